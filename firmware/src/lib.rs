@@ -1,0 +1,2 @@
+//! `stiffwall-firmware`: the hardware-neutral firmware core.
+#![no_std]

@@ -1,0 +1,3 @@
+//! One module per `hostctl` subcommand.
+
+pub mod analyze;

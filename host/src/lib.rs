@@ -1,0 +1,5 @@
+//! `stiffwall-host`: the library behind `hostctl`. Each subcommand lives in its own module under
+//! [`cmd`], exposing a clap `Args` struct and a `run` function, so the binary is a thin dispatcher
+//! and the end-to-end tests can call the same code.
+
+pub mod cmd;
