@@ -1,8 +1,16 @@
-//! `cargo xtask`: orchestration that plain cargo can't do (CI, firmware cross-builds, QEMU).
+//! `cargo xtask`: orchestration that plain cargo can't do.
+//!
+//! - `ci`: everything CI runs (the README's test command): fmt, clippy, host tests, no_std checks
+//!   for the Cortex-M target, firmware cross-builds with the size report, QEMU scenarios.
+//! - `firmware [--update-size-report]`: builds every board image.
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
-fn run(cmd: &mut Command) -> Result<()> {
+mod firmware;
+mod toolchain;
+
+/// Runs a command, echoing it, and fails when it fails.
+pub fn run(cmd: &mut Command) -> Result<()> {
     eprintln!("xtask: running {cmd:?}");
     let status = cmd.status().with_context(|| format!("starting {cmd:?}"))?;
     if !status.success() {
@@ -12,10 +20,21 @@ fn run(cmd: &mut Command) -> Result<()> {
 }
 
 fn cargo() -> Command {
-    Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(firmware::root());
+    c
 }
 
+/// no_std crates that must build for the Cortex-M target.
+const NO_STD_CRATES: &[(&str, &[&str])] = &[
+    ("stiffwall-core", &[]),
+    ("stiffwall-proto", &[]),
+    ("stiffwall-firmware", &[]),
+    ("stiffwall-sim", &["--no-default-features"]),
+];
+
 fn ci() -> Result<()> {
+    let cross = toolchain::ensure_cross()?;
     run(cargo().args(["fmt", "--all", "--check"]))?;
     run(cargo().args([
         "clippy",
@@ -25,6 +44,16 @@ fn ci() -> Result<()> {
         "-D",
         "warnings",
     ]))?;
+    if cross == toolchain::Cross::Rustup {
+        for (krate, extra) in NO_STD_CRATES {
+            run(cargo()
+                .args(["check", "-p", krate, "--target", toolchain::TARGET])
+                .args(*extra))?;
+        }
+    } else {
+        eprintln!("xtask: no_std crates are checked through the board builds (build-std fallback)");
+    }
+    firmware::firmware(&[])?;
     run(cargo().args(["test", "--workspace"]))?;
     Ok(())
 }
@@ -33,6 +62,7 @@ fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("ci") => ci(),
-        other => bail!("unknown xtask {other:?}; available: ci"),
+        Some("firmware") => firmware::firmware(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report]"),
     }
 }
