@@ -1,0 +1,110 @@
+//! Boots the QEMU board image (`firmware/boards/qemu-an386`) with `-serial pty` and finds the
+//! pseudo-terminal QEMU created, so hostctl can talk to the real Cortex-M firmware.
+
+use anyhow::{anyhow, bail, Context, Result};
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A running QEMU; killed when dropped.
+#[derive(Debug)]
+pub struct Qemu {
+    child: Child,
+    /// Path of the pseudo-terminal connected to the image's UART0.
+    pub pty: String,
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Where `cargo xtask firmware` leaves the QEMU image, relative to the repository root.
+pub const DEFAULT_IMAGE: &str =
+    "firmware/boards/qemu-an386/target/thumbv7em-none-eabihf/release/stiffwall-qemu-an386";
+
+/// Finds the QEMU image: an explicit path, `$STIFFWALL_QEMU_IMAGE`, or the default build path
+/// under the current directory or the repository this binary was built from.
+pub fn find_image(explicit: Option<&Path>) -> Result<PathBuf> {
+    if let Some(p) = explicit {
+        if p.is_file() {
+            return Ok(p.to_path_buf());
+        }
+        bail!("--qemu-image {} does not exist", p.display());
+    }
+    if let Some(p) = std::env::var_os("STIFFWALL_QEMU_IMAGE") {
+        let p = PathBuf::from(p);
+        if p.is_file() {
+            return Ok(p);
+        }
+        bail!("STIFFWALL_QEMU_IMAGE={} does not exist", p.display());
+    }
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for base in [PathBuf::from("."), repo] {
+        let p = base.join(DEFAULT_IMAGE);
+        if p.is_file() {
+            return Ok(p);
+        }
+    }
+    bail!("no QEMU image found; build it with `cargo xtask firmware` or pass --qemu-image PATH")
+}
+
+/// Boots `image` under QEMU (mps2-an386, Cortex-M4F) with UART0 on a new pseudo-terminal.
+pub fn boot(image: &Path) -> Result<Qemu> {
+    let mut child = Command::new("qemu-system-arm")
+        .args([
+            "-cpu",
+            "cortex-m4",
+            "-machine",
+            "mps2-an386",
+            "-display",
+            "none",
+        ])
+        .args([
+            "-monitor",
+            "none",
+            "-semihosting-config",
+            "enable=on,target=native",
+        ])
+        .args(["-serial", "pty", "-kernel"])
+        .arg(image)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                anyhow!(
+                    "qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)"
+                )
+            } else {
+                anyhow!("cannot start qemu-system-arm: {e}")
+            }
+        })?;
+    let stderr = child.stderr.take().context("QEMU stderr")?;
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if let Some(rest) = line.split("redirected to ").nth(1) {
+                let path = rest.split_whitespace().next().unwrap_or("").to_string();
+                let _ = tx.send(path);
+            }
+        }
+    });
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        if let Ok(pty) = rx.recv_timeout(Duration::from_millis(50)) {
+            return Ok(Qemu { child, pty });
+        }
+        if let Some(status) = child.try_wait()? {
+            bail!("QEMU exited before creating its pty ({status})");
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            bail!("QEMU did not report its pty within 10 s");
+        }
+    }
+}
