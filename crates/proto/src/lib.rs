@@ -1,2 +1,28 @@
-//! `stiffwall-proto`: messages between host and firmware (postcard + COBS + CRC-32).
+//! `stiffwall-proto`: the wire protocol shared by the stiffwall firmware and host.
+//!
+//! no_std, no allocation. Two layers, kept apart (smoltcp style):
+//! - [`msg`]: the messages ([`HostMsg`] host → device, [`DeviceMsg`] device → host) and the
+//!   servo configuration, serialized with postcard. Physical quantities are SI (`f32`); force
+//!   and position on the device side are output codes and encoder counts, named as such.
+//! - [`frame`]: the framing. One frame on the wire is
+//!   `COBS( version:u8 ++ postcard(msg) ++ CRC-32/ISO-HDLC(version ++ postcard) as 4 LE bytes ) ++ 0x00`.
+//!   [`encode`] writes one frame into a caller buffer; [`FrameDecoder`] is fed byte by byte and
+//!   yields a message or one of the distinct [`FrameError`]s.
+//!
+//! Invariants: a frame (including its 0x00 terminator) is at most [`MAX_FRAME`] bytes; decoding
+//! never panics on any byte sequence; after any error the decoder resynchronizes at the next 0x00.
 #![no_std]
+#![cfg_attr(not(test), warn(missing_docs))]
+
+#[cfg(any(feature = "std", test))]
+extern crate std;
+
+pub mod frame;
+pub mod msg;
+
+pub use frame::{encode, FrameDecoder, FrameError, Message, MAX_FRAME, MAX_PAYLOAD};
+pub use msg::*;
+
+/// Protocol version carried in the first byte of every frame and in the handshake.
+/// Bump on any incompatible change of a message or of the framing.
+pub const PROTOCOL_VERSION: u8 = 1;

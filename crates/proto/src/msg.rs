@@ -1,0 +1,463 @@
+//! Messages of the stiffwall protocol (postcard-serialized, no allocation).
+//!
+//! Units: physical quantities at this API are SI: positions in m (rad for rotary devices),
+//! forces in N (N·m), stiffness in N/m (N·m/rad), damping in N·s/m (N·m·s/rad), energy in J,
+//! rates in Hz. Device-side quantities are integers named for their unit: `*_code` is a force
+//! output code (one code = `DeviceInfo::force_per_code`), `count` / `*_counts` raw encoder counts
+//! (one count = `DeviceInfo::resolution`), `*_ticks` servo ticks (one tick = 1 / servo rate)
+//! or, for `deflection_ticks`, *effective* encoder ticks Δ_eff = 2^`coarsen_shift` counts (the
+//! paper's Δ).
+//!
+//! Invariant: the enum variant order is part of the wire format; append new variants at the end
+//! and bump [`crate::PROTOCOL_VERSION`] when an existing one changes.
+
+use heapless::{String, Vec};
+use serde::{Deserialize, Serialize};
+
+/// Telemetry samples per [`TelemetryBatch`].
+pub const TELEMETRY_BATCH: usize = 24;
+/// Values per [`HostMsg::TableChunk`].
+pub const TABLE_CHUNK: usize = 32;
+/// Maximum length of an uploaded excitation table (entries).
+pub const MAX_TABLE: usize = 1024;
+/// Maximum extra delay T_V in servo ticks (delay ring length − 1).
+pub const MAX_DELAY_TICKS: u8 = 31;
+/// Maximum encoder coarsening shift.
+pub const MAX_COARSEN_SHIFT: u8 = 16;
+/// Length of short text fields (names, versions).
+pub const NAME_LEN: usize = 24;
+
+/// Messages from the host to the device.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum HostMsg {
+    /// Handshake. Answered by [`DeviceMsg::HelloReply`], or `Error(VersionMismatch)`.
+    Hello {
+        /// The host's [`crate::PROTOCOL_VERSION`].
+        protocol_version: u8,
+    },
+    /// Read the active servo configuration. Answer: [`DeviceMsg::Config`].
+    GetConfig,
+    /// Validate and apply a configuration (not persisted). Answer: `Ack` or `Error(InvalidConfig)`
+    /// naming the field and its range; a refused config changes nothing.
+    SetConfig(ServoConfig),
+    /// Persist the active configuration to the config store. Answer: `Ack` or `Error(StoreFailed)`.
+    SaveConfig,
+    /// Apply the firmware defaults (not persisted). Answer: [`DeviceMsg::Config`].
+    LoadDefaults,
+    /// Start telemetry: one sample every `decimation` servo ticks (≥ 1). Answer: `Ack`.
+    StreamStart {
+        /// Servo ticks per sample, 1..=65535.
+        decimation: u16,
+    },
+    /// Stop telemetry. Answer: `Ack`.
+    StreamStop,
+    /// Release test (paper Fig. 8): hold at `deflection_ticks` effective ticks from the wall
+    /// with zero velocity, release into the wall and run `ticks` servo ticks, streaming every
+    /// tick. Answer: `Ack`, later [`DeviceMsg::ExperimentDone`].
+    Release {
+        /// Initial deflection in effective encoder ticks (Δ_eff), relative to the wall position.
+        deflection_ticks: i32,
+        /// Servo ticks to run after the release, 1..=10⁷.
+        ticks: u32,
+    },
+    /// Open-loop excitation with the wall off, streaming every tick. Answer: `Ack`, later
+    /// [`DeviceMsg::ExperimentDone`].
+    Excite {
+        /// The force profile.
+        profile: ExciteProfile,
+        /// Servo ticks to run, 1..=10⁷.
+        ticks: u32,
+    },
+    /// Upload a piece of the excitation table used by [`ExciteProfile::Table`]. Answer: `Ack`.
+    TableChunk {
+        /// Index of the first value in the table.
+        offset: u16,
+        /// Force codes.
+        values: Vec<i16, TABLE_CHUNK>,
+    },
+    /// Host keep-alive; an experiment aborts into safe mode when heartbeats stop for longer
+    /// than `ServoConfig::heartbeat_timeout_ms`. Answer: `Ack`.
+    Heartbeat,
+    /// Read the latched faults. Answer: [`DeviceMsg::Faults`].
+    GetFaults,
+    /// Clear latched faults and leave safe mode. Answer: `Ack` (with the faults still present
+    /// re-latching on the next tick if their cause persists).
+    ClearFaults,
+    /// Abort a running experiment (wall back on). Answer: `Ack`.
+    Stop,
+}
+
+/// Messages from the device to the host.
+// No allocation: the telemetry batch is stored inline (no Box).
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum DeviceMsg {
+    /// Answer to `Hello`.
+    HelloReply(DeviceInfo),
+    /// The active configuration.
+    Config(ServoConfig),
+    /// A request was accepted.
+    Ack(Request),
+    /// A batch of telemetry samples.
+    Telemetry(TelemetryBatch),
+    /// Latched faults.
+    Faults(FaultReport),
+    /// An experiment ended (completed, aborted by `Stop`, or by a fault).
+    ExperimentDone {
+        /// Which experiment.
+        kind: ExperimentKind,
+        /// `true` when it ran its full tick count.
+        completed: bool,
+        /// Fault bits ([`fault`]) latched when it ended.
+        faults: u32,
+    },
+    /// A malformed or refused request.
+    Error {
+        /// What went wrong.
+        code: ErrorCode,
+        /// Details (field and range, versions, tag).
+        detail: ErrorDetail,
+    },
+}
+
+/// Request kinds, echoed in [`DeviceMsg::Ack`].
+#[allow(missing_docs)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Request {
+    SetConfig,
+    SaveConfig,
+    LoadDefaults,
+    StreamStart,
+    StreamStop,
+    Release,
+    Excite,
+    TableChunk,
+    Heartbeat,
+    ClearFaults,
+    Stop,
+}
+
+/// Experiment kinds.
+#[allow(missing_docs)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ExperimentKind {
+    Release,
+    Excite,
+}
+
+/// Open-loop excitation profiles (force codes, wall off).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum ExciteProfile {
+    /// Square wave: `high` for `half_period_ticks`, then `low`, repeated.
+    Steps {
+        /// Force code of the low half.
+        low: i32,
+        /// Force code of the high half.
+        high: i32,
+        /// Ticks per half period, ≥ 1.
+        half_period_ticks: u32,
+    },
+    /// Linear chirp `amplitude · sin(φ)`, frequency from `f0_hz` to `f1_hz` over the run.
+    Chirp {
+        /// Amplitude in force codes.
+        amplitude: i32,
+        /// Start frequency, Hz, in [0, servo rate / 2].
+        f0_hz: f32,
+        /// End frequency, Hz, in [0, servo rate / 2].
+        f1_hz: f32,
+    },
+    /// The uploaded table (see [`HostMsg::TableChunk`]), each entry held `hold_ticks` ticks,
+    /// repeated.
+    Table {
+        /// Entries used, 1..=[`MAX_TABLE`].
+        len: u16,
+        /// Ticks per entry, ≥ 1.
+        hold_ticks: u16,
+    },
+}
+
+/// Wall geometry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum WallMode {
+    /// The spring of eq. (2) acts on both sides of the wall position.
+    Bidirectional,
+    /// The wall occupies counts ≥ the wall position and pushes toward negative counts; no
+    /// force outside it.
+    OneSided,
+}
+
+/// What the device does after a fault.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SafeMode {
+    /// Output zero force.
+    ZeroForce,
+    /// Output the virtual damping `ServoConfig::safe_damping` only.
+    Damping,
+}
+
+/// The servo configuration (Get/SetConfig, stored in the config store).
+///
+/// Ranges are checked by the firmware (`stiffwall_firmware::config::validate`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ServoConfig {
+    /// Wall stiffness K, N/m (N·m/rad). ≥ 0, and K·Δ_eff/2 ≤ 2^20 output codes.
+    pub stiffness: f32,
+    /// Virtual damping B, N·s/m, on the backward-difference velocity. ≥ 0.
+    pub damping: f32,
+    /// Servo rate 1/T, Hz.
+    pub servo_rate_hz: u32,
+    /// Extra delay T_V, servo ticks, 0..=[`MAX_DELAY_TICKS`].
+    pub extra_delay_ticks: u8,
+    /// Encoder coarsening shift s (Δ_eff = 2^s counts), 0..=[`MAX_COARSEN_SHIFT`].
+    pub coarsen_shift: u8,
+    /// Bidirectional spring or one-sided wall.
+    pub wall: WallMode,
+    /// Wall position (origin of eq. (2)), raw encoder counts.
+    pub wall_position: i32,
+    /// Force limit, N (N·m), > 0; the output is clamped to it.
+    pub force_limit: f32,
+    /// Over-velocity fault threshold, m/s (rad/s); 0 disables. Compare eq. (15).
+    pub max_velocity: f32,
+    /// Energy monitor on/off.
+    pub energy_monitor: bool,
+    /// Energy fault threshold on the storage function H_T (35), J; must exceed 0.
+    pub energy_limit: f32,
+    /// Energy monitor growth score that trips the fault (oscillation peaks that grew), 1..=64.
+    pub energy_growth_cycles: u8,
+    /// Encoder-jump fault threshold, raw counts per tick, ≥ 1.
+    pub encoder_jump_counts: u32,
+    /// Heartbeat timeout during experiments, ms; 0 disables.
+    pub heartbeat_timeout_ms: u32,
+    /// Behaviour after a fault.
+    pub safe_mode: SafeMode,
+    /// Virtual damping in safe mode `Damping`, N·s/m, ≥ 0.
+    pub safe_damping: f32,
+}
+
+impl Default for ServoConfig {
+    /// Safe, board-independent defaults: no wall force (K = 0) until the host sets one,
+    /// 1 kHz, no extra delay, no coarsening, bidirectional wall at count 0, 1 N force limit,
+    /// velocity fault off, energy monitor on (1 J, 4 growing peaks), 1000-count jump limit,
+    /// 500 ms heartbeat timeout, zero force in safe mode.
+    fn default() -> Self {
+        Self {
+            stiffness: 0.0,
+            damping: 0.0,
+            servo_rate_hz: 1000,
+            extra_delay_ticks: 0,
+            coarsen_shift: 0,
+            wall: WallMode::Bidirectional,
+            wall_position: 0,
+            force_limit: 1.0,
+            max_velocity: 0.0,
+            energy_monitor: true,
+            energy_limit: 1.0,
+            energy_growth_cycles: 4,
+            encoder_jump_counts: 1000,
+            heartbeat_timeout_ms: 500,
+            safe_mode: SafeMode::ZeroForce,
+            safe_damping: 0.0,
+        }
+    }
+}
+
+/// Fixed facts about the device (answer to `Hello`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DeviceInfo {
+    /// The device's [`crate::PROTOCOL_VERSION`].
+    pub protocol_version: u8,
+    /// Firmware name.
+    pub firmware_name: String<NAME_LEN>,
+    /// Firmware version (semver).
+    pub firmware_version: String<NAME_LEN>,
+    /// Board name.
+    pub board: String<NAME_LEN>,
+    /// Servo rate currently configured, Hz.
+    pub servo_rate_hz: u32,
+    /// Encoder counts per revolution for rotary devices, 0 for linear ones.
+    pub counts_per_rev: u32,
+    /// Encoder resolution Δ (one raw count), m or rad.
+    pub resolution: f32,
+    /// Width of the hardware encoder counter, bits (16 or 32).
+    pub encoder_bits: u8,
+    /// Force (N) or torque (N·m) per output code.
+    pub force_per_code: f32,
+    /// Largest output code magnitude.
+    pub max_code: i32,
+    /// Limits of the configuration fields.
+    pub limits: Limits,
+}
+
+/// Configuration limits advertised in the handshake.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Limits {
+    /// Lowest servo rate, Hz.
+    pub min_rate_hz: u32,
+    /// Highest servo rate, Hz.
+    pub max_rate_hz: u32,
+    /// Largest stiffness, N/m (N·m/rad), at coarsening shift 0.
+    pub max_stiffness: f32,
+    /// Largest force limit, N (N·m) (= max_code · force_per_code).
+    pub max_force: f32,
+    /// Largest extra delay, ticks.
+    pub max_delay_ticks: u8,
+    /// Largest coarsening shift.
+    pub max_coarsen_shift: u8,
+    /// Samples per telemetry batch.
+    pub telemetry_batch: u16,
+    /// Excitation table capacity, entries.
+    pub max_table: u16,
+}
+
+/// One servo tick as seen by the host.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct Sample {
+    /// Servo tick counter (wraps).
+    pub tick: u32,
+    /// Unwrapped raw encoder count relative to the wall position (saturated to i32).
+    pub count: i32,
+    /// Force code written to the output this tick (after delay and clamp).
+    pub force_code: i32,
+    /// Status bits, [`flags`].
+    pub flags: u16,
+    /// Energy estimate: the potential part of H_T (35) at this count (equal to H_T at turning
+    /// points), in units of K·Δ_eff²/8 (dimensionless ×8), saturating.
+    pub energy: u32,
+}
+
+/// Sample status bits.
+pub mod flags {
+    /// Safe mode active (a fault is latched).
+    pub const SAFE_MODE: u16 = 1 << 0;
+    /// Release experiment: holding phase.
+    pub const HOLD: u16 = 1 << 1;
+    /// Release experiment: released phase.
+    pub const RELEASED: u16 = 1 << 2;
+    /// Excitation experiment running.
+    pub const EXCITE: u16 = 1 << 3;
+    /// The output was clamped to the force limit.
+    pub const CLAMPED: u16 = 1 << 4;
+    /// The wall is off (one-sided wall outside contact, or excitation).
+    pub const WALL_OFF: u16 = 1 << 5;
+    /// The energy monitor saw a turning point this tick.
+    pub const TURN: u16 = 1 << 6;
+}
+
+/// Fault bits (latched until `ClearFaults`).
+pub mod fault {
+    /// The energy monitor saw sustained energy growth.
+    pub const ENERGY_GROWTH: u32 = 1 << 0;
+    /// The energy estimate exceeded `energy_limit`.
+    pub const ENERGY_LIMIT: u32 = 1 << 1;
+    /// Velocity above `max_velocity`.
+    pub const OVER_VELOCITY: u32 = 1 << 2;
+    /// Host heartbeat lost during an experiment.
+    pub const HEARTBEAT: u32 = 1 << 3;
+    /// Encoder count jumped more than `encoder_jump_counts` in one tick.
+    pub const ENCODER_JUMP: u32 = 1 << 4;
+}
+
+/// A sequence of telemetry samples.
+///
+/// Sequence: every sample the servo produces gets the next sample number, whether or not it
+/// reaches the host. `seq` is the number of `samples[0]`; the samples of one batch are
+/// consecutive. `dropped` counts, cumulatively since boot, samples lost because the device's
+/// telemetry queue was full: a host that sees `seq` jump by G between batches sees `dropped`
+/// grow by exactly G when the loss happened on the device (any other gap was lost on the link).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TelemetryBatch {
+    /// Sample number of the first sample.
+    pub seq: u32,
+    /// Cumulative samples dropped on the device.
+    pub dropped: u32,
+    /// The samples.
+    pub samples: Vec<Sample, TELEMETRY_BATCH>,
+}
+
+/// Latched faults.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FaultReport {
+    /// Latched fault bits, [`fault`].
+    pub latched: u32,
+    /// Servo tick of the first latched fault (0 if none).
+    pub first_tick: u32,
+    /// Safe mode active.
+    pub safe_mode: bool,
+}
+
+/// Error codes of [`DeviceMsg::Error`] (and of host-side decoding).
+#[allow(missing_docs)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ErrorCode {
+    /// Frame longer than [`crate::MAX_FRAME`].
+    Oversize,
+    /// CRC mismatch.
+    Crc,
+    /// Invalid COBS encoding or frame too short.
+    Cobs,
+    /// Unknown message tag.
+    UnknownTag,
+    /// Payload does not deserialize.
+    Deserialize,
+    /// Protocol version differs.
+    VersionMismatch,
+    /// `SetConfig` refused: see detail.
+    InvalidConfig,
+    /// Config store failed.
+    StoreFailed,
+    /// Request refused in the current state (e.g. an experiment running, faults latched).
+    Busy,
+    /// Request parameters out of range (experiments, table chunks).
+    InvalidArgument,
+}
+
+/// Fields of [`ServoConfig`] (for error details).
+#[allow(missing_docs)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ConfigField {
+    Stiffness,
+    Damping,
+    ServoRateHz,
+    ExtraDelayTicks,
+    CoarsenShift,
+    Wall,
+    WallPosition,
+    ForceLimit,
+    MaxVelocity,
+    EnergyMonitor,
+    EnergyLimit,
+    EnergyGrowthCycles,
+    EncoderJumpCounts,
+    HeartbeatTimeoutMs,
+    SafeMode,
+    SafeDamping,
+    /// Experiment / table parameters.
+    Argument,
+}
+
+/// Details of an error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum ErrorDetail {
+    /// Nothing more.
+    None,
+    /// A field outside its allowed range `[min, max]` (or not finite).
+    Field {
+        /// Which field.
+        field: ConfigField,
+        /// Smallest allowed value.
+        min: f64,
+        /// Largest allowed value.
+        max: f64,
+    },
+    /// Version mismatch.
+    Version {
+        /// Version received.
+        got: u8,
+        /// Version expected.
+        expected: u8,
+    },
+    /// Unknown message tag.
+    Tag(u32),
+    /// Short text.
+    Text(String<NAME_LEN>),
+}
