@@ -1,0 +1,297 @@
+//! Force output: DAC channel 1 (feature `dac`) or TIM1 PWM + direction pin (feature `pwm`), plus
+//! the amplifier / bridge enable line shared by both.
+//!
+//! Units: the input is a normalized signed command, `i16`, where `±FULL_SCALE` (±32767) is the
+//! amplifier's full-scale force in either direction and 0 is zero force (`i16::MIN` is clamped to
+//! −32767 so the range is symmetric). Conversion to newtons is the firmware core's business
+//! (its force gain): this module only maps the command linearly onto the hardware.
+//!
+//! - `dac`: PA4 (DAC_OUT1, Arduino A2 / CN8-3), 12-bit, output buffer on. Mid-scale code
+//!   `DAC_ZERO` = 2048 (1.65 V) is zero force; full scale is ±`DAC_SPAN` = ±1800 codes
+//!   (0.20 V … 3.10 V), kept inside the buffer's linear range (VSS+0.2 V … VDDA−0.2 V). An external
+//!   op-amp stage (README) maps 1.65 V ± 1.45 V to ±10 V for a Copley-style analog current
+//!   amplifier in current (torque) mode.
+//! - `pwm`: TIM1_CH1 on PA8 (AF1, Arduino D7 / CN9-8) at `PWM_HZ` = 20 kHz, edge aligned, with
+//!   the magnitude as duty cycle (limited to `DUTY_LIMIT_PERCENT` for bootstrapped gate drivers),
+//!   and the sign on DIR = PA9 (Arduino D8 / CN5-1, high = negative force). Sign-magnitude.
+//!   The duty register is preloaded, so a new duty takes effect at the next PWM period (≤ 50 µs).
+//! - Enable: PB10 (Arduino D6 / CN9-7), push-pull, high = amplifier / bridge enabled. It is
+//!   driven low at init and only raised by `enable(true)` after the output is at zero. Until the
+//!   firmware runs, the pin floats: the amplifier's enable input needs a pull-down (README).
+//!
+//! Invariants: `set` is O(1), never blocks, never panics (saturating arithmetic only), and is
+//! safe to call from the servo interrupt. `new` leaves the output at zero force and disabled.
+
+#[cfg(all(feature = "dac", feature = "pwm"))]
+compile_error!("features `dac` and `pwm` are mutually exclusive: pick the one your amplifier uses");
+#[cfg(not(any(feature = "dac", feature = "pwm")))]
+compile_error!("select the force output: `--features dac` (DAC on PA4) or `--features pwm` (PWM on PA8 + DIR on PA9)");
+
+use stm32f4xx_hal::gpio::{Output, PushPull, PB10};
+
+/// The command magnitude that means full-scale force.
+pub const FULL_SCALE: i32 = i16::MAX as i32;
+
+/// Amplifier / H-bridge enable pin type.
+pub type EnablePin = PB10<Output<PushPull>>;
+
+#[cfg(feature = "dac")]
+mod imp {
+    use super::FULL_SCALE;
+    use stm32f4xx_hal::{
+        dac::{DacExt, DacOut, DacPin, C1},
+        gpio::PA4,
+        pac::DAC,
+        rcc::Rcc,
+    };
+
+    /// DAC code for zero force (mid-scale).
+    pub const DAC_ZERO: u16 = 2048;
+    /// DAC codes from zero to full-scale force, each way.
+    pub const DAC_SPAN: i32 = 1800;
+
+    /// The DAC driver: channel 1 on PA4.
+    pub struct Driver {
+        ch: C1,
+        last: u16,
+    }
+
+    impl Driver {
+        pub fn new(dac: DAC, pa4: PA4, rcc: &mut Rcc) -> Self {
+            let mut ch = dac.constrain(pa4.into_analog(), rcc);
+            // Load mid-scale before the channel is enabled so the first output is zero force.
+            ch.set_value(DAC_ZERO);
+            ch.enable();
+            ch.set_value(DAC_ZERO);
+            Self { ch, last: DAC_ZERO }
+        }
+
+        /// Maps a command in −FULL_SCALE..=FULL_SCALE to a 12-bit code.
+        #[inline(always)]
+        pub fn code_for(cmd: i32) -> u16 {
+            let cmd = cmd.clamp(-FULL_SCALE, FULL_SCALE);
+            // |cmd·DAC_SPAN| ≤ 32767·1800 < 2³¹: no overflow. Rounded to nearest.
+            let scaled = (cmd * DAC_SPAN
+                + if cmd >= 0 {
+                    FULL_SCALE / 2
+                } else {
+                    -(FULL_SCALE / 2)
+                })
+                / FULL_SCALE;
+            (i32::from(DAC_ZERO) + scaled) as u16
+        }
+
+        #[inline(always)]
+        pub fn set(&mut self, cmd: i32) {
+            let code = Self::code_for(cmd);
+            self.ch.set_value(code);
+            self.last = code;
+        }
+
+        /// The last code written (12-bit, `DAC_ZERO` = zero force).
+        pub fn raw(&self) -> u16 {
+            self.last
+        }
+    }
+
+    /// Peripherals the DAC output needs.
+    pub struct Parts {
+        pub dac: DAC,
+        pub pa4: PA4,
+    }
+
+    impl Parts {
+        pub fn build(self, rcc: &mut Rcc) -> Driver {
+            Driver::new(self.dac, self.pa4, rcc)
+        }
+    }
+}
+
+#[cfg(feature = "pwm")]
+mod imp {
+    use super::FULL_SCALE;
+    use stm32f4xx_hal::{
+        gpio::{Output, PushPull, PA8, PA9},
+        pac::TIM1,
+        prelude::*,
+        rcc::Rcc,
+        timer::{PwmChannel, PwmHzManager},
+    };
+
+    /// PWM carrier frequency (above hearing, well below the bridge's switching limit).
+    pub const PWM_HZ: u32 = 20_000;
+    /// Largest duty cycle, percent (bootstrapped high-side drivers need some off time).
+    pub const DUTY_LIMIT_PERCENT: u32 = 98;
+
+    /// The PWM + DIR driver.
+    pub struct Driver {
+        _timer: PwmHzManager<TIM1>,
+        ch: PwmChannel<TIM1, 0>,
+        dir: PA9<Output<PushPull>>,
+        /// Timer counts at `DUTY_LIMIT_PERCENT`.
+        max_duty: u32,
+        last: i32,
+    }
+
+    impl Driver {
+        pub fn new(tim: TIM1, pa8: PA8, pa9: PA9, rcc: &mut Rcc) -> Self {
+            let dir = pa9.into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
+            let (timer, (ch1, ..)) = tim.pwm_hz(PWM_HZ.Hz(), rcc);
+            let mut ch = ch1.with(pa8);
+            ch.set_duty(0);
+            ch.enable();
+            let period = u32::from(ch.get_max_duty());
+            let max_duty = period * DUTY_LIMIT_PERCENT / 100;
+            Self {
+                _timer: timer,
+                ch,
+                dir,
+                max_duty,
+                last: 0,
+            }
+        }
+
+        /// Maps |cmd| in 0..=FULL_SCALE to timer counts in 0..=max_duty.
+        #[inline(always)]
+        fn duty_for(&self, magnitude: u32) -> u16 {
+            // magnitude ≤ 32767, max_duty ≤ 65535: product < 2³¹.
+            let duty = (magnitude.min(FULL_SCALE as u32) * self.max_duty + (FULL_SCALE as u32 / 2))
+                / FULL_SCALE as u32;
+            duty.min(u32::from(u16::MAX)) as u16
+        }
+
+        #[inline(always)]
+        pub fn set(&mut self, cmd: i32) {
+            let cmd = cmd.clamp(-FULL_SCALE, FULL_SCALE);
+            let duty = self.duty_for(cmd.unsigned_abs());
+            if cmd < 0 {
+                self.dir.set_high();
+            } else {
+                self.dir.set_low();
+            }
+            self.ch.set_duty(duty);
+            self.last = cmd;
+        }
+
+        /// The last command applied (signed, clamped).
+        pub fn raw(&self) -> i32 {
+            self.last
+        }
+    }
+
+    /// Peripherals the PWM output needs.
+    pub struct Parts {
+        pub tim1: TIM1,
+        pub pa8: PA8,
+        pub pa9: PA9,
+    }
+
+    impl Parts {
+        pub fn build(self, rcc: &mut Rcc) -> Driver {
+            Driver::new(self.tim1, self.pa8, self.pa9, rcc)
+        }
+    }
+}
+
+pub use imp::Parts;
+
+/// Which output this image drives (for the boot banner and the handshake).
+#[cfg(feature = "dac")]
+pub const VARIANT: &str = "dac";
+/// Which output this image drives (for the boot banner and the handshake).
+#[cfg(feature = "pwm")]
+pub const VARIANT: &str = "pwm";
+
+/// Drives the outputs to their safe state without owning them: amplifier enable low, zero
+/// force. For the panic and fault handlers and boot failures, where the drivers may be owned by
+/// an interrupt handler that will never run again. Only single-register writes (no
+/// read-modify-write), so it is correct whatever state the interrupted code left.
+pub fn emergency_off() {
+    // SAFETY: BSRR is write-only and set/reset atomic; resetting PB10 can't disturb other pins.
+    // If GPIOB's clock is still off the write is ignored, and the pin is still floating (the
+    // amplifier's pull-down keeps it disabled).
+    unsafe {
+        (*stm32f4xx_hal::pac::GPIOB::ptr())
+            .bsrr()
+            .write(|w| w.br10().set_bit());
+    }
+    #[cfg(feature = "dac")]
+    // SAFETY: a write of the mid-scale code to the 12-bit right-aligned holding register; the
+    // DAC driver only ever writes this register too, so the last write (this one) wins.
+    unsafe {
+        (*stm32f4xx_hal::pac::DAC::ptr())
+            .dhr12r1()
+            .write(|w| w.daccdhr().set(imp::DAC_ZERO));
+    }
+    #[cfg(feature = "pwm")]
+    // SAFETY: writes of duty 0 to CCR1, then an update event (EGR.UG) that loads the preloaded
+    // duty at once instead of at the end of the period; DIR (PA9) low through the atomic BSRR.
+    unsafe {
+        let tim = &*stm32f4xx_hal::pac::TIM1::ptr();
+        tim.ccr1().write(|w| w.ccr().set(0));
+        tim.egr().write(|w| w.ug().set_bit());
+        (*stm32f4xx_hal::pac::GPIOA::ptr())
+            .bsrr()
+            .write(|w| w.br9().set_bit());
+    }
+}
+
+/// The force output and its enable line. One instance, owned by the servo interrupt.
+pub struct ForceOut {
+    driver: imp::Driver,
+    enable: EnablePin,
+    enabled: bool,
+}
+
+impl ForceOut {
+    /// Sets up the selected output at zero force with the amplifier disabled.
+    pub fn new(parts: Parts, enable: EnablePin, rcc: &mut stm32f4xx_hal::rcc::Rcc) -> Self {
+        let mut enable = enable;
+        enable.set_low();
+        let mut driver = parts.build(rcc);
+        driver.set(0);
+        Self {
+            driver,
+            enable,
+            enabled: false,
+        }
+    }
+
+    /// Applies a normalized command (±`FULL_SCALE` = full-scale force). Saturates.
+    #[inline(always)]
+    pub fn set(&mut self, cmd: i16) {
+        self.driver.set(i32::from(cmd));
+    }
+
+    /// Zero force (the amplifier stays in its current enable state).
+    #[inline(always)]
+    pub fn zero(&mut self) {
+        self.driver.set(0);
+    }
+
+    /// Enables or disables the amplifier. Enabling first forces the output to zero.
+    #[inline(always)]
+    pub fn enable(&mut self, on: bool) {
+        if on {
+            if !self.enabled {
+                self.driver.set(0);
+            }
+            self.enable.set_high();
+        } else {
+            self.driver.set(0);
+            self.enable.set_low();
+        }
+        self.enabled = on;
+    }
+
+    /// Whether the amplifier enable line is high.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled
+    }
+
+    /// The last raw hardware value written: the DAC code (`dac`) or the signed command (`pwm`).
+    #[allow(dead_code)] // diagnostics
+    pub fn raw(&self) -> i32 {
+        i32::from(self.driver.raw())
+    }
+}

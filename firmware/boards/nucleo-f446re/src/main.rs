@@ -1,0 +1,178 @@
+//! stiffwall firmware image for the ST Nucleo-F446RE (STM32F446RE, Cortex-M4F at 180 MHz).
+//!
+//! Clocks: HSE 8 MHz in bypass mode (the ST-LINK's MCO output, Nucleo default SB50 closed)
+//! → PLL → SYSCLK = HCLK = 180 MHz (over-drive on), APB1 = 45 MHz (timers 90 MHz), APB2 = 90 MHz
+//! (timers 180 MHz). Interrupts: USART2 (priority 0, serial bytes), TIM7 (priority 1, servo
+//! tick); thread mode runs the protocol. Pins: see README.md and each module's header.
+#![no_std]
+#![no_main]
+
+mod encoder;
+mod flash_store;
+mod force;
+mod handoff;
+mod serial;
+mod servo_timer;
+
+use core::fmt::Write as _;
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use stm32f4xx_hal::{
+    interrupt,
+    pac::{self, Interrupt, NVIC},
+    prelude::*,
+    rcc::Config,
+};
+
+use encoder::QuadEncoder;
+use flash_store::FlashSlots;
+use force::ForceOut;
+use handoff::Handoff;
+use serial::SerialIsr;
+use servo_timer::ServoTimer;
+
+/// Frequency of the ST-LINK MCO clock fed into OSC_IN.
+const HSE_HZ: u32 = 8_000_000;
+/// System clock.
+const SYSCLK_HZ: u32 = 180_000_000;
+/// Servo rate in Hz (the firmware core's default).
+const SERVO_RATE_HZ: u32 = 1_000;
+
+/// NVIC priorities (upper nibble significant on the STM32F4: 16 levels, lower = more urgent).
+const PRIO_USART2: u8 = 0x00;
+const PRIO_SERVO: u8 = 0x10;
+
+/// What the servo interrupt owns.
+struct ServoIsr {
+    timer: ServoTimer,
+    encoder: QuadEncoder,
+    force: ForceOut,
+}
+
+static SERVO: Handoff<ServoIsr> = Handoff::new();
+static SERIAL: Handoff<SerialIsr> = Handoff::new();
+
+#[entry]
+fn main() -> ! {
+    // Both `take`s succeed: this is the only caller, and it runs once.
+    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+        halt()
+    };
+
+    let mut rcc = dp.RCC.freeze(
+        Config::hse(HSE_HZ.Hz())
+            .bypass_hse_oscillator()
+            .sysclk(SYSCLK_HZ.Hz())
+            .hclk(SYSCLK_HZ.Hz())
+            .pclk1(45.MHz())
+            .pclk2(90.MHz()),
+    );
+
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+
+    // Force output first, so the amplifier sees "disabled, zero force" as early as possible.
+    let enable = gpiob.pb10.into_push_pull_output();
+    #[cfg(feature = "dac")]
+    let parts = force::Parts {
+        dac: dp.DAC,
+        pa4: gpioa.pa4,
+    };
+    #[cfg(feature = "pwm")]
+    let parts = force::Parts {
+        tim1: dp.TIM1,
+        pa8: gpioa.pa8,
+        pa9: gpioa.pa9,
+    };
+    let force = ForceOut::new(parts, enable, &mut rcc);
+
+    let encoder = QuadEncoder::new(dp.TIM2, gpioa.pa0, gpioa.pa1, &mut rcc);
+
+    let Some((mut port, serial_isr)) = serial::new(dp.USART2, gpioa.pa2, gpioa.pa3, &mut rcc)
+    else {
+        halt()
+    };
+
+    let _flash = FlashSlots::new(dp.FLASH);
+
+    let Some(timer) = ServoTimer::new(dp.TIM7, SERVO_RATE_HZ, &mut rcc) else {
+        halt()
+    };
+
+    SERIAL.put(serial_isr);
+    SERVO.put(ServoIsr {
+        timer,
+        encoder,
+        force,
+    });
+    // SAFETY: no priority-based critical sections exist in this program (shared state is
+    // handed off or atomic), so changing priorities and unmasking can't break a lock.
+    unsafe {
+        cp.NVIC.set_priority(Interrupt::USART2, PRIO_USART2);
+        cp.NVIC.set_priority(Interrupt::TIM7, PRIO_SERVO);
+        NVIC::unmask(Interrupt::USART2);
+        NVIC::unmask(Interrupt::TIM7);
+    }
+
+    let _ = writeln!(
+        port,
+        "stiffwall nucleo-f446re {} sysclk {} Hz",
+        force::VARIANT,
+        rcc.clocks.sysclk().raw()
+    );
+
+    let mut buf = [0u8; 64];
+    loop {
+        let n = port.read(&mut buf);
+        let _ = n;
+        cortex_m::asm::wfi();
+    }
+}
+
+#[interrupt]
+fn TIM7() {
+    static mut RES: Option<ServoIsr> = None;
+    if RES.is_none() {
+        *RES = SERVO.take();
+    }
+    let Some(res) = RES.as_mut() else {
+        return;
+    };
+    res.timer.ack();
+    let _count = res.encoder.count();
+    res.force.zero();
+}
+
+#[interrupt]
+fn USART2() {
+    static mut RES: Option<SerialIsr> = None;
+    if RES.is_none() {
+        *RES = SERIAL.take();
+    }
+    if let Some(res) = RES.as_mut() {
+        res.on_interrupt();
+    }
+}
+
+/// Puts the outputs in their safe state and stops (boot failures only).
+fn halt() -> ! {
+    force::emergency_off();
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[exception]
+unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+    force::emergency_off();
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo) -> ! {
+    force::emergency_off();
+    loop {
+        cortex_m::asm::nop();
+    }
+}

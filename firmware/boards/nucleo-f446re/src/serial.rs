@@ -1,0 +1,182 @@
+//! USART2 to the ST-LINK virtual COM port (the Nucleo's USB serial), interrupt driven.
+//!
+//! Pins: TX = PA2, RX = PA3 (AF7), wired on the Nucleo to the ST-LINK/V2-1 VCP (solder bridges
+//! SB13/SB14 closed, the default); nothing to wire. Line: `BAUD` = 921600 baud, 8N1, no flow
+//! control. At APB1 = 45 MHz the divider is 48.8 (BRR 0x31): 918 367 baud, −0.35 %, well within
+//! the ±2 % a UART tolerates against the ST-LINK's own −/+0.2 %.
+//!
+//! Data path: the USART2 interrupt (highest priority in the system, a few dozen cycles per byte)
+//! moves each received byte into a lock-free SPSC queue (`RX_CAPACITY` bytes, i.e. ~11 ms of
+//! line time at full rate) and feeds the transmitter from a second SPSC queue (`TX_CAPACITY`
+//! bytes). Thread mode (`SerialPort`) only touches the other ends of the two queues, so no lock
+//! is needed. One byte time at 921600 baud is 10.9 µs; because the RX interrupt preempts everything
+//! else, a byte is read well within that and the hardware never overruns. Invariants: a byte is
+//! lost only if the RX queue is full (counted in `rx_dropped`) or on an overrun/framing/noise
+//! error (counted in `rx_errors`); `write` never blocks, it queues what fits and says how much.
+//!
+//! Caveat: erasing a flash sector stalls instruction fetches from flash for up to ~1 s, interrupts
+//! included; bytes that arrive then are lost (`flash_store.rs`). The host waits for the reply to
+//! a config save before sending more.
+
+use core::sync::atomic::{AtomicU32, Ordering};
+use heapless::spsc::{Consumer, Producer, Queue};
+use stm32f4xx_hal::{
+    gpio::{PA2, PA3},
+    nb,
+    pac::{Interrupt, USART2},
+    prelude::*,
+    rcc::Rcc,
+    serial::{config::Config, Rx, Serial, Tx},
+};
+
+/// Line rate of the link to the host.
+pub const BAUD: u32 = 921_600;
+/// Receive queue size in bytes.
+pub const RX_CAPACITY: usize = 1024;
+/// Transmit queue size in bytes.
+pub const TX_CAPACITY: usize = 2048;
+
+static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
+static RX_ERRORS: AtomicU32 = AtomicU32::new(0);
+
+/// Thread-mode end of the link: reads received bytes, queues bytes to send.
+pub struct SerialPort {
+    rx: Consumer<'static, u8>,
+    tx: Producer<'static, u8>,
+}
+
+/// Interrupt end of the link, owned by the `USART2` handler.
+pub struct SerialIsr {
+    rx: Rx<USART2>,
+    tx: Tx<USART2>,
+    rx_queue: Producer<'static, u8>,
+    tx_queue: Consumer<'static, u8>,
+}
+
+/// Configures USART2 on PA2/PA3 at `BAUD` and returns both ends. Returns `None` if called twice
+/// (the queues are singletons) or if the clock tree can't make the baud rate.
+pub fn new(usart: USART2, pa2: PA2, pa3: PA3, rcc: &mut Rcc) -> Option<(SerialPort, SerialIsr)> {
+    let rxq: &'static mut Queue<u8, RX_CAPACITY> =
+        cortex_m::singleton!(: Queue<u8, RX_CAPACITY> = Queue::new())?;
+    let txq: &'static mut Queue<u8, TX_CAPACITY> =
+        cortex_m::singleton!(: Queue<u8, TX_CAPACITY> = Queue::new())?;
+    let (rx_p, rx_c) = rxq.split();
+    let (tx_p, tx_c) = txq.split();
+
+    let serial: Serial<USART2> = Serial::new(
+        usart,
+        (pa2, pa3),
+        Config::default().baudrate(BAUD.bps()).wordlength_8(),
+        rcc,
+    )
+    .ok()?;
+    let (tx, mut rx) = serial.split();
+    rx.listen();
+    Some((
+        SerialPort { rx: rx_c, tx: tx_p },
+        SerialIsr {
+            rx,
+            tx,
+            rx_queue: rx_p,
+            tx_queue: tx_c,
+        },
+    ))
+}
+
+impl SerialIsr {
+    /// The whole USART2 interrupt: drain the receiver, then feed the transmitter.
+    #[inline(always)]
+    pub fn on_interrupt(&mut self) {
+        loop {
+            match self.rx.read() {
+                Ok(byte) => {
+                    if self.rx_queue.enqueue(byte).is_err() {
+                        RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+                Err(nb::Error::WouldBlock) => break,
+                // The error flag is cleared by the read sequence the HAL performs.
+                Err(nb::Error::Other(_)) => {
+                    RX_ERRORS.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        }
+        // TXE is set whenever the data register can take a byte; one byte per interrupt.
+        if let Some(&byte) = self.tx_queue.peek() {
+            if self.tx.write(byte).is_ok() {
+                let _ = self.tx_queue.dequeue();
+            }
+        }
+        if self.tx_queue.ready() {
+            self.tx.listen();
+        } else {
+            self.tx.unlisten();
+        }
+    }
+}
+
+impl SerialPort {
+    /// Moves received bytes into `buf`; returns how many (0 when none are waiting). Never blocks.
+    pub fn read(&mut self, buf: &mut [u8]) -> usize {
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            match self.rx.dequeue() {
+                Some(b) => {
+                    *slot = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        n
+    }
+
+    /// Queues as many of `bytes` as fit; returns how many. Never blocks.
+    pub fn write(&mut self, bytes: &[u8]) -> usize {
+        let mut n = 0;
+        for &b in bytes {
+            if self.tx.enqueue(b).is_err() {
+                break;
+            }
+            n += 1;
+        }
+        if n > 0 {
+            // The handler enables the TXE interrupt itself; pending it here starts the
+            // transmitter without thread mode touching USART2's CR1 (no read-modify-write race).
+            cortex_m::peripheral::NVIC::pend(Interrupt::USART2);
+        }
+        n
+    }
+
+    /// Free space in the transmit queue, bytes.
+    pub fn tx_free(&self) -> usize {
+        self.tx.capacity() - self.tx.len()
+    }
+
+    /// Queues all of `bytes`, waiting for room (thread mode only; used for the boot banner).
+    pub fn write_all(&mut self, mut bytes: &[u8]) {
+        while !bytes.is_empty() {
+            let n = self.write(bytes);
+            bytes = &bytes[n..];
+        }
+    }
+
+    /// Bytes lost because the receive queue was full.
+    #[allow(dead_code)]
+    pub fn rx_dropped(&self) -> u32 {
+        RX_DROPPED.load(Ordering::Relaxed)
+    }
+
+    /// Bytes lost to overrun, framing, parity or noise errors.
+    #[allow(dead_code)]
+    pub fn rx_errors(&self) -> u32 {
+        RX_ERRORS.load(Ordering::Relaxed)
+    }
+}
+
+impl core::fmt::Write for SerialPort {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        self.write_all(s.as_bytes());
+        Ok(())
+    }
+}

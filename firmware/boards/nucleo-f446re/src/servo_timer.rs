@@ -1,0 +1,49 @@
+//! The servo tick: TIM7 (basic timer, no pins) update interrupt at the configured servo rate.
+//!
+//! Units: rate in Hz; TIM7 runs from the APB1 timer clock (90 MHz at the 180 MHz system clock),
+//! so any rate that divides 90 MHz into a prescaler × reload product up to 2³² is exact (1 kHz:
+//! 90 000 timer clocks, zero drift). Invariants: the timer is free running and auto-reloading, so
+//! ticks are periodic no matter how long the handler takes (if a tick overruns the next period,
+//! one update is merged and `overruns` counts it); the handler must call `ack` exactly once per
+//! entry. Priority: below USART2 (serial bytes are never lost), above thread mode.
+
+use core::sync::atomic::{AtomicU32, Ordering};
+use stm32f4xx_hal::{
+    pac::TIM7,
+    prelude::*,
+    rcc::Rcc,
+    timer::{CounterHz, Event, Flag},
+};
+
+static TICKS: AtomicU32 = AtomicU32::new(0);
+
+/// TIM7 programmed as the servo clock. Owned by the `TIM7` interrupt handler.
+pub struct ServoTimer {
+    counter: CounterHz<TIM7>,
+}
+
+impl ServoTimer {
+    /// Starts TIM7 at `rate_hz` with its update interrupt enabled (the NVIC line stays masked
+    /// until `main` unmasks it). `None` if the rate is 0 or not reachable from the timer clock.
+    pub fn new(tim: TIM7, rate_hz: u32, rcc: &mut Rcc) -> Option<Self> {
+        if rate_hz == 0 || rate_hz > 100_000 {
+            return None;
+        }
+        let mut counter = tim.counter_hz(rcc);
+        counter.start(rate_hz.Hz()).ok()?;
+        counter.listen(Event::Update);
+        Some(Self { counter })
+    }
+
+    /// Clears the update flag; call once at the start of every TIM7 interrupt.
+    #[inline(always)]
+    pub fn ack(&mut self) {
+        self.counter.clear_flags(Flag::Update);
+        TICKS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+/// Servo ticks since boot (wraps after 2³² ticks, 49.7 days at 1 kHz).
+pub fn ticks() -> u32 {
+    TICKS.load(Ordering::Relaxed)
+}
