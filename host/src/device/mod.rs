@@ -1,4 +1,6 @@
-//! Talking to a device: transports (serial port, virtual device over a pty, QEMU over a pty).
+//! Talking to a device: transports (serial port, virtual device over a pty, QEMU over a pty)
+//! and the protocol client.
 
+pub mod client;
 pub mod qemu;
 pub mod transport;

@@ -1,0 +1,433 @@
+//! Host side of the stiffwall protocol over any byte port: handshake with version check,
+//! request/answer with timeouts, telemetry with sequence-gap accounting, and experiments.
+//!
+//! Telemetry that arrives while a request waits for its answer is queued, never lost. A gap in
+//! sample numbers is attributed to the device (its cumulative `dropped` counter grew by the
+//! same amount) or to the link (it did not).
+
+use anyhow::{anyhow, bail, Context, Result};
+use std::collections::VecDeque;
+use std::io::{ErrorKind, Read, Write};
+use std::time::{Duration, Instant};
+use stiffwall_proto::{
+    encode, DeviceInfo, DeviceMsg, ErrorCode, ErrorDetail, ExciteProfile, ExperimentKind,
+    FaultReport, FrameDecoder, HostMsg, Request, Sample, ServoConfig, TelemetryBatch, MAX_FRAME,
+    PROTOCOL_VERSION,
+};
+
+/// How long a request waits for its answer.
+pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
+/// Heartbeat period during experiments (the firmware's default timeout is 500 ms).
+pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(100);
+
+/// Keeps whatever serves the port (virtual device thread, QEMU process) alive with the client.
+pub trait Backend: std::fmt::Debug + Send {}
+impl<T: std::fmt::Debug + Send> Backend for T {}
+
+/// Telemetry bookkeeping.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct GapStats {
+    /// Samples received.
+    pub received: u64,
+    /// Samples missing in sequence numbers.
+    pub missing: u64,
+    /// Of those, samples the device reports it dropped (queue overflow).
+    pub dropped_on_device: u64,
+    /// Frames that failed to decode (CRC, COBS, …), i.e. lost on the link.
+    pub bad_frames: u64,
+}
+
+/// Samples of one experiment with their bookkeeping.
+#[derive(Debug, Clone)]
+pub struct Record {
+    /// Samples in order.
+    pub samples: Vec<Sample>,
+    /// Whether the experiment ran its full length.
+    pub completed: bool,
+    /// Fault bits latched when it ended.
+    pub faults: u32,
+    /// Telemetry gaps seen.
+    pub gaps: GapStats,
+}
+
+/// A connected device.
+#[derive(Debug)]
+pub struct Client {
+    port: Box<dyn serialport::SerialPort>,
+    decoder: FrameDecoder,
+    pending: VecDeque<DeviceMsg>,
+    next_seq: Option<u32>,
+    last_dropped: u32,
+    /// Telemetry bookkeeping since connecting.
+    pub gaps: GapStats,
+    /// The device's handshake answer.
+    pub info: DeviceInfo,
+    _backend: Option<Box<dyn Backend>>,
+}
+
+/// Renders a device error as a sentence naming the field and its range.
+#[must_use]
+pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
+    let what = match code {
+        ErrorCode::Oversize => "frame too long",
+        ErrorCode::Crc => "CRC mismatch",
+        ErrorCode::Cobs => "bad COBS framing",
+        ErrorCode::UnknownTag => "unknown message",
+        ErrorCode::Deserialize => "malformed message",
+        ErrorCode::VersionMismatch => "protocol version mismatch",
+        ErrorCode::InvalidConfig => "configuration refused",
+        ErrorCode::StoreFailed => "config store failed",
+        ErrorCode::Busy => "device busy",
+        ErrorCode::InvalidArgument => "argument out of range",
+    };
+    match detail {
+        ErrorDetail::None => what.to_string(),
+        ErrorDetail::Field { field, min, max } => {
+            format!("{what}: {field:?} must be within [{min}, {max}]")
+        }
+        ErrorDetail::Version { got, expected } => {
+            format!("{what}: device got version {got}, expects {expected}")
+        }
+        ErrorDetail::Tag(t) => format!("{what}: tag {t}"),
+        ErrorDetail::Text(t) => format!("{what}: {t}"),
+    }
+}
+
+impl Client {
+    /// Performs the handshake on an opened port. `backend` is kept alive with the client.
+    pub fn connect(
+        port: Box<dyn serialport::SerialPort>,
+        backend: Option<Box<dyn Backend>>,
+    ) -> Result<Self> {
+        let mut c = Self {
+            port,
+            decoder: FrameDecoder::new(),
+            pending: VecDeque::new(),
+            next_seq: None,
+            last_dropped: 0,
+            gaps: GapStats::default(),
+            info: placeholder_info(),
+            _backend: backend,
+        };
+        // A board may still be printing its boot banner or be mid-frame: a 0x00 ends whatever
+        // it holds, and the handshake is retried before giving up.
+        let _ = c.port.write_all(&[0]);
+        let mut last_err = None;
+        for _ in 0..3 {
+            c.send(&HostMsg::Hello {
+                protocol_version: PROTOCOL_VERSION,
+            })?;
+            match c.wait(ANSWER_TIMEOUT, |m| {
+                matches!(m, DeviceMsg::HelloReply(_) | DeviceMsg::Error { .. })
+            }) {
+                Ok(DeviceMsg::HelloReply(info)) => {
+                    if info.protocol_version != PROTOCOL_VERSION {
+                        bail!(
+                            "device speaks protocol version {}, this hostctl speaks {}; update the {}",
+                            info.protocol_version,
+                            PROTOCOL_VERSION,
+                            if info.protocol_version > PROTOCOL_VERSION { "host" } else { "firmware" }
+                        );
+                    }
+                    c.info = info;
+                    return Ok(c);
+                }
+                Ok(DeviceMsg::Error { code, detail }) => {
+                    bail!("handshake refused: {}", describe_error(code, &detail))
+                }
+                Ok(_) => unreachable!("filtered by the predicate"),
+                Err(e) => last_err = Some(e),
+            }
+        }
+        Err(last_err.unwrap_or_else(|| anyhow!("no answer")))
+            .context("the device never answered the handshake (wrong port, wrong baud rate, or not running stiffwall firmware?)")
+    }
+
+    /// Sends one message.
+    pub fn send(&mut self, msg: &HostMsg) -> Result<()> {
+        let mut buf = [0u8; MAX_FRAME];
+        let frame = encode(msg, &mut buf).map_err(|e| anyhow!("encoding {msg:?}: {e}"))?;
+        self.port
+            .write_all(frame)
+            .context("writing to the device")?;
+        self.port.flush().ok();
+        Ok(())
+    }
+
+    /// Writes raw bytes (tests of malformed input).
+    pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
+        self.port.write_all(bytes).context("writing to the device")
+    }
+
+    /// Reads what is available and returns the next message, waiting up to `timeout`.
+    pub fn recv(&mut self, timeout: Duration) -> Result<Option<DeviceMsg>> {
+        if let Some(m) = self.pending.pop_front() {
+            return Ok(Some(m));
+        }
+        let deadline = Instant::now() + timeout;
+        let mut buf = [0u8; 4096];
+        loop {
+            let n = match self.port.read(&mut buf) {
+                Ok(0) => bail!("the device closed the connection"),
+                Ok(n) => n,
+                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => 0,
+                Err(e) if e.kind() == ErrorKind::Interrupted => 0,
+                Err(e) => return Err(e).context("reading from the device"),
+            };
+            for &b in &buf[..n] {
+                match self.decoder.feed::<DeviceMsg>(b) {
+                    Some(Ok(m)) => self.pending.push_back(m),
+                    Some(Err(_)) => self.gaps.bad_frames += 1,
+                    None => {}
+                }
+            }
+            if let Some(m) = self.pending.pop_front() {
+                if let DeviceMsg::Telemetry(batch) = &m {
+                    self.account(batch);
+                }
+                return Ok(Some(m));
+            }
+            if Instant::now() >= deadline {
+                return Ok(None);
+            }
+        }
+    }
+
+    fn account(&mut self, batch: &TelemetryBatch) {
+        if let Some(expect) = self.next_seq {
+            let gap = batch.seq.wrapping_sub(expect);
+            if gap != 0 && gap < u32::MAX / 2 {
+                self.gaps.missing += u64::from(gap);
+                let dev = batch.dropped.wrapping_sub(self.last_dropped);
+                self.gaps.dropped_on_device += u64::from(dev.min(gap));
+            }
+        }
+        self.last_dropped = batch.dropped;
+        self.gaps.received += batch.samples.len() as u64;
+        self.next_seq = Some(batch.seq.wrapping_add(batch.samples.len() as u32));
+    }
+
+    /// Waits for a message matching `want`; other messages (telemetry) are kept for later.
+    fn wait(&mut self, timeout: Duration, want: impl Fn(&DeviceMsg) -> bool) -> Result<DeviceMsg> {
+        let deadline = Instant::now() + timeout;
+        let mut kept = VecDeque::new();
+        let result = loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.recv(left)? {
+                Some(m) if want(&m) => break Ok(m),
+                Some(m) => kept.push_back(m),
+                None => break Err(anyhow!("no answer within {} ms", timeout.as_millis())),
+            }
+        };
+        kept.extend(self.pending.drain(..));
+        self.pending = kept;
+        result
+    }
+
+    /// Sends a request and waits for its answer; a device `Error` becomes an error.
+    pub fn request(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
+        self.send(msg)?;
+        let ack = ack_kind(msg);
+        let m = self
+            .wait(ANSWER_TIMEOUT, |m| match m {
+                DeviceMsg::Error { .. } => true,
+                DeviceMsg::Ack(r) => Some(*r) == ack,
+                DeviceMsg::Config(_) => {
+                    matches!(msg, HostMsg::GetConfig | HostMsg::LoadDefaults)
+                }
+                DeviceMsg::Faults(_) => matches!(msg, HostMsg::GetFaults),
+                DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
+                _ => false,
+            })
+            .with_context(|| format!("waiting for the answer to {}", short(msg)))?;
+        if let DeviceMsg::Error { code, detail } = &m {
+            bail!("{} refused: {}", short(msg), describe_error(*code, detail));
+        }
+        Ok(m)
+    }
+
+    /// Reads the active configuration.
+    pub fn get_config(&mut self) -> Result<ServoConfig> {
+        match self.request(&HostMsg::GetConfig)? {
+            DeviceMsg::Config(c) => Ok(c),
+            other => bail!("unexpected answer {other:?}"),
+        }
+    }
+
+    /// Applies a configuration (validated by the device; refused ones change nothing).
+    pub fn set_config(&mut self, config: &ServoConfig) -> Result<()> {
+        self.request(&HostMsg::SetConfig(*config)).map(drop)
+    }
+
+    /// Persists the active configuration.
+    pub fn save_config(&mut self) -> Result<()> {
+        self.request(&HostMsg::SaveConfig).map(drop)
+    }
+
+    /// Applies the firmware defaults and returns them.
+    pub fn load_defaults(&mut self) -> Result<ServoConfig> {
+        match self.request(&HostMsg::LoadDefaults)? {
+            DeviceMsg::Config(c) => Ok(c),
+            other => bail!("unexpected answer {other:?}"),
+        }
+    }
+
+    /// Reads latched faults.
+    pub fn faults(&mut self) -> Result<FaultReport> {
+        match self.request(&HostMsg::GetFaults)? {
+            DeviceMsg::Faults(f) => Ok(f),
+            other => bail!("unexpected answer {other:?}"),
+        }
+    }
+
+    /// Clears latched faults.
+    pub fn clear_faults(&mut self) -> Result<()> {
+        self.request(&HostMsg::ClearFaults).map(drop)
+    }
+
+    /// Starts telemetry at one sample per `decimation` ticks.
+    pub fn stream_start(&mut self, decimation: u16) -> Result<()> {
+        self.next_seq = None;
+        self.request(&HostMsg::StreamStart { decimation }).map(drop)
+    }
+
+    /// Stops telemetry and discards batches still queued.
+    pub fn stream_stop(&mut self) -> Result<()> {
+        self.request(&HostMsg::StreamStop)?;
+        self.pending
+            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        Ok(())
+    }
+
+    /// Next telemetry batch, or None after `timeout`.
+    pub fn next_batch(&mut self, timeout: Duration) -> Result<Option<TelemetryBatch>> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.recv(left)? {
+                Some(DeviceMsg::Telemetry(b)) => return Ok(Some(b)),
+                Some(_) => {}
+                None => return Ok(None),
+            }
+        }
+    }
+
+    /// Runs a release test and collects every sample until the device reports the end.
+    pub fn release(&mut self, deflection_ticks: i32, ticks: u32) -> Result<Record> {
+        self.experiment(
+            &HostMsg::Release {
+                deflection_ticks,
+                ticks,
+            },
+            ExperimentKind::Release,
+            ticks,
+        )
+    }
+
+    /// Runs an open-loop excitation and collects every sample.
+    pub fn excite(&mut self, profile: ExciteProfile, ticks: u32) -> Result<Record> {
+        self.experiment(
+            &HostMsg::Excite { profile, ticks },
+            ExperimentKind::Excite,
+            ticks,
+        )
+    }
+
+    fn experiment(&mut self, msg: &HostMsg, kind: ExperimentKind, ticks: u32) -> Result<Record> {
+        self.pending
+            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        let before = self.gaps;
+        self.next_seq = None;
+        self.request(msg)?;
+        let rate = f64::from(self.info.servo_rate_hz.max(1));
+        // Generous: the virtual device may run slower than real time on a loaded machine.
+        let limit = Duration::from_secs_f64(f64::from(ticks) / rate * 20.0 + 10.0);
+        let start = Instant::now();
+        let mut last_hb = Instant::now();
+        let mut samples = Vec::with_capacity(ticks as usize + 16);
+        loop {
+            if last_hb.elapsed() >= HEARTBEAT_PERIOD {
+                self.send(&HostMsg::Heartbeat)?;
+                last_hb = Instant::now();
+            }
+            match self.recv(Duration::from_millis(20))? {
+                Some(DeviceMsg::Telemetry(b)) => samples.extend_from_slice(&b.samples),
+                Some(DeviceMsg::ExperimentDone {
+                    kind: k,
+                    completed,
+                    faults,
+                }) if k == kind => {
+                    // Telemetry queued behind the end message.
+                    while let Some(b) = self.next_batch(Duration::from_millis(50))? {
+                        samples.extend_from_slice(&b.samples);
+                    }
+                    let mut gaps = self.gaps;
+                    gaps.received -= before.received;
+                    gaps.missing -= before.missing;
+                    gaps.dropped_on_device -= before.dropped_on_device;
+                    gaps.bad_frames -= before.bad_frames;
+                    return Ok(Record {
+                        samples,
+                        completed,
+                        faults,
+                        gaps,
+                    });
+                }
+                Some(_) | None => {}
+            }
+            if start.elapsed() > limit {
+                let _ = self.send(&HostMsg::Stop);
+                bail!("the experiment did not finish within {} s", limit.as_secs());
+            }
+        }
+    }
+}
+
+fn ack_kind(msg: &HostMsg) -> Option<Request> {
+    Some(match msg {
+        HostMsg::SetConfig(_) => Request::SetConfig,
+        HostMsg::SaveConfig => Request::SaveConfig,
+        HostMsg::StreamStart { .. } => Request::StreamStart,
+        HostMsg::StreamStop => Request::StreamStop,
+        HostMsg::Release { .. } => Request::Release,
+        HostMsg::Excite { .. } => Request::Excite,
+        HostMsg::TableChunk { .. } => Request::TableChunk,
+        HostMsg::Heartbeat => Request::Heartbeat,
+        HostMsg::ClearFaults => Request::ClearFaults,
+        HostMsg::Stop => Request::Stop,
+        _ => return None,
+    })
+}
+
+fn short(msg: &HostMsg) -> String {
+    let s = format!("{msg:?}");
+    s.split(['(', ' ', '{'])
+        .next()
+        .unwrap_or("request")
+        .to_string()
+}
+
+fn placeholder_info() -> DeviceInfo {
+    DeviceInfo {
+        protocol_version: 0,
+        firmware_name: heapless::String::new(),
+        firmware_version: heapless::String::new(),
+        board: heapless::String::new(),
+        servo_rate_hz: 1000,
+        counts_per_rev: 0,
+        resolution: 0.0,
+        encoder_bits: 32,
+        force_per_code: 0.0,
+        max_code: 0,
+        limits: stiffwall_proto::Limits {
+            min_rate_hz: 0,
+            max_rate_hz: 0,
+            max_stiffness: 0.0,
+            max_force: 0.0,
+            max_delay_ticks: 0,
+            max_coarsen_shift: 0,
+            telemetry_batch: 0,
+            max_table: 0,
+        },
+    }
+}
