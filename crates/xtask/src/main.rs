@@ -3,10 +3,12 @@
 //! - `ci`: everything CI runs (the README's test command): fmt, clippy, host tests, no_std checks
 //!   for the Cortex-M target, firmware cross-builds with the size report, QEMU scenarios.
 //! - `firmware [--update-size-report]`: builds every board image.
+//! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
 mod firmware;
+mod qemu;
 mod toolchain;
 
 /// Runs a command, echoing it, and fails when it fails.
@@ -19,7 +21,8 @@ pub fn run(cmd: &mut Command) -> Result<()> {
     Ok(())
 }
 
-fn cargo() -> Command {
+/// A `cargo` command in the repository root.
+pub fn cargo() -> Command {
     let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
     c.current_dir(firmware::root());
     c
@@ -63,6 +66,7 @@ fn main() -> Result<()> {
     match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("firmware") => firmware::firmware(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report]"),
+        Some("qemu") => qemu::qemu(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless]"),
     }
 }

@@ -115,7 +115,6 @@ pub fn which(prog: &str) -> bool {
 }
 
 /// Makes sure `qemu-system-arm` is installed.
-#[allow(dead_code)] // used by the QEMU scenarios (next commit)
 pub fn ensure_qemu() -> Result<()> {
     if which("qemu-system-arm") {
         return Ok(());

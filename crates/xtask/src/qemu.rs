@@ -1,0 +1,43 @@
+//! `cargo xtask qemu [--bless]`: builds the QEMU board image and runs the QEMU scenarios.
+//!
+//! The scenarios live in `host/tests/qemu.rs` (opt-in `#[ignore]` tests, so plain `cargo test`
+//! needs no QEMU): each boots the image under `qemu-system-arm -serial pty` inside a timeout,
+//! talks to it through hostctl's own serial client, ends it through semihosting exit, and
+//! compares its transcript with `firmware/boards/qemu-an386/scenarios/<name>.expected`.
+//! `--bless` rewrites the expected files from this run.
+
+use crate::firmware::{self, root, IMAGES};
+use crate::toolchain;
+use anyhow::{bail, Result};
+
+/// Runs every QEMU scenario.
+pub fn qemu(args: &[String]) -> Result<()> {
+    let bless = args.iter().any(|a| a == "--bless");
+    if let Some(bad) = args.iter().find(|a| *a != "--bless") {
+        bail!("unknown argument {bad:?} for `cargo xtask qemu` (allowed: --bless)");
+    }
+    toolchain::ensure_qemu()?;
+    let cross = toolchain::ensure_cross()?;
+    let image = IMAGES
+        .iter()
+        .find(|i| i.name == "qemu-an386")
+        .expect("the QEMU image is in the image table");
+    let elf = firmware::build(cross, image, &[])?;
+    let mut cmd = crate::cargo();
+    cmd.args([
+        "test",
+        "-p",
+        "stiffwall-host",
+        "--test",
+        "qemu",
+        "--",
+        "--ignored",
+        "--test-threads=1",
+    ])
+    .env("STIFFWALL_QEMU_IMAGE", &elf)
+    .current_dir(root());
+    if bless {
+        cmd.env("STIFFWALL_BLESS", "1");
+    }
+    crate::run(&mut cmd)
+}
