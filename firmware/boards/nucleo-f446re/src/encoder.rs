@@ -3,8 +3,8 @@
 //! Pins: A = PA0 (TIM2_CH1, AF1, Arduino A0 / CN8-1), B = PA1 (TIM2_CH2, AF1, Arduino A1 /
 //! CN8-2), 3.3 V logic. Units: raw encoder counts (quadrature edges). Invariants: the counter
 //! starts at 0 at boot, counts up when A leads B, and wraps only after 2³² edges (the count is
-//! read as a two's-complement `i32`, so a device that never travels 2³¹ edges from the boot
-//! position never sees a wrap). A digital input filter (8 samples at the 90 MHz timer clock,
+//! read raw as `u32`; the firmware core unwraps it, and a two's-complement reading never wraps
+//! for a device that travels less than 2³¹ edges from the boot position). A digital input filter (8 samples at the 90 MHz timer clock,
 //! ≈ 89 ns) rejects glitches while still following edge rates above 10 MHz.
 //! Reading the count is a single 32-bit register read: no side effect, safe from any context.
 
@@ -39,10 +39,10 @@ impl QuadEncoder {
         Self { qei }
     }
 
-    /// The raw position in encoder counts since boot (two's complement of the 32-bit counter).
+    /// The raw 32-bit counter: encoder counts since boot, wrapping (encoder_bits = 32).
     #[inline(always)]
-    pub fn count(&self) -> i32 {
+    pub fn raw(&self) -> u32 {
         use stm32f4xx_hal::hal_02::Qei as _;
-        self.qei.count() as i32
+        self.qei.count()
     }
 }

@@ -129,6 +129,25 @@ impl FlashSlots {
         result
     }
 
+    /// Whether every byte of `slot` reads 0xFF (erased).
+    pub fn is_blank(&self, slot: usize) -> Result<bool, FlashError> {
+        let bytes = self.slot(slot)?;
+        // Word-sized compares: the slot is 4-byte aligned and a multiple of 4 long.
+        Ok(bytes.chunks_exact(4).all(|w| w == [0xFF; 4]))
+    }
+
+    /// Erases `slot` and programs `data` from offset 0 (the core's `ConfigStorage::write`).
+    pub fn rewrite(&mut self, slot: usize, data: &[u8]) -> Result<(), FlashError> {
+        if data.len() > SLOT_LEN {
+            return Err(FlashError::OutOfRange);
+        }
+        // A blank slot (first save on a fresh board) needs no erase: skip the 1–2 s stall.
+        if !self.is_blank(slot)? {
+            self.erase(slot)?;
+        }
+        self.program(slot, 0, data)
+    }
+
     fn unlock(&mut self) {
         if self.flash.cr().read().lock().bit_is_set() {
             self.flash.keyr().write(|w| w.key().set(KEY1));

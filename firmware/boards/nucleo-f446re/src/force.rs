@@ -1,18 +1,19 @@
 //! Force output: DAC channel 1 (feature `dac`) or TIM1 PWM + direction pin (feature `pwm`), plus
 //! the amplifier / bridge enable line shared by both.
 //!
-//! Units: the input is a normalized signed command, `i16`, where `±FULL_SCALE` (±32767) is the
-//! amplifier's full-scale force in either direction and 0 is zero force (`i16::MIN` is clamped to
-//! −32767 so the range is symmetric). Conversion to newtons is the firmware core's business
-//! (its force gain): this module only maps the command linearly onto the hardware.
+//! Units: the input is the firmware core's signed force code (`ForceOutput::write`), in native
+//! hardware steps so that one code is one DAC LSB or one PWM timer count: −`MAX_CODE` …
+//! +`MAX_CODE`, 0 = zero force; anything beyond saturates. The force per code (N or N·m per
+//! code) depends on the amplifier and is the board's `force_per_code` setting (README).
 //!
 //! - `dac`: PA4 (DAC_OUT1, Arduino A2 / CN8-3), 12-bit, output buffer on. Mid-scale code
 //!   `DAC_ZERO` = 2048 (1.65 V) is zero force; full scale is ±`DAC_SPAN` = ±1800 codes
-//!   (0.20 V … 3.10 V), kept inside the buffer's linear range (VSS+0.2 V … VDDA−0.2 V). An external
+//!   (0.20 V … 3.10 V, `MAX_CODE` = 1800), kept inside the buffer's linear range (VSS+0.2 V … VDDA−0.2 V). An external
 //!   op-amp stage (README) maps 1.65 V ± 1.45 V to ±10 V for a Copley-style analog current
 //!   amplifier in current (torque) mode.
 //! - `pwm`: TIM1_CH1 on PA8 (AF1, Arduino D7 / CN9-8) at `PWM_HZ` = 20 kHz, edge aligned, with
-//!   the magnitude as duty cycle (limited to `DUTY_LIMIT_PERCENT` for bootstrapped gate drivers),
+//!   the magnitude as duty cycle in timer counts (period `PWM_PERIOD` = 9000 counts at the
+//!   180 MHz timer clock; `MAX_CODE` = 8820 = 98 %, so bootstrapped gate drivers get off time),
 //!   and the sign on DIR = PA9 (Arduino D8 / CN5-1, high = negative force). Sign-magnitude.
 //!   The duty register is preloaded, so a new duty takes effect at the next PWM period (≤ 50 µs).
 //! - Enable: PB10 (Arduino D6 / CN9-7), push-pull, high = amplifier / bridge enabled. It is
@@ -29,15 +30,13 @@ compile_error!("select the force output: `--features dac` (DAC on PA4) or `--fea
 
 use stm32f4xx_hal::gpio::{Output, PushPull, PB10};
 
-/// The command magnitude that means full-scale force.
-pub const FULL_SCALE: i32 = i16::MAX as i32;
+pub use imp::MAX_CODE;
 
 /// Amplifier / H-bridge enable pin type.
 pub type EnablePin = PB10<Output<PushPull>>;
 
 #[cfg(feature = "dac")]
 mod imp {
-    use super::FULL_SCALE;
     use stm32f4xx_hal::{
         dac::{DacExt, DacOut, DacPin, C1},
         gpio::PA4,
@@ -47,8 +46,8 @@ mod imp {
 
     /// DAC code for zero force (mid-scale).
     pub const DAC_ZERO: u16 = 2048;
-    /// DAC codes from zero to full-scale force, each way.
-    pub const DAC_SPAN: i32 = 1800;
+    /// DAC codes from zero to full-scale force, each way (the buffer's linear range).
+    pub const MAX_CODE: i32 = 1800;
 
     /// The DAC driver: channel 1 on PA4.
     pub struct Driver {
@@ -66,19 +65,11 @@ mod imp {
             Self { ch, last: DAC_ZERO }
         }
 
-        /// Maps a command in −FULL_SCALE..=FULL_SCALE to a 12-bit code.
+        /// Maps a force code to a 12-bit DAC code: mid-scale + code, saturated to ±`MAX_CODE`.
         #[inline(always)]
         pub fn code_for(cmd: i32) -> u16 {
-            let cmd = cmd.clamp(-FULL_SCALE, FULL_SCALE);
-            // |cmd·DAC_SPAN| ≤ 32767·1800 < 2³¹: no overflow. Rounded to nearest.
-            let scaled = (cmd * DAC_SPAN
-                + if cmd >= 0 {
-                    FULL_SCALE / 2
-                } else {
-                    -(FULL_SCALE / 2)
-                })
-                / FULL_SCALE;
-            (i32::from(DAC_ZERO) + scaled) as u16
+            // In 248..=3848 after the clamp: always a valid 12-bit code.
+            (i32::from(DAC_ZERO) + cmd.clamp(-MAX_CODE, MAX_CODE)) as u16
         }
 
         #[inline(always)]
@@ -109,7 +100,6 @@ mod imp {
 
 #[cfg(feature = "pwm")]
 mod imp {
-    use super::FULL_SCALE;
     use stm32f4xx_hal::{
         gpio::{Output, PushPull, PA8, PA9},
         pac::TIM1,
@@ -120,16 +110,22 @@ mod imp {
 
     /// PWM carrier frequency (above hearing, well below the bridge's switching limit).
     pub const PWM_HZ: u32 = 20_000;
+    /// TIM1 clock (APB2 timer clock at the 180 MHz system clock, `main.rs`).
+    pub const TIMCLK_HZ: u32 = 180_000_000;
+    /// Timer counts per PWM period.
+    pub const PWM_PERIOD: u32 = TIMCLK_HZ / PWM_HZ;
     /// Largest duty cycle, percent (bootstrapped high-side drivers need some off time).
     pub const DUTY_LIMIT_PERCENT: u32 = 98;
+    /// Largest force code = largest duty in timer counts.
+    pub const MAX_CODE: i32 = (PWM_PERIOD * DUTY_LIMIT_PERCENT / 100) as i32;
 
     /// The PWM + DIR driver.
     pub struct Driver {
         _timer: PwmHzManager<TIM1>,
         ch: PwmChannel<TIM1, 0>,
         dir: PA9<Output<PushPull>>,
-        /// Timer counts at `DUTY_LIMIT_PERCENT`.
-        max_duty: u32,
+        /// Largest duty in timer counts: `MAX_CODE`, or less if the timer's period came out shorter.
+        max_duty: i32,
         last: i32,
     }
 
@@ -141,7 +137,7 @@ mod imp {
             ch.set_duty(0);
             ch.enable();
             let period = u32::from(ch.get_max_duty());
-            let max_duty = period * DUTY_LIMIT_PERCENT / 100;
+            let max_duty = MAX_CODE.min((period * DUTY_LIMIT_PERCENT / 100) as i32);
             Self {
                 _timer: timer,
                 ch,
@@ -151,19 +147,11 @@ mod imp {
             }
         }
 
-        /// Maps |cmd| in 0..=FULL_SCALE to timer counts in 0..=max_duty.
-        #[inline(always)]
-        fn duty_for(&self, magnitude: u32) -> u16 {
-            // magnitude ≤ 32767, max_duty ≤ 65535: product < 2³¹.
-            let duty = (magnitude.min(FULL_SCALE as u32) * self.max_duty + (FULL_SCALE as u32 / 2))
-                / FULL_SCALE as u32;
-            duty.min(u32::from(u16::MAX)) as u16
-        }
-
         #[inline(always)]
         pub fn set(&mut self, cmd: i32) {
-            let cmd = cmd.clamp(-FULL_SCALE, FULL_SCALE);
-            let duty = self.duty_for(cmd.unsigned_abs());
+            let cmd = cmd.clamp(-self.max_duty, self.max_duty);
+            // 0 ≤ |cmd| ≤ max_duty ≤ 8820: fits u16.
+            let duty = cmd.unsigned_abs() as u16;
             if cmd < 0 {
                 self.dir.set_high();
             } else {
@@ -257,10 +245,10 @@ impl ForceOut {
         }
     }
 
-    /// Applies a normalized command (±`FULL_SCALE` = full-scale force). Saturates.
+    /// Applies a force code (±`MAX_CODE` = full-scale force). Saturates.
     #[inline(always)]
-    pub fn set(&mut self, cmd: i16) {
-        self.driver.set(i32::from(cmd));
+    pub fn set(&mut self, code: i32) {
+        self.driver.set(code);
     }
 
     /// Zero force (the amplifier stays in its current enable state).

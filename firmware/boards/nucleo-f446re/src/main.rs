@@ -14,7 +14,6 @@ mod handoff;
 mod serial;
 mod servo_timer;
 
-use core::fmt::Write as _;
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use stm32f4xx_hal::{
     interrupt,
@@ -113,13 +112,6 @@ fn main() -> ! {
         NVIC::unmask(Interrupt::TIM7);
     }
 
-    let _ = writeln!(
-        port,
-        "stiffwall nucleo-f446re {} sysclk {} Hz",
-        force::VARIANT,
-        rcc.clocks.sysclk().raw()
-    );
-
     let mut buf = [0u8; 64];
     loop {
         let n = port.read(&mut buf);
@@ -138,7 +130,7 @@ fn TIM7() {
         return;
     };
     res.timer.ack();
-    let _count = res.encoder.count();
+    let _count = res.encoder.raw();
     res.force.zero();
 }
 

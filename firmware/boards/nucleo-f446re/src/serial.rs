@@ -131,20 +131,38 @@ impl SerialPort {
         n
     }
 
-    /// Queues as many of `bytes` as fit; returns how many. Never blocks.
+    /// The next received byte, if any. Never blocks.
+    #[inline]
+    pub fn read_byte(&mut self) -> Option<u8> {
+        self.rx.dequeue()
+    }
+
+    /// Queues one byte; `false` if the transmit queue is full. Never blocks. The byte goes out
+    /// once `kick` runs (thread mode calls it after each batch of writes).
+    #[inline]
+    pub fn write_byte(&mut self, byte: u8) -> bool {
+        self.tx.enqueue(byte).is_ok()
+    }
+
+    /// Starts the transmitter if bytes are waiting: pends the USART2 interrupt, which enables
+    /// its TXE interrupt itself (so thread mode never read-modify-writes USART2's CR1).
+    #[inline]
+    pub fn kick(&mut self) {
+        if self.tx.ready() {
+            cortex_m::peripheral::NVIC::pend(Interrupt::USART2);
+        }
+    }
+
+    /// Queues as many of `bytes` as fit and starts sending; returns how many. Never blocks.
     pub fn write(&mut self, bytes: &[u8]) -> usize {
         let mut n = 0;
         for &b in bytes {
-            if self.tx.enqueue(b).is_err() {
+            if !self.write_byte(b) {
                 break;
             }
             n += 1;
         }
-        if n > 0 {
-            // The handler enables the TXE interrupt itself; pending it here starts the
-            // transmitter without thread mode touching USART2's CR1 (no read-modify-write race).
-            cortex_m::peripheral::NVIC::pend(Interrupt::USART2);
-        }
+        self.kick();
         n
     }
 
