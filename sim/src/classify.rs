@@ -1,0 +1,154 @@
+//! Classification of a trajectory into the four shades of the paper's Fig. 6/7.
+//!
+//! Units: energies H_T (35) in K·Δ², evaluated at sample instants τ = h only.
+//!
+//! Rules (thresholds in [`Thresholds`], documented in `docs/model-notes-sim.md`):
+//! 1. **Growing**: H_T exceeds `divergence_ratio`·max(H_T(0), 1) (the run stops early), the state
+//!    diverges, or H_T at the end of the horizon exceeds H_T(0)·(1 + `growth_tol`).
+//! 2. **Decaying**: the mass comes to rest for good (at rest under an unchanged force for longer
+//!    than the delay line, a fixed point, see [`crate::ExactSim::at_rest`]) before the horizon.
+//!    - **monotonically** if H_T(h+1) ≤ H_T(h) + `mono_tol`·max(H_T(0), 1) at every sample,
+//!    - **non-monotonically** otherwise.
+//! 3. **Persistent**: neither: still moving at the end, with no net energy gain.
+//!
+//! Invariant: the classifier calls `step_period` at most `periods` times and stops at rest.
+
+use crate::exact::{storage, ExactSim};
+
+/// The four classes, darkest first (Fig. 6/7 shading).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "std", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "std", serde(rename_all = "snake_case"))]
+pub enum Class {
+    /// Energy grows (dark).
+    Growing,
+    /// Oscillations persist (medium).
+    Persistent,
+    /// Motion stops, energy not monotonic at samples (light).
+    NonMonotoneDecay,
+    /// Motion stops, energy monotonically decreasing at samples (white).
+    MonotoneDecay,
+}
+
+impl Class {
+    /// Short name used in JSON and CSV.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Growing => "growing",
+            Self::Persistent => "persistent",
+            Self::NonMonotoneDecay => "nonmonotone_decay",
+            Self::MonotoneDecay => "monotone_decay",
+        }
+    }
+
+    /// True for the two decaying classes.
+    #[must_use]
+    pub fn decays(self) -> bool {
+        matches!(self, Self::NonMonotoneDecay | Self::MonotoneDecay)
+    }
+}
+
+/// Classification thresholds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Thresholds {
+    /// Early stop as growing when H_T > ratio·max(H_T(0), 1).
+    pub divergence_ratio: f64,
+    /// Growing when H_T(end) > H_T(0)·(1 + growth_tol).
+    pub growth_tol: f64,
+    /// Relative tolerance of the monotonicity test (floating-point noise).
+    pub mono_tol: f64,
+    /// Fraction of the horizon at its end over which the oscillation amplitude is measured.
+    pub tail_fraction: f64,
+}
+
+impl Default for Thresholds {
+    fn default() -> Self {
+        Self {
+            divergence_ratio: 1e6,
+            growth_tol: 1e-9,
+            mono_tol: 1e-12,
+            tail_fraction: 0.1,
+        }
+    }
+}
+
+/// Result of a classification run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Outcome {
+    /// The class.
+    pub class: Class,
+    /// Periods simulated (less than the horizon on early stop).
+    pub periods_run: u64,
+    /// H_T(0).
+    pub h0: f64,
+    /// H_T at the last sample instant simulated.
+    pub h_end: f64,
+    /// Largest H_T seen at a sample instant.
+    pub h_max: f64,
+    /// Largest |ξ| at sample instants over the tail of the horizon (0 if stopped early).
+    pub tail_amplitude: f64,
+    /// Largest |ξ̇| at sample instants over the tail of the horizon.
+    pub tail_speed: f64,
+}
+
+/// Runs `sim` for up to `periods` periods and classifies the trajectory.
+pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outcome {
+    let mu = sim.params().mu;
+    let s0 = sim.state();
+    let h0 = storage(mu, s0.x, s0.v);
+    let scale = if h0 > 1.0 { h0 } else { 1.0 };
+    let limit = th.divergence_ratio * scale;
+    let tol = th.mono_tol * scale;
+    let tail_start = periods - (periods as f64 * th.tail_fraction) as u64;
+    let mut prev = h0;
+    let mut h_max = h0;
+    let mut mono = true;
+    let mut amp: f64 = 0.0;
+    let mut spd: f64 = 0.0;
+    let mut h = 0;
+    let mut class = None;
+    while h < periods {
+        sim.step_period();
+        h += 1;
+        let s = sim.state();
+        let e = storage(mu, s.x, s.v);
+        if e > prev + tol {
+            mono = false;
+        }
+        prev = e;
+        if e > h_max {
+            h_max = e;
+        }
+        if h >= tail_start {
+            amp = amp.max(s.x.abs());
+            spd = spd.max(s.v.abs());
+        }
+        if e.is_nan() || e > limit || sim.diverged() {
+            class = Some(Class::Growing);
+            break;
+        }
+        if sim.at_rest() {
+            class = Some(if mono {
+                Class::MonotoneDecay
+            } else {
+                Class::NonMonotoneDecay
+            });
+            break;
+        }
+    }
+    let class = class.unwrap_or(if prev > h0 * (1.0 + th.growth_tol) {
+        Class::Growing
+    } else {
+        Class::Persistent
+    });
+    Outcome {
+        class,
+        periods_run: h,
+        h0,
+        h_end: prev,
+        h_max,
+        tail_amplitude: amp,
+        tail_speed: spd,
+    }
+}

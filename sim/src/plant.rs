@@ -1,0 +1,306 @@
+//! Closed-form motion of a mass with viscous and dynamic Coulomb friction under a constant force,
+//! with the stick–slip rule; the physical-units plant the firmware drives.
+//!
+//! The equation is `m·ẍ + b·ẋ + c·sgn(ẋ) = f` with `f` constant over the step. The same code
+//! serves the dimensionless model (m = μ, b = β, c = σ, time in sampling periods, force in K·Δ)
+//! and SI units (kg, N·s/m, N, s, N).
+//!
+//! **Stick–slip rule** (documented in `docs/model-notes-sim.md`): while ẋ ≠ 0 the friction is
+//! −c·sgn(ẋ). When the velocity reaches zero (located analytically) the mass stays at rest as
+//! long as |f| ≤ c (this includes f = 0 when c = 0) and otherwise leaves in the direction of `f`
+//! with friction −c·sgn(f). With a constant force a mass can therefore reverse at most once per
+//! step, and a mass at rest stays at rest until the force changes: no Zeno behaviour.
+//!
+//! Invariants: m > 0, b ≥ 0, c ≥ 0, step length t ≥ 0; every call performs at most two
+//! closed-form sub-steps, never allocates and never loops.
+
+use crate::math::{e1, g, g1, g2, log1p_over};
+
+/// Mass, viscous and Coulomb coefficients with derived constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    /// Mass m (or μ).
+    pub mass: f64,
+    /// Viscous coefficient b (or β), ≥ 0.
+    pub damping: f64,
+    /// Dynamic Coulomb force c (or σ), ≥ 0.
+    pub coulomb: f64,
+    /// 1/m.
+    pub inv_mass: f64,
+    /// Decay rate k = b/m.
+    pub rate: f64,
+}
+
+impl Body {
+    /// A body; the caller guarantees m > 0, b ≥ 0, c ≥ 0 (validated at the API boundaries).
+    #[must_use]
+    pub fn new(mass: f64, damping: f64, coulomb: f64) -> Self {
+        Self {
+            mass,
+            damping,
+            coulomb,
+            inv_mass: 1.0 / mass,
+            rate: damping / mass,
+        }
+    }
+}
+
+/// Position and velocity.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Motion {
+    /// Position (ξ in ticks, or metres).
+    pub x: f64,
+    /// Velocity (ξ̇ in ticks per period, or m/s).
+    pub v: f64,
+}
+
+/// Integrals accumulated over one step, for the energy audit.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepIntegrals {
+    /// ∫ ẋ² dt over the step.
+    pub int_v2: f64,
+    /// ∫ |ẋ| dt over the step.
+    pub int_abs_v: f64,
+    /// Number of velocity zero crossings (0, 1).
+    pub crossings: u32,
+    /// Whether the mass is at rest (stuck) at the end of the step.
+    pub stuck: bool,
+}
+
+/// Free motion without a zero crossing: returns (Δx, v₁, ∫v²) for initial velocity `v0`,
+/// constant acceleration term `acc = a/m` and duration `t`.
+#[inline]
+fn free<const AUDIT: bool>(body: &Body, v0: f64, acc: f64, t: f64) -> (f64, f64, f64) {
+    let x = body.rate * t;
+    let e1x = e1(x);
+    let p1 = t * e1x;
+    let p2 = t * t * g(x);
+    let e = 1.0 - x * e1x;
+    let v1 = v0 * e + acc * p1;
+    let dx = v0 * p1 + acc * p2;
+    let iv2 = if AUDIT {
+        v0 * v0 * t * e1(2.0 * x) + 2.0 * v0 * acc * t * t * g1(x) + acc * acc * t * t * t * g2(x)
+    } else {
+        0.0
+    };
+    (dx, v1, iv2)
+}
+
+/// Sign as ±1 (`v` must be non-zero).
+#[inline]
+fn sign(v: f64) -> f64 {
+    if v > 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+/// Advances `m` by `t` under the constant force `f`, exactly, applying the stick–slip rule.
+/// With `AUDIT` the returned integrals hold ∫ẋ² and ∫|ẋ| (otherwise zeros and the flags).
+pub fn advance<const AUDIT: bool>(body: &Body, m: &mut Motion, f: f64, t: f64) -> StepIntegrals {
+    let mut out = StepIntegrals::default();
+    let mut rem = t;
+    let c = body.coulomb;
+    if m.v != 0.0 {
+        let s = sign(m.v);
+        let a = f - c * s;
+        let acc = a * body.inv_mass;
+        let (dx, v1, iv2) = free::<AUDIT>(body, m.v, acc, rem);
+        if v1 * s > 0.0 || a * s >= 0.0 {
+            m.x += dx;
+            m.v = v1;
+            if AUDIT {
+                out.int_v2 += iv2;
+                out.int_abs_v += dx.abs();
+            }
+            return out;
+        }
+        // Velocity reaches zero at t* = (m|v0|/|a|)·ln(1 + y)/y, y = k·m|v0|/|a|.
+        let t0 = m.v.abs() / acc.abs();
+        let tc = (t0 * log1p_over(body.rate * t0)).min(rem);
+        let (dx, _, iv2) = free::<AUDIT>(body, m.v, acc, tc);
+        m.x += dx;
+        m.v = 0.0;
+        rem -= tc;
+        out.crossings = 1;
+        if AUDIT {
+            out.int_v2 += iv2;
+            out.int_abs_v += dx.abs();
+        }
+    }
+    // At rest: stick while |f| ≤ c, otherwise slip in the direction of f.
+    if f.abs() <= c || rem <= 0.0 {
+        out.stuck = f.abs() <= c;
+        return out;
+    }
+    let s = sign(f);
+    let acc = (f - c * s) * body.inv_mass;
+    let (dx, v1, iv2) = free::<AUDIT>(body, 0.0, acc, rem);
+    m.x += dx;
+    m.v = v1;
+    if AUDIT {
+        out.int_v2 += iv2;
+        out.int_abs_v += dx.abs();
+    }
+    out
+}
+
+/// The device in SI units, for the firmware servo loop and the virtual device.
+///
+/// `advance(force_n, dt_s)` applies a constant force for `dt_s` seconds and returns the exact
+/// state at the end; `encoder_count()` is ⌊x/Δ⌋. No allocation, no panics, no loops: suitable
+/// for the no_std firmware (f64 is software-emulated on the Cortex-M4F, ~2 exp/log per call).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhysicalPlant {
+    body: Body,
+    resolution_m: f64,
+    state: Motion,
+}
+
+/// Invalid physical plant parameter (names the parameter).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlantError {
+    /// mass_kg must be finite and > 0.
+    Mass,
+    /// viscous_ns_per_m must be finite and ≥ 0.
+    Viscous,
+    /// coulomb_n must be finite and ≥ 0.
+    Coulomb,
+    /// resolution_m must be finite and > 0.
+    Resolution,
+}
+
+impl core::fmt::Display for PlantError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let s = match self {
+            Self::Mass => "mass_kg must be finite and > 0",
+            Self::Viscous => "viscous_ns_per_m must be finite and >= 0",
+            Self::Coulomb => "coulomb_n must be finite and >= 0",
+            Self::Resolution => "resolution_m must be finite and > 0",
+        };
+        f.write_str(s)
+    }
+}
+
+impl PhysicalPlant {
+    /// A plant at rest at x = 0. Mass in kg, viscous friction in N·s/m, dynamic Coulomb friction
+    /// in N, encoder resolution Δ in m.
+    pub fn new(
+        mass_kg: f64,
+        viscous_ns_per_m: f64,
+        coulomb_n: f64,
+        resolution_m: f64,
+    ) -> Result<Self, PlantError> {
+        if !(mass_kg.is_finite() && mass_kg > 0.0) {
+            return Err(PlantError::Mass);
+        }
+        if !(viscous_ns_per_m.is_finite() && viscous_ns_per_m >= 0.0) {
+            return Err(PlantError::Viscous);
+        }
+        if !(coulomb_n.is_finite() && coulomb_n >= 0.0) {
+            return Err(PlantError::Coulomb);
+        }
+        if !(resolution_m.is_finite() && resolution_m > 0.0) {
+            return Err(PlantError::Resolution);
+        }
+        Ok(Self {
+            body: Body::new(mass_kg, viscous_ns_per_m, coulomb_n),
+            resolution_m,
+            state: Motion::default(),
+        })
+    }
+
+    /// Sets position (m) and velocity (m/s).
+    pub fn set_state(&mut self, position_m: f64, velocity_m_per_s: f64) {
+        self.state = Motion {
+            x: position_m,
+            v: velocity_m_per_s,
+        };
+    }
+
+    /// Applies `force_n` (N, constant) for `dt_s` seconds (≥ 0; negative or NaN is treated as 0)
+    /// and returns the exact state at the end. A NaN force is treated as 0 N.
+    pub fn advance(&mut self, force_n: f64, dt_s: f64) -> Motion {
+        let f = if force_n.is_nan() { 0.0 } else { force_n };
+        if dt_s > 0.0 {
+            advance::<false>(&self.body, &mut self.state, f, dt_s);
+        }
+        self.state
+    }
+
+    /// Position in m.
+    #[must_use]
+    pub fn position_m(&self) -> f64 {
+        self.state.x
+    }
+
+    /// Velocity in m/s.
+    #[must_use]
+    pub fn velocity_m_per_s(&self) -> f64 {
+        self.state.v
+    }
+
+    /// Encoder count ⌊x/Δ⌋ (saturating at the i64 range).
+    #[must_use]
+    pub fn encoder_count(&self) -> i64 {
+        crate::math::floor_i64(self.state.x / self.resolution_m)
+    }
+
+    /// The body (m, b, c) in SI units.
+    #[must_use]
+    pub fn body(&self) -> &Body {
+        &self.body
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn beta_zero_is_the_parabola() {
+        let b = Body::new(2.0, 0.0, 0.0);
+        let mut m = Motion { x: 1.0, v: 3.0 };
+        advance::<false>(&b, &mut m, 4.0, 0.5);
+        assert_eq!(m.v, 3.0 + 2.0 * 0.5);
+        assert!((m.x - (1.0 + 1.5 + 0.25)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn sticks_when_force_within_coulomb() {
+        let b = Body::new(1.0, 0.1, 1.0);
+        let mut m = Motion { x: 0.0, v: 0.1 };
+        let r = advance::<true>(&b, &mut m, -0.5, 1.0);
+        assert_eq!(r.crossings, 1);
+        assert!(r.stuck);
+        assert_eq!(m.v, 0.0);
+        // Stays stuck.
+        let before = m;
+        advance::<false>(&b, &mut m, 0.9, 10.0);
+        assert_eq!(m, before);
+    }
+
+    #[test]
+    fn reverses_when_force_exceeds_coulomb() {
+        let b = Body::new(1.0, 0.0, 0.5);
+        let mut m = Motion { x: 0.0, v: 1.0 };
+        // a = -2 - 0.5 = -2.5: stops at t = 0.4, x = 0.2; then a = -1.5 for 0.6.
+        advance::<false>(&b, &mut m, -2.0, 1.0);
+        assert!((m.v + 1.5 * 0.6).abs() < 1e-15);
+        assert!((m.x - (0.2 - 0.75 * 0.36)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn physical_plant_validates() {
+        assert_eq!(
+            PhysicalPlant::new(0.0, 0.0, 0.0, 1e-5),
+            Err(PlantError::Mass)
+        );
+        let mut p = PhysicalPlant::new(0.25, 0.01, 0.06, 20e-6).unwrap();
+        p.set_state(-1e-6, 0.0);
+        assert_eq!(p.encoder_count(), -1);
+        let s = p.advance(1.0, 1e-3);
+        assert!(s.v > 0.0);
+    }
+}

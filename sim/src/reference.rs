@@ -1,0 +1,636 @@
+//! Reference integrators: fixed-step classical RK4 and adaptive Dormand–Prince 5(4), with event
+//! location by a bracketing root finder (Illinois regula falsi on re-taken partial steps).
+//!
+//! Units: dimensionless (Table I). State y = [ξ, ξ̇, p, q, E_d, W_A, W_H]: position, velocity,
+//! amplifier filter output p = φ_A and its derivative q, and three energy quadratures (dissipated
+//! energy (28), work of the actuator ∫φ_A ξ̇, work of the hand ∫φ_H ξ̇).
+//!
+//! Honest about sgn(0): the friction sign is a *mode* fixed between events, never sgn of a stage
+//! value. Modes: moving with s = ±1, or stuck. Events: the velocity crosses zero while moving
+//! (then the stick–slip rule of [`crate::plant`] picks the next mode), the net force |φ_A + φ_H|
+//! exceeds σ while stuck (only possible with the amplifier filter), and the segment ends (sample
+//! instants and delayed force switches, where the rule is re-applied to a mass at rest).
+//!
+//! Extra effects beyond the exact solver: a second-order amplifier filter
+//! p̈ + 2ζω ṗ + ω² p = ω² u, a hand (added mass μ_h, damping β_h, stiffness κ_h: φ_H = −κ_h ξ − β_h
+//! ξ̇), and a continuous spring without sampling (`zoh = false`, no delay allowed).
+//!
+//! Invariants: every step is finite-length (≥ 1e-14 periods or the segment end), the root
+//! finder is bounded to 100 iterations, so the run always terminates; no allocation.
+
+use crate::exact::{potential, ExactSim, History, PeriodAudit};
+use crate::math::floor_fast;
+use crate::params::{Effects, ParamError, Params};
+use crate::plant::Motion;
+
+const N: usize = 7;
+type Y = [f64; N];
+const LINE: usize = 256;
+const MASK: u64 = LINE as u64 - 1;
+
+/// Integration method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "std", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "std", serde(rename_all = "snake_case", tag = "kind"))]
+pub enum Method {
+    /// Classical RK4 with a fixed number of steps per sampling period.
+    Rk4 {
+        /// Steps per period (≥ 1).
+        steps_per_period: u32,
+    },
+    /// Dormand–Prince 5(4) with error control.
+    Dopri {
+        /// Relative tolerance.
+        rtol: f64,
+        /// Absolute tolerance.
+        atol: f64,
+    },
+}
+
+/// Human hand in contact (dimensionless, Table I scaling).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "std", derive(serde::Serialize, serde::Deserialize))]
+pub struct Hand {
+    /// Added mass μ_h = m_h/(K T²).
+    pub mu: f64,
+    /// Damping β_h = b_h/(K T).
+    pub beta: f64,
+    /// Stiffness κ_h = k_h/K (spring to the anchor at ξ = 0).
+    pub kappa: f64,
+}
+
+/// Second-order amplifier low-pass filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "std", derive(serde::Serialize, serde::Deserialize))]
+pub struct AmpFilter {
+    /// Cut-off ω_A·T (radians per period), > 0.
+    pub omega: f64,
+    /// Damping ratio δ_A, > 0.
+    pub zeta: f64,
+}
+
+/// Model seen by the reference integrators.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefModel {
+    /// μ, β, σ, τ_D.
+    pub params: Params,
+    /// Effects shared with the exact solver.
+    pub effects: Effects,
+    /// Sample-and-hold of the spring (otherwise the spring acts continuously, no delay).
+    pub zoh: bool,
+    /// Optional hand.
+    pub hand: Option<Hand>,
+    /// Optional amplifier filter.
+    pub amp: Option<AmpFilter>,
+    /// Delay-line history.
+    pub history: History,
+}
+
+impl RefModel {
+    /// The paper's model (7)–(9) with every effect of `effects`, no hand, no filter.
+    #[must_use]
+    pub fn paper(params: Params, effects: Effects) -> Self {
+        Self {
+            params,
+            effects,
+            zoh: true,
+            hand: None,
+            amp: None,
+            history: History::HoldInitial,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Mode {
+    Moving(f64),
+    Stuck,
+}
+
+/// Work counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Right-hand-side evaluations.
+    pub rhs_evals: u64,
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps (Dormand–Prince only).
+    pub rejected: u64,
+    /// Located events.
+    pub events: u64,
+}
+
+/// A reference simulation (implements [`ExactSim`] so it plugs into the same tools).
+#[derive(Debug, Clone)]
+pub struct RefSim {
+    m: RefModel,
+    method: Method,
+    y: Y,
+    mode: Mode,
+    mass: f64,
+    beta: f64,
+    sigma: f64,
+    tau_d: f64,
+    n: u64,
+    frac: f64,
+    line: [f64; LINE],
+    h: u64,
+    u: f64,
+    dt: f64,
+    stats: Stats,
+    audit: PeriodAudit,
+    rest_periods: u64,
+}
+
+// Dormand–Prince 5(4) tableau.
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const B1: f64 = 35.0 / 384.0;
+const B3: f64 = 500.0 / 1113.0;
+const B4: f64 = 125.0 / 192.0;
+const B5: f64 = -2187.0 / 6784.0;
+const B6: f64 = 11.0 / 84.0;
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+
+#[inline]
+fn axpy(y: &Y, terms: &[(f64, &Y)], h: f64) -> Y {
+    let mut out = *y;
+    for (i, o) in out.iter_mut().enumerate() {
+        let mut s = 0.0;
+        for (c, k) in terms {
+            s += c * k[i];
+        }
+        *o += h * s;
+    }
+    out
+}
+
+impl RefSim {
+    /// A reference simulation starting at τ = 0 in `init`.
+    pub fn new(model: RefModel, method: Method, init: Motion) -> Result<Self, ParamError> {
+        let p = model.params;
+        p.validate()?;
+        match method {
+            Method::Rk4 {
+                steps_per_period: 0,
+            } => {
+                return Err(ParamError {
+                    field: "steps_per_period",
+                    allowed: ">= 1",
+                })
+            }
+            Method::Dopri { rtol, atol } if !(rtol > 0.0 && atol > 0.0) => {
+                return Err(ParamError {
+                    field: "rtol/atol",
+                    allowed: "> 0",
+                })
+            }
+            _ => {}
+        }
+        let e = model.effects;
+        let tau_d = if e.delay { p.tau_d } else { 0.0 };
+        if !model.zoh && tau_d > 0.0 {
+            return Err(ParamError {
+                field: "zoh",
+                allowed: "true when a delay is simulated",
+            });
+        }
+        let mut mass = p.mu;
+        let mut beta = if e.viscous { p.beta } else { 0.0 };
+        if let Some(hand) = model.hand {
+            if !(hand.mu >= 0.0 && hand.beta >= 0.0 && hand.kappa >= 0.0) {
+                return Err(ParamError {
+                    field: "hand",
+                    allowed: "mass, damping, stiffness >= 0",
+                });
+            }
+            mass += hand.mu;
+            beta += hand.beta;
+        }
+        if let Some(a) = model.amp {
+            if !(a.omega > 0.0 && a.zeta > 0.0 && a.omega.is_finite() && a.zeta.is_finite()) {
+                return Err(ParamError {
+                    field: "amplifier",
+                    allowed: "omega > 0, zeta > 0",
+                });
+            }
+        }
+        let n = libm::floor(tau_d);
+        let mut s = Self {
+            m: model,
+            method,
+            y: [0.0; N],
+            mode: Mode::Stuck,
+            mass,
+            beta,
+            sigma: if e.coulomb { p.sigma } else { 0.0 },
+            tau_d,
+            n: n as u64,
+            frac: tau_d - n,
+            line: [0.0; LINE],
+            h: 0,
+            u: 0.0,
+            dt: 0.1,
+            stats: Stats::default(),
+            audit: PeriodAudit::default(),
+            rest_periods: 0,
+        };
+        let hist = match model.history {
+            History::HoldInitial => s.spring(init.x),
+            History::Zero => 0.0,
+        };
+        s.line = [hist; LINE];
+        s.y[0] = init.x;
+        s.y[1] = init.v;
+        // The filter starts in steady state with the history force.
+        s.y[2] = hist;
+        s.mode = if init.v > 0.0 {
+            Mode::Moving(1.0)
+        } else if init.v < 0.0 {
+            Mode::Moving(-1.0)
+        } else {
+            Mode::Stuck
+        };
+        Ok(s)
+    }
+
+    /// Work counters so far.
+    #[must_use]
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    fn spring(&self, xi: f64) -> f64 {
+        let e = self.m.effects;
+        let f = if e.quantization {
+            -floor_fast(xi) - 0.5
+        } else {
+            -xi
+        };
+        if e.one_sided {
+            f.min(0.0)
+        } else {
+            f
+        }
+    }
+
+    /// Force input u to the amplifier (held spring force, or continuous spring).
+    #[inline]
+    fn input(&self, y: &Y) -> f64 {
+        if self.m.zoh {
+            self.u
+        } else {
+            self.spring(y[0])
+        }
+    }
+
+    #[inline]
+    fn phi_a(&self, y: &Y) -> f64 {
+        if self.m.amp.is_some() {
+            y[2]
+        } else {
+            self.input(y)
+        }
+    }
+
+    #[inline]
+    fn phi_h(&self, y: &Y) -> f64 {
+        match self.m.hand {
+            Some(h) => -h.kappa * y[0] - h.beta * y[1],
+            None => 0.0,
+        }
+    }
+
+    fn rhs(&mut self, y: &Y, mode: Mode) -> Y {
+        self.stats.rhs_evals += 1;
+        let fa = self.phi_a(y);
+        let fh = self.phi_h(y);
+        let mut d = [0.0; N];
+        if let Mode::Moving(s) = mode {
+            let v = y[1];
+            // The hand's damping is part of φ_H, so the device's own β is used for E_d.
+            let own_beta = self.beta - self.m.hand.map_or(0.0, |h| h.beta);
+            d[0] = v;
+            d[1] = (fa + fh - own_beta * v - self.sigma * s) / self.mass;
+            d[4] = own_beta * v * v + self.sigma * s * v;
+            d[5] = fa * v;
+            d[6] = fh * v;
+        }
+        if let Some(a) = self.m.amp {
+            let u = self.input(y);
+            d[2] = y[3];
+            d[3] = a.omega * a.omega * (u - y[2]) - 2.0 * a.zeta * a.omega * y[3];
+        }
+        d
+    }
+
+    /// One explicit step of size h from y; returns (y1, error estimate or 0).
+    fn step(&mut self, y: &Y, h: f64, mode: Mode, want_err: bool) -> (Y, f64) {
+        match self.method {
+            Method::Rk4 { .. } => {
+                let k1 = self.rhs(y, mode);
+                let k2 = self.rhs(&axpy(y, &[(0.5, &k1)], h), mode);
+                let k3 = self.rhs(&axpy(y, &[(0.5, &k2)], h), mode);
+                let k4 = self.rhs(&axpy(y, &[(1.0, &k3)], h), mode);
+                let y1 = axpy(
+                    y,
+                    &[
+                        (1.0 / 6.0, &k1),
+                        (1.0 / 3.0, &k2),
+                        (1.0 / 3.0, &k3),
+                        (1.0 / 6.0, &k4),
+                    ],
+                    h,
+                );
+                (y1, 0.0)
+            }
+            Method::Dopri { rtol, atol } => {
+                let k1 = self.rhs(y, mode);
+                let k2 = self.rhs(&axpy(y, &[(A21, &k1)], h), mode);
+                let k3 = self.rhs(&axpy(y, &[(A31, &k1), (A32, &k2)], h), mode);
+                let k4 = self.rhs(&axpy(y, &[(A41, &k1), (A42, &k2), (A43, &k3)], h), mode);
+                let k5 = self.rhs(
+                    &axpy(y, &[(A51, &k1), (A52, &k2), (A53, &k3), (A54, &k4)], h),
+                    mode,
+                );
+                let k6 = self.rhs(
+                    &axpy(
+                        y,
+                        &[(A61, &k1), (A62, &k2), (A63, &k3), (A64, &k4), (A65, &k5)],
+                        h,
+                    ),
+                    mode,
+                );
+                let y1 = axpy(
+                    y,
+                    &[(B1, &k1), (B3, &k3), (B4, &k4), (B5, &k5), (B6, &k6)],
+                    h,
+                );
+                if !want_err {
+                    return (y1, 0.0);
+                }
+                let k7 = self.rhs(&y1, mode);
+                let mut err: f64 = 0.0;
+                for i in 0..N {
+                    let e = h
+                        * (E1 * k1[i]
+                            + E3 * k3[i]
+                            + E4 * k4[i]
+                            + E5 * k5[i]
+                            + E6 * k6[i]
+                            + E7 * k7[i]);
+                    let sc = atol + rtol * y[i].abs().max(y1[i].abs());
+                    err = err.max((e / sc).abs());
+                }
+                let _ = (C2, C3, C4, C5);
+                (y1, err)
+            }
+        }
+    }
+
+    /// Event function: ≤ 0 (moving) / > 0 (stuck) means the event happened.
+    fn event(&self, y: &Y, mode: Mode) -> f64 {
+        match mode {
+            Mode::Moving(s) => y[1] * s,
+            Mode::Stuck => (self.phi_a(y) + self.phi_h(y)).abs() - self.sigma,
+        }
+    }
+
+    fn triggered(&self, y: &Y, mode: Mode) -> bool {
+        let g = self.event(y, mode);
+        match mode {
+            Mode::Moving(_) => g <= 0.0,
+            Mode::Stuck => g > 0.0,
+        }
+    }
+
+    /// Mode for a mass at rest under the current net force (the stick–slip rule).
+    fn rest_mode(&self, y: &Y) -> Mode {
+        let f = self.phi_a(y) + self.phi_h(y);
+        if f.abs() <= self.sigma {
+            Mode::Stuck
+        } else if f > 0.0 {
+            Mode::Moving(1.0)
+        } else {
+            Mode::Moving(-1.0)
+        }
+    }
+
+    /// Locates the event inside a step of size h (the event is triggered at h).
+    fn locate(&mut self, y: &Y, h: f64, mode: Mode) -> (f64, Y) {
+        let sign_ok = |sim: &Self, g: f64| match mode {
+            Mode::Moving(_) => g > 0.0,
+            Mode::Stuck => g <= 0.0,
+        } && sim.event(y, mode).is_finite();
+        let (mut a, mut fa) = (0.0, self.event(y, mode));
+        let (y_h, _) = self.step(y, h, mode, false);
+        let (mut b, mut fb) = (h, self.event(&y_h, mode));
+        let mut yb = y_h;
+        if !sign_ok(self, fa) {
+            return (0.0, *y);
+        }
+        let mut side = 0;
+        for _ in 0..100 {
+            if (b - a) <= 1e-15 * (1.0 + h) {
+                break;
+            }
+            let mut c = (a * fb - b * fa) / (fb - fa);
+            if !(c > a && c < b) {
+                c = 0.5 * (a + b);
+            }
+            let (yc, _) = self.step(y, c, mode, false);
+            let fc = self.event(&yc, mode);
+            if sign_ok(self, fc) {
+                a = c;
+                fa = fc;
+                if side == -1 {
+                    fb *= 0.5;
+                }
+                side = -1;
+            } else {
+                b = c;
+                fb = fc;
+                yb = yc;
+                if side == 1 {
+                    fa *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        (b, yb)
+    }
+
+    /// Integrates one segment of length `len` with constant held input.
+    fn segment(&mut self, len: f64) {
+        let mut t = 0.0;
+        if self.mode == Mode::Stuck || self.y[1] == 0.0 {
+            self.y[1] = 0.0;
+            self.mode = self.rest_mode(&self.y);
+        }
+        let fixed = match self.method {
+            Method::Rk4 { steps_per_period } => Some(1.0 / f64::from(steps_per_period)),
+            Method::Dopri { .. } => None,
+        };
+        let mut guard = 0u64;
+        while t < len {
+            guard += 1;
+            if guard > 10_000_000 {
+                break;
+            }
+            // Nothing moves while stuck without a filter: skip the segment.
+            if self.mode == Mode::Stuck && self.m.amp.is_none() {
+                break;
+            }
+            let rem = len - t;
+            let (h, y1) = match fixed {
+                Some(hf) => {
+                    let n = libm::ceil(rem / hf - 1e-9).max(1.0);
+                    let h = rem / n;
+                    let (y1, _) = self.step(&self.y.clone(), h, self.mode, false);
+                    (h, y1)
+                }
+                None => {
+                    let mut h = self.dt.min(rem);
+                    loop {
+                        let (y1, err) = self.step(&self.y.clone(), h, self.mode, true);
+                        if err <= 1.0 || h <= 1e-12 {
+                            let fac = if err == 0.0 {
+                                5.0
+                            } else {
+                                (0.9 * libm::pow(err, -0.2)).clamp(0.2, 5.0)
+                            };
+                            if h < rem {
+                                self.dt = h * fac;
+                            } else {
+                                self.dt = self.dt.max(h * fac);
+                            }
+                            break (h, y1);
+                        }
+                        self.stats.rejected += 1;
+                        h *= (0.9 * libm::pow(err, -0.2)).clamp(0.2, 1.0);
+                    }
+                }
+            };
+            self.stats.steps += 1;
+            if self.triggered(&y1, self.mode) {
+                let y0 = self.y;
+                let (tc, yc) = self.locate(&y0, h, self.mode);
+                self.stats.events += 1;
+                self.y = yc;
+                t += tc;
+                if let Mode::Moving(_) = self.mode {
+                    self.y[1] = 0.0;
+                    self.mode = self.rest_mode(&self.y);
+                } else {
+                    self.mode = self.rest_mode(&self.y);
+                    if self.mode == Mode::Stuck {
+                        // Root found on the stuck side: nudge by the bracket width.
+                        t += 1e-15 * (1.0 + len);
+                    }
+                }
+                continue;
+            }
+            self.y = y1;
+            t += h;
+        }
+    }
+}
+
+impl ExactSim for RefSim {
+    fn step_period(&mut self) {
+        let start = self.y;
+        if self.diverged() {
+            self.h += 1;
+            return;
+        }
+        let fc = self.spring(self.y[0]);
+        let h = self.h;
+        self.line[(h & MASK) as usize] = fc;
+        let at = |back: u64| self.line[(h.wrapping_sub(back) & MASK) as usize];
+        let f2 = at(self.n);
+        let f1 = at(self.n + 1);
+        if self.frac > 0.0 {
+            self.u = f1;
+            self.segment(self.frac);
+            self.u = f2;
+            self.segment(1.0 - self.frac);
+        } else {
+            self.u = f2;
+            self.segment(1.0);
+        }
+        let _ = self.tau_d;
+        let end = self.y;
+        let m = self.mass;
+        let h0 = 0.5 * m * start[1] * start[1] + potential(start[0]);
+        let h1 = 0.5 * m * end[1] * end[1] + potential(end[0]);
+        let e_d = end[4] - start[4];
+        let e_g = (end[5] - start[5]) + potential(end[0]) - potential(start[0]);
+        let w_h = end[6] - start[6];
+        self.audit = PeriodAudit {
+            h_start: h0,
+            h_end: h1,
+            e_d,
+            e_g,
+            residual: (h1 - h0) + e_d - e_g - w_h,
+        };
+        let still = start[1] == 0.0 && end[1] == 0.0 && start[0] == end[0] && f1 == f2;
+        let settled_filter = self.m.amp.is_none() && self.m.zoh;
+        self.rest_periods = if still && settled_filter {
+            self.rest_periods + 1
+        } else {
+            0
+        };
+        self.h += 1;
+    }
+    fn state(&self) -> Motion {
+        Motion {
+            x: self.y[0],
+            v: self.y[1],
+        }
+    }
+    fn period(&self) -> u64 {
+        self.h
+    }
+    fn audit(&self) -> PeriodAudit {
+        self.audit
+    }
+    fn at_rest(&self) -> bool {
+        self.rest_periods > self.n + 2
+    }
+    fn diverged(&self) -> bool {
+        !(self.y[0].abs() <= 1e150 && self.y[1].abs() <= 1e150)
+    }
+    fn params(&self) -> Params {
+        Params {
+            mu: self.mass,
+            beta: self.beta,
+            sigma: self.sigma,
+            tau_d: self.tau_d,
+        }
+    }
+    fn applied_force(&self) -> f64 {
+        self.phi_a(&self.y)
+    }
+}
