@@ -143,7 +143,10 @@ impl FlashSlots {
         }
         // A blank slot (first save on a fresh board) needs no erase: skip the 1–2 s stall.
         if !self.is_blank(slot)? {
-            self.erase(slot)?;
+            crate::watchdog::stretch_for_flash();
+            let erased = self.erase(slot);
+            crate::watchdog::restore();
+            erased?;
         }
         self.program(slot, 0, data)
     }

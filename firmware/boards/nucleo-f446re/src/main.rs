@@ -13,6 +13,7 @@ mod force;
 mod handoff;
 mod serial;
 mod servo_timer;
+mod watchdog;
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use stm32f4xx_hal::{
@@ -112,10 +113,12 @@ fn main() -> ! {
         NVIC::unmask(Interrupt::TIM7);
     }
 
+    let mut dog = watchdog::Watchdog::start(dp.IWDG, &dp.DBGMCU, servo_timer::ticks());
     let mut buf = [0u8; 64];
     loop {
         let n = port.read(&mut buf);
         let _ = n;
+        dog.feed_if_ticking(servo_timer::ticks());
         cortex_m::asm::wfi();
     }
 }
