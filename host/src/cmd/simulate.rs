@@ -1,10 +1,142 @@
 //! `hostctl simulate`: simulate one scene file and write the trajectory as CSV.
+//!
+//! Units: dimensionless (Table I) in the CSV: `period` (τ = h), `xi` (ticks), `xidot` (ticks per
+//! period), `phi_a` (K·Δ, force applied from that instant), `h_t` (H_T of eq. (35), K·Δ²), and
+//! the energy audit of the period ending at that instant: `e_d` (28), `e_g` (29), `residual` of
+//! the balance (26). Physical scenes are converted to these units when loaded.
+
+use anyhow::{Context, Result};
+use plotters::prelude::*;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use stiffwall_sim::scene::{Row, Scene};
 
 /// Arguments of `hostctl simulate`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Scene file (TOML, see sim/scenes/).
+    pub scene: PathBuf,
+    /// CSV output file (default: standard output).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Also draw ξ(τ) and H_T(τ) to this PNG (or .svg) file.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Write every n-th sample only (the audit columns still cover the last period only).
+    #[arg(long, default_value_t = 1)]
+    pub every: u64,
+}
+
+/// Loads a scene file, with the file name in the error.
+pub fn load(path: &Path) -> Result<Scene> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    Scene::from_toml(&text).with_context(|| format!("scene {}", path.display()))
+}
 
 /// Runs `hostctl simulate`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("hostctl simulate is not implemented yet")
+pub fn run(args: &Args) -> Result<()> {
+    anyhow::ensure!(
+        args.every >= 1,
+        "--every {}: allowed range is >= 1",
+        args.every
+    );
+    let scene = load(&args.scene)?;
+    let mut w: Box<dyn Write> = match &args.out {
+        Some(p) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?,
+        )),
+        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+    };
+    writeln!(w, "period,xi,xidot,phi_a,h_t,e_d,e_g,residual")?;
+    let mut rows: Vec<Row> = Vec::new();
+    let keep = args.plot.is_some();
+    let mut io_err = None;
+    scene.simulate(&mut |r: &Row| {
+        if r.period % args.every != 0 || io_err.is_some() {
+            return;
+        }
+        if let Err(e) = writeln!(
+            w,
+            "{},{},{},{},{},{},{},{}",
+            r.period, r.xi, r.xidot, r.phi_a, r.h_t, r.e_d, r.e_g, r.residual
+        ) {
+            io_err = Some(e);
+        }
+        if keep {
+            rows.push(*r);
+        }
+    })?;
+    if let Some(e) = io_err {
+        return Err(e.into());
+    }
+    w.flush()?;
+    if let Some(p) = &args.plot {
+        plot(&rows, p)?;
+    }
+    Ok(())
+}
+
+fn plot(rows: &[Row], path: &Path) -> Result<()> {
+    if path.extension().is_some_and(|e| e == "svg") {
+        let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+        draw(&root, rows)?;
+        root.present()?;
+    } else {
+        let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+        draw(&root, rows)?;
+        root.present()?;
+    }
+    Ok(())
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    rows: &[Row],
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (a, b) = root.split_vertically(300);
+    let t1 = rows.last().map_or(1.0, |r| r.period as f64).max(1.0);
+    let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for r in rows {
+        lo = lo.min(finite(r.xi));
+        hi = hi.max(finite(r.xi));
+    }
+    if !(hi > lo) {
+        lo -= 1.0;
+        hi += 1.0;
+    }
+    let mut c = ChartBuilder::on(&a)
+        .margin(8)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t1, lo..hi)?;
+    c.configure_mesh()
+        .x_desc("tau")
+        .y_desc("xi [ticks]")
+        .draw()?;
+    c.draw_series(LineSeries::new(
+        rows.iter().map(|r| (r.period as f64, finite(r.xi))),
+        &BLUE,
+    ))?;
+    let hmax = rows
+        .iter()
+        .map(|r| finite(r.h_t))
+        .fold(0.0, f64::max)
+        .max(1e-12);
+    let mut c = ChartBuilder::on(&b)
+        .margin(8)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t1, 0.0..hmax * 1.05)?;
+    c.configure_mesh().x_desc("tau").y_desc("H_T").draw()?;
+    c.draw_series(LineSeries::new(
+        rows.iter().map(|r| (r.period as f64, finite(r.h_t))),
+        &RED,
+    ))?;
+    Ok(())
 }
