@@ -236,7 +236,7 @@ pub struct ServoConfig {
 
 impl Default for ServoConfig {
     /// Safe, board-independent defaults: no wall force (K = 0) until the host sets one,
-    /// 1 kHz, no extra delay, no coarsening, bidirectional wall at count 0, 1 N force limit,
+    /// 1 kHz, no extra delay, no coarsening, bidirectional wall at count 0, 0.1 N force limit,
     /// velocity fault off, energy monitor on (1 J, 4 growing peaks), 1000-count jump limit,
     /// 500 ms heartbeat timeout, zero force in safe mode.
     fn default() -> Self {
@@ -248,7 +248,7 @@ impl Default for ServoConfig {
             coarsen_shift: 0,
             wall: WallMode::Bidirectional,
             wall_position: 0,
-            force_limit: 1.0,
+            force_limit: 0.1,
             max_velocity: 0.0,
             energy_monitor: true,
             energy_limit: 1.0,

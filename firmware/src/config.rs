@@ -1,0 +1,306 @@
+//! Board facts, configuration validation, and the integer gains derived from a config.
+//!
+//! Units: [`ServoConfig`] is SI (see `stiffwall_proto::msg`); [`Gains`] are in device units:
+//! output codes, raw or effective encoder counts (Δ_eff = 2^shift counts), servo ticks.
+//!
+//! Invariant: [`validate`] accepts a config only if every derived gain fits its fixed-point
+//! range, so [`Gains::from_config`] never saturates for a valid config. A refused config
+//! reports the first offending field with its allowed `[min, max]`.
+
+use crate::numeric::Numeric;
+use stiffwall_proto::{ConfigField, DeviceInfo, Limits, ServoConfig, WallMode, MAX_COARSEN_SHIFT, MAX_DELAY_TICKS};
+
+/// Largest |gain| accepted, output codes per count (keeps `I16F16` and `I32F32` in range).
+pub const MAX_GAIN_CODES: f32 = 16384.0;
+/// Largest heartbeat timeout, ms.
+pub const MAX_HEARTBEAT_MS: u32 = 600_000;
+/// Largest encoder-jump threshold, counts per tick.
+pub const MAX_JUMP_COUNTS: u32 = 1 << 30;
+/// Largest energy limit, J.
+pub const MAX_ENERGY_J: f32 = 1.0e6;
+/// Velocity window of the over-velocity check, ticks (power of two).
+pub const VEL_WINDOW: usize = 8;
+
+/// Fixed facts about the board the firmware runs on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoardInfo {
+    /// Board name.
+    pub name: &'static str,
+    /// Encoder resolution Δ, m (rad) per raw count.
+    pub resolution: f32,
+    /// Counts per revolution (rotary), 0 for linear devices.
+    pub counts_per_rev: u32,
+    /// Hardware counter width, bits, 1..=32 (16 and 32 are usual).
+    pub encoder_bits: u8,
+    /// Force (N) or torque (N·m) per output code.
+    pub force_per_code: f32,
+    /// Largest output code magnitude (e.g. 2047 for a 12-bit bipolar DAC).
+    pub max_code: i32,
+    /// Lowest servo rate the board supports, Hz.
+    pub min_rate_hz: u32,
+    /// Highest servo rate the board supports, Hz.
+    pub max_rate_hz: u32,
+}
+
+impl Default for BoardInfo {
+    /// A generic simulated board: 8192 counts/rev rotary encoder on a 16-bit counter, 16-bit
+    /// bipolar output with 10 µN·m per code, 100 Hz – 20 kHz.
+    fn default() -> Self {
+        Self {
+            name: "generic",
+            resolution: core::f32::consts::TAU / 8192.0,
+            counts_per_rev: 8192,
+            encoder_bits: 16,
+            force_per_code: 1.0e-5,
+            max_code: 32767,
+            min_rate_hz: 100,
+            max_rate_hz: 20_000,
+        }
+    }
+}
+
+impl BoardInfo {
+    /// Largest stiffness at coarsening shift `shift`, N/m (N·m/rad).
+    #[must_use]
+    pub fn max_stiffness(&self, shift: u8) -> f32 {
+        2.0 * MAX_GAIN_CODES * self.force_per_code / self.delta_eff(shift)
+    }
+
+    /// Largest damping at shift `shift` and rate `rate_hz`, N·s/m.
+    #[must_use]
+    pub fn max_damping(&self, shift: u8, rate_hz: u32) -> f32 {
+        MAX_GAIN_CODES * self.force_per_code / (self.delta_eff(shift) * rate_hz as f32)
+    }
+
+    /// Δ_eff = 2^shift · Δ, m (rad).
+    #[must_use]
+    pub fn delta_eff(&self, shift: u8) -> f32 {
+        self.resolution * (1u32 << u32::from(shift.min(31))) as f32
+    }
+
+    /// Largest force limit, N (N·m).
+    #[must_use]
+    pub fn max_force(&self) -> f32 {
+        self.max_code as f32 * self.force_per_code
+    }
+
+    /// Largest over-velocity threshold at `rate_hz`, m/s.
+    #[must_use]
+    pub fn max_velocity(&self, rate_hz: u32) -> f32 {
+        (MAX_JUMP_COUNTS as f32) * self.resolution * rate_hz as f32 / VEL_WINDOW as f32
+    }
+
+    /// The handshake reply for this board at `rate_hz`.
+    #[must_use]
+    pub fn device_info(&self, rate_hz: u32) -> DeviceInfo {
+        let s = |x: &str| heapless::String::try_from(x).unwrap_or_default();
+        DeviceInfo {
+            protocol_version: stiffwall_proto::PROTOCOL_VERSION,
+            firmware_name: s("stiffwall"),
+            firmware_version: s(env!("CARGO_PKG_VERSION")),
+            board: s(self.name),
+            servo_rate_hz: rate_hz,
+            counts_per_rev: self.counts_per_rev,
+            resolution: self.resolution,
+            encoder_bits: self.encoder_bits,
+            force_per_code: self.force_per_code,
+            max_code: self.max_code,
+            limits: Limits {
+                min_rate_hz: self.min_rate_hz,
+                max_rate_hz: self.max_rate_hz,
+                max_stiffness: self.max_stiffness(0),
+                max_force: self.max_force(),
+                max_delay_ticks: MAX_DELAY_TICKS,
+                max_coarsen_shift: MAX_COARSEN_SHIFT,
+                telemetry_batch: stiffwall_proto::TELEMETRY_BATCH as u16,
+                max_table: stiffwall_proto::MAX_TABLE as u16,
+            },
+        }
+    }
+}
+
+/// A refused configuration: the field and its allowed range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConfigError {
+    /// The offending field.
+    pub field: ConfigField,
+    /// Smallest allowed value.
+    pub min: f64,
+    /// Largest allowed value.
+    pub max: f64,
+}
+
+fn check_f(field: ConfigField, v: f32, min: f32, max: f32) -> Result<(), ConfigError> {
+    if v.is_finite() && v >= min && v <= max {
+        Ok(())
+    } else {
+        Err(ConfigError {
+            field,
+            min: f64::from(min),
+            max: f64::from(max),
+        })
+    }
+}
+
+fn check_u(field: ConfigField, v: u32, min: u32, max: u32) -> Result<(), ConfigError> {
+    if v >= min && v <= max {
+        Ok(())
+    } else {
+        Err(ConfigError {
+            field,
+            min: f64::from(min),
+            max: f64::from(max),
+        })
+    }
+}
+
+/// Range-checks every field of `cfg` for `board`.
+///
+/// # Errors
+/// The first field out of range, with its range.
+pub fn validate(cfg: &ServoConfig, board: &BoardInfo) -> Result<(), ConfigError> {
+    use ConfigField as F;
+    check_u(F::ServoRateHz, cfg.servo_rate_hz, board.min_rate_hz, board.max_rate_hz)?;
+    check_u(F::ExtraDelayTicks, cfg.extra_delay_ticks.into(), 0, MAX_DELAY_TICKS.into())?;
+    check_u(F::CoarsenShift, cfg.coarsen_shift.into(), 0, MAX_COARSEN_SHIFT.into())?;
+    let s = cfg.coarsen_shift;
+    check_f(F::Stiffness, cfg.stiffness, 0.0, board.max_stiffness(s))?;
+    let dmax = board.max_damping(s, cfg.servo_rate_hz);
+    check_f(F::Damping, cfg.damping, 0.0, dmax)?;
+    check_f(F::ForceLimit, cfg.force_limit, board.force_per_code, board.max_force())?;
+    check_f(F::MaxVelocity, cfg.max_velocity, 0.0, board.max_velocity(cfg.servo_rate_hz))?;
+    check_f(F::EnergyLimit, cfg.energy_limit, f32::MIN_POSITIVE, MAX_ENERGY_J)?;
+    check_u(F::EnergyGrowthCycles, cfg.energy_growth_cycles.into(), 1, 64)?;
+    check_u(F::EncoderJumpCounts, cfg.encoder_jump_counts, 1, MAX_JUMP_COUNTS)?;
+    check_u(F::HeartbeatTimeoutMs, cfg.heartbeat_timeout_ms, 0, MAX_HEARTBEAT_MS)?;
+    let dsafe = board.max_damping(0, cfg.servo_rate_hz);
+    check_f(F::SafeDamping, cfg.safe_damping, 0.0, dsafe)?;
+    Ok(())
+}
+
+/// Integer / fixed-point servo parameters derived from a valid config.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gains<N: Numeric> {
+    /// K·Δ_eff/2 in output codes: the force code for effective count n is
+    /// `-mul(k_half, 2n+1)`.
+    pub k_half: N::Gain,
+    /// Virtual damping B·Δ_eff·rate in codes per effective count per tick.
+    pub damp: N::Gain,
+    /// Release-test hold damping (dimensionless β = `HOLD_BETA` = 2): 2·β·k_half, codes per effective count
+    /// per tick.
+    pub hold_damp: N::Gain,
+    /// Safe-mode damping B_safe·Δ·rate in codes per raw count per tick.
+    pub safe_damp: N::Gain,
+    /// Coarsening shift.
+    pub shift: u32,
+    /// Wall position, raw counts.
+    pub wall: i64,
+    /// One-sided wall.
+    pub one_sided: bool,
+    /// Extra delay, ticks.
+    pub delay: u32,
+    /// Output clamp, codes (≤ board max).
+    pub limit: i32,
+    /// Over-velocity threshold in raw counts per [`VEL_WINDOW`] ticks; 0 = off.
+    pub vel_window_counts: i64,
+    /// Encoder-jump threshold, raw counts per tick.
+    pub jump: i64,
+    /// Energy monitor on (and K > 0).
+    pub energy_monitor: bool,
+    /// Energy limit in units of K·Δ_eff²/8.
+    pub energy_limit_e8: u64,
+    /// Growth score that trips the energy monitor.
+    pub growth_trip: i32,
+    /// Heartbeat timeout, ticks; 0 = off.
+    pub heartbeat_ticks: u32,
+    /// Safe mode outputs damping (else zero).
+    pub safe_damping: bool,
+    /// Servo rate, Hz.
+    pub rate_hz: u32,
+}
+
+impl<N: Numeric> Gains<N> {
+    /// Derives the gains (call only with a config that passed [`validate`]; out-of-range
+    /// values saturate).
+    #[must_use]
+    pub fn from_config(cfg: &ServoConfig, board: &BoardInfo) -> Self {
+        // Derived in f64 (config time only, not in the servo path).
+        let de = f64::from(board.delta_eff(cfg.coarsen_shift));
+        let fs = f64::from(board.force_per_code);
+        let rate = f64::from(cfg.servo_rate_hz.max(1));
+        let k = f64::from(cfg.stiffness);
+        let k_half = k * de / (2.0 * fs);
+        let limit_codes = libm::round(f64::from(cfg.force_limit) / fs);
+        let limit = if limit_codes.is_finite() {
+            (limit_codes as i32).clamp(0, board.max_code.max(0))
+        } else {
+            0
+        };
+        let vel = f64::from(cfg.max_velocity) * VEL_WINDOW as f64 / (rate * f64::from(board.resolution));
+        let kd2 = k * de * de;
+        let e8 = if kd2 > 0.0 { 8.0 * f64::from(cfg.energy_limit) / kd2 } else { 0.0 };
+        let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
+        Self {
+            k_half: N::gain(k_half),
+            damp: N::gain(f64::from(cfg.damping) * de * rate / fs),
+            hold_damp: N::gain(2.0 * f64::from(crate::servo::HOLD_BETA) * k_half),
+            safe_damp: N::gain(f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs),
+            shift: u32::from(cfg.coarsen_shift.min(MAX_COARSEN_SHIFT)),
+            wall: i64::from(cfg.wall_position),
+            one_sided: cfg.wall == WallMode::OneSided,
+            delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
+            limit,
+            vel_window_counts: if vel.is_finite() && vel > 0.0 { libm::ceil(vel) as i64 } else { 0 },
+            jump: i64::from(cfg.encoder_jump_counts.max(1)),
+            energy_monitor: cfg.energy_monitor && kd2 > 0.0,
+            energy_limit_e8: if e8.is_finite() && e8 > 0.0 { e8 as u64 } else { u64::MAX },
+            growth_trip: i32::from(cfg.energy_growth_cycles.max(1)),
+            heartbeat_ticks: u32::try_from(hb).unwrap_or(u32::MAX),
+            safe_damping: cfg.safe_mode == stiffwall_proto::SafeMode::Damping,
+            rate_hz: cfg.servo_rate_hz,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::numeric::Fx64;
+
+    #[test]
+    fn default_config_is_valid_and_each_field_is_checked() {
+        let b = BoardInfo::default();
+        let c = ServoConfig::default();
+        assert_eq!(validate(&c, &b), Ok(()));
+        let bad: [(ServoConfig, ConfigField); 12] = [
+            (ServoConfig { stiffness: -1.0, ..c }, ConfigField::Stiffness),
+            (ServoConfig { stiffness: f32::NAN, ..c }, ConfigField::Stiffness),
+            (ServoConfig { damping: f32::INFINITY, ..c }, ConfigField::Damping),
+            (ServoConfig { servo_rate_hz: 99, ..c }, ConfigField::ServoRateHz),
+            (ServoConfig { extra_delay_ticks: 32, ..c }, ConfigField::ExtraDelayTicks),
+            (ServoConfig { coarsen_shift: 17, ..c }, ConfigField::CoarsenShift),
+            (ServoConfig { force_limit: 0.0, ..c }, ConfigField::ForceLimit),
+            (ServoConfig { max_velocity: -0.1, ..c }, ConfigField::MaxVelocity),
+            (ServoConfig { energy_limit: 0.0, ..c }, ConfigField::EnergyLimit),
+            (ServoConfig { energy_growth_cycles: 0, ..c }, ConfigField::EnergyGrowthCycles),
+            (ServoConfig { encoder_jump_counts: 0, ..c }, ConfigField::EncoderJumpCounts),
+            (ServoConfig { safe_damping: -1.0, ..c }, ConfigField::SafeDamping),
+        ];
+        for (cfg, field) in bad {
+            assert_eq!(validate(&cfg, &b).map_err(|e| e.field), Err(field));
+        }
+        let e = validate(&ServoConfig { servo_rate_hz: 50_000, ..c }, &b).unwrap_err();
+        assert_eq!((e.min, e.max), (100.0, 20_000.0));
+    }
+
+    #[test]
+    fn gains_of_a_known_config() {
+        let b = BoardInfo { resolution: 1e-5, force_per_code: 1e-3, ..BoardInfo::default() };
+        let c = ServoConfig { stiffness: 1000.0, coarsen_shift: 1, force_limit: 1.0, ..ServoConfig::default() };
+        let g: Gains<Fx64> = Gains::from_config(&c, &b);
+        // K·Δ_eff/2/fs = 1000 · 2e-5 / 2 / 1e-3 = 10 codes.
+        assert!((Fx64::to_f64(g.k_half) - 10.0).abs() < 1e-4);
+        assert_eq!(g.limit, 1000);
+        assert_eq!(g.shift, 1);
+    }
+}

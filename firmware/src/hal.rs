@@ -1,0 +1,71 @@
+//! Hardware traits the firmware core is generic over.
+//!
+//! Units: encoder counts are raw hardware counter values (wrapping at the counter width, see
+//! [`crate::config::BoardInfo::encoder_bits`]); force codes are signed output codes (one code =
+//! `BoardInfo::force_per_code` N or N·m); ticks are servo ticks. Implementations must not block.
+
+/// A quadrature (or simulated) encoder: the raw hardware counter.
+pub trait Encoder {
+    /// The raw counter value. Only the low `encoder_bits` bits are used; the firmware unwraps
+    /// counter wrap itself (the count may move less than half the counter range per tick).
+    fn count(&mut self) -> u32;
+}
+
+/// A force (or torque) output: DAC, PWM + direction, or a simulated amplifier.
+pub trait ForceOutput {
+    /// Applies `code` (already clamped to ±`BoardInfo::max_code` and the configured limit).
+    fn write(&mut self, code: i32);
+}
+
+/// A monotonic servo tick counter (wraps at 2^32).
+pub trait TickSource {
+    /// The current tick.
+    fn now(&self) -> u32;
+}
+
+/// A byte-oriented, non-blocking link to the host (UART, USB CDC, in-memory pipe).
+pub trait ByteLink {
+    /// The next received byte, if any.
+    fn read(&mut self) -> Option<u8>;
+    /// Queues one byte for sending; `false` if the link cannot take it now (try again later).
+    fn write(&mut self, byte: u8) -> bool;
+}
+
+/// Non-volatile storage with two independent slots of `slot_len()` bytes each (flash sectors,
+/// EEPROM pages, a file). A write may be interrupted at any byte: the bytes before the
+/// interruption are new, the rest keep their previous (or erased) value.
+pub trait ConfigStorage {
+    /// Bytes per slot.
+    fn slot_len(&self) -> usize;
+    /// Reads `buf.len()` bytes of `slot` (0 or 1) from offset 0.
+    ///
+    /// # Errors
+    /// [`StorageError`] on a hardware failure or an out-of-range request.
+    fn read(&mut self, slot: usize, buf: &mut [u8]) -> Result<(), StorageError>;
+    /// Erases `slot` (flash semantics) and writes `data` from offset 0.
+    ///
+    /// # Errors
+    /// [`StorageError`] when the write did not complete.
+    fn write(&mut self, slot: usize, data: &[u8]) -> Result<(), StorageError>;
+}
+
+/// A storage failure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StorageError;
+
+/// Storage for boards without non-volatile memory: every read and write fails, so the device
+/// boots with its defaults and `SaveConfig` answers `StoreFailed`.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NoStorage;
+
+impl ConfigStorage for NoStorage {
+    fn slot_len(&self) -> usize {
+        0
+    }
+    fn read(&mut self, _slot: usize, _buf: &mut [u8]) -> Result<(), StorageError> {
+        Err(StorageError)
+    }
+    fn write(&mut self, _slot: usize, _data: &[u8]) -> Result<(), StorageError> {
+        Err(StorageError)
+    }
+}

@@ -1,0 +1,125 @@
+//! Numeric back-ends for the servo's gains.
+//!
+//! A gain is "output codes per count" (e.g. K·Δ_eff/2 in codes). [`Numeric::mul`] computes
+//! `round(gain · m)` for an integer `m`, saturating to `i32` instead of wrapping, rounding to
+//! nearest with ties away from zero (so the result is odd-symmetric: `mul(g, -m) == -mul(g, m)`).
+//!
+//! - [`Fx64`] (default): `I32F32` gain (resolution 2^-32 code, range ±2^31 codes), 64-bit
+//!   multiply with saturation. Exact integer arithmetic on the gain's bits.
+//! - [`Fx32`]: `I16F16` gain (resolution 2^-16 code, range ±2^15 codes), 32-bit multiply, `m`
+//!   saturated to `i32` first. Cheaper on a 32-bit core; coarser gain.
+//! - [`F32`]: `f32` gain and product (single-precision FPU on the M4F); `m` beyond 2^24 loses
+//!   precision. For the instruction-count comparison.
+
+use fixed::types::{I16F16, I32F32};
+
+/// A numeric back-end for servo gains.
+pub trait Numeric: Copy + core::fmt::Debug + 'static {
+    /// The gain representation.
+    type Gain: Copy + core::fmt::Debug + PartialEq;
+    /// Short name for reports.
+    const NAME: &'static str;
+    /// The zero gain.
+    const ZERO: Self::Gain;
+    /// Converts `x` (codes per count) to a gain, saturating; non-finite → 0.
+    fn gain(x: f64) -> Self::Gain;
+    /// The gain as `f64` (exact for the fixed-point back-ends).
+    fn to_f64(g: Self::Gain) -> f64;
+    /// `round(g · m)`, saturated to `i32`.
+    fn mul(g: Self::Gain, m: i64) -> i32;
+}
+
+/// `I32F32` gains, 64-bit arithmetic (default).
+#[derive(Debug, Clone, Copy)]
+pub struct Fx64;
+
+/// `I16F16` gains, 32-bit arithmetic.
+#[derive(Debug, Clone, Copy)]
+pub struct Fx32;
+
+/// `f32` gains and arithmetic.
+#[derive(Debug, Clone, Copy)]
+pub struct F32;
+
+impl Numeric for Fx64 {
+    type Gain = I32F32;
+    const NAME: &'static str = "I32F32";
+    const ZERO: I32F32 = I32F32::ZERO;
+    fn gain(x: f64) -> I32F32 {
+        if x.is_finite() {
+            I32F32::saturating_from_num(x)
+        } else {
+            I32F32::ZERO
+        }
+    }
+    fn to_f64(g: I32F32) -> f64 {
+        g.to_num::<f64>()
+    }
+    #[inline]
+    fn mul(g: I32F32, m: i64) -> i32 {
+        g.saturating_mul_int(m).saturating_round().saturating_to_num::<i32>()
+    }
+}
+
+impl Numeric for Fx32 {
+    type Gain = I16F16;
+    const NAME: &'static str = "I16F16";
+    const ZERO: I16F16 = I16F16::ZERO;
+    fn gain(x: f64) -> I16F16 {
+        if x.is_finite() {
+            I16F16::saturating_from_num(x)
+        } else {
+            I16F16::ZERO
+        }
+    }
+    fn to_f64(g: I16F16) -> f64 {
+        g.to_num::<f64>()
+    }
+    #[inline]
+    fn mul(g: I16F16, m: i64) -> i32 {
+        let m = m.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+        g.saturating_mul_int(m).saturating_round().saturating_to_num::<i32>()
+    }
+}
+
+impl Numeric for F32 {
+    type Gain = f32;
+    const NAME: &'static str = "f32";
+    const ZERO: f32 = 0.0;
+    fn gain(x: f64) -> f32 {
+        if x.is_finite() {
+            x as f32
+        } else {
+            0.0
+        }
+    }
+    fn to_f64(g: f32) -> f64 {
+        f64::from(g)
+    }
+    #[inline]
+    fn mul(g: f32, m: i64) -> i32 {
+        // `as` from float saturates (NaN → 0): no panic, no wrap.
+        libm::roundf(g * m as f32) as i32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rounding_and_saturation() {
+        let g = Fx64::gain(0.25);
+        assert_eq!(Fx64::mul(g, 1), 0);
+        assert_eq!(Fx64::mul(g, 2), 1); // 0.5 rounds away from zero
+        assert_eq!(Fx64::mul(g, -2), -1);
+        assert_eq!(Fx64::mul(g, i64::MAX), i32::MAX);
+        assert_eq!(Fx64::mul(g, i64::MIN), i32::MIN);
+        let g = Fx32::gain(3.0);
+        assert_eq!(Fx32::mul(g, 5), 15);
+        assert_eq!(Fx32::mul(g, i64::MIN), i16::MIN as i32);
+        assert_eq!(F32::mul(3.0, -5), -15);
+        assert_eq!(F32::mul(1e30, 1 << 40), i32::MAX);
+        assert_eq!(Fx64::gain(f64::NAN), I32F32::ZERO);
+            }
+}
