@@ -1,0 +1,111 @@
+//! Simulated classes against the analytic regions of Fig. 3 (τ_D = 0) and Fig. 5 (τ_D = 1.25)
+//! on a coarse grid (μ = 100, ξ₀ = 0, 2×10⁴ periods). The full 714-point × 5×10⁴-period maps
+//! are `hostctl map` (docs/figures/) and the opt-in `full_fig6_set_under_5_s` below.
+
+use stiffwall_sim::classify::Class;
+use stiffwall_sim::map::{region_no_delay, simulate_point};
+
+const PERIODS: u64 = 20_000;
+
+fn grid() -> impl Iterator<Item = (f64, f64)> {
+    let betas = [0.0, 0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.7, 0.9, 1.0];
+    let sigmas = [0.0, 0.1, 0.25, 0.4, 0.6, 0.8, 1.0, 1.3, 1.7, 2.0];
+    betas
+        .into_iter()
+        .flat_map(move |b| sigmas.into_iter().map(move |s| (b, s)))
+}
+
+#[test]
+fn no_delay_classes_agree_with_fig3_regions() {
+    let mut report = Vec::new();
+    for v in [1.0, 5.0, 10.0, 20.0] {
+        for (b, s) in grid() {
+            let o = simulate_point(100.0, b, s, 0.0, v, PERIODS);
+            let r = region_no_delay(b, s, v);
+            match r {
+                // A: globally stable, motion stops.
+                'A' => assert!(o.class.decays(), "A ({b},{s}) xidot0 {v}: {o:?}"),
+                // B: persistent oscillations; where sigma > 0 they stay below one tick.
+                'B' => {
+                    assert_eq!(o.class, Class::Persistent, "B ({b},{s}) xidot0 {v}: {o:?}");
+                    if s > 0.0 {
+                        assert!(o.tail_amplitude < 1.0, "B ({b},{s}) xidot0 {v}: {o:?}");
+                    }
+                }
+                // C: never settles; grows away from the B/C border.
+                'C' => {
+                    assert!(!o.class.decays(), "C ({b},{s}) xidot0 {v}: {o:?}");
+                    if b <= 0.25 && s <= 0.25 && v >= 5.0 {
+                        assert_eq!(o.class, Class::Growing, "C ({b},{s}) xidot0 {v}: {o:?}");
+                    }
+                }
+                // E: above the critical line of (12) for this velocity: decays.
+                'E' => assert!(o.class.decays(), "E ({b},{s}) xidot0 {v}: {o:?}"),
+                _ => {}
+            }
+            report.push((v, b, s, r, o.class));
+        }
+    }
+    // Region D may grow: at least one D point grows for every velocity >= 5.
+    for v in [5.0, 10.0, 20.0] {
+        assert!(report
+            .iter()
+            .any(|&(vv, _, _, r, c)| vv == v && r == 'D' && c == Class::Growing));
+    }
+}
+
+#[test]
+fn below_one_tick_claim_fails_without_coulomb_friction() {
+    // Region B with sigma = 0 (viscous friction only): the limit cycle exceeds one tick.
+    let o = simulate_point(100.0, 0.515, 0.0, 0.0, 1.0, 50_000);
+    assert_eq!(o.class, Class::Persistent);
+    assert!(o.tail_amplitude > 1.0, "{o:?}");
+}
+
+#[test]
+fn delay_1_25_grows_everywhere_below_beta_1_2_for_fast_starts() {
+    for v in [5.0, 10.0, 20.0] {
+        for b in [0.0, 0.3, 0.6, 0.9, 1.2] {
+            for s in [0.0, 0.5, 1.0, 1.5, 2.0] {
+                let o = simulate_point(100.0, b, s, 1.25, v, PERIODS);
+                assert_eq!(o.class, Class::Growing, "({b},{s}) xidot0 {v}: {o:?}");
+            }
+        }
+    }
+    // Far right of Fig. 7 (beta > 1/2 + tau_D, sigma > 1/2 + ...): decays.
+    for v in [1.0, 5.0] {
+        let o = simulate_point(100.0, 3.0, 2.0, 1.25, v, PERIODS);
+        assert!(o.class.decays(), "xidot0 {v}: {o:?}");
+    }
+}
+
+/// The full Fig. 6 set (4 × 714 points × 5×10⁴ periods) must take < 5 s on this 2-core
+/// machine. Opt-in: `cargo test --release -p stiffwall-sim --test regions -- --ignored`.
+#[test]
+#[ignore = "timing, release build only"]
+fn full_fig6_set_under_5_s() {
+    use stiffwall_sim::map::{run, Axis, MapSpec};
+    let t = std::time::Instant::now();
+    for v in [1.0, 5.0, 10.0, 20.0] {
+        let spec = MapSpec {
+            mu: 100.0,
+            tau_d: 0.0,
+            xidot0: v,
+            beta: Axis {
+                lo: 0.0,
+                hi: 1.0,
+                n: 34,
+            },
+            sigma: Axis {
+                lo: 0.0,
+                hi: 2.0,
+                n: 21,
+            },
+            periods: 50_000,
+        };
+        let idx: Vec<usize> = (0..spec.len()).collect();
+        assert_eq!(run(&spec, &idx, &|| {}).len(), 714);
+    }
+    let s = t.elapsed().as_secs_f64();
+    assert!(s < 5.0, "{s} s");
+}
