@@ -39,6 +39,9 @@ pub fn quantizer_df(m: f64) -> Result<f64, ParamError> {
         // (M − l)(M + l) avoids cancellation in M² − l² near l = M.
         sum += libm::sqrt((m - l) * (m + l));
     }
+    if n == 0 {
+        return Ok(2.0 / (PI * m));
+    }
     Ok(2.0 / (PI * m) + 4.0 / (PI * m * m) * sum)
 }
 
@@ -90,6 +93,13 @@ fn check_mbs(mu: f64, beta: f64, sigma: f64, tau_l: f64) -> Result<(), ParamErro
     check_non_negative("beta", beta)?;
     check_non_negative("sigma", sigma)?;
     check_positive("tau_l", tau_l)?;
+    if !(FRAC_PI_2 / tau_l).is_finite() {
+        return Err(ParamError::OutOfRange {
+            name: "tau_l",
+            value: tau_l,
+            allowed: "finite and > 0 with pi/(2 tau_l) finite",
+        });
+    }
     Ok(())
 }
 
@@ -148,7 +158,20 @@ pub fn small_limit_cycle(
 pub fn small_cycle_sigma(mu: f64, beta: f64, tau_l: f64, omega: f64) -> Result<f64, ParamError> {
     check_mbs(mu, beta, 0.0, tau_l)?;
     check_omega(omega, tau_l)?;
-    Ok(0.5 * libm::sin(tau_l * omega) - beta * libm::cos(tau_l * omega) / (2.0 * mu * omega))
+    let visc = if beta == 0.0 {
+        0.0
+    } else {
+        beta * libm::cos(tau_l * omega) / (2.0 * mu * omega)
+    };
+    let s = 0.5 * libm::sin(tau_l * omega) - visc;
+    if s.is_nan() {
+        return Err(ParamError::OutOfRange {
+            name: "mu",
+            value: mu,
+            allowed: "> 0 and not so small that beta/(2 mu omega) overflows",
+        });
+    }
+    Ok(s)
 }
 
 fn check_omega(omega: f64, tau_l: f64) -> Result<f64, ParamError> {

@@ -93,6 +93,15 @@ impl core::fmt::Display for Region {
     }
 }
 
+/// Product that is 0 when either factor is 0 (0·∞ from an overflowed factor is 0, not NaN).
+fn mul0(a: f64, b: f64) -> f64 {
+    if a == 0.0 || b == 0.0 {
+        0.0
+    } else {
+        a * b
+    }
+}
+
 fn check_bs(beta: f64, sigma: f64) -> Result<(), ParamError> {
     check_non_negative("beta", beta)?;
     check_non_negative("sigma", sigma)?;
@@ -146,7 +155,7 @@ pub fn criterion_16(beta: f64, sigma: f64, xidot_max: Option<f64>) -> Result<boo
 /// Left-hand side of (19): σ − ½ − ξ̈(τ_D² + τ_D) + ξ̇(β − ½ − τ_D).
 #[must_use]
 pub fn criterion_19_margin(beta: f64, sigma: f64, tau_d: f64, xidot: f64, xiddot: f64) -> f64 {
-    sigma - 0.5 - xiddot * (tau_d * tau_d + tau_d) + xidot * (beta - 0.5 - tau_d)
+    sigma - 0.5 - mul0(xiddot, tau_d * tau_d + tau_d) + mul0(xidot, beta - 0.5 - tau_d)
 }
 
 /// Delayed dissipation criterion (19), required at every speed |ξ̇| ≤ ξ̇_max. Since (59) is
@@ -178,7 +187,7 @@ pub fn criterion_19(
     let beta_star = 0.5 + tau_d;
     Ok(match xidot_max {
         None => beta >= beta_star,
-        Some(v) => (sigma - sigma_star) + v * (beta - beta_star) >= 0.0,
+        Some(v) => (sigma - sigma_star) + mul0(v, beta - beta_star) >= 0.0,
     })
 }
 
@@ -189,7 +198,7 @@ fn sigma_star(tau_d: f64, xiddot_max: Option<f64>) -> Option<f64> {
     if g == 0.0 {
         return Some(0.5);
     }
-    xiddot_max.map(|a| 0.5 + a * g)
+    xiddot_max.map(|a| 0.5 + mul0(a, g))
 }
 
 /// Region of Fig. 3 for τ_D = 0 (Sec. III-B), with the critical line of (12) drawn for
@@ -270,15 +279,29 @@ pub fn velocity_limit_delayed(
     check_bs(beta, sigma)?;
     check_non_negative("tau_d", tau_d)?;
     check_non_negative("xiddot_max", xiddot_max)?;
-    let s = sigma - 0.5 - xiddot_max * (tau_d * tau_d + tau_d);
-    let d = 0.5 + tau_d - beta;
+    let sigma_star = 0.5 + mul0(xiddot_max, tau_d * tau_d + tau_d);
+    let s = sigma - sigma_star;
+    let beta_star = 0.5 + tau_d;
+    let d = beta_star - beta;
     Ok(if s < 0.0 {
         Some(0.0)
     } else if d <= 0.0 {
         None
     } else {
-        Some(s / d)
+        // Lower by ulps until the criterion, evaluated as in `criterion_19`, holds at it.
+        Some(settle_down(s / d, |v| s + mul0(v, beta - beta_star) >= 0.0))
     })
+}
+
+/// Lowers a non-negative `v` by ulps (at most 64) until `holds(v)`.
+fn settle_down(mut v: f64, holds: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..64 {
+        if holds(v) || v <= 0.0 {
+            return v;
+        }
+        v = v.next_down();
+    }
+    v
 }
 
 /// Delayed velocity limit when the acceleration bound is that of a harmonic motion at the
