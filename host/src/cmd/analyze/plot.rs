@@ -1,0 +1,255 @@
+//! `--plot`: the (β, σ) plane of Fig. 3 (τ_D = 0) or Fig. 5 (τ_D > 0) with the device's
+//! operating point, the critical line of (12)/(19) for the velocity bound, and the path of the
+//! point as K grows (Fig. 4: a ray towards the origin, β and σ both ∝ 1/K).
+//!
+//! Units: dimensionless axes. Invariants: the region polygons use the same boundaries as
+//! `stiffwall_core::regions::classify_delayed` (β* = ½ + τ_D, σ = ½, σ* = ½ + ξ̈(τ_D² + τ_D),
+//! critical line σ = σ* + ξ̇(β* − β)).
+
+use super::Report;
+use anyhow::{anyhow, bail};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+const W: u32 = 1000;
+const H: u32 = 720;
+
+/// Writes the plot to `path` (`.svg` or `.png`).
+///
+/// # Errors
+/// Unsupported extension, or a drawing/IO error.
+pub fn write(path: &Path, r: &Report) -> anyhow::Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("svg") => draw(SVGBackend::new(path, (W, H)).into_drawing_area(), r),
+        Some("png") => draw(BitMapBackend::new(path, (W, H)).into_drawing_area(), r),
+        _ => bail!(
+            "--plot file must end in .svg or .png (got '{}')",
+            path.display()
+        ),
+    }
+}
+
+fn e<E: std::fmt::Display>(err: E) -> anyhow::Error {
+    anyhow!("plot: {err}")
+}
+
+#[allow(clippy::too_many_lines)]
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &Report) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(e)?;
+    let tau = r.tau_d;
+    let delayed = tau > 0.0;
+    let b_star = 0.5 + tau;
+    let s_star = 0.5 + r.xiddot.unwrap_or(0.0) * (tau * tau + tau);
+    // Slope of the critical line: the given velocity bound, else the velocity limit (15)
+    // (the line through the operating point).
+    let (slope, slope_label) = match (r.xidot, r.xidot_max) {
+        (Some(x), _) => (
+            Some(x),
+            format!("critical line, dξ/dτ max = {x:.3} (--velocity)"),
+        ),
+        (None, Some(x)) if x > 0.0 => (
+            Some(x),
+            format!("critical line at the velocity limit dξ/dτ max = {x:.3}"),
+        ),
+        _ => (None, String::new()),
+    };
+    let bmax = (1.5 * b_star).max(1.2 * r.beta).max(1.0);
+    let smax = (1.25 * r.sigma).max(s_star + 0.6).max(2.0);
+
+    let title = format!(
+        "{}: (β, σ) plane, {} — region {}",
+        r.device.as_deref().unwrap_or("device"),
+        if delayed {
+            format!("Fig. 5 regions, τ_D = {tau:.3}")
+        } else {
+            "Fig. 3 regions".to_string()
+        },
+        r.region
+    );
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 24))
+        .margin(18)
+        .x_label_area_size(55)
+        .y_label_area_size(65)
+        .build_cartesian_2d(0f64..bmax, 0f64..smax)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("β = b/(KT)   (dimensionless viscous friction)")
+        .y_desc("σ = c/(KΔ)   (dimensionless Coulomb friction)")
+        .axis_desc_style(("sans-serif", 18))
+        .label_style(("sans-serif", 15))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(e)?;
+
+    let c_a = RGBColor(120, 200, 120);
+    let c_b = RGBColor(140, 170, 235);
+    let c_c = RGBColor(235, 120, 120);
+    let c_d = RGBColor(245, 190, 120);
+    let c_e = RGBColor(200, 235, 150);
+    let c_f2 = RGBColor(170, 220, 210);
+
+    let mut region = |pts: Vec<(f64, f64)>, color: RGBColor, label: String| -> anyhow::Result<()> {
+        if pts.len() < 3 {
+            return Ok(());
+        }
+        chart
+            .draw_series(std::iter::once(Polygon::new(pts, color.mix(0.55).filled())))
+            .map_err(e)?
+            .label(label)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], color.filled()));
+        Ok(())
+    };
+    let s_lo = 0.5_f64.min(smax);
+    region(
+        vec![(0.0, 0.0), (b_star, 0.0), (b_star, s_lo), (0.0, s_lo)],
+        c_c,
+        "C: unstable".into(),
+    )?;
+    region(
+        vec![(b_star, 0.0), (bmax, 0.0), (bmax, s_lo), (b_star, s_lo)],
+        c_b,
+        "B: limit cycle < 1 tick".into(),
+    )?;
+    if delayed && s_star > 0.5 {
+        region(
+            vec![(b_star, 0.5), (bmax, 0.5), (bmax, s_star), (b_star, s_star)],
+            c_f2,
+            "F2: stable, brief energy generation".into(),
+        )?;
+    }
+    region(
+        vec![
+            (b_star, s_star),
+            (bmax, s_star),
+            (bmax, smax),
+            (b_star, smax),
+        ],
+        c_a,
+        if delayed {
+            "F1: stable, energy decreasing".into()
+        } else {
+            "A: passive, globally stable".into()
+        },
+    )?;
+    // D and E, split by the critical line σ = σ* + s(β* − β) (E empty without a slope).
+    let s = slope.unwrap_or(f64::INFINITY);
+    let line = |b: f64| s_star + s * (b_star - b);
+    let (d_poly, e_poly) = if s.is_finite() && line(0.0) <= smax {
+        (
+            vec![
+                (0.0, 0.5),
+                (b_star, 0.5),
+                (b_star, s_star),
+                (0.0, line(0.0)),
+            ],
+            vec![
+                (0.0, line(0.0)),
+                (b_star, s_star),
+                (b_star, smax),
+                (0.0, smax),
+            ],
+        )
+    } else if s.is_finite() {
+        let b1 = b_star - (smax - s_star) / s;
+        (
+            vec![
+                (0.0, 0.5),
+                (b_star, 0.5),
+                (b_star, s_star),
+                (b1, smax),
+                (0.0, smax),
+            ],
+            vec![(b1, smax), (b_star, s_star), (b_star, smax)],
+        )
+    } else {
+        (
+            vec![(0.0, 0.5), (b_star, 0.5), (b_star, smax), (0.0, smax)],
+            Vec::new(),
+        )
+    };
+    region(d_poly, c_d, "D: locally unstable".into())?;
+    region(e_poly, c_e, "E: locally stable".into())?;
+
+    // Critical line.
+    if let Some(sl) = slope {
+        let b0 = if line(0.0) <= smax {
+            0.0
+        } else {
+            b_star - (smax - s_star) / sl
+        };
+        chart
+            .draw_series(LineSeries::new(
+                vec![(b0, s_star + sl * (b_star - b0)), (b_star, s_star)],
+                BLACK.stroke_width(2),
+            ))
+            .map_err(e)?
+            .label(slope_label)
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+    }
+
+    // Path of the operating point as K grows: (β, σ)·K0/K, a ray to the origin.
+    let (b0, s0) = (r.beta, r.sigma);
+    let far = if b0 > 0.0 || s0 > 0.0 {
+        (bmax / b0.max(1e-300)).min(smax / s0.max(1e-300))
+    } else {
+        1.0
+    };
+    let path_color = RGBColor(90, 40, 160);
+    chart
+        .draw_series(LineSeries::new(
+            vec![(0.0, 0.0), (b0 * far, s0 * far)],
+            ShapeStyle::from(&path_color).stroke_width(2),
+        ))
+        .map_err(e)?
+        .label("path as K grows (towards origin)")
+        .legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 16, y)], path_color.stroke_width(2))
+        });
+    for (factor, label) in [(0.5, "K/2"), (2.0, "2K"), (4.0, "4K")] {
+        let pt = (b0 / factor, s0 / factor);
+        if pt.0 <= bmax && pt.1 <= smax {
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at(pt)
+                        + Circle::new((0, 0), 4, path_color.filled())
+                        + Text::new(label, (8, -6), ("sans-serif", 15)),
+                ))
+                .map_err(e)?;
+        }
+    }
+    // Operating point.
+    chart
+        .draw_series(std::iter::once(
+            EmptyElement::at((b0, s0))
+                + Circle::new((0, 0), 7, BLACK.filled())
+                + Text::new(
+                    format!("K = {:.4e}", r.params.stiffness),
+                    (10, -14),
+                    ("sans-serif", 16),
+                ),
+        ))
+        .map_err(e)?
+        .label(format!("operating point (β = {b0:.4}, σ = {s0:.3})"))
+        .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.filled()));
+
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
