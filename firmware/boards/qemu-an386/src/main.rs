@@ -4,7 +4,7 @@
 #![no_std]
 #![no_main]
 
-mod uart;
+use stiffwall_board_qemu_an386::uart;
 
 use core::fmt::Write as _;
 use core::sync::atomic::{AtomicU32, Ordering};

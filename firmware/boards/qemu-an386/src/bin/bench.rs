@@ -1,0 +1,136 @@
+//! Instruction counts of the servo tick, stage by stage and per numeric back-end.
+//!
+//! Run under `qemu-system-arm ... -icount shift=0` (`cargo xtask bench-firmware`): the virtual
+//! clock then advances 1 ns per instruction and SysTick (25 MHz core clock) one count per 40
+//! instructions, deterministically. Each stage runs `BATCHES × PER_BATCH` ticks; the SysTick
+//! counter is read around every batch, the empty loop's count is subtracted, and the telemetry
+//! queue is drained between batches (outside the measured windows). Output lines, on the
+//! semihosting console: `BENCH <stage> <numeric> <instructions per tick ×100>`.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use stiffwall_firmware::{Channels, Encoder, ForceOutput, Fx32, Fx64, Numeric, Servo, ServoCmd, F32};
+use stiffwall_proto::ServoConfig;
+
+const BATCHES: u32 = 40;
+const PER_BATCH: u32 = 200;
+/// Instructions per SysTick count with `-icount shift=0` and a 25 MHz SysTick clock.
+const INSTR_PER_COUNT: u64 = 40;
+
+/// An encoder sweeping a triangle of ±300 counts around the wall, one count per tick.
+struct Sweep(u32);
+impl Encoder for Sweep {
+    fn count(&mut self) -> u32 {
+        self.0 = self.0.wrapping_add(1);
+        let p = (self.0 % 1200) as i32;
+        let tri = if p < 600 { p - 300 } else { 900 - p };
+        black_box(tri as u32 & 0xffff)
+    }
+}
+
+struct Sink;
+impl ForceOutput for Sink {
+    fn write(&mut self, code: i32) {
+        black_box(code);
+    }
+}
+
+fn config() -> ServoConfig {
+    ServoConfig {
+        stiffness: 2.0,
+        damping: 0.0,
+        extra_delay_ticks: 1,
+        max_velocity: 1.0e4,
+        energy_monitor: true,
+        // Generous limits: the sweep must not trip the supervisor during the measurement.
+        energy_limit: 1.0e5,
+        encoder_jump_counts: 100_000,
+        force_limit: 0.09,
+        heartbeat_timeout_ms: 0,
+        ..ServoConfig::default()
+    }
+}
+
+fn elapsed(start: u32, end: u32) -> u64 {
+    u64::from(start.wrapping_sub(end) & 0x00ff_ffff)
+}
+
+/// SysTick counts for `BATCHES × PER_BATCH` calls of `f`, with `between` run unmeasured.
+fn measure(mut f: impl FnMut(u32), mut between: impl FnMut()) -> u64 {
+    let mut total = 0;
+    let mut now = 0u32;
+    for _ in 0..BATCHES {
+        let start = SYST::get_current();
+        for _ in 0..PER_BATCH {
+            f(black_box(now));
+            now = now.wrapping_add(1);
+        }
+        total += elapsed(start, SYST::get_current());
+        between();
+    }
+    total
+}
+
+fn report(stage: &str, numeric: &str, counts: u64, baseline: u64) {
+    let ticks = u64::from(BATCHES * PER_BATCH);
+    let instr_x100 = counts.saturating_sub(baseline) * INSTR_PER_COUNT * 100 / ticks;
+    hprintln!("BENCH {} {} {}", stage, numeric, instr_x100);
+}
+
+fn stages<N: Numeric>(baseline: u64) {
+    let board = stiffwall_board_qemu_an386::plant::board_info();
+    let cfg = config();
+    let mut channels = Channels::new();
+    let (servo_port, mut host) = channels.split();
+    let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
+    let (mut enc, mut out) = (Sweep(0), Sink);
+    let c = measure(|_| { black_box(servo.tick_spring(&mut enc, &mut out)); }, || {});
+    report("spring", N::NAME, c, baseline);
+    let c = measure(|_| { black_box(servo.tick_spring_delay(&mut enc, &mut out)); }, || {});
+    report("spring+delay", N::NAME, c, baseline);
+    let c = measure(|t| { black_box(servo.tick_supervised(t, &mut enc, &mut out)); }, || {});
+    report("spring+delay+supervisor", N::NAME, c, baseline);
+    if host.commands.enqueue(ServoCmd::Stream { decimation: 1 }).is_err() {
+        hprintln!("BENCH-ERROR command queue full");
+    }
+    let c = measure(
+        |t| {
+            black_box(servo.tick(t, &mut enc, &mut out));
+        },
+        || while host.telemetry.dequeue().is_some() {},
+    );
+    report("full(+telemetry)", N::NAME, c, baseline);
+    if servo.faults() != 0 {
+        hprintln!("BENCH-ERROR faults {:#x} latched during {}", servo.faults(), N::NAME);
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let mut cp = match cortex_m::Peripherals::take() {
+        Some(p) => p,
+        None => cortex_m::asm::udf(),
+    };
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(0x00ff_ffff);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
+    let baseline = measure(|t| { black_box(t); }, || {});
+    hprintln!("BENCH baseline loop {}", baseline * INSTR_PER_COUNT * 100 / u64::from(BATCHES * PER_BATCH));
+    stages::<Fx64>(baseline);
+    stages::<Fx32>(baseline);
+    stages::<F32>(baseline);
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}
+
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo) -> ! {
+    hprintln!("BENCH-ERROR panic");
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
