@@ -4,9 +4,11 @@
 //!   for the Cortex-M target, firmware cross-builds with the size report, QEMU scenarios.
 //! - `firmware [--update-size-report]`: builds every board image.
 //! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
+//! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
+mod bench_firmware;
 mod firmware;
 mod qemu;
 mod toolchain;
@@ -35,6 +37,20 @@ const NO_STD_CRATES: &[(&str, &[&str])] = &[
     ("stiffwall-firmware", &[]),
     ("stiffwall-sim", &["--no-default-features"]),
 ];
+
+/// Replaces the text between `<!-- NAME:start -->` and `<!-- NAME:end -->` in a Markdown file
+/// (appending the section when absent, creating the file when missing).
+pub fn update_section(path: &std::path::Path, name: &str, body: &str) -> Result<()> {
+    let start = format!("<!-- {name}:start -->");
+    let end = format!("<!-- {name}:end -->");
+    let old = std::fs::read_to_string(path).unwrap_or_else(|_| "# Benchmarks\n".into());
+    let block = format!("{start}\n{body}\n{end}");
+    let new = match (old.find(&start), old.find(&end)) {
+        (Some(a), Some(b)) if b > a => format!("{}{block}{}", &old[..a], &old[b + end.len()..]),
+        _ => format!("{}\n{block}\n", old.trim_end()),
+    };
+    std::fs::write(path, new).with_context(|| format!("writing {}", path.display()))
+}
 
 fn ci() -> Result<()> {
     let cross = toolchain::ensure_cross()?;
@@ -67,6 +83,7 @@ fn main() -> Result<()> {
         Some("ci") => ci(),
         Some("firmware") => firmware::firmware(&args[1..]),
         Some("qemu") => qemu::qemu(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless]"),
+        Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write]"),
     }
 }

@@ -1,0 +1,157 @@
+//! `cargo xtask bench-firmware [--no-write]`: instructions per servo tick on the QEMU image.
+//!
+//! Runs `stiffwall-qemu-an386-bench` under `qemu-system-arm -icount shift=0` (deterministic:
+//! one virtual ns per instruction, SysTick one count per 40 instructions), parses its
+//! `BENCH <stage> <numeric> <instructions ×100>` lines, prints a table, writes it into
+//! `docs/BENCHMARKS.md` between the `firmware-icount` markers, and fails when the default
+//! back-end (I32F32) exceeds the budgets: spring ≤ 40, full tick ≤ 250 instructions.
+
+use crate::firmware::{root, IMAGES};
+use crate::{toolchain, update_section};
+use anyhow::{bail, Context, Result};
+use std::fmt::Write as _;
+use std::process::Command;
+
+/// Budget of the spring stage, instructions per tick.
+pub const SPRING_BUDGET: f64 = 40.0;
+/// Budget of the full tick, instructions per tick.
+pub const FULL_BUDGET: f64 = 250.0;
+const DEFAULT_NUMERIC: &str = "I32F32";
+
+/// Builds and runs the bench image; returns (stage, numeric, instructions per tick).
+pub fn measure() -> Result<Vec<(String, String, f64)>> {
+    toolchain::ensure_qemu()?;
+    let cross = toolchain::ensure_cross()?;
+    let image = IMAGES
+        .iter()
+        .find(|i| i.name == "qemu-an386")
+        .expect("QEMU image listed");
+    let elf = crate::firmware::build(cross, image, &[])?;
+    let bench = elf.with_file_name("stiffwall-qemu-an386-bench");
+    let out = Command::new("timeout")
+        .args([
+            "120",
+            "qemu-system-arm",
+            "-cpu",
+            "cortex-m4",
+            "-machine",
+            "mps2-an386",
+        ])
+        .args(["-display", "none", "-monitor", "none", "-serial", "null"])
+        .args([
+            "-semihosting-config",
+            "enable=on,target=native",
+            "-icount",
+            "shift=0",
+        ])
+        .arg("-kernel")
+        .arg(&bench)
+        .output()
+        .context("running qemu-system-arm")?;
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    if !out.status.success() || stdout.contains("BENCH-ERROR") {
+        bail!(
+            "bench image failed ({}):\n{stdout}{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let rows: Vec<(String, String, f64)> = stdout
+        .lines()
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            match f.as_slice() {
+                ["BENCH", stage, numeric, v] if *stage != "baseline" => Some((
+                    (*stage).into(),
+                    (*numeric).into(),
+                    v.parse::<f64>().ok()? / 100.0,
+                )),
+                _ => None,
+            }
+        })
+        .collect();
+    if rows.is_empty() {
+        bail!("bench image printed no results:\n{stdout}");
+    }
+    Ok(rows)
+}
+
+/// Renders the measurements as a Markdown table.
+pub fn table(rows: &[(String, String, f64)]) -> String {
+    let mut numerics: Vec<&str> = Vec::new();
+    let mut stages: Vec<&str> = Vec::new();
+    for (s, n, _) in rows {
+        if !numerics.contains(&n.as_str()) {
+            numerics.push(n);
+        }
+        if !stages.contains(&s.as_str()) {
+            stages.push(s);
+        }
+    }
+    let mut t = String::from("| servo stage (cumulative) |");
+    for n in &numerics {
+        let _ = write!(t, " {n} |");
+    }
+    t.push_str("\n|---|");
+    t.push_str(&"---:|".repeat(numerics.len()));
+    t.push('\n');
+    for s in &stages {
+        let _ = write!(t, "| {s} |");
+        for n in &numerics {
+            match rows.iter().find(|r| r.0 == *s && r.1 == *n) {
+                Some(r) => {
+                    let _ = write!(t, " {:.1} |", r.2);
+                }
+                None => t.push_str(" – |"),
+            }
+        }
+        t.push('\n');
+    }
+    t
+}
+
+/// `cargo xtask bench-firmware`.
+pub fn bench_firmware(args: &[String]) -> Result<()> {
+    let write = !args.iter().any(|a| a == "--no-write");
+    if let Some(bad) = args.iter().find(|a| *a != "--no-write") {
+        bail!("unknown argument {bad:?} for `cargo xtask bench-firmware` (allowed: --no-write)");
+    }
+    let rows = measure()?;
+    let t = table(&rows);
+    println!(
+        "Instructions per servo tick (QEMU -icount shift=0, mps2-an386, release build):\n\n{t}"
+    );
+    if write {
+        let body = format!(
+            "Instructions per servo tick on the QEMU image, measured by `cargo xtask bench-firmware`\n\
+             (`qemu-system-arm -icount shift=0`: one instruction per virtual ns; SysTick read around\n\
+             batches of 200 ticks, 8000 ticks per stage, the empty loop subtracted). Stages are\n\
+             cumulative; the full tick adds the command queue and the telemetry push. Budgets for the\n\
+             default back-end ({DEFAULT_NUMERIC}): spring ≤ {SPRING_BUDGET}, full ≤ {FULL_BUDGET}.\n\n{t}"
+        );
+        update_section(&root().join("docs/BENCHMARKS.md"), "firmware-icount", &body)?;
+    }
+    let get = |stage: &str| {
+        rows.iter()
+            .find(|r| r.0 == stage && r.1 == DEFAULT_NUMERIC)
+            .map(|r| r.2)
+    };
+    let mut over = Vec::new();
+    if let Some(v) = get("spring") {
+        if v > SPRING_BUDGET {
+            over.push(format!("spring {v:.1} > {SPRING_BUDGET}"));
+        }
+    }
+    if let Some(v) = get("full(+telemetry)") {
+        if v > FULL_BUDGET {
+            over.push(format!("full tick {v:.1} > {FULL_BUDGET}"));
+        }
+    }
+    if !over.is_empty() {
+        bail!(
+            "servo tick over its instruction budget: {}",
+            over.join(", ")
+        );
+    }
+    Ok(())
+}
