@@ -59,15 +59,46 @@ impl Bench {
     }
 }
 
+impl Bench {
+    /// The raw 16-bit quadrature counter at this instant: the low 16 bits of the true count.
+    pub fn raw_count(&self) -> u32 {
+        (self.plant.encoder_count() as i32 as u32) & 0xffff
+    }
+
+    /// Applies an output code (held until the next call).
+    pub fn set_code(&mut self, code: i32) {
+        self.torque = f64::from(code) * f64::from(TORQUE_PER_CODE);
+    }
+}
+
+/// The encoder as sampled at a servo instant.
+#[derive(Debug, Clone, Copy)]
+pub struct Sampled(pub u32);
+
+impl Encoder for Sampled {
+    fn count(&mut self) -> u32 {
+        self.0
+    }
+}
+
+/// The output code the servo wrote this tick.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Written(pub i32);
+
+impl ForceOutput for Written {
+    fn write(&mut self, code: i32) {
+        self.0 = code;
+    }
+}
+
 impl Encoder for Bench {
     fn count(&mut self) -> u32 {
-        // A 16-bit quadrature counter: the low 16 bits of the true count.
-        (self.plant.encoder_count() as i32 as u32) & 0xffff
+        self.raw_count()
     }
 }
 
 impl ForceOutput for Bench {
     fn write(&mut self, code: i32) {
-        self.torque = f64::from(code) * f64::from(TORQUE_PER_CODE);
+        self.set_code(code);
     }
 }
