@@ -108,7 +108,7 @@ pub fn storage(mu: f64, xi: f64, xidot: f64) -> f64 {
 }
 
 /// Common interface of every monomorphised exact solver (and of the reference solvers).
-pub trait ExactSim {
+pub trait ExactSim: Clone {
     /// Advances one sampling period.
     fn step_period(&mut self);
     /// State at the current sample instant.

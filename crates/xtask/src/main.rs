@@ -8,6 +8,7 @@
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
+mod bench;
 mod bench_firmware;
 mod firmware;
 mod qemu;
@@ -82,6 +83,7 @@ fn main() -> Result<()> {
     match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("firmware") => firmware::firmware(&args[1..]),
+        Some("bench") => bench::bench(&args[1..]),
         Some("qemu") => qemu::qemu(&args[1..]),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
         other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write]"),
