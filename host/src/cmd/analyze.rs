@@ -146,8 +146,7 @@ pub struct Report {
 /// Bad or missing input (message names the field and allowed range), or a plot write error.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.list_devices {
-        print!("{}", list_devices());
-        return Ok(());
+        return emit(&list_devices());
     }
     let (name, p) = resolve_params(args)?;
     let report = analyze(name, &p, args.velocity, args.acceleration)?;
@@ -155,14 +154,24 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         plot::write(path, &report).with_context(|| format!("writing plot {}", path.display()))?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        emit(&(serde_json::to_string_pretty(&report)? + "\n"))
     } else {
-        print!("{}", render_table(&report));
+        let mut s = render_table(&report);
         if let Some(path) = &args.plot {
-            println!("plot written to {}", path.display());
+            let _ = writeln!(s, "plot written to {}", path.display());
         }
+        emit(&s)
     }
-    Ok(())
+}
+
+/// Writes `s` to stdout; a closed pipe (e.g. `| head`) is not an error.
+fn emit(s: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(s.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
 }
 
 /// The `--list-devices` text.
