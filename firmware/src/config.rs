@@ -8,7 +8,9 @@
 //! reports the first offending field with its allowed `[min, max]`.
 
 use crate::numeric::Numeric;
-use stiffwall_proto::{ConfigField, DeviceInfo, Limits, ServoConfig, WallMode, MAX_COARSEN_SHIFT, MAX_DELAY_TICKS};
+use stiffwall_proto::{
+    ConfigField, DeviceInfo, Limits, ServoConfig, WallMode, MAX_COARSEN_SHIFT, MAX_DELAY_TICKS,
+};
 
 /// Largest |gain| accepted, output codes per count (keeps `I16F16` and `I32F32` in range).
 pub const MAX_GAIN_CODES: f32 = 16384.0;
@@ -160,19 +162,64 @@ fn check_u(field: ConfigField, v: u32, min: u32, max: u32) -> Result<(), ConfigE
 /// The first field out of range, with its range.
 pub fn validate(cfg: &ServoConfig, board: &BoardInfo) -> Result<(), ConfigError> {
     use ConfigField as F;
-    check_u(F::ServoRateHz, cfg.servo_rate_hz, board.min_rate_hz, board.max_rate_hz)?;
-    check_u(F::ExtraDelayTicks, cfg.extra_delay_ticks.into(), 0, MAX_DELAY_TICKS.into())?;
-    check_u(F::CoarsenShift, cfg.coarsen_shift.into(), 0, MAX_COARSEN_SHIFT.into())?;
+    check_u(
+        F::ServoRateHz,
+        cfg.servo_rate_hz,
+        board.min_rate_hz,
+        board.max_rate_hz,
+    )?;
+    check_u(
+        F::ExtraDelayTicks,
+        cfg.extra_delay_ticks.into(),
+        0,
+        MAX_DELAY_TICKS.into(),
+    )?;
+    check_u(
+        F::CoarsenShift,
+        cfg.coarsen_shift.into(),
+        0,
+        MAX_COARSEN_SHIFT.into(),
+    )?;
     let s = cfg.coarsen_shift;
     check_f(F::Stiffness, cfg.stiffness, 0.0, board.max_stiffness(s))?;
     let dmax = board.max_damping(s, cfg.servo_rate_hz);
     check_f(F::Damping, cfg.damping, 0.0, dmax)?;
-    check_f(F::ForceLimit, cfg.force_limit, board.force_per_code, board.max_force())?;
-    check_f(F::MaxVelocity, cfg.max_velocity, 0.0, board.max_velocity(cfg.servo_rate_hz))?;
-    check_f(F::EnergyLimit, cfg.energy_limit, f32::MIN_POSITIVE, MAX_ENERGY_J)?;
-    check_u(F::EnergyGrowthCycles, cfg.energy_growth_cycles.into(), 1, 64)?;
-    check_u(F::EncoderJumpCounts, cfg.encoder_jump_counts, 1, MAX_JUMP_COUNTS)?;
-    check_u(F::HeartbeatTimeoutMs, cfg.heartbeat_timeout_ms, 0, MAX_HEARTBEAT_MS)?;
+    check_f(
+        F::ForceLimit,
+        cfg.force_limit,
+        board.force_per_code,
+        board.max_force(),
+    )?;
+    check_f(
+        F::MaxVelocity,
+        cfg.max_velocity,
+        0.0,
+        board.max_velocity(cfg.servo_rate_hz),
+    )?;
+    check_f(
+        F::EnergyLimit,
+        cfg.energy_limit,
+        f32::MIN_POSITIVE,
+        MAX_ENERGY_J,
+    )?;
+    check_u(
+        F::EnergyGrowthCycles,
+        cfg.energy_growth_cycles.into(),
+        1,
+        64,
+    )?;
+    check_u(
+        F::EncoderJumpCounts,
+        cfg.encoder_jump_counts,
+        1,
+        MAX_JUMP_COUNTS,
+    )?;
+    check_u(
+        F::HeartbeatTimeoutMs,
+        cfg.heartbeat_timeout_ms,
+        0,
+        MAX_HEARTBEAT_MS,
+    )?;
     let dsafe = board.max_damping(0, cfg.servo_rate_hz);
     check_f(F::SafeDamping, cfg.safe_damping, 0.0, dsafe)?;
     Ok(())
@@ -236,24 +283,39 @@ impl<N: Numeric> Gains<N> {
         } else {
             0
         };
-        let vel = f64::from(cfg.max_velocity) * VEL_WINDOW as f64 / (rate * f64::from(board.resolution));
+        let vel =
+            f64::from(cfg.max_velocity) * VEL_WINDOW as f64 / (rate * f64::from(board.resolution));
         let kd2 = k * de * de;
-        let e8 = if kd2 > 0.0 { 8.0 * f64::from(cfg.energy_limit) / kd2 } else { 0.0 };
+        let e8 = if kd2 > 0.0 {
+            8.0 * f64::from(cfg.energy_limit) / kd2
+        } else {
+            0.0
+        };
         let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
         Self {
             k_half: N::gain(k_half),
             damp: N::gain(f64::from(cfg.damping) * de * rate / fs),
             hold_damp: N::gain(2.0 * f64::from(crate::servo::HOLD_BETA) * k_half),
-            safe_damp: N::gain(f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs),
+            safe_damp: N::gain(
+                f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
+            ),
             shift: u32::from(cfg.coarsen_shift.min(MAX_COARSEN_SHIFT)),
             wall: i64::from(cfg.wall_position),
             one_sided: cfg.wall == WallMode::OneSided,
             delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
             limit,
-            vel_window_counts: if vel.is_finite() && vel > 0.0 { libm::ceil(vel) as i64 } else { 0 },
+            vel_window_counts: if vel.is_finite() && vel > 0.0 {
+                libm::ceil(vel) as i64
+            } else {
+                0
+            },
             jump: i64::from(cfg.encoder_jump_counts.max(1)),
             energy_monitor: cfg.energy_monitor && kd2 > 0.0,
-            energy_limit_e8: if e8.is_finite() && e8 > 0.0 { e8 as u64 } else { u64::MAX },
+            energy_limit_e8: if e8.is_finite() && e8 > 0.0 {
+                e8 as u64
+            } else {
+                u64::MAX
+            },
             growth_trip: i32::from(cfg.energy_growth_cycles.max(1)),
             heartbeat_ticks: u32::try_from(hb).unwrap_or(u32::MAX),
             safe_damping: cfg.safe_mode == stiffwall_proto::SafeMode::Damping,
@@ -273,30 +335,118 @@ mod tests {
         let c = ServoConfig::default();
         assert_eq!(validate(&c, &b), Ok(()));
         let bad: [(ServoConfig, ConfigField); 12] = [
-            (ServoConfig { stiffness: -1.0, ..c }, ConfigField::Stiffness),
-            (ServoConfig { stiffness: f32::NAN, ..c }, ConfigField::Stiffness),
-            (ServoConfig { damping: f32::INFINITY, ..c }, ConfigField::Damping),
-            (ServoConfig { servo_rate_hz: 99, ..c }, ConfigField::ServoRateHz),
-            (ServoConfig { extra_delay_ticks: 32, ..c }, ConfigField::ExtraDelayTicks),
-            (ServoConfig { coarsen_shift: 17, ..c }, ConfigField::CoarsenShift),
-            (ServoConfig { force_limit: 0.0, ..c }, ConfigField::ForceLimit),
-            (ServoConfig { max_velocity: -0.1, ..c }, ConfigField::MaxVelocity),
-            (ServoConfig { energy_limit: 0.0, ..c }, ConfigField::EnergyLimit),
-            (ServoConfig { energy_growth_cycles: 0, ..c }, ConfigField::EnergyGrowthCycles),
-            (ServoConfig { encoder_jump_counts: 0, ..c }, ConfigField::EncoderJumpCounts),
-            (ServoConfig { safe_damping: -1.0, ..c }, ConfigField::SafeDamping),
+            (
+                ServoConfig {
+                    stiffness: -1.0,
+                    ..c
+                },
+                ConfigField::Stiffness,
+            ),
+            (
+                ServoConfig {
+                    stiffness: f32::NAN,
+                    ..c
+                },
+                ConfigField::Stiffness,
+            ),
+            (
+                ServoConfig {
+                    damping: f32::INFINITY,
+                    ..c
+                },
+                ConfigField::Damping,
+            ),
+            (
+                ServoConfig {
+                    servo_rate_hz: 99,
+                    ..c
+                },
+                ConfigField::ServoRateHz,
+            ),
+            (
+                ServoConfig {
+                    extra_delay_ticks: 32,
+                    ..c
+                },
+                ConfigField::ExtraDelayTicks,
+            ),
+            (
+                ServoConfig {
+                    coarsen_shift: 17,
+                    ..c
+                },
+                ConfigField::CoarsenShift,
+            ),
+            (
+                ServoConfig {
+                    force_limit: 0.0,
+                    ..c
+                },
+                ConfigField::ForceLimit,
+            ),
+            (
+                ServoConfig {
+                    max_velocity: -0.1,
+                    ..c
+                },
+                ConfigField::MaxVelocity,
+            ),
+            (
+                ServoConfig {
+                    energy_limit: 0.0,
+                    ..c
+                },
+                ConfigField::EnergyLimit,
+            ),
+            (
+                ServoConfig {
+                    energy_growth_cycles: 0,
+                    ..c
+                },
+                ConfigField::EnergyGrowthCycles,
+            ),
+            (
+                ServoConfig {
+                    encoder_jump_counts: 0,
+                    ..c
+                },
+                ConfigField::EncoderJumpCounts,
+            ),
+            (
+                ServoConfig {
+                    safe_damping: -1.0,
+                    ..c
+                },
+                ConfigField::SafeDamping,
+            ),
         ];
         for (cfg, field) in bad {
             assert_eq!(validate(&cfg, &b).map_err(|e| e.field), Err(field));
         }
-        let e = validate(&ServoConfig { servo_rate_hz: 50_000, ..c }, &b).unwrap_err();
+        let e = validate(
+            &ServoConfig {
+                servo_rate_hz: 50_000,
+                ..c
+            },
+            &b,
+        )
+        .unwrap_err();
         assert_eq!((e.min, e.max), (100.0, 20_000.0));
     }
 
     #[test]
     fn gains_of_a_known_config() {
-        let b = BoardInfo { resolution: 1e-5, force_per_code: 1e-3, ..BoardInfo::default() };
-        let c = ServoConfig { stiffness: 1000.0, coarsen_shift: 1, force_limit: 1.0, ..ServoConfig::default() };
+        let b = BoardInfo {
+            resolution: 1e-5,
+            force_per_code: 1e-3,
+            ..BoardInfo::default()
+        };
+        let c = ServoConfig {
+            stiffness: 1000.0,
+            coarsen_shift: 1,
+            force_limit: 1.0,
+            ..ServoConfig::default()
+        };
         let g: Gains<Fx64> = Gains::from_config(&c, &b);
         // K·Δ_eff/2/fs = 1000 · 2e-5 / 2 / 1e-3 = 10 codes.
         assert!((Fx64::to_f64(g.k_half) - 10.0).abs() < 1e-4);

@@ -1,2 +1,669 @@
-//! placeholder
-pub struct Device;
+//! The command handler for the main loop: frames in, replies and telemetry batches out.
+//!
+//! Units: `now` is the servo tick (used only to age partial telemetry batches); bytes on the
+//! link are protocol frames ([`stiffwall_proto::frame`]).
+//!
+//! Invariants:
+//! - Every complete frame gets exactly one reply: the answer, or `Error { code, detail }` with a
+//!   distinct code per framing failure. Bytes are read only while the reply queue has room, so
+//!   no reply is ever lost; a slow link back-pressures the reader.
+//! - A refused request (bad range, busy, store failure) changes nothing. `SetConfig` is
+//!   validated field by field ([`crate::config::validate`]) before it reaches the servo.
+//! - Telemetry batches hold consecutive samples only. The device counts lost samples from the
+//!   gaps in the servo's sample numbers, so `TelemetryBatch::dropped` is exact: between two
+//!   batches, `seq` jumps by exactly the growth of `dropped`.
+//! - `ExperimentDone` is sent after the last telemetry sample of the experiment.
+//! - No allocation; bounded work per `poll`.
+
+use crate::config::{validate, BoardInfo};
+use crate::hal::{ByteLink, ConfigStorage};
+use crate::servo::{HostPort, ServoCmd, ServoEvent};
+use crate::store::ConfigStore;
+use core::sync::atomic::Ordering;
+use heapless::Deque;
+use stiffwall_proto::{
+    encode, ConfigField, DeviceMsg, ErrorCode, ErrorDetail, ExciteProfile, FaultReport,
+    FrameDecoder, HostMsg, Request, ServoConfig, TelemetryBatch, MAX_FRAME, MAX_TABLE,
+    PROTOCOL_VERSION, TELEMETRY_BATCH,
+};
+
+/// Replies queued at most.
+const REPLIES: usize = 4;
+/// Bytes read per `poll` at most.
+const READ_BUDGET: usize = 512;
+/// Frames started per `poll` at most.
+const FRAME_BUDGET: usize = 4;
+/// Longest experiment, ticks.
+pub const MAX_EXPERIMENT_TICKS: u32 = 10_000_000;
+/// Largest release deflection, effective ticks.
+pub const MAX_DEFLECTION: i32 = 1 << 20;
+
+/// Counters for diagnostics.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct DeviceStats {
+    /// Frames decoded and handled.
+    pub frames_ok: u32,
+    /// Frames that failed to decode.
+    pub frames_bad: u32,
+    /// Requests refused (range, busy, store).
+    pub refused: u32,
+}
+
+/// The main-loop side of the firmware.
+#[derive(Debug)]
+pub struct Device<'a, S: ConfigStorage> {
+    board: BoardInfo,
+    config: ServoConfig,
+    defaults: ServoConfig,
+    store: ConfigStore<S>,
+    port: HostPort<'a>,
+    decoder: FrameDecoder,
+    tx: [u8; MAX_FRAME],
+    tx_len: usize,
+    tx_pos: usize,
+    replies: Deque<DeviceMsg, REPLIES>,
+    batch: TelemetryBatch,
+    batch_tick: u32,
+    batch_cut: bool,
+    next_seq: u32,
+    dropped: u32,
+    pending_event: Option<ServoEvent>,
+    rate_change: Option<u32>,
+    stats: DeviceStats,
+}
+
+fn seq_reached(next: u32, target: u32) -> bool {
+    next.wrapping_sub(target) as i32 >= 0
+}
+
+fn invalid(field: ConfigField, min: f64, max: f64) -> DeviceMsg {
+    DeviceMsg::Error {
+        code: ErrorCode::InvalidArgument,
+        detail: ErrorDetail::Field { field, min, max },
+    }
+}
+
+fn busy(text: &str) -> DeviceMsg {
+    DeviceMsg::Error {
+        code: ErrorCode::Busy,
+        detail: ErrorDetail::Text(heapless::String::try_from(text).unwrap_or_default()),
+    }
+}
+
+impl<'a, S: ConfigStorage> Device<'a, S> {
+    /// A device for `board`: loads the newest valid stored config (falling back to `defaults`
+    /// when none is stored or it fails validation). Build the [`crate::Servo`] with
+    /// [`Device::config`].
+    pub fn new(
+        board: BoardInfo,
+        store: ConfigStore<S>,
+        port: HostPort<'a>,
+        defaults: ServoConfig,
+    ) -> Self {
+        let mut store = store;
+        let config = match store.load() {
+            Some(c) if validate(&c, &board).is_ok() => c,
+            _ => defaults,
+        };
+        Self {
+            board,
+            config,
+            defaults,
+            store,
+            port,
+            decoder: FrameDecoder::new(),
+            tx: [0; MAX_FRAME],
+            tx_len: 0,
+            tx_pos: 0,
+            replies: Deque::new(),
+            batch: TelemetryBatch {
+                seq: 0,
+                dropped: 0,
+                samples: heapless::Vec::new(),
+            },
+            batch_tick: 0,
+            batch_cut: false,
+            next_seq: 0,
+            dropped: 0,
+            pending_event: None,
+            rate_change: None,
+            stats: DeviceStats::default(),
+        }
+    }
+
+    /// The active configuration.
+    pub fn config(&self) -> &ServoConfig {
+        &self.config
+    }
+
+    /// The board facts.
+    pub fn board(&self) -> &BoardInfo {
+        &self.board
+    }
+
+    /// The configured servo rate, Hz.
+    pub fn servo_rate_hz(&self) -> u32 {
+        self.config.servo_rate_hz
+    }
+
+    /// A new servo rate the board must program (once per change).
+    pub fn take_rate_change(&mut self) -> Option<u32> {
+        self.rate_change.take()
+    }
+
+    /// Diagnostic counters.
+    pub fn stats(&self) -> DeviceStats {
+        self.stats
+    }
+
+    /// Samples lost on the device so far (from sample-number gaps).
+    pub fn dropped(&self) -> u32 {
+        self.dropped
+    }
+
+    /// The config store.
+    pub fn store_mut(&mut self) -> &mut ConfigStore<S> {
+        &mut self.store
+    }
+
+    /// One main-loop step: read and handle frames, collect telemetry, send what the link takes.
+    pub fn poll(&mut self, now: u32, link: &mut impl ByteLink) {
+        // 1. Requests (only while a reply has room).
+        let mut budget = READ_BUDGET;
+        while budget > 0 && self.replies.len() < REPLIES {
+            budget -= 1;
+            let Some(b) = link.read() else { break };
+            if let Some(r) = self.decoder.feed::<HostMsg>(b) {
+                let reply = match r {
+                    Ok(msg) => {
+                        self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
+                        self.handle(msg)
+                    }
+                    Err(e) => {
+                        self.stats.frames_bad = self.stats.frames_bad.wrapping_add(1);
+                        DeviceMsg::Error {
+                            code: e.code(),
+                            detail: e.detail(),
+                        }
+                    }
+                };
+                if matches!(reply, DeviceMsg::Error { .. }) {
+                    self.stats.refused = self.stats.refused.wrapping_add(1);
+                }
+                let _ = self.replies.push_back(reply);
+            }
+        }
+        // 2. Telemetry into the batch.
+        self.collect(now);
+        // 3. Experiment end, after its samples.
+        if self.pending_event.is_none() {
+            self.pending_event = self.port.events.dequeue();
+        }
+        if let Some(ServoEvent::ExperimentDone {
+            kind,
+            completed,
+            faults,
+            next_seq,
+        }) = self.pending_event
+        {
+            if seq_reached(self.next_seq, next_seq)
+                && self.batch.samples.is_empty()
+                && !self.replies.is_full()
+            {
+                let _ = self.replies.push_back(DeviceMsg::ExperimentDone {
+                    kind,
+                    completed,
+                    faults,
+                });
+                self.pending_event = None;
+            } else if seq_reached(self.next_seq, next_seq) {
+                self.batch_cut = true;
+            }
+        }
+        // 4. Transmit.
+        for _ in 0..FRAME_BUDGET {
+            while self.tx_pos < self.tx_len {
+                let Some(&b) = self.tx.get(self.tx_pos) else {
+                    break;
+                };
+                if !link.write(b) {
+                    return;
+                }
+                self.tx_pos += 1;
+            }
+            if !self.next_frame(now) {
+                return;
+            }
+            self.collect(now);
+        }
+    }
+
+    /// Moves samples from the servo queue into the batch (consecutive numbers only).
+    fn collect(&mut self, now: u32) {
+        while self.batch.samples.len() < TELEMETRY_BATCH && !self.batch_cut {
+            let Some(item) = self.port.telemetry.peek().copied() else {
+                break;
+            };
+            let gap = item.seq.wrapping_sub(self.next_seq);
+            if gap != 0 && !self.batch.samples.is_empty() {
+                self.batch_cut = true;
+                break;
+            }
+            let _ = self.port.telemetry.dequeue();
+            self.dropped = self.dropped.wrapping_add(gap);
+            self.next_seq = item.seq.wrapping_add(1);
+            if self.batch.samples.is_empty() {
+                self.batch.seq = item.seq;
+                self.batch_tick = now;
+            }
+            let _ = self.batch.samples.push(item.sample);
+        }
+        self.batch.dropped = self.dropped;
+    }
+
+    /// Encodes the next frame into `tx`; `false` if there is nothing to send.
+    fn next_frame(&mut self, now: u32) -> bool {
+        let flush_ticks = (self.config.servo_rate_hz / 100).max(1);
+        let msg = if let Some(r) = self.replies.pop_front() {
+            r
+        } else if !self.batch.samples.is_empty()
+            && (self.batch.samples.len() >= TELEMETRY_BATCH
+                || self.batch_cut
+                || now.wrapping_sub(self.batch_tick) >= flush_ticks
+                || self.pending_event.is_some())
+        {
+            self.batch_cut = false;
+            let b = core::mem::replace(
+                &mut self.batch,
+                TelemetryBatch {
+                    seq: 0,
+                    dropped: self.dropped,
+                    samples: heapless::Vec::new(),
+                },
+            );
+            DeviceMsg::Telemetry(b)
+        } else {
+            self.batch_cut = false;
+            return false;
+        };
+        match encode(&msg, &mut self.tx) {
+            Ok(f) => {
+                self.tx_len = f.len();
+                self.tx_pos = 0;
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    fn send_servo(&mut self, cmd: ServoCmd) -> bool {
+        self.port.commands.enqueue(cmd).is_ok()
+    }
+
+    fn experiment_running(&self) -> bool {
+        self.port.shared.experiment.load(Ordering::Relaxed)
+    }
+
+    fn apply(&mut self, cfg: ServoConfig, ok: DeviceMsg) -> DeviceMsg {
+        if let Err(e) = validate(&cfg, &self.board) {
+            return DeviceMsg::Error {
+                code: ErrorCode::InvalidConfig,
+                detail: ErrorDetail::Field {
+                    field: e.field,
+                    min: e.min,
+                    max: e.max,
+                },
+            };
+        }
+        if self.experiment_running() {
+            return busy("experiment running");
+        }
+        if !self.send_servo(ServoCmd::Config(cfg)) {
+            return busy("servo queue full");
+        }
+        if cfg.servo_rate_hz != self.config.servo_rate_hz {
+            self.rate_change = Some(cfg.servo_rate_hz);
+        }
+        self.config = cfg;
+        match ok {
+            DeviceMsg::Config(_) => DeviceMsg::Config(cfg),
+            other => other,
+        }
+    }
+
+    /// `Err((min, max))` of the offending argument.
+    fn check_profile(&self, p: &ExciteProfile) -> Result<(), (f64, f64)> {
+        let mc = self.board.max_code;
+        let code_ok = |c: i32| c.unsigned_abs() <= mc.unsigned_abs();
+        let nyq = f64::from(self.config.servo_rate_hz) / 2.0;
+        let bad_code = (-f64::from(mc), f64::from(mc));
+        match *p {
+            ExciteProfile::Steps {
+                low,
+                high,
+                half_period_ticks,
+            } => {
+                if !code_ok(low) || !code_ok(high) {
+                    return Err(bad_code);
+                }
+                if half_period_ticks == 0 {
+                    return Err((1.0, f64::from(u32::MAX)));
+                }
+            }
+            ExciteProfile::Chirp {
+                amplitude,
+                f0_hz,
+                f1_hz,
+            } => {
+                if !code_ok(amplitude) {
+                    return Err(bad_code);
+                }
+                for f in [f0_hz, f1_hz] {
+                    if !(f.is_finite() && f >= 0.0 && f64::from(f) <= nyq) {
+                        return Err((0.0, nyq));
+                    }
+                }
+            }
+            ExciteProfile::Table { len, hold_ticks } => {
+                if len == 0 || usize::from(len) > MAX_TABLE {
+                    return Err((1.0, MAX_TABLE as f64));
+                }
+                if hold_ticks == 0 {
+                    return Err((1.0, f64::from(u16::MAX)));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Handles one request; returns the reply.
+    pub fn handle(&mut self, msg: HostMsg) -> DeviceMsg {
+        let ack = |r| DeviceMsg::Ack(r);
+        match msg {
+            HostMsg::Hello { protocol_version } => {
+                if protocol_version == PROTOCOL_VERSION {
+                    DeviceMsg::HelloReply(self.board.device_info(self.config.servo_rate_hz))
+                } else {
+                    DeviceMsg::Error {
+                        code: ErrorCode::VersionMismatch,
+                        detail: ErrorDetail::Version {
+                            got: protocol_version,
+                            expected: PROTOCOL_VERSION,
+                        },
+                    }
+                }
+            }
+            HostMsg::GetConfig => DeviceMsg::Config(self.config),
+            HostMsg::SetConfig(cfg) => self.apply(cfg, ack(Request::SetConfig)),
+            HostMsg::LoadDefaults => {
+                let d = self.defaults;
+                self.apply(d, DeviceMsg::Config(d))
+            }
+            HostMsg::SaveConfig => match self.store.save(&self.config) {
+                Ok(()) => ack(Request::SaveConfig),
+                Err(_) => DeviceMsg::Error {
+                    code: ErrorCode::StoreFailed,
+                    detail: ErrorDetail::None,
+                },
+            },
+            HostMsg::StreamStart { decimation } => {
+                if decimation == 0 {
+                    invalid(ConfigField::Argument, 1.0, f64::from(u16::MAX))
+                } else if self.send_servo(ServoCmd::Stream { decimation }) {
+                    ack(Request::StreamStart)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+            HostMsg::StreamStop => {
+                if self.send_servo(ServoCmd::Stream { decimation: 0 }) {
+                    ack(Request::StreamStop)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+            HostMsg::Release {
+                deflection_ticks,
+                ticks,
+            } => {
+                if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
+                    return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
+                }
+                if deflection_ticks.unsigned_abs() > MAX_DEFLECTION.unsigned_abs() {
+                    return invalid(
+                        ConfigField::Argument,
+                        -f64::from(MAX_DEFLECTION),
+                        f64::from(MAX_DEFLECTION),
+                    );
+                }
+                if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
+                    return busy("faults latched");
+                }
+                if self.config.stiffness <= 0.0 {
+                    return invalid(
+                        ConfigField::Stiffness,
+                        f64::from(f32::MIN_POSITIVE),
+                        f64::from(self.board.max_stiffness(self.config.coarsen_shift)),
+                    );
+                }
+                if self.send_servo(ServoCmd::Release {
+                    deflection: deflection_ticks,
+                    ticks,
+                }) {
+                    self.port.shared.experiment.store(true, Ordering::Relaxed);
+                    ack(Request::Release)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+            HostMsg::Excite { profile, ticks } => {
+                if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
+                    return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
+                }
+                if let Err((min, max)) = self.check_profile(&profile) {
+                    return invalid(ConfigField::Argument, min, max);
+                }
+                if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
+                    return busy("faults latched");
+                }
+                if self.send_servo(ServoCmd::Excite { profile, ticks }) {
+                    self.port.shared.experiment.store(true, Ordering::Relaxed);
+                    ack(Request::Excite)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+            HostMsg::TableChunk { offset, values } => {
+                if usize::from(offset) + values.len() > MAX_TABLE {
+                    return invalid(
+                        ConfigField::Argument,
+                        0.0,
+                        (MAX_TABLE - values.len()) as f64,
+                    );
+                }
+                if self.send_servo(ServoCmd::TableChunk { offset, values }) {
+                    ack(Request::TableChunk)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+            HostMsg::Heartbeat => {
+                self.port.shared.heartbeat.fetch_add(1, Ordering::Relaxed);
+                ack(Request::Heartbeat)
+            }
+            HostMsg::GetFaults => {
+                let latched = self.port.shared.faults.load(Ordering::Relaxed);
+                DeviceMsg::Faults(FaultReport {
+                    latched,
+                    first_tick: if latched != 0 {
+                        self.port.shared.first_fault_tick.load(Ordering::Relaxed)
+                    } else {
+                        0
+                    },
+                    safe_mode: latched != 0,
+                })
+            }
+            HostMsg::ClearFaults => {
+                if self.send_servo(ServoCmd::ClearFaults) {
+                    ack(Request::ClearFaults)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+            HostMsg::Stop => {
+                if self.send_servo(ServoCmd::Stop) {
+                    ack(Request::Stop)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hal::{Encoder, ForceOutput};
+    use crate::servo::{Channels, Servo};
+    use crate::store::MemStorage;
+    use std::collections::VecDeque;
+    use std::vec::Vec;
+    use stiffwall_proto::frame::decode_frame;
+
+    #[derive(Default)]
+    struct Link {
+        rx: VecDeque<u8>,
+        tx: Vec<u8>,
+        tx_room: Option<usize>,
+    }
+    impl ByteLink for Link {
+        fn read(&mut self) -> Option<u8> {
+            self.rx.pop_front()
+        }
+        fn write(&mut self, b: u8) -> bool {
+            if let Some(r) = &mut self.tx_room {
+                if *r == 0 {
+                    return false;
+                }
+                *r -= 1;
+            }
+            self.tx.push(b);
+            true
+        }
+    }
+    impl Link {
+        fn send(&mut self, m: &HostMsg) {
+            let mut buf = [0u8; MAX_FRAME];
+            self.rx.extend(encode(m, &mut buf).unwrap());
+        }
+        fn frames(&mut self) -> Vec<DeviceMsg> {
+            let mut out = Vec::new();
+            let mut cur = Vec::new();
+            for b in self.tx.drain(..) {
+                cur.push(b);
+                if b == 0 {
+                    out.push(decode_frame::<DeviceMsg>(&mut cur).unwrap());
+                    cur.clear();
+                }
+            }
+            self.tx = cur;
+            out
+        }
+    }
+    struct Enc;
+    impl Encoder for Enc {
+        fn count(&mut self) -> u32 {
+            0
+        }
+    }
+    struct Out;
+    impl ForceOutput for Out {
+        fn write(&mut self, _: i32) {}
+    }
+
+    #[test]
+    fn hello_config_and_refusal() {
+        let mut ch = Channels::new();
+        let (sp, hp) = ch.split();
+        let b = BoardInfo::default();
+        let mut dev = Device::new(
+            b,
+            ConfigStore::new(MemStorage::default()),
+            hp,
+            ServoConfig::default(),
+        );
+        let mut servo: Servo<'_> = Servo::new(b, dev.config(), sp);
+        let mut link = Link::default();
+        link.send(&HostMsg::Hello {
+            protocol_version: PROTOCOL_VERSION,
+        });
+        link.send(&HostMsg::Hello {
+            protocol_version: 9,
+        });
+        link.send(&HostMsg::SetConfig(ServoConfig {
+            coarsen_shift: 40,
+            ..ServoConfig::default()
+        }));
+        link.send(&HostMsg::GetConfig);
+        for t in 0..10 {
+            dev.poll(t, &mut link);
+            servo.tick(t, &mut Enc, &mut Out);
+        }
+        let f = link.frames();
+        assert_eq!(f.len(), 4);
+        assert!(
+            matches!(&f[0], DeviceMsg::HelloReply(i) if i.protocol_version == PROTOCOL_VERSION && i.board == "generic")
+        );
+        assert_eq!(
+            f[1],
+            DeviceMsg::Error {
+                code: ErrorCode::VersionMismatch,
+                detail: ErrorDetail::Version {
+                    got: 9,
+                    expected: PROTOCOL_VERSION
+                }
+            }
+        );
+        assert_eq!(
+            f[2],
+            DeviceMsg::Error {
+                code: ErrorCode::InvalidConfig,
+                detail: ErrorDetail::Field {
+                    field: ConfigField::CoarsenShift,
+                    min: 0.0,
+                    max: 16.0
+                }
+            }
+        );
+        assert_eq!(f[3], DeviceMsg::Config(ServoConfig::default()));
+    }
+
+    #[test]
+    fn slow_link_keeps_every_reply() {
+        let mut ch = Channels::new();
+        let (_sp, hp) = ch.split();
+        let b = BoardInfo::default();
+        let mut dev = Device::new(
+            b,
+            ConfigStore::new(MemStorage::default()),
+            hp,
+            ServoConfig::default(),
+        );
+        let mut link = Link {
+            tx_room: Some(0),
+            ..Link::default()
+        };
+        for _ in 0..20 {
+            link.send(&HostMsg::GetFaults);
+        }
+        let mut got = Vec::new();
+        for t in 0..2000 {
+            link.tx_room = Some(3);
+            dev.poll(t, &mut link);
+            got.extend(link.frames());
+        }
+        assert_eq!(got.len(), 20);
+        assert!(got.iter().all(|m| matches!(m, DeviceMsg::Faults(_))));
+    }
+}

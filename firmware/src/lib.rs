@@ -14,11 +14,11 @@
 //! ```
 //! - Traits ([`hal`]): [`Encoder`] (raw counter, 16/32-bit wrap unwrapped here),
 //!   [`ForceOutput`], [`TickSource`], [`ByteLink`], [`ConfigStorage`] (two slots).
-//! - [`Servo::tick`] is the full servo tick; [`Servo::tick_spring`], [`Servo::tick_spring_delay`]
-//!   and [`Servo::tick_supervised`] are the reduced stages for instruction counting (spring;
-//!   + delay line; + damping, supervisor, experiments; the full tick adds the command queue and
-//!   the telemetry push). `Servo<'_, Fx64>` (default, `I32F32` gains), `Servo<'_, Fx32>`
-//!   (`I16F16`) and `Servo<'_, F32>` are the numeric choices.
+//! - [`Servo::tick`] is the full servo tick. The reduced stages for instruction counting are
+//!   [`Servo::tick_spring`] (spring alone), [`Servo::tick_spring_delay`] (spring and delay
+//!   line) and [`Servo::tick_supervised`] (spring, damping, delay, supervisor, experiments);
+//!   the full tick adds the command queue and the telemetry push. `Servo<'_, Fx64>` (default,
+//!   `I32F32` gains), `Servo<'_, Fx32>` (`I16F16`) and `Servo<'_, F32>` are the numeric choices.
 //! - [`Device::poll`] is the command handler: bytes in, replies and telemetry batches out.
 //!
 //! Servo and device talk only through [`Channels`] (lock-free SPSC queues + atomics), so the
@@ -43,5 +43,8 @@ pub use config::{validate, BoardInfo, ConfigError, Gains};
 pub use device::Device;
 pub use hal::{ByteLink, ConfigStorage, Encoder, ForceOutput, NoStorage, StorageError, TickSource};
 pub use numeric::{Fx32, Fx64, Numeric, F32};
-pub use servo::{Channels, EnergyMonitor, HostPort, Servo, ServoCmd, ServoEvent, ServoPort, Shared, TelemetryItem};
+pub use servo::{
+    Channels, EnergyMonitor, HostPort, Servo, ServoCmd, ServoEvent, ServoPort, Shared,
+    TelemetryItem,
+};
 pub use store::{ConfigStore, MemStorage};

@@ -57,7 +57,9 @@ impl Numeric for Fx64 {
     }
     #[inline]
     fn mul(g: I32F32, m: i64) -> i32 {
-        g.saturating_mul_int(m).saturating_round().saturating_to_num::<i32>()
+        g.saturating_mul_int(m)
+            .saturating_round()
+            .saturating_to_num::<i32>()
     }
 }
 
@@ -78,7 +80,9 @@ impl Numeric for Fx32 {
     #[inline]
     fn mul(g: I16F16, m: i64) -> i32 {
         let m = m.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
-        g.saturating_mul_int(m).saturating_round().saturating_to_num::<i32>()
+        g.saturating_mul_int(m)
+            .saturating_round()
+            .saturating_to_num::<i32>()
     }
 }
 
@@ -121,5 +125,5 @@ mod tests {
         assert_eq!(F32::mul(3.0, -5), -15);
         assert_eq!(F32::mul(1e30, 1 << 40), i32::MAX);
         assert_eq!(Fx64::gain(f64::NAN), I32F32::ZERO);
-            }
+    }
 }

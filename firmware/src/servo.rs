@@ -21,7 +21,9 @@ use crate::numeric::{Fx64, Numeric};
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use heapless::spsc::{Consumer, Producer, Queue};
 use heapless::Vec;
-use stiffwall_proto::{fault, flags, ExciteProfile, ExperimentKind, Sample, ServoConfig, MAX_TABLE, TABLE_CHUNK};
+use stiffwall_proto::{
+    fault, flags, ExciteProfile, ExperimentKind, Sample, ServoConfig, MAX_TABLE, TABLE_CHUNK,
+};
 
 /// Telemetry queue length (capacity − 1 samples in flight).
 pub const TELEMETRY_QUEUE: usize = 256;
@@ -92,6 +94,9 @@ pub enum ServoEvent {
         completed: bool,
         /// Latched faults at the end.
         faults: u32,
+        /// Sample number the next telemetry sample will get (all the experiment's samples
+        /// have smaller numbers): the main loop reports the end after sending them.
+        next_seq: u32,
     },
 }
 
@@ -138,7 +143,9 @@ pub struct Channels {
 
 impl core::fmt::Debug for Channels {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("Channels").field("shared", &self.shared).finish_non_exhaustive()
+        f.debug_struct("Channels")
+            .field("shared", &self.shared)
+            .finish_non_exhaustive()
     }
 }
 
@@ -211,13 +218,17 @@ pub struct HostPort<'a> {
 
 impl core::fmt::Debug for ServoPort<'_> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("ServoPort").field("shared", self.shared).finish_non_exhaustive()
+        f.debug_struct("ServoPort")
+            .field("shared", self.shared)
+            .finish_non_exhaustive()
     }
 }
 
 impl core::fmt::Debug for HostPort<'_> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("HostPort").field("shared", self.shared).finish_non_exhaustive()
+        f.debug_struct("HostPort")
+            .field("shared", self.shared)
+            .finish_non_exhaustive()
     }
 }
 
@@ -435,7 +446,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
         if self.g.one_sided && n < 0 {
             return 0;
         }
-        N::mul(self.g.k_half, n.saturating_mul(2).saturating_add(1).saturating_neg())
+        N::mul(
+            self.g.k_half,
+            n.saturating_mul(2).saturating_add(1).saturating_neg(),
+        )
     }
 
     /// Reads and unwraps the encoder; returns the raw count delta.
@@ -497,7 +511,12 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     /// Spring + damping + delay + supervisor + experiments, no telemetry, no commands. (Stage 3.)
-    pub fn tick_supervised(&mut self, now: u32, enc: &mut impl Encoder, out: &mut impl ForceOutput) -> i32 {
+    pub fn tick_supervised(
+        &mut self,
+        now: u32,
+        enc: &mut impl Encoder,
+        out: &mut impl ForceOutput,
+    ) -> i32 {
         self.step::<false>(now, enc, out)
     }
 
@@ -511,7 +530,12 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     #[inline]
-    fn step<const TEL: bool>(&mut self, now: u32, enc: &mut impl Encoder, out: &mut impl ForceOutput) -> i32 {
+    fn step<const TEL: bool>(
+        &mut self,
+        now: u32,
+        enc: &mut impl Encoder,
+        out: &mut impl ForceOutput,
+    ) -> i32 {
         let d = self.read(enc);
         let rel = self.pos.saturating_sub(self.g.wall);
         let n = rel >> self.g.shift;
@@ -526,13 +550,18 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let vi = (now & VEL_MASK) as usize;
         let old = self.vel_hist[vi];
         self.vel_hist[vi] = self.pos;
-        if self.g.vel_window_counts > 0 && self.pos.saturating_sub(old).unsigned_abs() > self.g.vel_window_counts.unsigned_abs() {
+        if self.g.vel_window_counts > 0
+            && self.pos.saturating_sub(old).unsigned_abs() > self.g.vel_window_counts.unsigned_abs()
+        {
             new_faults |= fault::OVER_VELOCITY;
         }
         let mut fl = 0u16;
-        let monitoring = self.g.energy_monitor && matches!(self.exp, Experiment::None | Experiment::Released { .. });
+        let monitoring = self.g.energy_monitor
+            && matches!(self.exp, Experiment::None | Experiment::Released { .. });
         if monitoring {
-            let (f, turn) = self.monitor.update(n, self.g.growth_trip, self.g.energy_limit_e8);
+            let (f, turn) = self
+                .monitor
+                .update(n, self.g.growth_trip, self.g.energy_limit_e8);
             new_faults |= f;
             if turn {
                 fl |= flags::TURN;
@@ -553,7 +582,11 @@ impl<'a, N: Numeric> Servo<'a, N> {
 
         // Force.
         let c = self.force(n, dn, d);
-        let code = if c.bypass_delay { c.code } else { self.delay(c.code) };
+        let code = if c.bypass_delay {
+            c.code
+        } else {
+            self.delay(c.code)
+        };
         let (code, cf) = self.clamp(code);
         out.write(code);
         fl |= c.flags | cf;
@@ -568,17 +601,27 @@ impl<'a, N: Numeric> Servo<'a, N> {
 
     fn latch(&mut self, now: u32, bits: u32) {
         if self.faults == 0 {
-            self.port.shared.first_fault_tick.store(now, Ordering::Relaxed);
+            self.port
+                .shared
+                .first_fault_tick
+                .store(now, Ordering::Relaxed);
         }
         self.faults |= bits;
-        self.port.shared.faults.store(self.faults, Ordering::Relaxed);
+        self.port
+            .shared
+            .faults
+            .store(self.faults, Ordering::Relaxed);
         self.end_experiment(false);
     }
 
     #[inline]
     fn force(&mut self, n: i64, dn: i64, d: i64) -> Cmd {
         if self.faults != 0 {
-            let code = if self.g.safe_damping { N::mul(self.g.safe_damp, d.saturating_neg()) } else { 0 };
+            let code = if self.g.safe_damping {
+                N::mul(self.g.safe_damp, d.saturating_neg())
+            } else {
+                0
+            };
             return Cmd {
                 code,
                 flags: flags::SAFE_MODE,
@@ -589,7 +632,11 @@ impl<'a, N: Numeric> Servo<'a, N> {
         match &mut self.exp {
             Experiment::None => Cmd {
                 code: self.spring_code(n).saturating_add(damp),
-                flags: if self.g.one_sided && n < 0 { flags::WALL_OFF } else { 0 },
+                flags: if self.g.one_sided && n < 0 {
+                    flags::WALL_OFF
+                } else {
+                    0
+                },
                 bypass_delay: false,
             },
             Experiment::Released { .. } => Cmd {
@@ -599,7 +646,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
             },
             Experiment::Hold { target, .. } => {
                 let e = n.saturating_sub(*target);
-                let k = N::mul(self.g.k_half, e.saturating_mul(2).saturating_add(1).saturating_neg());
+                let k = N::mul(
+                    self.g.k_half,
+                    e.saturating_mul(2).saturating_add(1).saturating_neg(),
+                );
                 let hd = N::mul(self.g.hold_damp, dn.saturating_neg());
                 Cmd {
                     code: k.saturating_add(hd),
@@ -616,13 +666,28 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 cnt,
             } => {
                 let code = match *profile {
-                    ExciteProfile::Steps { low, high, half_period_ticks } => {
+                    ExciteProfile::Steps {
+                        low,
+                        high,
+                        half_period_ticks,
+                    } => {
                         let hp = half_period_ticks.max(1);
-                        let v = if (*t / hp) & 1 == 0 { high } else { low };
-                        v
+                        if (*t / hp) & 1 == 0 {
+                            high
+                        } else {
+                            low
+                        }
                     }
-                    ExciteProfile::Chirp { amplitude, f0_hz, f1_hz } => {
-                        let frac = if *total > 0 { *t as f32 / *total as f32 } else { 0.0 };
+                    ExciteProfile::Chirp {
+                        amplitude,
+                        f0_hz,
+                        f1_hz,
+                    } => {
+                        let frac = if *total > 0 {
+                            *t as f32 / *total as f32
+                        } else {
+                            0.0
+                        };
                         let f = f0_hz + (f1_hz - f0_hz) * frac;
                         let v = amplitude as f32 * libm::sinf(*phase);
                         *phase += core::f32::consts::TAU * f / self.g.rate_hz.max(1) as f32;
@@ -709,6 +774,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             kind,
             completed,
             faults: self.faults,
+            next_seq: self.seq,
         });
     }
 
@@ -839,9 +905,20 @@ mod tests {
         -f64::from(cfg.stiffness) * de * (n as f64 + 0.5) / f64::from(b.force_per_code)
     }
 
-    fn check_backend<Nm: Numeric>(k: f32, shift: u8, n: i64, tol_extra: f64, range: f64) -> Result<(), TestCaseError> {
+    fn check_backend<Nm: Numeric>(
+        k: f32,
+        shift: u8,
+        n: i64,
+        tol_extra: f64,
+        range: f64,
+    ) -> Result<(), TestCaseError> {
         let b = board();
-        let cfg = ServoConfig { stiffness: k, coarsen_shift: shift, force_limit: 30.0, ..ServoConfig::default() };
+        let cfg = ServoConfig {
+            stiffness: k,
+            coarsen_shift: shift,
+            force_limit: 30.0,
+            ..ServoConfig::default()
+        };
         let mut ch = Channels::new();
         let (sp, _hp) = ch.split();
         let s: Servo<'_, Nm> = Servo::new(b, &cfg, sp);
@@ -850,7 +927,10 @@ mod tests {
         let want = exact(&cfg, &b, n);
         let clamped = i64::from(code).clamp(-(lim as i64), lim as i64) as f64;
         let want_c = want.clamp(-lim, lim);
-        prop_assert!((clamped - want_c).abs() <= 1.0 + tol_extra, "n={n} code={code} want={want}");
+        prop_assert!(
+            (clamped - want_c).abs() <= 1.0 + tol_extra,
+            "n={n} code={code} want={want}"
+        );
         // Exactly the documented integer formula on the gain's bits.
         let g = Nm::to_f64(s.gains().k_half);
         let formula = -(2.0 * n as f64 + 1.0) * g;
@@ -918,7 +998,11 @@ mod tests {
     #[test]
     fn saturates_at_extreme_counts() {
         let b = board();
-        let cfg = ServoConfig { stiffness: 80.0, force_limit: 10.0, ..ServoConfig::default() };
+        let cfg = ServoConfig {
+            stiffness: 80.0,
+            force_limit: 10.0,
+            ..ServoConfig::default()
+        };
         let mut ch = Channels::new();
         let (sp, _hp) = ch.split();
         let s: Servo<'_> = Servo::new(b, &cfg, sp);
@@ -932,7 +1016,12 @@ mod tests {
     #[test]
     fn delay_line_delays_by_exact_ticks() {
         let b = board();
-        let cfg = ServoConfig { stiffness: 8.0, force_limit: 20.0, extra_delay_ticks: 3, ..ServoConfig::default() };
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            force_limit: 20.0,
+            extra_delay_ticks: 3,
+            ..ServoConfig::default()
+        };
         let mut ch = Channels::new();
         let (sp, _hp) = ch.split();
         let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
@@ -948,7 +1037,14 @@ mod tests {
     #[test]
     fn one_sided_wall_and_coarsening() {
         let b = board();
-        let cfg = ServoConfig { stiffness: 8.0, force_limit: 20.0, wall: WallMode::OneSided, wall_position: 100, coarsen_shift: 2, ..ServoConfig::default() };
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            force_limit: 20.0,
+            wall: WallMode::OneSided,
+            wall_position: 100,
+            coarsen_shift: 2,
+            ..ServoConfig::default()
+        };
         let mut ch = Channels::new();
         let (sp, _hp) = ch.split();
         let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
@@ -963,7 +1059,12 @@ mod tests {
     #[test]
     fn encoder_jump_latches_and_zeroes_force_until_cleared() {
         let b = board();
-        let cfg = ServoConfig { stiffness: 8.0, force_limit: 20.0 / 1024.0, encoder_jump_counts: 50, ..ServoConfig::default() };
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            force_limit: 20.0 / 1024.0,
+            encoder_jump_counts: 50,
+            ..ServoConfig::default()
+        };
         let mut ch = Channels::new();
         let (sp, hp) = ch.split();
         let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
@@ -973,20 +1074,31 @@ mod tests {
         s.tick(1, &mut Enc(100), &mut out);
         assert_eq!(s.faults(), fault::ENCODER_JUMP);
         assert_eq!(out.0, 0);
-        assert_eq!(hp.shared.faults.load(Ordering::Relaxed), fault::ENCODER_JUMP);
+        assert_eq!(
+            hp.shared.faults.load(Ordering::Relaxed),
+            fault::ENCODER_JUMP
+        );
         s.tick(2, &mut Enc(101), &mut out);
         assert_eq!((s.faults(), out.0), (fault::ENCODER_JUMP, 0), "latched");
         s.command(3, ServoCmd::ClearFaults);
         s.tick(3, &mut Enc(101), &mut out);
         assert_eq!(s.faults(), 0);
-        assert_eq!(out.0, -20, "n=101 → −101.5 codes, clamped to the 20-code limit");
+        assert_eq!(
+            out.0, -20,
+            "n=101 → −101.5 codes, clamped to the 20-code limit"
+        );
     }
 
     #[test]
     fn over_velocity_fault() {
         let b = board();
         // 8-tick window: 0.6103515625 m/s · 8 / (1000 Hz · 2^-13 m) = 40 counts.
-        let cfg = ServoConfig { stiffness: 1.0, force_limit: 20.0, max_velocity: 0.6103515625, ..ServoConfig::default() };
+        let cfg = ServoConfig {
+            stiffness: 1.0,
+            force_limit: 20.0,
+            max_velocity: 625.0 / 1024.0,
+            ..ServoConfig::default()
+        };
         let mut ch = Channels::new();
         let (sp, _hp) = ch.split();
         let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
@@ -1031,7 +1143,10 @@ mod tests {
     #[test]
     fn telemetry_counts_drops_exactly() {
         let b = board();
-        let cfg = ServoConfig { stiffness: 1.0, ..ServoConfig::default() };
+        let cfg = ServoConfig {
+            stiffness: 1.0,
+            ..ServoConfig::default()
+        };
         let mut ch = Channels::new();
         let (sp, mut hp) = ch.split();
         let mut s: Servo<'_> = Servo::new(b, &cfg, sp);

@@ -45,11 +45,14 @@ fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
 fn build(cfg: &ServoConfig, gen: u32, buf: &mut [u8; RECORD_MAX]) -> Option<usize> {
     buf[..4].copy_from_slice(&MAGIC);
     buf[4..8].copy_from_slice(&gen.to_le_bytes());
-    let len = postcard::to_slice(cfg, &mut buf[HEADER..RECORD_MAX - 4]).ok()?.len();
+    let len = postcard::to_slice(cfg, &mut buf[HEADER..RECORD_MAX - 4])
+        .ok()?
+        .len();
     buf[8..10].copy_from_slice(&u16::try_from(len).ok()?.to_le_bytes());
     let end = HEADER + len;
     let crc = CRC32.checksum(&buf[..end]);
-    buf.get_mut(end..end + 4)?.copy_from_slice(&crc.to_le_bytes());
+    buf.get_mut(end..end + 4)?
+        .copy_from_slice(&crc.to_le_bytes());
     Some(end + 4)
 }
 
@@ -82,7 +85,11 @@ impl<S: ConfigStorage> ConfigStore<S> {
         let a = self.read_slot(0).map(|(g, c)| (0, g, c));
         let b = self.read_slot(1).map(|(g, c)| (1, g, c));
         match (a, b) {
-            (Some(a), Some(b)) => Some(if b.1.wrapping_sub(a.1) as i32 > 0 { b } else { a }),
+            (Some(a), Some(b)) => Some(if b.1.wrapping_sub(a.1) as i32 > 0 {
+                b
+            } else {
+                a
+            }),
             (a, b) => a.or(b),
         }
     }
@@ -167,7 +174,10 @@ mod tests {
     use super::*;
 
     fn cfg(k: f32) -> ServoConfig {
-        ServoConfig { stiffness: k, ..ServoConfig::default() }
+        ServoConfig {
+            stiffness: k,
+            ..ServoConfig::default()
+        }
     }
 
     #[test]
@@ -187,14 +197,20 @@ mod tests {
         let mut buf = [0u8; RECORD_MAX];
         let n = build(&cfg(0.0), 7, &mut buf).unwrap();
         assert_eq!(&buf[..8], &[b'S', b'W', b'C', b'1', 7, 0, 0, 0]);
-        assert_eq!(usize::from(u16::from_le_bytes([buf[8], buf[9]])) + HEADER + 4, n);
+        assert_eq!(
+            usize::from(u16::from_le_bytes([buf[8], buf[9]])) + HEADER + 4,
+            n
+        );
         assert_eq!(parse(&buf[..n]), Some((7, cfg(0.0))));
     }
 
     #[test]
     fn interrupted_write_at_every_byte_keeps_previous_config() {
         for erase_first in [true, false] {
-            let mut base = ConfigStore::new(MemStorage { erase_first, ..MemStorage::default() });
+            let mut base = ConfigStore::new(MemStorage {
+                erase_first,
+                ..MemStorage::default()
+            });
             base.save(&cfg(1.0)).unwrap();
             base.save(&cfg(2.0)).unwrap();
             let mut rec = [0u8; RECORD_MAX];
@@ -208,7 +224,11 @@ mod tests {
                 if k == n {
                     assert_eq!(got, Some(cfg(3.0)), "complete write at k={k}");
                 } else {
-                    assert_eq!(got, Some(cfg(2.0)), "interrupted at byte {k} (erase_first={erase_first})");
+                    assert_eq!(
+                        got,
+                        Some(cfg(2.0)),
+                        "interrupted at byte {k} (erase_first={erase_first})"
+                    );
                 }
                 // And the next save after the interruption works and wins.
                 s.save(&cfg(4.0)).unwrap();
