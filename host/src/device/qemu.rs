@@ -72,8 +72,8 @@ pub fn boot(image: &Path) -> Result<Qemu> {
         .args(["-serial", "pty", "-kernel"])
         .arg(image)
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
         .spawn()
         .map_err(|e| {
             if e.kind() == std::io::ErrorKind::NotFound {
@@ -84,10 +84,15 @@ pub fn boot(image: &Path) -> Result<Qemu> {
                 anyhow!("cannot start qemu-system-arm: {e}")
             }
         })?;
-    let stderr = child.stderr.take().context("QEMU stderr")?;
+    // QEMU announces the pty on stdout; the semihosting console shares stdout, so a thread
+    // keeps draining it for the life of the process (and forwards the console to stderr).
+    let stdout = child.stdout.take().context("QEMU stdout")?;
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if !line.contains("redirected to ") {
+                eprintln!("qemu: {line}");
+            }
             if let Some(rest) = line.split("redirected to ").nth(1) {
                 let path = rest.split_whitespace().next().unwrap_or("").to_string();
                 let _ = tx.send(path);
