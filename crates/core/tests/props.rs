@@ -191,6 +191,25 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// The exact sampled-linear boundary (Gil et al.): stable just below, unstable just above.
+    #[test]
+    fn gil_boundary_is_sharp(p in device()) {
+        let k = criteria::k_max_gil_avello_rubio(&p).unwrap();
+        let x = p.viscous * p.period_s / p.mass;
+        // The polynomial test resolves the boundary to ~1e-16/x relative (documented).
+        if k == 0.0 || x <= 1e-7 {
+            return Ok(());
+        }
+        prop_assert!(criteria::gil_avello_rubio_stable(&p.with_stiffness(k * (1.0 - 1e-7))).unwrap());
+        prop_assert!(!criteria::gil_avello_rubio_stable(&p.with_stiffness(k * (1.0 + 1e-7))).unwrap());
+        // Never above Colgate's 2b/T by more than the exact no-delay factor (≤ 2b/T·(1 + x)).
+        prop_assert!(k <= criteria::k_max_colgate_schenkel(&p).unwrap() * (1.0 + x) * (1.0 + 1e-9) || x > 0.1);
+    }
+}
+
 /// Non-finite input is an error, never a value.
 #[test]
 fn non_finite_is_error() {
