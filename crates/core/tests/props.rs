@@ -142,7 +142,7 @@ proptest! {
                               d in any::<f64>().prop_filter("finite", |x| x.is_finite()),
                               e in -1e3..1e3f64) {
         let ok = |r: Result<f64, stiffwall_core::ParamError>| r.map_or(true, |x| !x.is_nan());
-        let oko = |r: Result<Option<f64>, stiffwall_core::ParamError>| r.map_or(true, |x| x.map_or(true, |x| !x.is_nan()));
+        let oko = |r: Result<Option<f64>, stiffwall_core::ParamError>| r.map_or(true, |x| x.is_none_or(|x| !x.is_nan()));
         prop_assert!(oko(velocity_limit(a, b)));
         prop_assert!(oko(regions::velocity_limit_delayed(a, b, c, d)));
         prop_assert!(oko(regions::velocity_limit_harmonic(a, b, c, d)));
