@@ -284,6 +284,40 @@ mod tests {
         assert!(small_limit_cycle(mu, 0.0, 0.0, tl).unwrap().is_none());
     }
 
+    /// Sec. VII-C: as σ → ½⁻ the small cycle's ω → π/(2τ_L) and M → 0; M grows as σ drops.
+    #[test]
+    fn small_cycle_limits() {
+        let (mu, beta, tl) = (5.0, 0.8, 1.75);
+        let near = small_limit_cycle(mu, beta, 0.5 - 1e-9, tl)
+            .unwrap()
+            .unwrap();
+        assert!((near.omega - FRAC_PI_2 / tl).abs() < 1e-3);
+        assert!(near.amplitude < 1e-3);
+        let mut prev = 0.0;
+        for s in [0.45, 0.35, 0.25, 0.15] {
+            let lc = small_limit_cycle(mu, beta, s, tl).unwrap().unwrap();
+            assert!(lc.amplitude > prev, "σ={s}");
+            prev = lc.amplitude;
+            // (70) holds at the solution
+            assert!((small_cycle_sigma(mu, beta, tl, lc.omega).unwrap() - s).abs() < 1e-9);
+        }
+    }
+
+    /// Sec. VII-D: (72) crosses σ = 0 at β = sin(τ_Lω)/ω ≈ τ_L (for μ ≫ τ_L²), and (74)/(75)
+    /// vanish at β = τ_L.
+    #[test]
+    fn large_cycle_boundary_crosses_zero_near_tau_l() {
+        let (mu, tl) = (100.0, 0.5 + 1.25);
+        let w = large_cycle_omega(mu, tl).unwrap();
+        let b0 = libm::sin(tl * w) / w;
+        assert!(large_cycle_sigma(mu, b0, tl, 2.0).unwrap().abs() < 1e-12);
+        assert!((b0 - tl).abs() < 0.01 * tl, "{b0}");
+        assert!(large_cycle_sigma_approx(mu, tl, tl, 2.0).unwrap().abs() < 1e-15);
+        assert!(sigma_min_large(mu, tl, tl).unwrap().abs() < 1e-15);
+        // below the line (small β, σ = 0) the large-cycle boundary is positive: unstable
+        assert!(large_cycle_sigma(mu, 0.0, tl, 1.0).unwrap() > 0.0);
+    }
+
     #[test]
     fn large_cycle_73_close_for_big_mu() {
         let w = large_cycle_omega(100.0, 0.5).unwrap();
