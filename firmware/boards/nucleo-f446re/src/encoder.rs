@@ -46,3 +46,10 @@ impl QuadEncoder {
         self.qei.count()
     }
 }
+
+impl stiffwall_firmware::Encoder for QuadEncoder {
+    #[inline(always)]
+    fn count(&mut self) -> u32 {
+        self.raw()
+    }
+}

@@ -99,7 +99,7 @@ impl FlashSlots {
         let end = offset
             .checked_add(data.len())
             .ok_or(FlashError::OutOfRange)?;
-        if offset % 4 != 0 || end > SLOT_LEN {
+        if !offset.is_multiple_of(4) || end > SLOT_LEN {
             return Err(FlashError::OutOfRange);
         }
         self.unlock();
@@ -198,5 +198,29 @@ impl FlashSlots {
         if dcen {
             self.flash.acr().modify(|_, w| w.dcen().set_bit());
         }
+    }
+}
+
+/// The firmware core's two-slot storage (`stiffwall_firmware::ConfigStore` adds the records,
+/// generations and CRC). A write holds the force output at zero with the amplifier disabled for
+/// as long as the flash is busy (`force::inhibit`), because the servo can't run meanwhile.
+impl stiffwall_firmware::ConfigStorage for FlashSlots {
+    fn slot_len(&self) -> usize {
+        SLOT_LEN
+    }
+
+    fn read(
+        &mut self,
+        slot: usize,
+        buf: &mut [u8],
+    ) -> Result<(), stiffwall_firmware::StorageError> {
+        FlashSlots::read(self, slot, 0, buf).map_err(|_| stiffwall_firmware::StorageError)
+    }
+
+    fn write(&mut self, slot: usize, data: &[u8]) -> Result<(), stiffwall_firmware::StorageError> {
+        crate::force::inhibit(true);
+        let result = self.rewrite(slot, data);
+        crate::force::inhibit(false);
+        result.map_err(|_| stiffwall_firmware::StorageError)
     }
 }

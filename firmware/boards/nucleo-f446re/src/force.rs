@@ -28,7 +28,22 @@ compile_error!("features `dac` and `pwm` are mutually exclusive: pick the one yo
 #[cfg(not(any(feature = "dac", feature = "pwm")))]
 compile_error!("select the force output: `--features dac` (DAC on PA4) or `--features pwm` (PWM on PA8 + DIR on PA9)");
 
+use core::sync::atomic::{AtomicBool, Ordering};
 use stm32f4xx_hal::gpio::{Output, PushPull, PB10};
+
+/// Set while thread mode needs the power stage off (flash writes stall the servo).
+static INHIBIT: AtomicBool = AtomicBool::new(false);
+
+/// Turns the power stage off (zero force, enable low) until `inhibit(false)`, at once and in
+/// every servo tick meanwhile. Thread mode only. Clearing it lets the next servo tick re-enable
+/// the amplifier (after writing zero first) and apply the servo's code.
+pub fn inhibit(on: bool) {
+    INHIBIT.store(on, Ordering::SeqCst);
+    if on {
+        // Any servo tick after the store sees the flag, so the tick can't undo this.
+        emergency_off();
+    }
+}
 
 pub use imp::MAX_CODE;
 
@@ -52,7 +67,6 @@ mod imp {
     /// The DAC driver: channel 1 on PA4.
     pub struct Driver {
         ch: C1,
-        last: u16,
     }
 
     impl Driver {
@@ -62,7 +76,7 @@ mod imp {
             ch.set_value(DAC_ZERO);
             ch.enable();
             ch.set_value(DAC_ZERO);
-            Self { ch, last: DAC_ZERO }
+            Self { ch }
         }
 
         /// Maps a force code to a 12-bit DAC code: mid-scale + code, saturated to ±`MAX_CODE`.
@@ -76,12 +90,6 @@ mod imp {
         pub fn set(&mut self, cmd: i32) {
             let code = Self::code_for(cmd);
             self.ch.set_value(code);
-            self.last = code;
-        }
-
-        /// The last code written (12-bit, `DAC_ZERO` = zero force).
-        pub fn raw(&self) -> u16 {
-            self.last
         }
     }
 
@@ -126,7 +134,6 @@ mod imp {
         dir: PA9<Output<PushPull>>,
         /// Largest duty in timer counts: `MAX_CODE`, or less if the timer's period came out shorter.
         max_duty: i32,
-        last: i32,
     }
 
     impl Driver {
@@ -143,7 +150,6 @@ mod imp {
                 ch,
                 dir,
                 max_duty,
-                last: 0,
             }
         }
 
@@ -158,12 +164,6 @@ mod imp {
                 self.dir.set_low();
             }
             self.ch.set_duty(duty);
-            self.last = cmd;
-        }
-
-        /// The last command applied (signed, clamped).
-        pub fn raw(&self) -> i32 {
-            self.last
         }
     }
 
@@ -182,13 +182,6 @@ mod imp {
 }
 
 pub use imp::Parts;
-
-/// Which output this image drives (for the boot banner and the handshake).
-#[cfg(feature = "dac")]
-pub const VARIANT: &str = "dac";
-/// Which output this image drives (for the boot banner and the handshake).
-#[cfg(feature = "pwm")]
-pub const VARIANT: &str = "pwm";
 
 /// Drives the outputs to their safe state without owning them: amplifier enable low, zero
 /// force. For the panic and fault handlers and boot failures, where the drivers may be owned by
@@ -245,18 +238,6 @@ impl ForceOut {
         }
     }
 
-    /// Applies a force code (±`MAX_CODE` = full-scale force). Saturates.
-    #[inline(always)]
-    pub fn set(&mut self, code: i32) {
-        self.driver.set(code);
-    }
-
-    /// Zero force (the amplifier stays in its current enable state).
-    #[inline(always)]
-    pub fn zero(&mut self) {
-        self.driver.set(0);
-    }
-
     /// Enables or disables the amplifier. Enabling first forces the output to zero.
     #[inline(always)]
     pub fn enable(&mut self, on: bool) {
@@ -273,13 +254,26 @@ impl ForceOut {
     }
 
     /// Whether the amplifier enable line is high.
+    #[allow(dead_code)] // diagnostics
     pub fn is_enabled(&self) -> bool {
         self.enabled
     }
+}
 
-    /// The last raw hardware value written: the DAC code (`dac`) or the signed command (`pwm`).
-    #[allow(dead_code)] // diagnostics
-    pub fn raw(&self) -> i32 {
-        i32::from(self.driver.raw())
+/// The firmware core's force output: the servo's code, in native steps (±`MAX_CODE`). The
+/// amplifier is enabled on the first write (after the output is at zero) and stays enabled,
+/// including while the servo is in safe mode (its safe damping needs the amplifier), unless
+/// `inhibit` is on.
+impl stiffwall_firmware::ForceOutput for ForceOut {
+    #[inline(always)]
+    fn write(&mut self, code: i32) {
+        if INHIBIT.load(Ordering::Relaxed) {
+            self.enable(false);
+        } else {
+            if !self.enabled {
+                self.enable(true);
+            }
+            self.driver.set(code);
+        }
     }
 }

@@ -11,6 +11,7 @@ mod encoder;
 mod flash_store;
 mod force;
 mod handoff;
+mod rig;
 mod serial;
 mod servo_timer;
 mod watchdog;
@@ -29,13 +30,13 @@ use force::ForceOut;
 use handoff::Handoff;
 use serial::SerialIsr;
 use servo_timer::ServoTimer;
+use static_cell::StaticCell;
+use stiffwall_firmware::{Channels, ConfigStore, Device, Servo};
 
 /// Frequency of the ST-LINK MCO clock fed into OSC_IN.
 const HSE_HZ: u32 = 8_000_000;
 /// System clock.
 const SYSCLK_HZ: u32 = 180_000_000;
-/// Servo rate in Hz (the firmware core's default).
-const SERVO_RATE_HZ: u32 = 1_000;
 
 /// NVIC priorities (upper nibble significant on the STM32F4: 16 levels, lower = more urgent).
 const PRIO_USART2: u8 = 0x00;
@@ -46,8 +47,11 @@ struct ServoIsr {
     timer: ServoTimer,
     encoder: QuadEncoder,
     force: ForceOut,
+    servo: Servo<'static>,
 }
 
+/// Queues and atomics between the servo (TIM7) and the protocol (thread mode).
+static CHANNELS: StaticCell<Channels> = StaticCell::new();
 static SERVO: Handoff<ServoIsr> = Handoff::new();
 static SERIAL: Handoff<SerialIsr> = Handoff::new();
 
@@ -92,9 +96,20 @@ fn main() -> ! {
         halt()
     };
 
-    let _flash = FlashSlots::new(dp.FLASH);
+    // The firmware core: the device loads the newest valid stored config (else the defaults);
+    // the servo starts from that config.
+    let channels: &'static mut Channels = CHANNELS.init_with(Channels::new);
+    let (servo_port, host_port) = channels.split();
+    let board = rig::board_info();
+    let mut device = Device::new(
+        board,
+        ConfigStore::new(FlashSlots::new(dp.FLASH)),
+        host_port,
+        rig::defaults(),
+    );
+    let servo = Servo::new(board, device.config(), servo_port);
 
-    let Some(timer) = ServoTimer::new(dp.TIM7, SERVO_RATE_HZ, &mut rcc) else {
+    let Some(timer) = ServoTimer::new(dp.TIM7, device.servo_rate_hz(), &mut rcc) else {
         halt()
     };
 
@@ -103,6 +118,7 @@ fn main() -> ! {
         timer,
         encoder,
         force,
+        servo,
     });
     // SAFETY: no priority-based critical sections exist in this program (shared state is
     // handed off or atomic), so changing priorities and unmasking can't break a lock.
@@ -114,12 +130,18 @@ fn main() -> ! {
     }
 
     let mut dog = watchdog::Watchdog::start(dp.IWDG, &dp.DBGMCU, servo_timer::ticks());
-    let mut buf = [0u8; 64];
     loop {
-        let n = port.read(&mut buf);
-        let _ = n;
+        device.poll(servo_timer::ticks(), &mut port);
+        port.kick();
+        if let Some(hz) = device.take_rate_change() {
+            servo_timer::request_rate(hz);
+        }
         dog.feed_if_ticking(servo_timer::ticks());
-        cortex_m::asm::wfi();
+        // Sleep until the next interrupt (a servo tick or a serial byte) unless there is work:
+        // bytes received, or replies/telemetry the device still has to push into a full TX queue.
+        if !port.rx_pending() {
+            cortex_m::asm::wfi();
+        }
     }
 }
 
@@ -132,9 +154,9 @@ fn TIM7() {
     let Some(res) = RES.as_mut() else {
         return;
     };
-    res.timer.ack();
-    let _count = res.encoder.raw();
-    res.force.zero();
+    let now = res.timer.ack();
+    res.servo.tick(now, &mut res.encoder, &mut res.force);
+    res.timer.apply_rate_request();
 }
 
 #[interrupt]

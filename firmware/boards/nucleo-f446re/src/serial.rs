@@ -12,7 +12,8 @@
 //! is needed. One byte time at 921600 baud is 10.9 µs; because the RX interrupt preempts everything
 //! else, a byte is read well within that and the hardware never overruns. Invariants: a byte is
 //! lost only if the RX queue is full (counted in `rx_dropped`) or on an overrun/framing/noise
-//! error (counted in `rx_errors`); `write` never blocks, it queues what fits and says how much.
+//! error (counted in `rx_errors`); writing never blocks: a byte that doesn't fit is refused (`ByteLink::write` returns false) and
+//! the firmware core retries it later.
 //!
 //! Caveat: erasing a flash sector stalls instruction fetches from flash for up to ~1 s, interrupts
 //! included; bytes that arrive then are lost (`flash_store.rs`). The host waits for the reply to
@@ -116,21 +117,6 @@ impl SerialIsr {
 }
 
 impl SerialPort {
-    /// Moves received bytes into `buf`; returns how many (0 when none are waiting). Never blocks.
-    pub fn read(&mut self, buf: &mut [u8]) -> usize {
-        let mut n = 0;
-        for slot in buf.iter_mut() {
-            match self.rx.dequeue() {
-                Some(b) => {
-                    *slot = b;
-                    n += 1;
-                }
-                None => break,
-            }
-        }
-        n
-    }
-
     /// The next received byte, if any. Never blocks.
     #[inline]
     pub fn read_byte(&mut self) -> Option<u8> {
@@ -153,30 +139,10 @@ impl SerialPort {
         }
     }
 
-    /// Queues as many of `bytes` as fit and starts sending; returns how many. Never blocks.
-    pub fn write(&mut self, bytes: &[u8]) -> usize {
-        let mut n = 0;
-        for &b in bytes {
-            if !self.write_byte(b) {
-                break;
-            }
-            n += 1;
-        }
-        self.kick();
-        n
-    }
-
-    /// Free space in the transmit queue, bytes.
-    pub fn tx_free(&self) -> usize {
-        self.tx.capacity() - self.tx.len()
-    }
-
-    /// Queues all of `bytes`, waiting for room (thread mode only; used for the boot banner).
-    pub fn write_all(&mut self, mut bytes: &[u8]) {
-        while !bytes.is_empty() {
-            let n = self.write(bytes);
-            bytes = &bytes[n..];
-        }
+    /// Whether received bytes are waiting.
+    #[inline]
+    pub fn rx_pending(&self) -> bool {
+        self.rx.ready()
     }
 
     /// Bytes lost because the receive queue was full.
@@ -192,9 +158,14 @@ impl SerialPort {
     }
 }
 
-impl core::fmt::Write for SerialPort {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        self.write_all(s.as_bytes());
-        Ok(())
+/// The firmware core's link: bytes queue up until `kick` (main loop, after each `Device::poll`).
+impl stiffwall_firmware::ByteLink for SerialPort {
+    #[inline]
+    fn read(&mut self) -> Option<u8> {
+        self.read_byte()
+    }
+    #[inline]
+    fn write(&mut self, byte: u8) -> bool {
+        self.write_byte(byte)
     }
 }

@@ -16,30 +16,58 @@ use stm32f4xx_hal::{
 };
 
 static TICKS: AtomicU32 = AtomicU32::new(0);
+/// A servo rate requested by thread mode (Hz), 0 = none pending.
+static RATE_REQUEST: AtomicU32 = AtomicU32::new(0);
+
+/// Asks the servo interrupt to reprogram TIM7 to `rate_hz` at its next tick (thread mode).
+pub fn request_rate(rate_hz: u32) {
+    RATE_REQUEST.store(rate_hz, Ordering::Relaxed);
+}
 
 /// TIM7 programmed as the servo clock. Owned by the `TIM7` interrupt handler.
 pub struct ServoTimer {
     counter: CounterHz<TIM7>,
+    rate_hz: u32,
 }
+
+/// Highest rate the timer is asked for, Hz.
+const MAX_RATE_HZ: u32 = 100_000;
 
 impl ServoTimer {
     /// Starts TIM7 at `rate_hz` with its update interrupt enabled (the NVIC line stays masked
     /// until `main` unmasks it). `None` if the rate is 0 or not reachable from the timer clock.
     pub fn new(tim: TIM7, rate_hz: u32, rcc: &mut Rcc) -> Option<Self> {
-        if rate_hz == 0 || rate_hz > 100_000 {
+        if rate_hz == 0 || rate_hz > MAX_RATE_HZ {
             return None;
         }
         let mut counter = tim.counter_hz(rcc);
         counter.start(rate_hz.Hz()).ok()?;
         counter.listen(Event::Update);
-        Some(Self { counter })
+        Some(Self { counter, rate_hz })
     }
 
-    /// Clears the update flag; call once at the start of every TIM7 interrupt.
+    /// Clears the update flag and counts the tick; call once at the start of every TIM7
+    /// interrupt. Returns the new tick number.
     #[inline(always)]
-    pub fn ack(&mut self) {
+    pub fn ack(&mut self) -> u32 {
         self.counter.clear_flags(Flag::Update);
-        TICKS.fetch_add(1, Ordering::Relaxed);
+        TICKS.fetch_add(1, Ordering::Relaxed).wrapping_add(1)
+    }
+
+    /// Applies a rate change requested with `request_rate`, if any (from the TIM7 handler).
+    /// An unreachable rate leaves the timer at its old rate.
+    #[inline]
+    pub fn apply_rate_request(&mut self) {
+        let hz = RATE_REQUEST.swap(0, Ordering::Relaxed);
+        if hz == 0 || hz == self.rate_hz {
+            return;
+        }
+        if hz <= MAX_RATE_HZ && self.counter.start(hz.Hz()).is_ok() {
+            self.rate_hz = hz;
+        } else {
+            // `start` stops the counter first: restart it at the old, known-good rate.
+            let _ = self.counter.start(self.rate_hz.Hz());
+        }
     }
 }
 
