@@ -22,7 +22,7 @@ fn base(p: &PhysicalParams) -> Result<PhysicalParams, ParamError> {
 }
 
 /// Colgate & Schenkel, "Passivity of a class of sampled-data systems: Application to haptic
-/// interfaces", ACC 1994 (the paper's [7]): passivity iff b > KT/2 + |B|. With B = 0:
+/// interfaces", ACC 1994 (the paper's ref. 7): passivity iff b > KT/2 + |B|. With B = 0:
 /// K < 2b/T. Quantization, Coulomb friction and delay are not modelled. Returns the supremum
 /// 2b/T (strict inequality: K must stay below it).
 ///
@@ -34,7 +34,7 @@ pub fn k_max_colgate_schenkel(p: &PhysicalParams) -> Result<f64, ParamError> {
 }
 
 /// Abbott & Okamura, "Effects of position quantization and sampling rate on virtual-wall
-/// passivity", IEEE T-RO 21(5), 2005 (the paper's [15]): for a mass with viscous and Coulomb
+/// passivity", IEEE T-RO 21(5), 2005 (the paper's ref. 15): for a mass with viscous and Coulomb
 /// friction, sampled, with encoder resolution Δ, the virtual wall is passive iff
 /// K < min(2b/T, 2f_c/Δ) (with B = 0; the 2b/T term is Colgate's, the 2f_c/Δ term the
 /// quantization one). Implemented exactly as that formula, as we recall it from the paper;
