@@ -176,15 +176,17 @@ impl Client {
             };
             for &b in &buf[..n] {
                 match self.decoder.feed::<DeviceMsg>(b) {
-                    Some(Ok(m)) => self.pending.push_back(m),
+                    Some(Ok(m)) => {
+                        if let DeviceMsg::Telemetry(batch) = &m {
+                            self.account(batch);
+                        }
+                        self.pending.push_back(m);
+                    }
                     Some(Err(_)) => self.gaps.bad_frames += 1,
                     None => {}
                 }
             }
             if let Some(m) = self.pending.pop_front() {
-                if let DeviceMsg::Telemetry(batch) = &m {
-                    self.account(batch);
-                }
                 return Ok(Some(m));
             }
             if Instant::now() >= deadline {

@@ -4,3 +4,4 @@
 pub mod client;
 pub mod qemu;
 pub mod transport;
+pub mod virtual_device;

@@ -1,0 +1,238 @@
+//! The built-in virtual device: the firmware core (`stiffwall-firmware`: `Device` + `Servo`)
+//! driving the exact simulated plant of `stiffwall-sim`, served on a pseudo-terminal so that
+//! hostctl reaches it through the same serial code path as a real board.
+//!
+//! Timing: the servo ticks at the configured rate against the wall clock (`paced`), or as fast
+//! as the host reads telemetry (`fast`): in fast mode the servo only runs while fewer than
+//! [`FAST_BACKLOG`] bytes wait for the host, so no telemetry sample is ever dropped.
+//! Units: SI at this API; the plant is read at each sample instant and the written code is held
+//! (ZOH) for one period, as on hardware. The amplifier is ideal; extra delay comes from the
+//! firmware's own delay line (`ServoConfig::extra_delay_ticks`).
+
+use super::transport;
+use anyhow::{bail, Result};
+use serialport::SerialPort as _;
+use std::collections::VecDeque;
+use std::io::{ErrorKind, Read, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use stiffwall_core::params::PhysicalParams;
+use stiffwall_firmware::{
+    BoardInfo, ByteLink, Channels, ConfigStore, Device, Encoder, ForceOutput, MemStorage, Servo,
+};
+use stiffwall_proto::ServoConfig;
+use stiffwall_sim::PhysicalPlant;
+
+/// Bytes waiting for the host above which the fast virtual device pauses its servo.
+pub const FAST_BACKLOG: usize = 2048;
+/// Output codes of the virtual amplifier (16-bit bipolar).
+pub const MAX_CODE: i32 = 32_767;
+
+/// What to simulate.
+#[derive(Debug, Clone)]
+pub struct Spec {
+    /// The device: m, b, c, Δ (T and K come from the firmware's config; `stiffness` and
+    /// `period_s` here set the boot config).
+    pub plant: PhysicalParams,
+    /// Encoder counts per revolution for rotary devices (0 for linear).
+    pub counts_per_rev: u32,
+    /// Run as fast as the host reads instead of in real time.
+    pub fast: bool,
+    /// Initial position of the plant, m (rad).
+    pub initial_position: f64,
+}
+
+impl Spec {
+    /// The board facts the firmware is built with for this plant: a 32-bit encoder counter
+    /// and a 16-bit amplifier whose full scale is 32.8 × the Coulomb friction (at least 1 mN).
+    #[must_use]
+    pub fn board(&self) -> BoardInfo {
+        let full_scale = (self.plant.coulomb * 32.767).max(1e-3);
+        BoardInfo {
+            name: "virtual",
+            resolution: self.plant.resolution as f32,
+            counts_per_rev: self.counts_per_rev,
+            encoder_bits: 32,
+            force_per_code: (full_scale / f64::from(MAX_CODE)) as f32,
+            max_code: MAX_CODE,
+            min_rate_hz: 100,
+            max_rate_hz: 20_000,
+        }
+    }
+
+    /// Boot configuration: wall off, the spec's servo rate, force limit at full scale. In fast
+    /// mode the heartbeat watchdog is off: device time then runs many times faster than the
+    /// host's clock, so a heartbeat timeout counted in servo ticks would trip spuriously.
+    #[must_use]
+    pub fn defaults(&self) -> ServoConfig {
+        let b = self.board();
+        ServoConfig {
+            heartbeat_timeout_ms: if self.fast { 0 } else { 500 },
+            stiffness: 0.0,
+            servo_rate_hz: (1.0 / self.plant.period_s).round().clamp(100.0, 20_000.0) as u32,
+            force_limit: b.force_per_code * b.max_code as f32,
+            energy_limit: 1.0e3,
+            ..ServoConfig::default()
+        }
+    }
+}
+
+/// A running virtual device; stopped when dropped.
+#[derive(Debug)]
+pub struct VirtualDevice {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    /// Path of the host side of its pseudo-terminal.
+    pub pty: String,
+}
+
+impl Drop for VirtualDevice {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// In-memory byte link between the firmware's `Device` and the pty.
+#[derive(Debug, Default)]
+struct MemLink {
+    rx: VecDeque<u8>,
+    tx: VecDeque<u8>,
+}
+
+impl ByteLink for MemLink {
+    fn read(&mut self) -> Option<u8> {
+        self.rx.pop_front()
+    }
+    fn write(&mut self, byte: u8) -> bool {
+        if self.tx.len() >= 1 << 16 {
+            return false;
+        }
+        self.tx.push_back(byte);
+        true
+    }
+}
+
+struct Sampled(u32);
+impl Encoder for Sampled {
+    fn count(&mut self) -> u32 {
+        self.0
+    }
+}
+
+struct Written(i32);
+impl ForceOutput for Written {
+    fn write(&mut self, code: i32) {
+        self.0 = code;
+    }
+}
+
+/// Starts the virtual device; returns it and the host side of its pty, opened by path.
+pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPort>)> {
+    let p = &spec.plant;
+    let mut plant = match PhysicalPlant::new(p.mass, p.viscous, p.coulomb, p.resolution) {
+        Ok(pl) => pl,
+        Err(e) => bail!("virtual device plant: {e}"),
+    };
+    plant.set_state(spec.initial_position, 0.0);
+    let (mut master, host, pty) = transport::pty_pair()?;
+    master.set_timeout(Duration::from_millis(1))?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let stop2 = Arc::clone(&stop);
+    let thread = std::thread::Builder::new()
+        .name("virtual-device".into())
+        .spawn(move || run(&spec, plant, &mut master, &stop2))?;
+    Ok((
+        VirtualDevice {
+            stop,
+            thread: Some(thread),
+            pty,
+        },
+        host,
+    ))
+}
+
+fn run(spec: &Spec, mut plant: PhysicalPlant, pty: &mut serialport::TTYPort, stop: &AtomicBool) {
+    let board = spec.board();
+    let mut channels = Box::new(Channels::new());
+    let (servo_port, host_port) = channels.split();
+    let mut device = Device::new(
+        board,
+        ConfigStore::new(MemStorage::default()),
+        host_port,
+        spec.defaults(),
+    );
+    let mut servo: Servo<'_> = Servo::new(board, device.config(), servo_port);
+    let mut period_s = 1.0 / f64::from(device.servo_rate_hz().max(1));
+    let mut link = MemLink::default();
+    let mut tick: u32 = 0;
+    let mut ticks_since_epoch: u64 = 0;
+    let mut epoch = Instant::now();
+    let mut buf = [0u8; 4096];
+    let mask: u64 = if board.encoder_bits >= 32 {
+        u64::from(u32::MAX)
+    } else {
+        (1u64 << board.encoder_bits) - 1
+    };
+    while !stop.load(Ordering::Relaxed) {
+        // Host → device.
+        match pty.read(&mut buf) {
+            Ok(n) => link.rx.extend(&buf[..n]),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                ) => {}
+            Err(_) => break, // the host hung up
+        }
+        device.poll(tick, &mut link);
+        if let Some(hz) = device.take_rate_change() {
+            period_s = 1.0 / f64::from(hz.max(1));
+            epoch = Instant::now();
+            ticks_since_epoch = 0;
+        }
+        // Servo ticks due now.
+        let due = if spec.fast {
+            if link.tx.len() < FAST_BACKLOG {
+                32
+            } else {
+                0
+            }
+        } else {
+            let target = (epoch.elapsed().as_secs_f64() / period_s) as u64;
+            target.saturating_sub(ticks_since_epoch).min(64)
+        };
+        for _ in 0..due {
+            tick = tick.wrapping_add(1);
+            ticks_since_epoch += 1;
+            let raw = (plant.encoder_count() as u64 & mask) as u32;
+            let mut out = Written(0);
+            servo.tick(tick, &mut Sampled(raw), &mut out);
+            plant.advance(f64::from(out.0) * f64::from(board.force_per_code), period_s);
+            // Let the main loop drain telemetry before the servo's queue fills.
+            device.poll(tick, &mut link);
+        }
+        // Device → host.
+        if !link.tx.is_empty() {
+            let (a, _) = link.tx.as_slices();
+            match pty.write(a) {
+                Ok(n) => {
+                    link.tx.drain(..n);
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                    ) => {}
+                Err(_) => break,
+            }
+        }
+        if due == 0 && link.rx.is_empty() && link.tx.is_empty() && !spec.fast {
+            std::thread::sleep(Duration::from_micros(200));
+        }
+    }
+}

@@ -1,0 +1,69 @@
+//! End-to-end tests against the built-in virtual device over a pseudo-terminal.
+
+use stiffwall_host::device::client::Client;
+use stiffwall_host::device::virtual_device::{spawn, Spec};
+use stiffwall_host::tune::release::{classify, Verdict};
+
+fn maxon(fast: bool) -> Spec {
+    let d = stiffwall_core::devices::find("maxon-re35").expect("preset");
+    Spec {
+        plant: d.params,
+        counts_per_rev: 8192,
+        fast,
+        initial_position: 0.0,
+    }
+}
+
+fn connect(spec: Spec) -> Client {
+    let (vd, port) = spawn(spec).expect("spawn virtual device");
+    Client::connect(port, Some(Box::new(vd))).expect("handshake")
+}
+
+fn release_verdict(c: &mut Client, k: f32, deflection: i32) -> Verdict {
+    let mut cfg = c.get_config().unwrap();
+    cfg.stiffness = k;
+    c.set_config(&cfg).unwrap();
+    let rec = c.release(deflection, 3000).unwrap();
+    assert!(rec.completed || rec.faults != 0, "{rec:?}");
+    assert_eq!(
+        rec.gaps.missing,
+        0,
+        "no sample lost in fast mode: {:?} first {:?} n {}",
+        rec.gaps,
+        rec.samples.first(),
+        rec.samples.len()
+    );
+    let counts: Vec<i64> = rec
+        .samples
+        .iter()
+        .filter(|s| s.flags & stiffwall_proto::flags::RELEASED != 0)
+        .map(|s| i64::from(s.count))
+        .collect();
+    eprintln!(
+        "K={k} faults={:#x} completed={} n={} head={:?} tail={:?}",
+        rec.faults,
+        rec.completed,
+        counts.len(),
+        &counts[..counts.len().min(40)],
+        &counts[counts.len().saturating_sub(20)..]
+    );
+    classify(&counts, rec.faults != 0)
+}
+
+#[test]
+fn handshake_reports_the_virtual_board() {
+    let c = connect(maxon(true));
+    assert_eq!(c.info.board.as_str(), "virtual");
+    assert_eq!(c.info.protocol_version, stiffwall_proto::PROTOCOL_VERSION);
+    assert_eq!(c.info.counts_per_rev, 8192);
+}
+
+#[test]
+fn soft_wall_settles_and_stiff_wall_does_not() {
+    let mut c = connect(maxon(true));
+    let soft = release_verdict(&mut c, 0.5, 20);
+    assert!(soft.settled(), "K=0.5 N·m/rad: {soft:?}");
+    c.clear_faults().unwrap();
+    let stiff = release_verdict(&mut c, 40.0, 20);
+    assert!(!stiff.settled(), "K=40 N·m/rad: {stiff:?}");
+}
