@@ -227,6 +227,28 @@ where
                 .map_err(e)?;
         }
     }
+    // Stiffness limits on the path: the point the device reaches at K = K_max.
+    let k0 = r.params.stiffness;
+    let limits = [
+        (r.k_max_at_velocity, "K_max (12)"),
+        (r.k_max_delayed.filter(|_| delayed), "K_max (19)"),
+        (Some(r.k_max_passive), "K_max region A"),
+    ];
+    for (km, label) in limits {
+        let Some(km) = km.filter(|k| k.is_finite() && *k > 0.0) else {
+            continue;
+        };
+        let pt = (b0 * k0 / km, s0 * k0 / km);
+        if pt.0 <= bmax && pt.1 <= smax {
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at(pt)
+                        + Cross::new((0, 0), 6, BLACK.stroke_width(2))
+                        + Text::new(format!("{label} = {km:.4e}"), (10, 4), ("sans-serif", 15)),
+                ))
+                .map_err(e)?;
+        }
+    }
     // Operating point.
     chart
         .draw_series(std::iter::once(
