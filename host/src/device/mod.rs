@@ -2,6 +2,7 @@
 //! and the protocol client.
 
 pub mod client;
+pub mod connect;
 pub mod qemu;
 pub mod transport;
 pub mod virtual_device;
