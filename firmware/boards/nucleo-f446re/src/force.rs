@@ -155,7 +155,7 @@ mod imp {
 
         #[inline(always)]
         pub fn set(&mut self, cmd: i32) {
-            let cmd = cmd.clamp(-self.max_duty, self.max_duty);
+            let cmd = cmd.max(-self.max_duty).min(self.max_duty);
             // 0 ≤ |cmd| ≤ max_duty ≤ 8820: fits u16.
             let duty = cmd.unsigned_abs() as u16;
             if cmd < 0 {

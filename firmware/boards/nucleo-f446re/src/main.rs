@@ -1,6 +1,6 @@
 //! stiffwall firmware image for the ST Nucleo-F446RE (STM32F446RE, Cortex-M4F at 180 MHz).
 //!
-//! Clocks: HSE 8 MHz in bypass mode (the ST-LINK's MCO output, Nucleo default SB50 closed)
+//! Clocks: HSE 8 MHz in bypass mode (the ST-LINK's MCO output, the Nucleo's default HSE source)
 //! → PLL → SYSCLK = HCLK = 180 MHz (over-drive on), APB1 = 45 MHz (timers 90 MHz), APB2 = 90 MHz
 //! (timers 180 MHz). Interrupts: USART2 (priority 0, serial bytes), TIM7 (priority 1, servo
 //! tick); thread mode runs the protocol. Pins: see README.md and each module's header.
@@ -12,6 +12,7 @@ mod flash_store;
 mod force;
 mod handoff;
 mod rig;
+mod ring;
 mod serial;
 mod servo_timer;
 mod watchdog;
@@ -137,11 +138,14 @@ fn main() -> ! {
             servo_timer::request_rate(hz);
         }
         dog.feed_if_ticking(servo_timer::ticks());
-        // Sleep until the next interrupt (a servo tick or a serial byte) unless there is work:
-        // bytes received, or replies/telemetry the device still has to push into a full TX queue.
-        if !port.rx_pending() {
-            cortex_m::asm::wfi();
-        }
+        // Sleep until the next interrupt (servo tick, serial byte in or out) unless received
+        // bytes are waiting. Interrupts are masked around the check so a byte arriving between
+        // the check and WFI still wakes it (WFI wakes on a pending interrupt even when masked).
+        cortex_m::interrupt::free(|_| {
+            if !port.rx_pending() {
+                cortex_m::asm::wfi();
+            }
+        });
     }
 }
 

@@ -6,8 +6,8 @@
 //! the ±2 % a UART tolerates against the ST-LINK's own −/+0.2 %.
 //!
 //! Data path: the USART2 interrupt (highest priority in the system, a few dozen cycles per byte)
-//! moves each received byte into a lock-free SPSC queue (`RX_CAPACITY` bytes, i.e. ~11 ms of
-//! line time at full rate) and feeds the transmitter from a second SPSC queue (`TX_CAPACITY`
+//! moves each received byte into a lock-free SPSC ring (`ring.rs`) (`RX_CAPACITY` bytes, i.e. ~11 ms of
+//! line time at full rate) and feeds the transmitter from a second SPSC ring (`TX_CAPACITY`
 //! bytes). Thread mode (`SerialPort`) only touches the other ends of the two queues, so no lock
 //! is needed. One byte time at 921600 baud is 10.9 µs; because the RX interrupt preempts everything
 //! else, a byte is read well within that and the hardware never overruns. Invariants: a byte is
@@ -19,8 +19,8 @@
 //! included; bytes that arrive then are lost (`flash_store.rs`). The host waits for the reply to
 //! a config save before sending more.
 
-use core::sync::atomic::{AtomicU32, Ordering};
-use heapless::spsc::{Consumer, Producer, Queue};
+use crate::ring::Ring;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use stm32f4xx_hal::{
     gpio::{PA2, PA3},
     nb,
@@ -37,32 +37,33 @@ pub const RX_CAPACITY: usize = 1024;
 /// Transmit queue size in bytes.
 pub const TX_CAPACITY: usize = 2048;
 
+static RX_RING: Ring<RX_CAPACITY> = Ring::new();
+static TX_RING: Ring<TX_CAPACITY> = Ring::new();
+static TAKEN: AtomicBool = AtomicBool::new(false);
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 static RX_ERRORS: AtomicU32 = AtomicU32::new(0);
 
 /// Thread-mode end of the link: reads received bytes, queues bytes to send.
 pub struct SerialPort {
-    rx: Consumer<'static, u8>,
-    tx: Producer<'static, u8>,
+    rx: &'static Ring<RX_CAPACITY>,
+    tx: &'static Ring<TX_CAPACITY>,
 }
 
 /// Interrupt end of the link, owned by the `USART2` handler.
 pub struct SerialIsr {
     rx: Rx<USART2>,
     tx: Tx<USART2>,
-    rx_queue: Producer<'static, u8>,
-    tx_queue: Consumer<'static, u8>,
+    rx_queue: &'static Ring<RX_CAPACITY>,
+    tx_queue: &'static Ring<TX_CAPACITY>,
 }
 
 /// Configures USART2 on PA2/PA3 at `BAUD` and returns both ends. Returns `None` if called twice
-/// (the queues are singletons) or if the clock tree can't make the baud rate.
+/// (each ring must have one producer and one consumer) or if the clock tree can't make the
+/// baud rate.
 pub fn new(usart: USART2, pa2: PA2, pa3: PA3, rcc: &mut Rcc) -> Option<(SerialPort, SerialIsr)> {
-    let rxq: &'static mut Queue<u8, RX_CAPACITY> =
-        cortex_m::singleton!(: Queue<u8, RX_CAPACITY> = Queue::new())?;
-    let txq: &'static mut Queue<u8, TX_CAPACITY> =
-        cortex_m::singleton!(: Queue<u8, TX_CAPACITY> = Queue::new())?;
-    let (rx_p, rx_c) = rxq.split();
-    let (tx_p, tx_c) = txq.split();
+    if TAKEN.swap(true, Ordering::AcqRel) {
+        return None;
+    }
 
     let serial: Serial<USART2> = Serial::new(
         usart,
@@ -74,12 +75,15 @@ pub fn new(usart: USART2, pa2: PA2, pa3: PA3, rcc: &mut Rcc) -> Option<(SerialPo
     let (tx, mut rx) = serial.split();
     rx.listen();
     Some((
-        SerialPort { rx: rx_c, tx: tx_p },
+        SerialPort {
+            rx: &RX_RING,
+            tx: &TX_RING,
+        },
         SerialIsr {
             rx,
             tx,
-            rx_queue: rx_p,
-            tx_queue: tx_c,
+            rx_queue: &RX_RING,
+            tx_queue: &TX_RING,
         },
     ))
 }
@@ -91,7 +95,7 @@ impl SerialIsr {
         loop {
             match self.rx.read() {
                 Ok(byte) => {
-                    if self.rx_queue.enqueue(byte).is_err() {
+                    if !self.rx_queue.push(byte) {
                         RX_DROPPED.fetch_add(1, Ordering::Relaxed);
                     }
                 }
@@ -103,12 +107,12 @@ impl SerialIsr {
             }
         }
         // TXE is set whenever the data register can take a byte; one byte per interrupt.
-        if let Some(&byte) = self.tx_queue.peek() {
+        if let Some(byte) = self.tx_queue.peek() {
             if self.tx.write(byte).is_ok() {
-                let _ = self.tx_queue.dequeue();
+                let _ = self.tx_queue.pop();
             }
         }
-        if self.tx_queue.ready() {
+        if !self.tx_queue.is_empty() {
             self.tx.listen();
         } else {
             self.tx.unlisten();
@@ -120,21 +124,21 @@ impl SerialPort {
     /// The next received byte, if any. Never blocks.
     #[inline]
     pub fn read_byte(&mut self) -> Option<u8> {
-        self.rx.dequeue()
+        self.rx.pop()
     }
 
     /// Queues one byte; `false` if the transmit queue is full. Never blocks. The byte goes out
     /// once `kick` runs (thread mode calls it after each batch of writes).
     #[inline]
     pub fn write_byte(&mut self, byte: u8) -> bool {
-        self.tx.enqueue(byte).is_ok()
+        self.tx.push(byte)
     }
 
     /// Starts the transmitter if bytes are waiting: pends the USART2 interrupt, which enables
     /// its TXE interrupt itself (so thread mode never read-modify-writes USART2's CR1).
     #[inline]
     pub fn kick(&mut self) {
-        if self.tx.ready() {
+        if !self.tx.is_empty() {
             cortex_m::peripheral::NVIC::pend(Interrupt::USART2);
         }
     }
@@ -142,7 +146,7 @@ impl SerialPort {
     /// Whether received bytes are waiting.
     #[inline]
     pub fn rx_pending(&self) -> bool {
-        self.rx.ready()
+        !self.rx.is_empty()
     }
 
     /// Bytes lost because the receive queue was full.
