@@ -7,7 +7,7 @@
 //! makes a sector erase about twice as fast as the HAL's x8 path (typ. 1 s instead of 2 s for
 //! 128 KiB). Invariants: offsets and lengths are bounds-checked (an out-of-range request is an
 //! error, never a write elsewhere); the flash is locked again after every operation; the data
-//! cache is reset after an erase so reads never return stale bytes.
+//! cache is reset after an erase and after programming so reads never return stale bytes.
 //!
 //! The two-slot scheme itself (sequence numbers, CRC, which slot is newer, writing the older
 //! one) belongs to the firmware core: a half-written slot (power cut during a save) fails its
@@ -126,6 +126,8 @@ impl FlashSlots {
         }
         self.flash.cr().modify(|_, w| w.pg().clear_bit());
         self.lock();
+        // Lines of this slot read before programming (e.g. by `is_blank`) may still be cached.
+        self.reset_data_cache();
         result
     }
 

@@ -74,6 +74,8 @@ fn main() -> ! {
 
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
+    // LD2 (green user LED): blinks at 1 Hz while the servo ticks (thread mode toggles it).
+    let mut led = gpioa.pa5.into_push_pull_output();
 
     // Force output first, so the amplifier sees "disabled, zero force" as early as possible.
     let enable = gpiob.pb10.into_push_pull_output();
@@ -137,7 +139,10 @@ fn main() -> ! {
         if let Some(hz) = device.take_rate_change() {
             servo_timer::request_rate(hz);
         }
-        dog.feed_if_ticking(servo_timer::ticks());
+        let now = servo_timer::ticks();
+        dog.feed_if_ticking(now);
+        // Half a second of ticks per LED phase.
+        led.set_state(((now / (device.servo_rate_hz() / 2).max(1)) & 1 == 1).into());
         // Sleep until the next interrupt (servo tick, serial byte in or out) unless received
         // bytes are waiting. Interrupts are masked around the check so a byte arriving between
         // the check and WFI still wakes it (WFI wakes on a pending interrupt even when masked).

@@ -86,3 +86,77 @@ impl<const N: usize> Ring<N> {
         Some(byte)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    // Host check (the crate itself is target-only): `rustc --edition 2021 --test src/ring.rs`.
+    use super::Ring;
+
+    #[test]
+    fn fifo_order_capacity_and_wrap() {
+        let r: Ring<8> = Ring::new();
+        assert!(r.is_empty());
+        for round in 0..1000u32 {
+            let n = (round % 9) as u8;
+            for i in 0..n {
+                assert!(r.push(i.wrapping_add(round as u8)));
+            }
+            assert_eq!(r.len(), u32::from(n));
+            for i in 0..n {
+                assert_eq!(r.peek(), Some(i.wrapping_add(round as u8)));
+                assert_eq!(r.pop(), Some(i.wrapping_add(round as u8)));
+            }
+            assert_eq!(r.pop(), None);
+        }
+        for i in 0..8 {
+            assert!(r.push(i));
+        }
+        assert!(!r.push(99), "a full ring refuses a byte");
+        assert_eq!(r.pop(), Some(0));
+        assert!(r.push(8));
+        for i in 1..=8 {
+            assert_eq!(r.pop(), Some(i));
+        }
+    }
+
+    #[test]
+    fn counters_wrap_at_u32() {
+        let r: Ring<4> = Ring::new();
+        r.head
+            .store(u32::MAX - 1, core::sync::atomic::Ordering::Relaxed);
+        r.tail
+            .store(u32::MAX - 1, core::sync::atomic::Ordering::Relaxed);
+        for i in 0..4 {
+            assert!(r.push(i));
+        }
+        assert!(!r.push(4));
+        for i in 0..4 {
+            assert_eq!(r.pop(), Some(i));
+        }
+        assert!(r.is_empty());
+    }
+
+    #[test]
+    fn two_threads_lose_and_reorder_nothing() {
+        extern crate std;
+        static R: Ring<16> = Ring::new();
+        const COUNT: u32 = 200_000;
+        let producer = std::thread::spawn(|| {
+            let mut i = 0u32;
+            while i < COUNT {
+                if R.push(i as u8) {
+                    i += 1;
+                }
+            }
+        });
+        let mut expect = 0u32;
+        while expect < COUNT {
+            if let Some(b) = R.pop() {
+                assert_eq!(b, expect as u8);
+                expect += 1;
+            }
+        }
+        producer.join().unwrap();
+        assert!(R.is_empty());
+    }
+}
