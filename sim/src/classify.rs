@@ -37,7 +37,7 @@ impl Class {
         match self {
             Self::Growing => "growing",
             Self::Persistent => "persistent",
-            Self::NonMonotoneDecay => "nonmonotone_decay",
+            Self::NonMonotoneDecay => "non_monotone_decay",
             Self::MonotoneDecay => "monotone_decay",
         }
     }

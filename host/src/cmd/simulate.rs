@@ -53,7 +53,7 @@ pub fn run(args: &Args) -> Result<()> {
     let keep = args.plot.is_some();
     let mut io_err = None;
     scene.simulate(&mut |r: &Row| {
-        if r.period % args.every != 0 || io_err.is_some() {
+        if !r.period.is_multiple_of(args.every) || io_err.is_some() {
             return;
         }
         if let Err(e) = writeln!(
@@ -106,7 +106,7 @@ where
         lo = lo.min(finite(r.xi));
         hi = hi.max(finite(r.xi));
     }
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         lo -= 1.0;
         hi += 1.0;
     }
