@@ -3,10 +3,10 @@
 //! Pins: A = PA0 (TIM2_CH1, AF1, Arduino A0 / CN8-1), B = PA1 (TIM2_CH2, AF1, Arduino A1 /
 //! CN8-2), 3.3 V logic. Units: raw encoder counts (quadrature edges). Invariants: the counter
 //! starts at 0 at boot, counts up when A leads B, and wraps only after 2³² edges (the count is
-//! read raw as `u32`; the firmware core unwraps it, and a two's-complement reading never wraps
-//! for a device that travels less than 2³¹ edges from the boot position). A digital input filter (8 samples at the 90 MHz timer clock,
-//! ≈ 89 ns) rejects glitches while still following edge rates above 10 MHz.
-//! Reading the count is a single 32-bit register read: no side effect, safe from any context.
+//! read raw as `u32` and the firmware core unwraps it with `encoder_bits` = 32). A digital input
+//! filter (8 samples at the 90 MHz timer clock, ≈ 89 ns) rejects glitches while still following
+//! edge rates above 10 MHz. Reading the count is a single 32-bit register read: no side effect,
+//! safe from any context.
 
 use stm32f4xx_hal::{
     gpio::{PA0, PA1},

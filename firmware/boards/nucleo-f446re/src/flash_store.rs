@@ -15,8 +15,9 @@
 //!
 //! Timing caveat: while a sector erases or a word programs, every instruction fetch from flash
 //! stalls, interrupt handlers included (they live in flash). The servo tick and the serial
-//! receiver therefore stop for up to ~1–2 s during an erase. The board only saves with the
-//! amplifier disabled and zero force (`main.rs`), and the host waits for the save's reply.
+//! receiver therefore stop for up to ~1–2 s during an erase. `ConfigStorage::write` holds the
+//! force output at zero with the amplifier disabled for the whole save (`force::inhibit`) and
+//! stretches the watchdog for the erase; the host waits for the save's reply.
 
 use stm32f4xx_hal::pac::FLASH;
 

@@ -7,10 +7,10 @@
 //! code) depends on the amplifier and is the board's `force_per_code` setting (README).
 //!
 //! - `dac`: PA4 (DAC_OUT1, Arduino A2 / CN8-3), 12-bit, output buffer on. Mid-scale code
-//!   `DAC_ZERO` = 2048 (1.65 V) is zero force; full scale is ±`DAC_SPAN` = ±1800 codes
-//!   (0.20 V … 3.10 V, `MAX_CODE` = 1800), kept inside the buffer's linear range (VSS+0.2 V … VDDA−0.2 V). An external
-//!   op-amp stage (README) maps 1.65 V ± 1.45 V to ±10 V for a Copley-style analog current
-//!   amplifier in current (torque) mode.
+//!   `DAC_ZERO` = 2048 (1.65 V) is zero force; full scale is ±`MAX_CODE` = ±1800 LSB
+//!   (0.20 V … 3.10 V), inside the output buffer's linear range (VSS + 0.2 V … VDDA − 0.2 V).
+//!   An external op-amp stage (README) maps 1.65 V ± 1.45 V to ±10 V for a Copley-style analog
+//!   current amplifier in current (torque) mode.
 //! - `pwm`: TIM1_CH1 on PA8 (AF1, Arduino D7 / CN9-8) at `PWM_HZ` = 20 kHz, edge aligned, with
 //!   the magnitude as duty cycle in timer counts (period `PWM_PERIOD` = 9000 counts at the
 //!   180 MHz timer clock; `MAX_CODE` = 8820 = 98 %, so bootstrapped gate drivers get off time),
@@ -20,8 +20,8 @@
 //!   driven low at init and only raised by `enable(true)` after the output is at zero. Until the
 //!   firmware runs, the pin floats: the amplifier's enable input needs a pull-down (README).
 //!
-//! Invariants: `set` is O(1), never blocks, never panics (saturating arithmetic only), and is
-//! safe to call from the servo interrupt. `new` leaves the output at zero force and disabled.
+//! Invariants: `ForceOutput::write` is O(1), never blocks, never panics (saturating arithmetic
+//! only), and runs in the servo interrupt. `new` leaves the output at zero force and disabled.
 
 #[cfg(all(feature = "dac", feature = "pwm"))]
 compile_error!("features `dac` and `pwm` are mutually exclusive: pick the one your amplifier uses");

@@ -6,14 +6,14 @@
 //! the ±2 % a UART tolerates against the ST-LINK's own −/+0.2 %.
 //!
 //! Data path: the USART2 interrupt (highest priority in the system, a few dozen cycles per byte)
-//! moves each received byte into a lock-free SPSC ring (`ring.rs`) (`RX_CAPACITY` bytes, i.e. ~11 ms of
-//! line time at full rate) and feeds the transmitter from a second SPSC ring (`TX_CAPACITY`
-//! bytes). Thread mode (`SerialPort`) only touches the other ends of the two queues, so no lock
-//! is needed. One byte time at 921600 baud is 10.9 µs; because the RX interrupt preempts everything
-//! else, a byte is read well within that and the hardware never overruns. Invariants: a byte is
-//! lost only if the RX queue is full (counted in `rx_dropped`) or on an overrun/framing/noise
-//! error (counted in `rx_errors`); writing never blocks: a byte that doesn't fit is refused (`ByteLink::write` returns false) and
-//! the firmware core retries it later.
+//! moves each received byte into a lock-free SPSC ring (`ring.rs`; `RX_CAPACITY` bytes, ~11 ms
+//! of line time at full rate) and feeds the transmitter from a second ring (`TX_CAPACITY` bytes),
+//! one byte per TXE interrupt. Thread mode (`SerialPort`) only touches the other ends of the two
+//! rings, so no lock is needed. One byte time at 921600 baud is 10.9 µs; because the RX
+//! interrupt preempts everything else, a byte is read well within that and the hardware never
+//! overruns. Invariants: a byte is lost only if the RX ring is full (counted in `rx_dropped`) or
+//! on an overrun/framing/noise error (counted in `rx_errors`); writing never blocks: a byte that
+//! doesn't fit is refused (`ByteLink::write` returns false) and the firmware core retries it.
 //!
 //! Caveat: erasing a flash sector stalls instruction fetches from flash for up to ~1 s, interrupts
 //! included; bytes that arrive then are lost (`flash_store.rs`). The host waits for the reply to

@@ -1,11 +1,13 @@
 //! The servo tick: TIM7 (basic timer, no pins) update interrupt at the configured servo rate.
 //!
-//! Units: rate in Hz; TIM7 runs from the APB1 timer clock (90 MHz at the 180 MHz system clock),
-//! so any rate that divides 90 MHz into a prescaler × reload product up to 2³² is exact (1 kHz:
-//! 90 000 timer clocks, zero drift). Invariants: the timer is free running and auto-reloading, so
-//! ticks are periodic no matter how long the handler takes (if a tick overruns the next period,
-//! one update is merged and `overruns` counts it); the handler must call `ack` exactly once per
-//! entry. Priority: below USART2 (serial bytes are never lost), above thread mode.
+//! Units: rate in Hz; TIM7 runs from the APB1 timer clock (90 MHz at the 180 MHz system clock).
+//! 1 kHz is exact (prescaler 2 × reload 45 000, zero drift); 2, 5 and 10 kHz are exact too, and
+//! any other rate is within 3·10⁻⁵ of the request. Invariants: the timer is free running and
+//! auto-reloading, so ticks are periodic no matter how long the handler takes (a tick that
+//! overran its period merges the next update: one tick is skipped, never run twice); the handler
+//! calls `ack` exactly once per entry. Rate changes happen inside the handler (`request_rate` →
+//! `apply_rate_request`), so thread mode never touches TIM7. Priority: below USART2 (serial
+//! bytes are never lost), above thread mode.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use stm32f4xx_hal::{
