@@ -28,6 +28,9 @@ compile_error!("features `dac` and `pwm` are mutually exclusive: pick the one yo
 #[cfg(not(any(feature = "dac", feature = "pwm")))]
 compile_error!("select the force output: `--features dac` (DAC on PA4) or `--features pwm` (PWM on PA8 + DIR on PA9)");
 
+// The `dac` code is compiled when `pwm` is off and the `pwm` code when it is on, so a wrong
+// feature set stops at exactly one of the two errors above.
+
 use core::sync::atomic::{AtomicBool, Ordering};
 use stm32f4xx_hal::gpio::{Output, PushPull, PB10};
 
@@ -50,7 +53,7 @@ pub use imp::MAX_CODE;
 /// Amplifier / H-bridge enable pin type.
 pub type EnablePin = PB10<Output<PushPull>>;
 
-#[cfg(feature = "dac")]
+#[cfg(not(feature = "pwm"))]
 mod imp {
     use stm32f4xx_hal::{
         dac::{DacExt, DacOut, DacPin, C1},
@@ -196,7 +199,7 @@ pub fn emergency_off() {
             .bsrr()
             .write(|w| w.br10().set_bit());
     }
-    #[cfg(feature = "dac")]
+    #[cfg(not(feature = "pwm"))]
     // SAFETY: a write of the mid-scale code to the 12-bit right-aligned holding register; the
     // DAC driver only ever writes this register too, so the last write (this one) wins.
     unsafe {

@@ -79,7 +79,7 @@ fn main() -> ! {
 
     // Force output first, so the amplifier sees "disabled, zero force" as early as possible.
     let enable = gpiob.pb10.into_push_pull_output();
-    #[cfg(feature = "dac")]
+    #[cfg(not(feature = "pwm"))]
     let parts = force::Parts {
         dac: dp.DAC,
         pa4: gpioa.pa4,
