@@ -8,7 +8,7 @@
 //! Invariants: every number from the command line is validated by `stiffwall-core`; bad input
 //! is an error naming the field and its allowed range, and nothing is written.
 
-mod plot;
+pub mod plot;
 
 use anyhow::{anyhow, bail, Context};
 use serde::Serialize;

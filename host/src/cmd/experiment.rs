@@ -1,10 +1,279 @@
-//! `hostctl experiment`: run the paper's experiments (release tests) on the device.
+//! `hostctl experiment release`: the paper's Fig. 8 test on a device. The device is held at a
+//! deflection (effective encoder ticks from the wall) with zero velocity, released, and
+//! recorded; the outcome is classified (settles / locally stable / limit cycle below one tick /
+//! persistent / growing, see [`crate::tune::release`]) and plotted: x(t) with the ±1-tick lines,
+//! beside the (β, σ) operating point and its critical line for the equivalent velocity (all
+//! spring energy turned into kinetic energy, as in Sec. V).
+
+use crate::device::connect::ConnectArgs;
+use crate::tune::release::{classify, Verdict};
+use anyhow::{bail, Result};
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use stiffwall_core::params::PhysicalParams;
+use stiffwall_proto::{flags, Sample};
 
 /// Arguments of `hostctl experiment`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    #[command(subcommand)]
+    pub kind: Kind,
+}
+
+/// Experiments.
+#[derive(Debug, clap::Subcommand)]
+pub enum Kind {
+    /// Release test (Fig. 8): hold at a deflection, release into the wall, classify.
+    Release(ReleaseArgs),
+}
+
+/// Arguments of `hostctl experiment release`.
+#[derive(Debug, clap::Args)]
+pub struct ReleaseArgs {
+    #[command(flatten)]
+    pub connect: ConnectArgs,
+    /// Initial deflection, effective encoder ticks from the wall (non-zero, |d| ≤ 1048576).
+    #[arg(long, allow_hyphen_values = true)]
+    pub deflection: i32,
+    /// Servo ticks to record after the release (100–10000000).
+    #[arg(long, default_value_t = 3000)]
+    pub ticks: u32,
+    /// Wall stiffness for the test, N/m (N·m/rad); default: the device's configured K.
+    #[arg(long)]
+    pub stiffness: Option<f64>,
+    /// Device model for the (β, σ) panel: mass, viscous and Coulomb friction (SI); default:
+    /// the `--device` preset of the virtual device.
+    #[arg(long, num_args = 3, value_names = ["M", "B", "C"])]
+    pub model: Option<Vec<f64>>,
+    /// Write the figure (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Runs `hostctl experiment`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("hostctl experiment is not implemented yet")
+pub fn run(a: &Args) -> Result<()> {
+    match &a.kind {
+        Kind::Release(r) => release(r),
+    }
+}
+
+fn release(a: &ReleaseArgs) -> Result<()> {
+    if a.deflection == 0 || a.deflection.unsigned_abs() > 1 << 20 {
+        bail!(
+            "--deflection must be non-zero and within [-1048576, 1048576] (got {})",
+            a.deflection
+        );
+    }
+    if !(100..=10_000_000).contains(&a.ticks) {
+        bail!("--ticks must be within [100, 10000000] (got {})", a.ticks);
+    }
+    if let Some(k) = a.stiffness {
+        if !(k.is_finite() && k > 0.0) {
+            bail!("--stiffness must be finite and > 0 (got {k})");
+        }
+    }
+    let model = match &a.model {
+        Some(v) if v.iter().all(|x| x.is_finite() && *x >= 0.0) && v[0] > 0.0 => {
+            Some((v[0], v[1], v[2]))
+        }
+        Some(_) => bail!("--model M B C must be finite, M > 0, B ≥ 0, C ≥ 0"),
+        None => a
+            .connect
+            .virtual_spec()?
+            .map(|s| (s.plant.mass, s.plant.viscous, s.plant.coulomb)),
+    };
+    let mut c = a.connect.connect()?;
+    let original = c.get_config()?;
+    let mut cfg = original;
+    if let Some(k) = a.stiffness {
+        cfg.stiffness = k as f32;
+    }
+    c.clear_faults().ok();
+    c.set_config(&cfg)?;
+    let rec = c.release(a.deflection, a.ticks);
+    // The experiment's stiffness is not kept.
+    c.set_config(&original)?;
+    let rec = rec?;
+    let released: Vec<Sample> = rec
+        .samples
+        .iter()
+        .copied()
+        .filter(|s| s.flags & flags::RELEASED != 0)
+        .collect();
+    let counts: Vec<i64> = released
+        .iter()
+        .map(|s| i64::from(s.count) >> cfg.coarsen_shift)
+        .collect();
+    let verdict = classify(&counts, rec.faults != 0);
+    let rate = f64::from(c.info.servo_rate_hz);
+    let delta = f64::from(c.info.resolution) * f64::from(1u32 << cfg.coarsen_shift);
+    let params = model.map(|(m, b, cc)| PhysicalParams {
+        mass: m,
+        viscous: b,
+        coulomb: cc,
+        resolution: delta,
+        period_s: 1.0 / rate,
+        stiffness: f64::from(cfg.stiffness),
+        delay_s: f64::from(cfg.extra_delay_ticks) / rate,
+        rotational: c.info.counts_per_rev > 0,
+    });
+    // Equivalent maximum velocity: ½K(dΔ)² = ½mv² (Sec. V).
+    let start = counts.first().copied().unwrap_or(i64::from(a.deflection));
+    let v_eq = params.map(|p| (start as f64 + 0.5).abs() * delta * (p.stiffness / p.mass).sqrt());
+    let report = match (params, v_eq) {
+        (Some(p), Some(v)) => Some(crate::cmd::analyze::analyze(None, &p, Some(v), None)?),
+        _ => None,
+    };
+    if let Some(path) = &a.plot {
+        plot(path, &counts, rate, verdict, report.as_ref())?;
+    }
+    let peak_tail = counts
+        .iter()
+        .rev()
+        .take(counts.len() / 4)
+        .map(|n| (*n as f64 + 0.5).abs())
+        .fold(0.0, f64::max);
+    if a.json {
+        let j = serde_json::json!({
+            "verdict": verdict,
+            "deflection_ticks": a.deflection,
+            "start_ticks": start,
+            "ticks": counts.len(),
+            "completed": rec.completed,
+            "faults": rec.faults,
+            "tail_peak_ticks": peak_tail,
+            "stiffness": cfg.stiffness,
+            "equivalent_velocity": v_eq,
+            "mu": report.as_ref().map(|r| r.mu),
+            "beta": report.as_ref().map(|r| r.beta),
+            "sigma": report.as_ref().map(|r| r.sigma),
+            "region": report.as_ref().map(|r| r.region),
+            "gaps": rec.gaps,
+        });
+        println!("{}", serde_json::to_string_pretty(&j)?);
+    } else {
+        println!("release test on the {}", a.connect.describe());
+        println!(
+            "  K = {} , released from {start} ticks, {} ticks recorded",
+            cfg.stiffness,
+            counts.len()
+        );
+        println!("  verdict: {}", verdict.describe());
+        println!(
+            "  peak |x| over the last quarter: {peak_tail:.1} ticks; faults {:#x}",
+            rec.faults
+        );
+        if let Some(r) = &report {
+            println!(
+                "  (β, σ) = ({:.4}, {:.4}), μ = {:.3}; region {:?} for the equivalent velocity {:.4}",
+                r.beta, r.sigma, r.mu, r.region, v_eq.unwrap_or(0.0)
+            );
+        }
+        if let Some(p) = &a.plot {
+            println!("  plot: {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+fn plot(
+    path: &Path,
+    counts: &[i64],
+    rate: f64,
+    verdict: Verdict,
+    report: Option<&crate::cmd::analyze::Report>,
+) -> Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("svg") => draw(
+            SVGBackend::new(path, (1500, 600)).into_drawing_area(),
+            counts,
+            rate,
+            verdict,
+            report,
+        ),
+        Some("png") => draw(
+            BitMapBackend::new(path, (1500, 600)).into_drawing_area(),
+            counts,
+            rate,
+            verdict,
+            report,
+        ),
+        _ => bail!(
+            "--plot file must end in .svg or .png (got '{}')",
+            path.display()
+        ),
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    counts: &[i64],
+    rate: f64,
+    verdict: Verdict,
+    report: Option<&crate::cmd::analyze::Report>,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("plot: {e}");
+    root.fill(&WHITE).map_err(err)?;
+    let (left, right) = root.split_horizontally(600);
+    if let Some(r) = report {
+        crate::cmd::analyze::plot::draw(left, r)?;
+    }
+    let t_end = counts.len() as f64 / rate;
+    let lo = counts.iter().copied().min().unwrap_or(-2).min(-2) as f64 - 0.5;
+    let hi = counts.iter().copied().max().unwrap_or(2).max(2) as f64 + 1.5;
+    let mut chart = ChartBuilder::on(&right)
+        .caption(
+            format!("release test: {}", verdict.describe()),
+            ("sans-serif", 22),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t_end.max(1e-3), lo..hi)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("t [s]")
+        .y_desc("x [encoder ticks]")
+        .draw()
+        .map_err(err)?;
+    chart
+        .draw_series(LineSeries::new(
+            counts
+                .iter()
+                .enumerate()
+                .map(|(i, n)| (i as f64 / rate, *n as f64)),
+            BLUE.stroke_width(2),
+        ))
+        .map_err(err)?
+        .label("x(t) (encoder count)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+    for level in [-1.0, 1.0] {
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(0.0, level), (t_end, level)],
+                6,
+                4,
+                BLACK.into(),
+            ))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
 }

@@ -1,10 +1,210 @@
-//! `hostctl tune`: find and set the largest stable wall stiffness, with evidence.
+//! `hostctl tune`: finds and sets the largest stable wall stiffness on a device, with evidence
+//! (see [`crate::tune::procedure`] for the method).
+
+use crate::device::connect::ConnectArgs;
+use crate::tune::procedure::{self, Outcome, Settings, INTERRUPTED};
+use anyhow::Result;
+use std::fmt::Write as _;
+use std::io::IsTerminal as _;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
 
 /// Arguments of `hostctl tune`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    #[command(flatten)]
+    pub connect: ConnectArgs,
+    /// Expected maximum velocity of the user, m/s (rad/s for rotary devices). Default: 5 encoder
+    /// ticks per servo period (ξ̇ = 5 of Table I).
+    #[arg(long, value_name = "V")]
+    pub max_velocity: Option<f64>,
+    /// Fraction of the largest settling stiffness that is set, in (0, 1].
+    #[arg(long, default_value_t = 0.9)]
+    pub margin: f64,
+    /// Servo ticks per release test (default: 60 natural periods, 1500–30000).
+    #[arg(long)]
+    pub release_ticks: Option<u32>,
+    /// Duration of the identification excitation, s (0.5–1000).
+    #[arg(long, default_value_t = 4.0)]
+    pub excite_seconds: f64,
+    /// Find and report K, but leave the device's config as it was.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the (β, σ) plot of the tuned operating point (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+}
+
+/// Validates the numeric arguments (before any device is touched).
+pub fn settings(a: &Args) -> Result<Settings> {
+    if let Some(v) = a.max_velocity {
+        if !(v.is_finite() && v > 0.0) {
+            anyhow::bail!("--max-velocity must be finite and > 0 (got {v})");
+        }
+    }
+    if !(a.margin.is_finite() && a.margin > 0.0 && a.margin <= 1.0) {
+        anyhow::bail!("--margin must be in (0, 1] (got {})", a.margin);
+    }
+    if !(a.excite_seconds.is_finite() && (0.5..=1000.0).contains(&a.excite_seconds)) {
+        anyhow::bail!(
+            "--excite-seconds must be within [0.5, 1000] (got {})",
+            a.excite_seconds
+        );
+    }
+    if let Some(t) = a.release_ticks {
+        if !(100..=10_000_000).contains(&t) {
+            anyhow::bail!("--release-ticks must be within [100, 10000000] (got {t})");
+        }
+    }
+    Ok(Settings {
+        max_velocity: a.max_velocity,
+        margin: a.margin,
+        release_ticks: a.release_ticks,
+        excite_seconds: a.excite_seconds,
+        ..Settings::default()
+    })
+}
 
 /// Runs `hostctl tune`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("hostctl tune is not implemented yet")
+pub fn run(a: &Args) -> Result<()> {
+    let s = settings(a)?;
+    // Ctrl-C: finish the current experiment, restore the previous config, exit. A second
+    // registration (tests calling run twice) is harmless.
+    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
+    let bar = indicatif::ProgressBar::new_spinner();
+    let tty = std::io::stderr().is_terminal();
+    if tty {
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    }
+    let progress = |m: &str| {
+        if tty {
+            bar.set_message(m.to_string());
+        } else {
+            eprintln!("tune: {m}");
+        }
+    };
+    progress(&format!("connecting to the {}", a.connect.describe()));
+    let mut client = a.connect.connect()?;
+    let outcome = procedure::tune(&mut client, &s, a.dry_run, &progress);
+    bar.finish_and_clear();
+    let o = match outcome {
+        Ok(o) => o,
+        Err(e) if INTERRUPTED.load(Ordering::Relaxed) => {
+            return Err(e.context("interrupted; the previous config was restored"))
+        }
+        Err(e) => return Err(e.context("tune failed; the previous config was restored")),
+    };
+    let report = crate::cmd::analyze::analyze(None, &o.params, Some(o.max_velocity), None)?;
+    if let Some(path) = &a.plot {
+        crate::cmd::analyze::plot::write(path, &report)?;
+    }
+    if a.json {
+        let j = serde_json::json!({
+            "target": a.connect.describe(),
+            "tune": o,
+            "analysis": report,
+        });
+        println!("{}", serde_json::to_string_pretty(&j)?);
+    } else {
+        print!("{}", render(a, &o, &report));
+    }
+    Ok(())
+}
+
+fn render(a: &Args, o: &Outcome, r: &crate::cmd::analyze::Report) -> String {
+    let u = if o.params.rotational {
+        ("N·m/rad", "kg·m²", "N·m·s/rad", "N·m", "rad/s")
+    } else {
+        ("N/m", "kg", "N·s/m", "N", "m/s")
+    };
+    let mut s = String::new();
+    let id = &o.identified;
+    let _ = writeln!(s, "tune: {}", a.connect.describe());
+    let _ = writeln!(
+        s,
+        "identified (wall off, chirp of {} codes, {} windows):",
+        id.excite_amplitude_codes, id.equations
+    );
+    let _ = writeln!(s, "  m = {:.4e} ± {:.1e} {}", id.mass[0], id.mass[1], u.1);
+    if id.viscous_only_bounded {
+        let _ = writeln!(
+            s,
+            "  b ≤ {:.3e} {} (only bounded: estimate {:.2e} ± {:.1e})",
+            id.viscous_upper_bound, u.2, id.viscous[0], id.viscous[1]
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "  b = {:.4e} ± {:.1e} {}",
+            id.viscous[0], id.viscous[1], u.2
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  c = {:.4e} ± {:.1e} {}",
+        id.coulomb[0], id.coulomb[1], u.3
+    );
+    let _ = writeln!(
+        s,
+        "max velocity: {:.4} {} ({:.2} ticks/period)",
+        o.max_velocity, u.4, o.xidot
+    );
+    let _ = writeln!(s, "stiffness limits ({}):", u.0);
+    let _ = writeln!(
+        s,
+        "  passive (region A)            {:>12.5}",
+        o.predicted.passive
+    );
+    let _ = writeln!(
+        s,
+        "  guaranteed (worst case)       {:>12.5}",
+        o.predicted.guaranteed
+    );
+    let _ = writeln!(
+        s,
+        "  expected (DF + exact linear)  {:>12.5}",
+        o.predicted.expected
+    );
+    let _ = writeln!(
+        s,
+        "  expected (paper eq. 74)       {:>12.5}",
+        o.predicted.expected_paper_74
+    );
+    let k_fail = o
+        .search
+        .k_fail
+        .map_or("none below the cap".to_string(), |k| format!("{k:.5}"));
+    let _ = writeln!(
+        s,
+        "  verified: largest settling    {:>12.5}  (first failing {k_fail}, {} release tests)",
+        o.search.k_pass,
+        o.search.trials.len()
+    );
+    let _ = writeln!(
+        s,
+        "  set (×{:.2}, confirmed ±)      {:>12.5}  {:?}",
+        a.margin, o.k_set, o.confirmation
+    );
+    let _ = writeln!(
+        s,
+        "operating point at the set K: μ = {:.4}, β = {:.5}, σ = {:.4}, τ_D = {:.3}",
+        r.mu, r.beta, r.sigma, r.tau_d
+    );
+    let _ = writeln!(s, "region {:?}: {}", r.region, r.region_meaning);
+    let _ = writeln!(
+        s,
+        "{}",
+        if o.saved {
+            "config set and saved on the device"
+        } else {
+            "dry run: the device's config was left unchanged"
+        }
+    );
+    if let Some(p) = &a.plot {
+        let _ = writeln!(s, "plot: {}", p.display());
+    }
+    s
 }

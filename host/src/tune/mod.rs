@@ -1,6 +1,7 @@
-//! The pieces of `hostctl tune` that need no device: identification, release-test verdicts
-//! and the stiffness search.
+//! `hostctl tune` and `hostctl experiment`: identification, release-test verdicts, the stiffness
+//! search, and the procedure that runs them on a device.
 
 pub mod ident;
+pub mod procedure;
 pub mod release;
 pub mod search;

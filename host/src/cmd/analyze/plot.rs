@@ -39,7 +39,11 @@ fn e<E: std::fmt::Display>(err: E) -> anyhow::Error {
 }
 
 #[allow(clippy::too_many_lines)]
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &Report) -> anyhow::Result<()>
+/// Draws the plane into `root` (which it fills), e.g. one panel of a larger figure.
+///
+/// # Errors
+/// A drawing error.
+pub fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &Report) -> anyhow::Result<()>
 where
     DB::ErrorType: 'static,
 {

@@ -1,0 +1,440 @@
+//! The `tune` procedure on a connected device: identify, predict, verify, set.
+//!
+//! 1. **Identify** m, b, c with the wall off from an open-loop chirp the firmware plays
+//!    ([`super::ident`]); the amplitude starts small and grows until the device moves freely.
+//! 2. **Predict** K limits with `stiffwall-core` at the maximum velocity v (default: 5 encoder
+//!    ticks per servo period, [`DEFAULT_XIDOT`]): the guaranteed limit (worst case, criterion
+//!    (12), or (19) with delay and a harmonic acceleration bound) and the expected limit: the
+//!    describing-function view of Sec. VII-D with the ZOH approximation replaced by the exact
+//!    sampled linear boundary (Gil–Avello–Rubio), i.e. the largest K for which the sampled
+//!    system is stable with Coulomb friction counted as its describing-function damping
+//!    b + 4c/(πv) at the peak speed v. The paper's approximation (74) is reported beside it.
+//! 3. **Verify** with release tests (Fig. 8): the device is held at the deflection whose spring
+//!    energy equals the kinetic energy at v, d = v·√(m/K)/Δ, and released; the search of
+//!    [`super::search`] brackets and bisects the largest K whose release settles, never above
+//!    the firmware's force limit (K·Δ·(d + ½) ≤ force limit) or its stiffness limit.
+//! 4. **Set** K = margin × (largest settling K), confirmed by releases from both sides, and
+//!    save it (unless dry-run). On any error or Ctrl-C the previous config is restored.
+
+use super::ident::{self, Identified};
+use super::release::{classify, Verdict};
+use super::search::{largest_settling_k, Found, Search};
+use crate::device::client::Client;
+use anyhow::{bail, Context, Result};
+use std::sync::atomic::{AtomicBool, Ordering};
+use stiffwall_core::params::PhysicalParams;
+use stiffwall_proto::{flags, ExciteProfile, ServoConfig};
+
+/// Default maximum velocity, in encoder ticks per servo period (ξ̇ of Table I; independent of K).
+pub const DEFAULT_XIDOT: f64 = 5.0;
+
+/// Set by the Ctrl-C handler; checked between experiments.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Tune settings.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    /// Expected maximum velocity, m/s (rad/s); None = [`DEFAULT_XIDOT`] ticks per period.
+    pub max_velocity: Option<f64>,
+    /// Fraction of the largest settling K that is set, in (0, 1].
+    pub margin: f64,
+    /// Ticks per release test; None = 60 natural periods (at least 1500, at most 30000).
+    pub release_ticks: Option<u32>,
+    /// Duration of the identification chirp, s.
+    pub excite_seconds: f64,
+    /// Relative tolerance of the K bisection.
+    pub rel_tol: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            max_velocity: None,
+            margin: 0.9,
+            release_ticks: None,
+            excite_seconds: 4.0,
+            rel_tol: 0.02,
+        }
+    }
+}
+
+/// Predicted stiffness limits, N/m (N·m/rad).
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Predicted {
+    /// Region A (passive) limit, (17)–(18).
+    pub passive: f64,
+    /// Worst-case guaranteed limit at v: (12), or (19) with delay.
+    pub guaranteed: f64,
+    /// Expected limit: exact sampled linear boundary with Coulomb as DF damping at v.
+    pub expected: f64,
+    /// The paper's describing-function approximation (74) at v (ZOH as a ½-period delay).
+    pub expected_paper_74: f64,
+}
+
+/// Everything `tune` found.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Outcome {
+    /// Identified parameters.
+    pub identified: IdentifiedReport,
+    /// Device model used for predictions (K = the set value).
+    pub params: PhysicalParams,
+    /// Maximum velocity used, m/s (rad/s).
+    pub max_velocity: f64,
+    /// Same, ticks per period.
+    pub xidot: f64,
+    /// Predictions.
+    pub predicted: Predicted,
+    /// The release-test search.
+    pub search: Found,
+    /// The stiffness set.
+    pub k_set: f64,
+    /// Verdicts of the confirmation releases at `k_set` (+d, −d).
+    pub confirmation: Vec<Verdict>,
+    /// Whether the config was saved.
+    pub saved: bool,
+}
+
+/// Identified parameters as reported.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct IdentifiedReport {
+    /// m and its standard error.
+    pub mass: [f64; 2],
+    /// b and its standard error.
+    pub viscous: [f64; 2],
+    /// Upper bound on b (estimate + 2 s.e.), meaningful when b is only bounded.
+    pub viscous_upper_bound: f64,
+    /// Whether b is indistinguishable from 0.
+    pub viscous_only_bounded: bool,
+    /// c and its standard error.
+    pub coulomb: [f64; 2],
+    /// Integrated equations used.
+    pub equations: usize,
+    /// Chirp amplitude used, output codes.
+    pub excite_amplitude_codes: i32,
+}
+
+fn check_interrupt() -> Result<()> {
+    if INTERRUPTED.load(Ordering::Relaxed) {
+        bail!("interrupted");
+    }
+    Ok(())
+}
+
+/// Raw-count resolution and servo period of the connected device.
+fn device_scale(c: &Client) -> Result<(f64, f64)> {
+    let res = f64::from(c.info.resolution);
+    let rate = f64::from(c.info.servo_rate_hz);
+    if !(res.is_finite() && res > 0.0 && rate > 0.0) {
+        bail!("device reports resolution {res} and rate {rate} Hz; cannot tune");
+    }
+    Ok((res, 1.0 / rate))
+}
+
+/// One chirp excitation of `amplitude` codes and its identification.
+fn excite_and_identify(
+    c: &mut Client,
+    amplitude: i32,
+    ticks: u32,
+    f1: f32,
+    progress: &dyn Fn(&str),
+) -> Result<(Identified, i32)> {
+    let (res, t) = device_scale(c)?;
+    progress(&format!(
+        "identifying: chirp of {amplitude} codes, 0.5–{f1} Hz, {ticks} ticks"
+    ));
+    c.clear_faults().ok();
+    let rec = c.excite(
+        ExciteProfile::Chirp {
+            amplitude,
+            f0_hz: 0.5,
+            f1_hz: f1,
+        },
+        ticks,
+    )?;
+    if rec.gaps.missing > 0 {
+        bail!(
+            "{} telemetry samples lost during identification; use a faster link or --fast",
+            rec.gaps.missing
+        );
+    }
+    let samples: Vec<ident::Sample> = rec
+        .samples
+        .iter()
+        .filter(|x| x.flags & flags::EXCITE != 0)
+        .map(|x| ident::Sample {
+            count: i64::from(x.count),
+            force: f64::from(x.force_code) * f64::from(c.info.force_per_code),
+        })
+        .collect();
+    let settings = ident::Settings {
+        period_s: t,
+        resolution: res,
+        ..ident::Settings::default()
+    };
+    let id = ident::identify(&samples, &settings)?;
+    if !(id.mass > 0.0 && id.coulomb >= 0.0 && id.equations >= 20) {
+        bail!(
+            "implausible fit: m = {:.3e}, c = {:.3e} from {} windows",
+            id.mass,
+            id.coulomb,
+            id.equations
+        );
+    }
+    let last = rec.samples.last().map_or(0, |x| x.count);
+    Ok((id, last))
+}
+
+/// Step 1: identification with the wall off. A low-frequency chirp (0.5 Hz up to 4 Hz, or
+/// rate/250) keeps the velocity fit accurate; the amplitude grows from 5 % of the force limit
+/// until a fit succeeds, then the chirp is repeated at about 5·c (when the limit allows) so
+/// that the device slides most of the time and Coulomb friction acts as c·sgn(v).
+/// Returns the fit, the amplitude used (codes) and where the device ended, in raw counts from
+/// the configured wall position.
+pub fn identify(
+    c: &mut Client,
+    cfg: &ServoConfig,
+    s: &Settings,
+    progress: &dyn Fn(&str),
+) -> Result<(Identified, i32, i32)> {
+    let rate = f64::from(c.info.servo_rate_hz);
+    let ticks = (s.excite_seconds * rate).round().clamp(500.0, 1e6) as u32;
+    let f1 = (rate / 250.0).min(4.0) as f32;
+    let fpc = f64::from(c.info.force_per_code);
+    let max_code = c.info.max_code.max(1);
+    let limit_code = ((f64::from(cfg.force_limit) / fpc) as i32).clamp(1, max_code);
+    let mut last_err = None;
+    for frac in [0.05, 0.1, 0.2, 0.4] {
+        check_interrupt()?;
+        let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
+        match excite_and_identify(c, amplitude, ticks, f1, progress) {
+            Ok((first, end)) => {
+                let wanted = ((5.0 * first.coulomb / fpc) as i32)
+                    .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
+                if wanted > amplitude * 5 / 4 {
+                    check_interrupt()?;
+                    if let Ok((second, end2)) = excite_and_identify(c, wanted, ticks, f1, progress)
+                    {
+                        return Ok((second, wanted, end2));
+                    }
+                }
+                return Ok((first, amplitude, end));
+            }
+            Err(e) => last_err = Some(e),
+        }
+    }
+    Err(last_err.unwrap_or_else(|| anyhow::anyhow!("no excitation")))
+        .context("identification failed at every excitation level")
+}
+
+/// Step 2: predictions for the identified device.
+pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
+    use stiffwall_core::{criteria, limits};
+    let passive = limits::k_max_passive(p)?;
+    let guaranteed = if p.delay_s > 0.0 {
+        limits::k_max_delayed_harmonic(p, v)?
+    } else {
+        limits::k_max_at_velocity(p, v)?
+    };
+    let equivalent = PhysicalParams {
+        viscous: p.viscous + 4.0 * p.coulomb / (std::f64::consts::PI * v),
+        ..*p
+    };
+    let expected = criteria::k_max_gil_avello_rubio(&equivalent)?;
+    // (74) with ξ̇ = vT/Δ: c/(KΔ) = (π/4)ξ̇(τ_L − b/(KT))  ⇒  K = (c/Δ + (π/4)ξ̇ b/T)/((π/4)ξ̇ τ_L).
+    let xidot = v * p.period_s / p.resolution;
+    let tau_l = 0.5 + p.delay_s / p.period_s;
+    let q = std::f64::consts::FRAC_PI_4 * xidot;
+    let expected_paper_74 = (p.coulomb / p.resolution + q * p.viscous / p.period_s) / (q * tau_l);
+    Ok(Predicted {
+        passive,
+        guaranteed,
+        expected,
+        expected_paper_74,
+    })
+}
+
+/// Release deflection (effective ticks) whose spring energy equals the kinetic energy at v.
+#[must_use]
+pub fn deflection_for(p: &PhysicalParams, k: f64, v: f64) -> i32 {
+    let d = v * (p.mass / k).sqrt() / p.resolution;
+    d.round().clamp(2.0, 1e6) as i32
+}
+
+/// One release test at stiffness `k` from `deflection` ticks; returns the verdict.
+pub fn release_test(
+    c: &mut Client,
+    base: &ServoConfig,
+    k: f64,
+    deflection: i32,
+    ticks: u32,
+) -> Result<Verdict> {
+    check_interrupt()?;
+    let cfg = ServoConfig {
+        stiffness: k as f32,
+        ..*base
+    };
+    c.clear_faults().ok();
+    c.set_config(&cfg)?;
+    let f = c.faults()?;
+    if f.latched != 0 {
+        bail!(
+            "faults {:#x} still latched before a release test (first at tick {})",
+            f.latched,
+            f.first_tick
+        );
+    }
+    let rec = c.release(deflection, ticks)?;
+    if rec.gaps.missing > 0 {
+        bail!(
+            "{} telemetry samples lost during a release test",
+            rec.gaps.missing
+        );
+    }
+    let counts: Vec<i64> = rec
+        .samples
+        .iter()
+        .filter(|s| s.flags & flags::RELEASED != 0)
+        .map(|s| i64::from(s.count) >> base.coarsen_shift)
+        .collect();
+    Ok(classify(&counts, rec.faults != 0))
+}
+
+/// Runs the whole procedure. `progress` receives one-line status messages.
+pub fn tune(
+    c: &mut Client,
+    s: &Settings,
+    dry_run: bool,
+    progress: &dyn Fn(&str),
+) -> Result<Outcome> {
+    if !(s.margin.is_finite() && s.margin > 0.0 && s.margin <= 1.0) {
+        bail!("--margin must be in (0, 1] (got {})", s.margin);
+    }
+    if let Some(v) = s.max_velocity {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("--max-velocity must be finite and > 0 (got {v})");
+        }
+    }
+    let original = c.get_config()?;
+    let result = tune_inner(c, s, &original, dry_run, progress);
+    // Leave the device as it was unless a new config was deliberately set.
+    let keep = matches!(&result, Ok(o) if !dry_run && o.saved);
+    if !keep {
+        c.clear_faults().ok();
+        c.set_config(&original)
+            .context("restoring the previous config")?;
+    }
+    result
+}
+
+fn tune_inner(
+    c: &mut Client,
+    s: &Settings,
+    original: &ServoConfig,
+    dry_run: bool,
+    progress: &dyn Fn(&str),
+) -> Result<Outcome> {
+    let (res, t) = device_scale(c)?;
+    // Experiments run without extra damping and with the energy monitor on, whatever the
+    // user's config; the servo rate, delay and coarsening stay as configured.
+    let base = ServoConfig {
+        damping: 0.0,
+        energy_monitor: true,
+        ..*original
+    };
+    let (id, amplitude, rest) = identify(c, &base, s, progress)?;
+    // The chirp leaves the device wherever it stopped: the release tests put the wall there,
+    // so no test starts with a long, energetic approach (the user's wall position is kept
+    // in the config that is finally set).
+    let base = ServoConfig {
+        wall_position: base.wall_position.saturating_add(rest),
+        ..base
+    };
+    let delta = res * f64::from(1u32 << base.coarsen_shift);
+    let mut p = PhysicalParams {
+        mass: id.mass,
+        viscous: id.viscous.max(0.0),
+        coulomb: id.coulomb.max(0.0),
+        resolution: delta,
+        period_s: t,
+        stiffness: 1.0,
+        delay_s: f64::from(base.extra_delay_ticks) * t,
+        rotational: c.info.counts_per_rev > 0,
+    };
+    let v = s.max_velocity.unwrap_or(DEFAULT_XIDOT * delta / t);
+    let predicted = predict(&p, v)?;
+    progress(&format!(
+        "identified m={:.3e} b={:.3e} c={:.3e}; K guaranteed {:.4} expected {:.4}",
+        id.mass, id.viscous, id.coulomb, predicted.guaranteed, predicted.expected
+    ));
+    // Force cap: K·Δ·(d + ½) ≤ force limit with d = v√(m/K)/Δ  ⇒  √K ≤ F/(v√m) (approximately).
+    let f_lim = f64::from(base.force_limit);
+    let k_force = (f_lim / (v * id.mass.sqrt())).powi(2) * 0.8;
+    let k_cap = k_force.min(f64::from(c.info.limits.max_stiffness));
+    let ticks_for = |k: f64| {
+        s.release_ticks.unwrap_or_else(|| {
+            let natural = std::f64::consts::TAU * (id.mass / k).sqrt() / t;
+            (60.0 * natural).clamp(1500.0, 30_000.0) as u32
+        })
+    };
+    let search = Search {
+        k_cap,
+        rel_tol: s.rel_tol,
+        ..Search::default()
+    };
+    let start = predicted
+        .expected
+        .min(k_cap)
+        .max(predicted.guaranteed.min(k_cap) * 0.5);
+    let found = largest_settling_k(start, &search, |k| {
+        let d = deflection_for(&p, k, v);
+        progress(&format!("release test K={k:.4} from {d} ticks"));
+        release_test(c, &base, k, d, ticks_for(k))
+    })?;
+    let mut k_set = found.k_pass * s.margin;
+    let mut confirmation = Vec::new();
+    for _ in 0..4 {
+        let d = deflection_for(&p, k_set, v);
+        progress(&format!("confirming K={k_set:.4} from ±{d} ticks"));
+        confirmation = vec![
+            release_test(c, &base, k_set, d, ticks_for(k_set))?,
+            release_test(c, &base, k_set, -d, ticks_for(k_set))?,
+        ];
+        if confirmation.iter().all(|v| v.settled()) {
+            break;
+        }
+        k_set *= s.margin;
+    }
+    if !confirmation.iter().all(|v| v.settled()) {
+        bail!("no stiffness confirmed by releases from both sides (last tried {k_set:.4})");
+    }
+    p.stiffness = k_set;
+    let mut saved = false;
+    if !dry_run {
+        c.clear_faults().ok();
+        c.set_config(&ServoConfig {
+            stiffness: k_set as f32,
+            ..*original
+        })?;
+        c.save_config().context("saving the tuned config")?;
+        saved = true;
+    }
+    Ok(Outcome {
+        identified: IdentifiedReport {
+            mass: [id.mass, id.mass_se],
+            viscous: [id.viscous, id.viscous_se],
+            viscous_upper_bound: id.viscous_upper_bound(),
+            viscous_only_bounded: id.viscous_only_bounded(),
+            coulomb: [id.coulomb, id.coulomb_se],
+            equations: id.equations,
+            excite_amplitude_codes: amplitude,
+        },
+        params: p,
+        max_velocity: v,
+        xidot: v * t / delta,
+        predicted,
+        search: found,
+        k_set,
+        confirmation,
+        saved,
+    })
+}
