@@ -14,6 +14,8 @@ use stiffwall_proto::{
 
 /// Largest |gain| accepted, output codes per count (keeps `I16F16` and `I32F32` in range).
 pub const MAX_GAIN_CODES: f32 = 16384.0;
+/// Largest force clamp, codes (keeps the spring product far from the `i32` range).
+pub const MAX_LIMIT_CODES: i32 = 1 << 24;
 /// Largest heartbeat timeout, ms.
 pub const MAX_HEARTBEAT_MS: u32 = 600_000;
 /// Largest encoder-jump threshold, counts per tick.
@@ -241,17 +243,20 @@ pub struct Gains<N: Numeric> {
     /// Coarsening shift.
     pub shift: u32,
     /// Wall position, raw counts.
-    pub wall: i64,
+    pub wall: i32,
     /// One-sided wall.
     pub one_sided: bool,
     /// Extra delay, ticks.
     pub delay: u32,
-    /// Output clamp, codes (≤ board max).
+    /// Output clamp, codes (≤ board max and ≤ [`MAX_LIMIT_CODES`]).
     pub limit: i32,
+    /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit. Clamping n
+    /// to [−n_sat−1, n_sat] leaves the clamped force unchanged and keeps the product in range.
+    pub n_sat: i32,
     /// Over-velocity threshold in raw counts per [`VEL_WINDOW`] ticks; 0 = off.
-    pub vel_window_counts: i64,
+    pub vel_window_counts: u32,
     /// Encoder-jump threshold, raw counts per tick.
-    pub jump: i64,
+    pub jump: u32,
     /// Energy monitor on (and K > 0).
     pub energy_monitor: bool,
     /// Energy limit in units of K·Δ_eff²/8.
@@ -279,7 +284,7 @@ impl<N: Numeric> Gains<N> {
         let k_half = k * de / (2.0 * fs);
         let limit_codes = libm::round(f64::from(cfg.force_limit) / fs);
         let limit = if limit_codes.is_finite() {
-            (limit_codes as i32).clamp(0, board.max_code.max(0))
+            (limit_codes as i32).clamp(0, board.max_code.clamp(0, MAX_LIMIT_CODES))
         } else {
             0
         };
@@ -292,24 +297,32 @@ impl<N: Numeric> Gains<N> {
             0.0
         };
         let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
+        let k_half = N::gain(k_half);
+        let kf = N::to_f64(k_half);
+        let n_sat = if kf > 0.0 {
+            (libm::ceil(f64::from(limit) / (2.0 * kf)) as i32).clamp(0, 1 << 29)
+        } else {
+            1 << 29
+        };
         Self {
-            k_half: N::gain(k_half),
+            k_half,
+            n_sat,
             damp: N::gain(f64::from(cfg.damping) * de * rate / fs),
-            hold_damp: N::gain(2.0 * f64::from(crate::servo::HOLD_BETA) * k_half),
+            hold_damp: N::gain(2.0 * f64::from(crate::servo::HOLD_BETA) * kf),
             safe_damp: N::gain(
                 f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
             ),
             shift: u32::from(cfg.coarsen_shift.min(MAX_COARSEN_SHIFT)),
-            wall: i64::from(cfg.wall_position),
+            wall: cfg.wall_position,
             one_sided: cfg.wall == WallMode::OneSided,
             delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
             limit,
             vel_window_counts: if vel.is_finite() && vel > 0.0 {
-                libm::ceil(vel) as i64
+                libm::ceil(vel) as u32
             } else {
                 0
             },
-            jump: i64::from(cfg.encoder_jump_counts.max(1)),
+            jump: cfg.encoder_jump_counts.max(1),
             energy_monitor: cfg.energy_monitor && kd2 > 0.0,
             energy_limit_e8: if e8.is_finite() && e8 > 0.0 {
                 e8 as u64

@@ -2,7 +2,8 @@
 //!
 //! A gain is "output codes per count" (e.g. K·Δ_eff/2 in codes). [`Numeric::mul`] computes
 //! `round(gain · m)` for an integer `m`, saturating to `i32` instead of wrapping, rounding to
-//! nearest with ties away from zero (so the result is odd-symmetric: `mul(g, -m) == -mul(g, m)`).
+//! nearest with ties away from zero (used for damping). [`Numeric::mul_bounded`] is the spring's
+//! fast path: `⌊gain · m + ½⌋` for products the caller keeps below 2^30 codes.
 //!
 //! - [`Fx64`] (default): `I32F32` gain (resolution 2^-32 code, range ±2^31 codes), 64-bit
 //!   multiply with saturation. Exact integer arithmetic on the gain's bits.
@@ -27,6 +28,13 @@ pub trait Numeric: Copy + core::fmt::Debug + 'static {
     fn to_f64(g: Self::Gain) -> f64;
     /// `round(g · m)`, saturated to `i32`.
     fn mul(g: Self::Gain, m: i64) -> i32;
+    /// `⌊g · m + ½⌋` (round to nearest, ties toward +∞) for a caller that guarantees
+    /// `|g · m| < 2^30` codes (the servo clamps the count first). Differs from
+    /// [`Numeric::mul`] only at exact ties (negative x.5); cheaper on the target.
+    #[inline]
+    fn mul_bounded(g: Self::Gain, m: i32) -> i32 {
+        Self::mul(g, i64::from(m))
+    }
 }
 
 /// `I32F32` gains, 64-bit arithmetic (default).
@@ -60,6 +68,14 @@ impl Numeric for Fx64 {
         g.saturating_mul_int(m)
             .saturating_round()
             .saturating_to_num::<i32>()
+    }
+    #[inline]
+    fn mul_bounded(g: I32F32, m: i32) -> i32 {
+        // In range by contract: a plain 32×64-bit multiply and ⌊x + ½⌋ (add, then drop the
+        // fraction: `to_num` rounds toward −∞), no overflow checks needed.
+        g.wrapping_mul_int(i64::from(m))
+            .wrapping_add(I32F32::from_bits(1 << 31))
+            .wrapping_to_num::<i32>()
     }
 }
 
@@ -105,6 +121,10 @@ impl Numeric for F32 {
         // `as` from float saturates (NaN → 0): no panic, no wrap.
         libm::roundf(g * m as f32) as i32
     }
+    #[inline]
+    fn mul_bounded(g: f32, m: i32) -> i32 {
+        libm::floorf(g * m as f32 + 0.5) as i32
+    }
 }
 
 #[cfg(test)]
@@ -125,5 +145,9 @@ mod tests {
         assert_eq!(F32::mul(3.0, -5), -15);
         assert_eq!(F32::mul(1e30, 1 << 40), i32::MAX);
         assert_eq!(Fx64::gain(f64::NAN), I32F32::ZERO);
+        for m in -1000..1000 {
+            let g = Fx64::gain(0.3757);
+            assert_eq!(Fx64::mul(g, i64::from(m)), Fx64::mul_bounded(g, m));
+        }
     }
 }

@@ -1,13 +1,15 @@
 //! The servo tick: encoder → eq. (2) in fixed point → extra delay → clamp → output, with the
 //! safety supervisor and telemetry in the same tick.
 //!
-//! Units: raw counts (hardware counter, unwrapped to `i64`), effective counts
+//! Units: raw counts (hardware counter, unwrapped to a saturating `i32`), effective counts
 //! n = ⌊(pos − wall) / 2^shift⌋ (the paper's ⌊ξ⌋ with Δ_eff = 2^shift·Δ), output codes, ticks.
 //!
 //! Spring (eq. (2)): the force code for effective count n is exactly
-//! `code(n) = sat_i32(round(−(2n+1) · k_half))` where `k_half` = K·Δ_eff/(2·force_per_code) is
-//! a fixed-point gain ([`crate::numeric`]) and `round` is to nearest, ties away from zero. It is
-//! then clamped to ±limit. The arithmetic saturates: a count far outside the wall (or a counter
+//! `code(n) = clamp(⌊−(2n+1) · k_half + ½⌋, −limit, limit)` where `k_half` =
+//! K·Δ_eff/(2·force_per_code) is an `I32F32` gain ([`crate::numeric`]), the product computed
+//! exactly in 64 bits. Before the multiply n is clamped to [−n_sat−1, n_sat] where the force
+//! already exceeds the limit, so the output is exact for every n and the product never
+//! overflows. Positions are saturating `i32` counts: a count far outside the wall (or a counter
 //! that wrapped many times) gives the clamped force, never a wrapped one.
 //!
 //! Invariants: `tick*` never allocates, blocks or panics (no indexing that can fail: the ring
@@ -249,9 +251,9 @@ pub fn energy_e8(n: i64) -> u64 {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct EnergyMonitor {
     primed: bool,
-    prev_n: i64,
+    prev_n: i32,
     dir: i8,
-    peak: i64,
+    peak: i32,
     last: [u64; 2],
     have: [bool; 2],
     score: i32,
@@ -270,9 +272,9 @@ impl EnergyMonitor {
     }
 
     /// One tick at effective count `n`. Returns (fault bits, turning point seen).
-    pub fn update(&mut self, n: i64, trip: i32, limit_e8: u64) -> (u32, bool) {
+    pub fn update(&mut self, n: i32, trip: i32, limit_e8: u64) -> (u32, bool) {
         let mut faults = 0;
-        if energy_e8(n) > limit_e8 {
+        if energy_e8(i64::from(n)) > limit_e8 {
             faults |= fault::ENERGY_LIMIT;
         }
         if !self.primed {
@@ -291,7 +293,7 @@ impl EnergyMonitor {
             } else {
                 turn = true;
                 let side = usize::from(self.dir < 0);
-                let e = energy_e8(self.peak);
+                let e = energy_e8(i64::from(self.peak));
                 if let (Some(&had), Some(&last)) = (self.have.get(side), self.last.get(side)) {
                     if had {
                         if e > last {
@@ -322,7 +324,7 @@ impl EnergyMonitor {
 enum Experiment {
     None,
     Hold {
-        target: i64,
+        target: i32,
         ticks: u32,
         held: u32,
         still: u32,
@@ -349,11 +351,11 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     sign_shift: u32,
     primed: bool,
     last_raw: u32,
-    pos: i64,
-    prev_n: i64,
+    pos: i32,
+    prev_n: i32,
     ring: [i32; RING],
     head: u32,
-    vel_hist: [i64; VEL_WINDOW],
+    vel_hist: [i32; VEL_WINDOW],
     faults: u32,
     monitor: EnergyMonitor,
     hb_seen: u32,
@@ -426,9 +428,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
         &self.monitor
     }
 
-    /// Unwrapped raw position (counts since the first reading, sign-extended).
+    /// Unwrapped raw position (counts since the first reading, sign-extended; saturates at
+    /// the `i32` range instead of wrapping).
     #[must_use]
-    pub fn position(&self) -> i64 {
+    pub fn position(&self) -> i32 {
         self.pos
     }
 
@@ -438,34 +441,45 @@ impl<'a, N: Numeric> Servo<'a, N> {
         self.exp != Experiment::None
     }
 
-    /// The spring of eq. (2) for effective count `n` before the clamp:
-    /// `round(−(2n+1)·k_half)` saturated (0 outside a one-sided wall).
+    /// The spring of eq. (2) for effective count `n` before the output clamp:
+    /// `round(−(2n+1)·k_half)` for |n| ≤ `n_sat`; beyond, n is clamped to ±`n_sat`, where the
+    /// force already exceeds the limit, so the clamped output is exact for every n.
+    /// 0 outside a one-sided wall.
     #[inline]
     #[must_use]
-    pub fn spring_code(&self, n: i64) -> i32 {
+    pub fn spring_code(&self, n: i32) -> i32 {
         if self.g.one_sided && n < 0 {
             return 0;
         }
-        N::mul(
+        self.spring_raw(n)
+    }
+
+    #[inline]
+    fn spring_raw(&self, n: i32) -> i32 {
+        let s = self.g.n_sat;
+        // max/min, not `clamp` (which has a panic path for min > max).
+        let n = n.max(s.wrapping_neg().wrapping_sub(1)).min(s);
+        // n_sat ≤ 2^29: |2n+1| < 2^31, and |(2n+1)·k_half| ≤ limit + 3·k_half < 2^25 codes.
+        N::mul_bounded(
             self.g.k_half,
-            n.saturating_mul(2).saturating_add(1).saturating_neg(),
+            n.wrapping_mul(2).wrapping_add(1).wrapping_neg(),
         )
     }
 
     /// Reads and unwraps the encoder; returns the raw count delta.
     #[inline]
-    fn read(&mut self, enc: &mut impl Encoder) -> i64 {
+    fn read(&mut self, enc: &mut impl Encoder) -> i32 {
         let raw = enc.count();
         let sh = self.sign_shift;
         if !self.primed {
             self.primed = true;
             self.last_raw = raw;
-            self.pos = i64::from(((raw << sh) as i32) >> sh);
+            self.pos = (raw.wrapping_shl(sh) as i32).wrapping_shr(sh);
             self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.shift;
             self.vel_hist = [self.pos; VEL_WINDOW];
             return 0;
         }
-        let d = i64::from((raw.wrapping_sub(self.last_raw) << sh) as i32 >> sh);
+        let d = (raw.wrapping_sub(self.last_raw).wrapping_shl(sh) as i32).wrapping_shr(sh);
         self.last_raw = raw;
         self.pos = self.pos.saturating_add(d);
         d
@@ -544,14 +558,14 @@ impl<'a, N: Numeric> Servo<'a, N> {
 
         // Supervisor.
         let mut new_faults = 0u32;
-        if d.unsigned_abs() > self.g.jump.unsigned_abs() {
+        if d.unsigned_abs() > self.g.jump {
             new_faults |= fault::ENCODER_JUMP;
         }
         let vi = (now & VEL_MASK) as usize;
         let old = self.vel_hist[vi];
         self.vel_hist[vi] = self.pos;
         if self.g.vel_window_counts > 0
-            && self.pos.saturating_sub(old).unsigned_abs() > self.g.vel_window_counts.unsigned_abs()
+            && self.pos.saturating_sub(old).unsigned_abs() > self.g.vel_window_counts
         {
             new_faults |= fault::OVER_VELOCITY;
         }
@@ -615,10 +629,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     #[inline]
-    fn force(&mut self, n: i64, dn: i64, d: i64) -> Cmd {
+    fn force(&mut self, n: i32, dn: i32, d: i32) -> Cmd {
         if self.faults != 0 {
             let code = if self.g.safe_damping {
-                N::mul(self.g.safe_damp, d.saturating_neg())
+                N::mul(self.g.safe_damp, i64::from(d).wrapping_neg())
             } else {
                 0
             };
@@ -628,7 +642,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 bypass_delay: true,
             };
         }
-        let damp = N::mul(self.g.damp, dn.saturating_neg());
+        let damp = N::mul(self.g.damp, i64::from(dn).wrapping_neg());
         match &mut self.exp {
             Experiment::None => Cmd {
                 code: self.spring_code(n).saturating_add(damp),
@@ -646,11 +660,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
             },
             Experiment::Hold { target, .. } => {
                 let e = n.saturating_sub(*target);
-                let k = N::mul(
-                    self.g.k_half,
-                    e.saturating_mul(2).saturating_add(1).saturating_neg(),
-                );
-                let hd = N::mul(self.g.hold_damp, dn.saturating_neg());
+                let k = self.spring_raw(e);
+                let hd = N::mul(self.g.hold_damp, i64::from(dn).wrapping_neg());
                 Cmd {
                     code: k.saturating_add(hd),
                     flags: flags::HOLD,
@@ -672,7 +683,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                         half_period_ticks,
                     } => {
                         let hp = half_period_ticks.max(1);
-                        if (*t / hp) & 1 == 0 {
+                        if t.checked_div(hp).unwrap_or(0) & 1 == 0 {
                             high
                         } else {
                             low
@@ -698,10 +709,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
                     }
                     ExciteProfile::Table { len, hold_ticks } => {
                         let v = self.table.get(*idx as usize).copied().unwrap_or(0);
-                        *cnt += 1;
+                        *cnt = cnt.saturating_add(1);
                         if *cnt >= u32::from(hold_ticks.max(1)) {
                             *cnt = 0;
-                            *idx += 1;
+                            *idx = idx.saturating_add(1);
                             if *idx >= u32::from(len) {
                                 *idx = 0;
                             }
@@ -719,7 +730,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     /// Experiment bookkeeping after the output.
-    fn advance(&mut self, n: i64, dn: i64) {
+    fn advance(&mut self, n: i32, dn: i32) {
         let rate = self.g.rate_hz.max(1);
         let mut release = None;
         let mut done = false;
@@ -779,7 +790,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     #[inline]
-    fn telemetry(&mut self, now: u32, rel: i64, n: i64, code: i32, fl: u16) {
+    fn telemetry(&mut self, now: u32, rel: i32, n: i32, code: i32, fl: u16) {
         if self.decimation == 0 {
             return;
         }
@@ -792,10 +803,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
             seq: self.seq,
             sample: Sample {
                 tick: now,
-                count: rel.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32,
+                count: rel,
                 force_code: code,
                 flags: fl,
-                energy: u32::try_from(energy_e8(n)).unwrap_or(u32::MAX),
+                energy: u32::try_from(energy_e8(i64::from(n))).unwrap_or(u32::MAX),
             },
         };
         self.seq = self.seq.wrapping_add(1);
@@ -819,7 +830,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 if self.faults == 0 {
                     self.end_experiment(false);
                     self.exp = Experiment::Hold {
-                        target: i64::from(deflection),
+                        target: deflection,
                         ticks: ticks.max(1),
                         held: 0,
                         still: 0,
@@ -900,7 +911,7 @@ mod tests {
     }
 
     /// Exact force in codes for count n, from the SI config (f64).
-    fn exact(cfg: &ServoConfig, b: &BoardInfo, n: i64) -> f64 {
+    fn exact(cfg: &ServoConfig, b: &BoardInfo, n: i32) -> f64 {
         let de = f64::from(b.resolution) * f64::from(1u32 << cfg.coarsen_shift);
         -f64::from(cfg.stiffness) * de * (n as f64 + 0.5) / f64::from(b.force_per_code)
     }
@@ -908,7 +919,7 @@ mod tests {
     fn check_backend<Nm: Numeric>(
         k: f32,
         shift: u8,
-        n: i64,
+        n: i32,
         tol_extra: f64,
         range: f64,
     ) -> Result<(), TestCaseError> {
@@ -931,14 +942,14 @@ mod tests {
             (clamped - want_c).abs() <= 1.0 + tol_extra,
             "n={n} code={code} want={want}"
         );
-        // Exactly the documented integer formula on the gain's bits.
+        // Exactly the documented integer formula on the gain's bits, then the clamp.
         let g = Nm::to_f64(s.gains().k_half);
         let formula = -(2.0 * n as f64 + 1.0) * g;
-        if formula.abs() < range - 1.0 {
+        if formula.abs() < range - 1.0 && formula.abs() < lim {
             prop_assert!((f64::from(code) - formula).abs() <= 0.5 + 1e-9 * formula.abs());
         } else {
-            // Saturated, with the sign of the formula.
-            prop_assert!(f64::from(code).abs() >= range - 1.0 && (f64::from(code) * formula) > 0.0);
+            // Saturated: the clamped output is the limit with the sign of the formula.
+            prop_assert_eq!(clamped, lim * formula.signum());
         }
         Ok(())
     }
@@ -946,23 +957,23 @@ mod tests {
     proptest! {
         // K·Δ_eff/2 from 1e-4 to ~15 codes; counts over the whole i32 range and beyond.
         #[test]
-        fn fixed_point_force_matches_eq2(k in 0.002f32..300.0, shift in 0u8..4, n in -(1i64 << 40)..(1i64 << 40)) {
+        fn fixed_point_force_matches_eq2(k in 0.002f32..300.0, shift in 0u8..4, n in any::<i32>()) {
             check_backend::<Fx64>(k, shift, n, 0.0, 2147483648.0)?;
         }
 
         #[test]
-        fn fixed_point_force_small_counts(k in 0.002f32..300.0, n in -5000i64..5000) {
+        fn fixed_point_force_small_counts(k in 0.002f32..300.0, n in -5000i32..5000) {
             check_backend::<Fx64>(k, 0, n, 0.0, 2147483648.0)?;
         }
 
         #[test]
-        fn fx32_force_within_one_code_near_the_wall(k in 0.2f32..300.0, n in -3000i64..3000) {
+        fn fx32_force_within_one_code_near_the_wall(k in 0.2f32..300.0, n in -3000i32..3000) {
             // I16F16: the gain error (≤ 2^-17 code) times |2n+1| ≤ 6001 adds < 0.05 code.
             check_backend::<Fx32>(k, 0, n, 0.05, 32768.0)?;
         }
 
         #[test]
-        fn f32_force_within_one_code_near_the_wall(k in 0.2f32..300.0, n in -3000i64..3000) {
+        fn f32_force_within_one_code_near_the_wall(k in 0.2f32..300.0, n in -3000i32..3000) {
             check_backend::<F32>(k, 0, n, 0.0, 2147483648.0)?;
         }
 
@@ -1006,8 +1017,10 @@ mod tests {
         let mut ch = Channels::new();
         let (sp, _hp) = ch.split();
         let s: Servo<'_> = Servo::new(b, &cfg, sp);
-        assert_eq!(s.spring_code(i64::MAX), i32::MIN);
-        assert_eq!(s.spring_code(i64::MIN), i32::MAX);
+        let lim = s.gains().limit;
+        assert_eq!(lim, 10240);
+        assert!(s.spring_code(i32::MAX) <= -lim);
+        assert!(s.spring_code(i32::MIN) >= lim);
         assert_eq!(s.spring_code(0), -5); // −K·Δ·½ / fs = −80/16 = −5
         assert_eq!(s.spring_code(-1), 5);
         assert_eq!(s.spring_code(3), -35);
@@ -1030,8 +1043,8 @@ mod tests {
         for i in 0..8u32 {
             got.push(s.tick_spring_delay(&mut Enc(i * 10), &mut out));
         }
-        // code(n) = −(2n+1)·0.5: n = 0, 10, 20 ... → −0.5 → −1 (ties away), −10.5 → −11 ...
-        assert_eq!(got, [0, 0, 0, -1, -11, -21, -31, -41]);
+        // code(n) = ⌊−(2n+1)·0.5 + ½⌋: n = 0, 10, 20 ... → 0, −10, −20 ... (ties toward +∞)
+        assert_eq!(got, [0, 0, 0, 0, -10, -20, -30, -40]);
     }
 
     #[test]
@@ -1070,7 +1083,7 @@ mod tests {
         let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
         let mut out = Out(0);
         s.tick(0, &mut Enc(10), &mut out);
-        assert_eq!(out.0, -11); // n=10: −21·0.5 = −10.5 → −11 (ties away from zero)
+        assert_eq!(out.0, -10); // n=10: ⌊−21·0.5 + ½⌋ = −10
         s.tick(1, &mut Enc(100), &mut out);
         assert_eq!(s.faults(), fault::ENCODER_JUMP);
         assert_eq!(out.0, 0);
@@ -1119,7 +1132,7 @@ mod tests {
         let mut tripped = None;
         // Oscillation with growing amplitude 3, 4, 5, ... counts.
         let mut t = 0;
-        'outer: for a in 3i64..20 {
+        'outer: for a in 3i32..20 {
             for n in (-a..=a).chain((-a..a).rev()) {
                 let (f, _) = m.update(n, 4, u64::MAX);
                 t += 1;
