@@ -22,8 +22,10 @@
 //! let state = plant.advance(force_n, 1e-3);     // exact state one period (1 ms) later
 //! assert!(state.x > 0.0);
 //! ```
-//! In dimensionless units, [`plant::advance`] with a [`plant::Body`] of (μ, β, σ) steps one
-//! constant-force interval exactly (`advance::<false>(&body, &mut motion, phi_a, 1.0)`).
+//! In dimensionless units, [`plant::DimensionlessPlant::step_period`]`(phi_a)` returns the exact
+//! state at the next sample instant and `encoder_count()` is ⌊ξ⌋;
+//! [`plant::DimensionlessPlant::step`]`(phi_a, dtau)` covers fractional delays. The lower-level
+//! [`plant::advance`] steps a [`plant::Body`] of (μ, β, σ) or (m, b, c) over one interval.
 //!
 //! # std feature
 //! [`scene`] (TOML scenes) and [`map`] (parallel (β, σ) sweeps).
@@ -45,4 +47,4 @@ pub mod scene;
 
 pub use exact::{dispatch, Exact, ExactSim, History, PeriodAudit, Visitor};
 pub use params::{Effects, ParamError, Params};
-pub use plant::{Body, Motion, PhysicalPlant};
+pub use plant::{Body, DimensionlessPlant, Motion, PhysicalPlant};

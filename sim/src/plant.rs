@@ -254,6 +254,57 @@ impl PhysicalPlant {
     }
 }
 
+/// The device in dimensionless units (Table I), stepped one constant-force interval at a time:
+/// the firmware-facing twin of [`PhysicalPlant`] for tests written in ticks and periods.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DimensionlessPlant {
+    body: Body,
+    state: Motion,
+}
+
+impl DimensionlessPlant {
+    /// A plant with μ, β, σ of `params` (τ_D is the controller's business), at rest at ξ = 0.
+    pub fn new(params: &crate::params::Params) -> Result<Self, crate::params::ParamError> {
+        params.validate()?;
+        Ok(Self {
+            body: Body::new(params.mu, params.beta, params.sigma),
+            state: Motion::default(),
+        })
+    }
+
+    /// Sets ξ (ticks) and ξ̇ (ticks per period).
+    pub fn set_state(&mut self, xi: f64, xidot: f64) {
+        self.state = Motion { x: xi, v: xidot };
+    }
+
+    /// Applies the constant force `phi_a` (K·Δ) for `dtau` periods (≥ 0) and returns the exact
+    /// state at the end. NaN force or negative/NaN duration are treated as 0.
+    pub fn step(&mut self, phi_a: f64, dtau: f64) -> Motion {
+        let f = if phi_a.is_nan() { 0.0 } else { phi_a };
+        if dtau > 0.0 {
+            advance::<false>(&self.body, &mut self.state, f, dtau);
+        }
+        self.state
+    }
+
+    /// One full sampling period under `phi_a`: the state at the next sample instant.
+    pub fn step_period(&mut self, phi_a: f64) -> Motion {
+        self.step(phi_a, 1.0)
+    }
+
+    /// Current state.
+    #[must_use]
+    pub fn state(&self) -> Motion {
+        self.state
+    }
+
+    /// Encoder count ⌊ξ⌋.
+    #[must_use]
+    pub fn encoder_count(&self) -> i64 {
+        crate::math::floor_i64(self.state.x)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -289,6 +340,30 @@ mod tests {
         advance::<false>(&b, &mut m, -2.0, 1.0);
         assert!((m.v + 1.5 * 0.6).abs() < 1e-15);
         assert!((m.x - (0.2 - 0.75 * 0.36)).abs() < 1e-15);
+    }
+
+    /// The SI plant and the dimensionless plant agree through Table I (Freedom 6 of Table II).
+    #[test]
+    fn physical_and_dimensionless_agree() {
+        let (m, b, c, delta, k, t) = (0.25, 0.01, 0.06, 20e-6, 2400.0, 1e-3);
+        let mut phys = PhysicalPlant::new(m, b, c, delta).unwrap();
+        let p = crate::params::Params {
+            mu: m / (k * t * t),
+            beta: b / (k * t),
+            sigma: c / (k * delta),
+            tau_d: 0.0,
+        };
+        let mut dim = DimensionlessPlant::new(&p).unwrap();
+        phys.set_state(0.0, 3.0 * delta / t);
+        dim.set_state(0.0, 3.0);
+        for _ in 0..500 {
+            assert_eq!(phys.encoder_count(), dim.encoder_count());
+            let n = phys.encoder_count() as f64;
+            phys.advance(-k * delta * (n + 0.5), t);
+            let s = dim.step_period(-(n + 0.5));
+            assert!((phys.position_m() / delta - s.x).abs() < 1e-9 * (1.0 + s.x.abs()));
+            assert!((phys.velocity_m_per_s() * t / delta - s.v).abs() < 1e-9 * (1.0 + s.v.abs()));
+        }
     }
 
     #[test]

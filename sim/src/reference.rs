@@ -262,6 +262,7 @@ impl RefSim {
             History::Zero => 0.0,
         };
         s.line = [hist; LINE];
+        s.u = hist;
         s.y[0] = init.x;
         s.y[1] = init.v;
         // The filter starts in steady state with the history force.
@@ -494,6 +495,9 @@ impl RefSim {
             Method::Dopri { .. } => None,
         };
         let mut guard = 0u64;
+        // Step cap after an event that could not be bracketed (a mass leaving rest whose force
+        // reverses within the step): halve until the step is tiny, then hold the mass for it.
+        let mut cap = f64::INFINITY;
         while t < len {
             guard += 1;
             if guard > 10_000_000 {
@@ -507,12 +511,12 @@ impl RefSim {
             let (h, y1) = match fixed {
                 Some(hf) => {
                     let n = libm::ceil(rem / hf - 1e-9).max(1.0);
-                    let h = rem / n;
+                    let h = (rem / n).min(cap);
                     let (y1, _) = self.step(&self.y.clone(), h, self.mode, false);
                     (h, y1)
                 }
                 None => {
-                    let mut h = self.dt.min(rem);
+                    let mut h = self.dt.min(rem).min(cap);
                     loop {
                         let (y1, err) = self.step(&self.y.clone(), h, self.mode, true);
                         if err <= 1.0 || h <= 1e-12 {
@@ -538,6 +542,21 @@ impl RefSim {
                 let y0 = self.y;
                 let (tc, yc) = self.locate(&y0, h, self.mode);
                 self.stats.events += 1;
+                if tc <= 0.0 {
+                    if h > 1e-13 {
+                        cap = 0.5 * h;
+                    } else {
+                        // The mass cannot leave rest within 1e-13 periods: hold it that long.
+                        let (ys, _) = self.step(&y0, h, Mode::Stuck, false);
+                        self.y = ys;
+                        self.y[1] = 0.0;
+                        self.mode = Mode::Stuck;
+                        t += h;
+                        cap = f64::INFINITY;
+                    }
+                    continue;
+                }
+                cap = f64::INFINITY;
                 self.y = yc;
                 t += tc;
                 if let Mode::Moving(_) = self.mode {
@@ -552,6 +571,7 @@ impl RefSim {
                 }
                 continue;
             }
+            cap = f64::INFINITY;
             self.y = y1;
             t += h;
         }

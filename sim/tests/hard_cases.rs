@@ -79,7 +79,13 @@ proptest! {
     fn reference_never_nan(mu in mu_strategy(), beta in beta_strategy(), sigma in sigma_strategy(),
                            tau_d in tau_strategy(), xi0 in xi0_strategy(), v0 in -50.0..50.0f64) {
         let p = Params { mu, beta, sigma, tau_d };
-        let m = RefModel::paper(p, Effects::ALL);
+        let mut m = RefModel::paper(p, Effects::ALL);
+        if xi0 > 2.0 {
+            m.amp = Some(stiffwall_sim::reference::AmpFilter { omega: 1.0 + xi0, zeta: 0.2 * xi0 });
+        }
+        if xi0 < -2.0 {
+            m.hand = Some(stiffwall_sim::reference::Hand { mu: -xi0, beta: 0.3, kappa: 0.1 });
+        }
         for method in [Method::Rk4 { steps_per_period: 8 }, Method::Dopri { rtol: 1e-8, atol: 1e-10 }] {
             let s = RefSim::new(m, method, Motion { x: xi0, v: v0 }).unwrap();
             prop_assert!(Check(50).visit(s).is_ok());
