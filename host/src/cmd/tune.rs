@@ -16,10 +16,10 @@ pub struct Args {
     pub connect: ConnectArgs,
     /// Expected maximum velocity of the user, m/s (rad/s for rotary devices). Default: 5 encoder
     /// ticks per servo period (ξ̇ = 5 of Table I).
-    #[arg(long, value_name = "V")]
+    #[arg(long, value_name = "V", allow_hyphen_values = true)]
     pub max_velocity: Option<f64>,
     /// Fraction of the largest settling stiffness that is set, in (0, 1].
-    #[arg(long, default_value_t = 0.9)]
+    #[arg(long, default_value_t = 0.9, allow_hyphen_values = true)]
     pub margin: f64,
     /// Servo ticks per release test (default: 60 natural periods, 1500–30000).
     #[arg(long)]
