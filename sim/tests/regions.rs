@@ -22,6 +22,12 @@ fn no_delay_classes_agree_with_fig3_regions() {
         for (b, s) in grid() {
             let o = simulate_point(100.0, b, s, 0.0, v, PERIODS);
             let r = region_no_delay(b, s, v);
+            // Same region as stiffwall-core's classifier (away from the critical line, where
+            // rounding decides).
+            let core = stiffwall_core::regions::classify(b, s, Some(v)).unwrap();
+            if (s - 0.5 - v * (0.5 - b)).abs() > 1e-9 {
+                assert_eq!(format!("{core:?}"), r.to_string(), "({b},{s}) xidot0 {v}");
+            }
             match r {
                 // A: globally stable, motion stops.
                 'A' => assert!(o.class.decays(), "A ({b},{s}) xidot0 {v}: {o:?}"),
@@ -72,10 +78,20 @@ fn delay_1_25_grows_everywhere_below_beta_1_2_for_fast_starts() {
             }
         }
     }
-    // Far right of Fig. 7 (beta > 1/2 + tau_D, sigma > 1/2 + ...): decays.
+    // Far right of Fig. 7 (region F1/F2 of stiffwall-core, beta > 1/2 + tau_D, sigma > 1/2):
+    // decays; region B (sigma < 1/2) persists below one tick.
     for v in [1.0, 5.0] {
+        let r = stiffwall_core::regions::classify_delayed(3.0, 2.0, 1.25, Some(v), Some(v / 10.0))
+            .unwrap();
+        assert!(matches!(
+            r,
+            stiffwall_core::Region::F1 | stiffwall_core::Region::F2
+        ));
         let o = simulate_point(100.0, 3.0, 2.0, 1.25, v, PERIODS);
         assert!(o.class.decays(), "xidot0 {v}: {o:?}");
+        let o = simulate_point(100.0, 2.5, 0.3, 1.25, v, PERIODS);
+        assert_eq!(o.class, Class::Persistent, "xidot0 {v}: {o:?}");
+        assert!(o.tail_amplitude < 1.0, "xidot0 {v}: {o:?}");
     }
 }
 
