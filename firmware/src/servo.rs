@@ -1154,6 +1154,76 @@ mod tests {
     }
 
     #[test]
+    fn excitation_profiles() {
+        let b = board();
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            force_limit: 20.0,
+            heartbeat_timeout_ms: 0, // no host here
+            ..ServoConfig::default()
+        };
+        let mut ch = Channels::new();
+        let (sp, mut hp) = ch.split();
+        let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
+        let mut out = Out(0);
+        let run = |s: &mut Servo<'_>, out: &mut Out, n: u32| -> std::vec::Vec<i32> {
+            (0..n).map(|t| s.tick(t, &mut Enc(7), out)).collect()
+        };
+        s.command(
+            0,
+            ServoCmd::Excite {
+                profile: ExciteProfile::Steps {
+                    low: -3,
+                    high: 5,
+                    half_period_ticks: 2,
+                },
+                ticks: 6,
+            },
+        );
+        assert_eq!(run(&mut s, &mut out, 6), [5, 5, -3, -3, 5, 5]);
+        assert!(matches!(
+            hp.events.dequeue(),
+            Some(ServoEvent::ExperimentDone {
+                completed: true,
+                ..
+            })
+        ));
+        assert!(!s.experiment_running());
+        // Back to the wall at count 7: ⌊−15·0.5 + ½⌋ = −7.
+        assert_eq!(run(&mut s, &mut out, 1), [-7]);
+        // Chirp 1 → 100 Hz at 1 kHz: bounded by the amplitude, sign changes speed up.
+        s.command(
+            0,
+            ServoCmd::Excite {
+                profile: ExciteProfile::Chirp {
+                    amplitude: 1000,
+                    f0_hz: 1.0,
+                    f1_hz: 100.0,
+                },
+                ticks: 2000,
+            },
+        );
+        let c = run(&mut s, &mut out, 2000);
+        assert!(c.iter().all(|v| v.abs() <= 1000));
+        let flips = |w: &[i32]| w.windows(2).filter(|p| (p[0] >= 0) != (p[1] >= 0)).count();
+        assert!(flips(&c[..500]) < flips(&c[1500..]));
+        // Table: uploaded values, each held twice.
+        let values = heapless::Vec::from_slice(&[1, 2, 3]).unwrap();
+        s.command(0, ServoCmd::TableChunk { offset: 0, values });
+        s.command(
+            0,
+            ServoCmd::Excite {
+                profile: ExciteProfile::Table {
+                    len: 3,
+                    hold_ticks: 2,
+                },
+                ticks: 8,
+            },
+        );
+        assert_eq!(run(&mut s, &mut out, 8), [1, 1, 2, 2, 3, 3, 1, 1]);
+    }
+
+    #[test]
     fn telemetry_counts_drops_exactly() {
         let b = board();
         let cfg = ServoConfig {

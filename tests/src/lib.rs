@@ -205,8 +205,14 @@ pub fn count_of(p: &impl Plant) -> i64 {
 
 /// One servo tick of firmware + plant; returns the code written.
 pub fn tick<P: Plant>(servo: &mut Servo<'_>, plant: &mut P, now: u32) -> i32 {
+    tick_offset(servo, plant, now, 0)
+}
+
+/// [`tick`] with the hardware counter reading `offset` more than ⌊x/Δ⌋ (wrapping), e.g. to
+/// put the counter wrap inside the motion.
+pub fn tick_offset<P: Plant>(servo: &mut Servo<'_>, plant: &mut P, now: u32, offset: i64) -> i32 {
     let mut enc = PlantEncoder {
-        count: count_of(plant),
+        count: count_of(plant).wrapping_add(offset),
     };
     let mut out = LastCode::default();
     servo.tick(now, &mut enc, &mut out);

@@ -3,7 +3,7 @@
 
 use stiffwall_firmware::{Channels, Servo};
 use stiffwall_proto::fault;
-use stiffwall_tests::{board, config, tick, Plant, Point, K};
+use stiffwall_tests::{board, config, tick, tick_offset, Plant, Point, K};
 
 struct Run {
     /// Position per tick, m.
@@ -196,4 +196,33 @@ fn region_b_with_zero_coulomb_friction() {
         p > p_sigma,
         "sigma = 0 cycle ({p}) larger than sigma = 0.2 ({p_sigma})"
     );
+}
+
+#[test]
+fn release_across_the_16_bit_counter_wrap_is_bit_identical() {
+    // The 16-bit counter reads ⌊x/Δ⌋ − 30, so it crosses 0 ↔ 0xFFFF on every swing of the
+    // oscillation (raw counts from −10 down through −30 and below). The firmware's origin is
+    // the first reading sign-extended (20 − 30 = −10), so the wall sits at position −30.
+    let d = f64::from(board().resolution);
+    let run = |offset: i64, wall: i32| {
+        let mut plant = C.sim_plant();
+        plant.set(20.5 * d, 0.0);
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let cfg = stiffwall_proto::ServoConfig {
+            wall_position: wall,
+            ..config(false)
+        };
+        let mut servo: Servo<'_> = Servo::new(board(), &cfg, sp);
+        (0..8000u32)
+            .map(|t| tick_offset(&mut servo, &mut plant, t, offset))
+            .collect::<Vec<i32>>()
+    };
+    let plain = run(0, 0);
+    let wrapped = run(-30, -30);
+    assert_eq!(plain, wrapped);
+    // Region C grows until the force clamps (3 N = 30 000 codes), never flipping sign.
+    let max = plain.iter().map(|c| c.abs()).max().unwrap();
+    eprintln!("counter-wrap run: largest |code| {max}");
+    assert_eq!(max, 30_000, "reaches the force limit");
 }
