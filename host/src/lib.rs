@@ -5,4 +5,5 @@
 
 pub mod cmd;
 pub mod device;
+pub mod recording;
 pub mod tune;
