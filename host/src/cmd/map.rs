@@ -382,14 +382,24 @@ where
                 let a = v / s.mu.sqrt();
                 let b_c = 0.5 + td;
                 chart.draw_series(LineSeries::new(vec![(b_c, sy0), (b_c, sy1)], red))?;
-                let pts: Vec<(f64, f64)> = (0..=200)
-                    .map(|i| bx0 + (bx1 - bx0) * f64::from(i) / 200.0)
-                    .map(|b| (b, map::critical_sigma_delay(b, td, v, a)))
-                    .filter(|&(_, sg)| sg >= sy0 && sg <= sy1)
-                    .collect();
-                chart.draw_series(LineSeries::new(pts, red))?;
+                // (19) is a straight line in (beta, sigma): clip it to the panel.
+                let at = |b: f64| map::critical_sigma_delay(b, td, v, a);
+                let b_of = |sg: f64| b_c + (at(b_c) - sg) / v.max(1e-12);
+                let (b_lo, b_hi) = {
+                    let (p, q) = (b_of(sy1), b_of(sy0));
+                    (p.min(q).max(bx0), p.max(q).min(bx1))
+                };
+                if b_lo < b_hi {
+                    chart.draw_series(LineSeries::new(
+                        vec![(b_lo, at(b_lo)), (b_hi, at(b_hi))],
+                        red,
+                    ))?;
+                }
                 let s_f = 0.5 + a * (td * td + td);
-                chart.draw_series(LineSeries::new(vec![(b_c, s_f), (bx1, s_f)], red))?;
+                if s_f <= sy1 {
+                    // F1/F2 boundary sigma* of Fig. 5.
+                    chart.draw_series(LineSeries::new(vec![(b_c, s_f), (bx1, s_f)], red))?;
+                }
             }
         }
     }
