@@ -362,7 +362,9 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
         self.params
     }
     fn applied_force(&self) -> f64 {
-        if D {
+        // The force at the start of the next period; with no delay it is the sample about to
+        // be taken (the delay line slot h is written by the next `step_period`).
+        if D && (self.split || self.n > 0) {
             self.delayed(self.n + u64::from(self.split))
         } else {
             Self::spring(self.st.x)
@@ -447,5 +449,26 @@ mod tests {
             b.step_period();
         }
         assert_eq!(a, b.state());
+    }
+
+    #[test]
+    fn applied_force_is_the_force_of_the_next_period() {
+        let init = Motion { x: 2.5, v: 0.0 };
+        for tau_d in [0.0, 0.5, 1.0, 2.25] {
+            let p = Params {
+                tau_d,
+                ..Params::BASE
+            };
+            let mut s = Full::new(p, init, History::HoldInitial).unwrap();
+            // History: the force of the initial position.
+            assert_eq!(s.applied_force(), -2.5, "tau_d {tau_d}");
+            for _ in 0..300 {
+                s.step_period();
+            }
+            let st = s.state();
+            if tau_d == 0.0 {
+                assert_eq!(s.applied_force(), -floor_fast(st.x) - 0.5);
+            }
+        }
     }
 }

@@ -651,6 +651,18 @@ impl ExactSim for RefSim {
         }
     }
     fn applied_force(&self) -> f64 {
-        self.phi_a(&self.y)
+        // Same convention as the exact solver: the force at the start of the next period.
+        if self.m.amp.is_some() || !self.m.zoh {
+            return self.phi_a(&self.y);
+        }
+        let h = self.h;
+        let at = |back: u64| self.line[(h.wrapping_sub(back) & MASK) as usize];
+        if self.frac > 0.0 {
+            at(self.n + 1)
+        } else if self.n > 0 {
+            at(self.n)
+        } else {
+            self.spring(self.y[0])
+        }
     }
 }
