@@ -1,10 +1,553 @@
-//! `hostctl replay`: replay a recording through the simulated plant and the firmware servo core.
+//! `hostctl replay`: check a recording against the models it came from.
+//!
+//! (a) **Plant replay.** The recorded force codes are applied, each held for one servo period
+//! T = 1/`config.servo_rate_hz` (ZOH), to the exact simulated plant
+//! (`stiffwall_sim::PhysicalPlant`, m, b, c from `--mass/--viscous/--coulomb`, a `--device`
+//! preset, or the recording's virtual-device preset; Δ from the recorded `DeviceInfo`). Each
+//! run of consecutive samples starts at the first recorded count (mid-count, x₀ = (n₀ + ½)·Δ
+//! in raw counts) with the velocity estimated from the first ≤ 10 samples. The model's count
+//! ⌊x/Δ⌋ after each period is compared with the next recorded count; the error is reported in
+//! encoder ticks (raw counts), RMS and max. Needs decimation 1 (every tick's force).
+//!
+//! (b) **Servo replay.** The recorded encoder counts are fed, tick by tick, to the firmware's
+//! own servo core (`stiffwall_firmware::Servo`, same fixed-point backend as the boards) built
+//! from the recorded `DeviceInfo` (as `BoardInfo`) and the recorded `ServoConfig`, and its
+//! force codes are compared bit for bit with the recorded ones. The supervisor is switched off
+//! on the host (energy monitor, velocity, jump and heartbeat faults): whether the device was in
+//! safe mode is read from the recorded flags instead. Comparable samples: decimation 1; not in
+//! safe mode and not in an experiment's hold or excitation phase (those forces do not come from
+//! the wall law); and at least `extra_delay_ticks + 1` samples after the start of each run of
+//! consecutive samples and after any such excluded sample (the host servo's delay line and
+//! velocity history must hold the same values as the device's). The configuration must not
+//! have changed during the recording (`hostctl record` never changes it).
+//!
+//! Invariants: a corrupted file is an error naming the line and the column
+//! ([`crate::recording`]); nothing panics on bad input; a mismatch in (b) exits non-zero.
+
+use super::info::emit;
+use crate::recording::{self, Recording};
+use anyhow::{anyhow, bail, Context, Result};
+use plotters::prelude::*;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use stiffwall_firmware::{BoardInfo, Channels, Encoder, ForceOutput, Servo};
+use stiffwall_proto::{flags, ServoConfig};
+use stiffwall_sim::PhysicalPlant;
 
 /// Arguments of `hostctl replay`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+#[command(
+    after_help = "Examples:\n  hostctl replay wall.csv\n  hostctl replay wall.csv --device maxon-re35 --plot replay.svg\n  hostctl replay run.csv --mass 2.1e-5 --viscous 1e-5 --coulomb 2e-3 --json"
+)]
+pub struct Args {
+    /// Recording made by `hostctl record`.
+    pub file: PathBuf,
+    /// Plant preset for (a) (see `hostctl analyze --list-devices`); default: the recording's
+    /// virtual-device preset, if any.
+    #[arg(long = "device", value_name = "NAME")]
+    pub device: Option<String>,
+    /// Inertia m [kg or kg·m²], > 0 (overrides the preset).
+    #[arg(long, allow_negative_numbers = true)]
+    pub mass: Option<f64>,
+    /// Viscous friction b [N·s/m or N·m·s/rad], >= 0 (overrides the preset).
+    #[arg(long, allow_negative_numbers = true)]
+    pub viscous: Option<f64>,
+    /// Coulomb friction c [N or N·m], >= 0 (overrides the preset).
+    #[arg(long, allow_negative_numbers = true)]
+    pub coulomb: Option<f64>,
+    /// Plot of recorded vs model position and the error (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Result of the plant replay (a).
+#[derive(Debug, Clone, Serialize)]
+pub struct PlantReplay {
+    /// m, b, c used (SI).
+    pub mass: f64,
+    /// Viscous friction.
+    pub viscous: f64,
+    /// Coulomb friction.
+    pub coulomb: f64,
+    /// Where they came from.
+    pub source: String,
+    /// Samples compared (all but the first of each run).
+    pub compared: usize,
+    /// Runs of consecutive samples (each restarted from its first recorded count).
+    pub runs: usize,
+    /// RMS of model − recorded count, encoder ticks.
+    pub rms_ticks: f64,
+    /// Largest |model − recorded count|, encoder ticks.
+    pub max_ticks: i64,
+    /// Time (s, from the first sample) and recorded / model counts, for plotting.
+    #[serde(skip)]
+    pub trace: Vec<(f64, i64, i64)>,
+}
+
+/// One force code that the host servo did not reproduce.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Mismatch {
+    /// Sample number.
+    pub seq: u32,
+    /// Recorded count.
+    pub count: i32,
+    /// Recorded force code.
+    pub recorded: i32,
+    /// Host servo's force code.
+    pub replayed: i32,
+}
+
+/// Result of the servo replay (b).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ServoReplay {
+    /// Samples compared.
+    pub compared: usize,
+    /// Of those, reproduced bit for bit.
+    pub matched: usize,
+    /// Excluded: delay-line / velocity warm-up after a run start or an excluded sample.
+    pub excluded_warmup: usize,
+    /// Excluded: safe mode.
+    pub excluded_safe_mode: usize,
+    /// Excluded: release hold phase or excitation (force not from the wall law).
+    pub excluded_experiment: usize,
+    /// The first mismatches (at most 20).
+    pub mismatches: Vec<Mismatch>,
+    /// Total mismatches.
+    pub mismatch_count: usize,
+}
+
+/// Both replays (None with the reason when one cannot run).
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// Samples in the recording.
+    pub samples: usize,
+    /// Sample numbers missing in the recording.
+    pub missing: u64,
+    /// (a), if it ran.
+    pub plant: Option<PlantReplay>,
+    /// Why (a) did not run.
+    pub plant_skipped: Option<String>,
+    /// (b), if it ran.
+    pub servo: Option<ServoReplay>,
+    /// Why (b) did not run.
+    pub servo_skipped: Option<String>,
+}
+
+struct Enc(u32);
+impl Encoder for Enc {
+    fn count(&mut self) -> u32 {
+        self.0
+    }
+}
+struct Out(i32);
+impl ForceOutput for Out {
+    fn write(&mut self, code: i32) {
+        self.0 = code;
+    }
+}
+
+/// The firmware's board facts, rebuilt from the recorded handshake.
+#[must_use]
+pub fn board_of(d: &stiffwall_proto::DeviceInfo) -> BoardInfo {
+    BoardInfo {
+        name: "recorded",
+        resolution: d.resolution,
+        counts_per_rev: d.counts_per_rev,
+        encoder_bits: d.encoder_bits,
+        force_per_code: d.force_per_code,
+        max_code: d.max_code,
+        min_rate_hz: d.limits.min_rate_hz,
+        max_rate_hz: d.limits.max_rate_hz,
+    }
+}
+
+/// Replay (b): the recorded counts through the firmware servo core.
+pub fn replay_servo(rec: &Recording) -> Result<ServoReplay> {
+    if rec.header.decimation != 1 {
+        bail!(
+            "servo replay needs every servo tick (decimation 1); this recording has decimation {}",
+            rec.header.decimation
+        );
+    }
+    let board = board_of(&rec.header.device);
+    let wall = rec.header.config.wall_position;
+    let cfg_base = ServoConfig {
+        energy_monitor: false,
+        max_velocity: 0.0,
+        encoder_jump_counts: u32::MAX,
+        heartbeat_timeout_ms: 0,
+        ..rec.header.config
+    };
+    let warm = usize::from(rec.header.config.extra_delay_ticks) + 1;
+    let bits = u32::from(board.encoder_bits.clamp(1, 32));
+    let mask: u32 = if bits >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << bits) - 1
+    };
+    let sext = |raw: u32| -> i64 {
+        let sh = 32 - bits;
+        i64::from((raw.wrapping_shl(sh) as i32).wrapping_shr(sh))
+    };
+    let mut r = ServoReplay::default();
+    for seg in rec.segments() {
+        let rows = &rec.rows[seg];
+        // The device's absolute position is count + wall; the host servo primes its position
+        // from the (sign-extended) hardware counter, so shift its wall by the difference.
+        let pos0 = i64::from(rows[0].sample.count) + i64::from(wall);
+        let raw0 = (pos0 as u32) & mask;
+        let host_wall = i64::from(wall) + (sext(raw0) - pos0);
+        let host_wall = i32::try_from(host_wall).map_err(|_| {
+            anyhow!("servo replay: the recorded position {pos0} is outside the servo's i32 range")
+        })?;
+        let cfg = ServoConfig {
+            wall_position: host_wall,
+            ..cfg_base
+        };
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let mut servo: Servo<'_> = Servo::new(board, &cfg, sp);
+        let mut since_clean = 0usize;
+        for row in rows {
+            let s = row.sample;
+            let raw = ((i64::from(s.count) + i64::from(wall)) as u32) & mask;
+            let mut out = Out(0);
+            let code = servo.tick(s.tick, &mut Enc(raw), &mut out);
+            if s.flags & flags::SAFE_MODE != 0 {
+                r.excluded_safe_mode += 1;
+                since_clean = 0;
+                continue;
+            }
+            if s.flags & (flags::HOLD | flags::EXCITE) != 0 {
+                r.excluded_experiment += 1;
+                since_clean = 0;
+                continue;
+            }
+            since_clean += 1;
+            if since_clean <= warm {
+                r.excluded_warmup += 1;
+                continue;
+            }
+            r.compared += 1;
+            if code == s.force_code {
+                r.matched += 1;
+            } else {
+                r.mismatch_count += 1;
+                if r.mismatches.len() < 20 {
+                    r.mismatches.push(Mismatch {
+                        seq: row.seq,
+                        count: s.count,
+                        recorded: s.force_code,
+                        replayed: code,
+                    });
+                }
+            }
+        }
+    }
+    Ok(r)
+}
+
+/// Plant parameters for (a): preset (given or recorded), then explicit overrides.
+fn plant_params(args: &Args, rec: &Recording) -> Result<(f64, f64, f64, String)> {
+    let preset = args
+        .device
+        .clone()
+        .or_else(|| rec.header.virtual_plant.clone());
+    let (mut m, mut b, mut c, mut src) = (None, None, None, Vec::new());
+    if let Some(name) = &preset {
+        let d = stiffwall_core::devices::find(name).ok_or_else(|| {
+            anyhow!(
+                "unknown device {name:?} for --device (allowed: {})",
+                stiffwall_core::devices::NAMES
+            )
+        })?;
+        m = Some(d.params.mass);
+        b = Some(d.params.viscous);
+        c = Some(d.params.coulomb);
+        src.push(format!(
+            "preset {name}{}",
+            if args.device.is_none() {
+                " (from the recording)"
+            } else {
+                ""
+            }
+        ));
+    }
+    if let Some(v) = args.mass {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("--mass must be a finite number > 0 (got {v})");
+        }
+        m = Some(v);
+        src.push("--mass".into());
+    }
+    if let Some(v) = args.viscous {
+        if !(v.is_finite() && v >= 0.0) {
+            bail!("--viscous must be a finite number >= 0 (got {v})");
+        }
+        b = Some(v);
+        src.push("--viscous".into());
+    }
+    if let Some(v) = args.coulomb {
+        if !(v.is_finite() && v >= 0.0) {
+            bail!("--coulomb must be a finite number >= 0 (got {v})");
+        }
+        c = Some(v);
+        src.push("--coulomb".into());
+    }
+    match (m, b, c) {
+        (Some(m), Some(b), Some(c)) => Ok((m, b, c, src.join(" + "))),
+        _ => bail!("plant replay needs m, b and c: give --device NAME or all of --mass, --viscous and --coulomb"),
+    }
+}
+
+/// Replay (a): the recorded forces through the exact simulated plant.
+pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantReplay> {
+    if rec.header.decimation != 1 {
+        bail!(
+            "plant replay needs the force of every servo tick (decimation 1); this recording has decimation {}",
+            rec.header.decimation
+        );
+    }
+    let d = &rec.header.device;
+    let delta = f64::from(d.resolution);
+    let fpc = f64::from(d.force_per_code);
+    let period = 1.0 / f64::from(rec.header.config.servo_rate_hz.max(1));
+    let wall = i64::from(rec.header.config.wall_position);
+    let mut plant = PhysicalPlant::new(m, b, c, delta).map_err(|e| anyhow!("plant replay: {e}"))?;
+    let t0 = rec.rows.first().map_or(0, |r| r.seq);
+    let mut trace = Vec::with_capacity(rec.rows.len());
+    let (mut sum2, mut max, mut n, mut runs) = (0.0f64, 0i64, 0usize, 0usize);
+    for seg in rec.segments() {
+        let rows = &rec.rows[seg];
+        runs += 1;
+        let abs = |i: usize| i64::from(rows[i].sample.count) + wall;
+        let k = (rows.len() - 1).min(10);
+        let v0 = if k > 0 {
+            (abs(k) - abs(0)) as f64 * delta / (k as f64 * period)
+        } else {
+            0.0
+        };
+        plant.set_state((abs(0) as f64 + 0.5) * delta, v0);
+        let t = |i: usize| f64::from(rows[i].seq.wrapping_sub(t0)) * period;
+        trace.push((t(0), abs(0) - wall, abs(0) - wall));
+        for i in 1..rows.len() {
+            plant.advance(f64::from(rows[i - 1].sample.force_code) * fpc, period);
+            let model = plant.encoder_count();
+            let e = model - abs(i);
+            sum2 += (e as f64) * (e as f64);
+            max = max.max(e.abs());
+            n += 1;
+            trace.push((t(i), abs(i) - wall, model - wall));
+        }
+    }
+    Ok(PlantReplay {
+        mass: m,
+        viscous: b,
+        coulomb: c,
+        source: String::new(),
+        compared: n,
+        runs,
+        rms_ticks: if n > 0 { (sum2 / n as f64).sqrt() } else { 0.0 },
+        max_ticks: max,
+        trace,
+    })
+}
+
+/// Both replays of a parsed recording; plant parameters from `args`.
+pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
+    let (plant, plant_skipped) = match plant_params(args, rec) {
+        Err(e)
+            if args.device.is_some()
+                || args.mass.is_some()
+                || args.viscous.is_some()
+                || args.coulomb.is_some() =>
+        {
+            return Err(e)
+        }
+        Err(e) => (None, Some(format!("{e:#}"))),
+        Ok((m, b, c, src)) => match replay_plant(rec, m, b, c) {
+            Ok(mut p) => {
+                p.source = src;
+                (Some(p), None)
+            }
+            Err(e) => (None, Some(format!("{e:#}"))),
+        },
+    };
+    let (servo, servo_skipped) = match replay_servo(rec) {
+        Ok(s) => (Some(s), None),
+        Err(e) => (None, Some(format!("{e:#}"))),
+    };
+    Ok(Report {
+        samples: rec.rows.len(),
+        missing: rec.missing(),
+        plant,
+        plant_skipped,
+        servo,
+        servo_skipped,
+    })
+}
+
+fn render(file: &Path, r: &Report) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: {} samples, {} missing sample numbers",
+        file.display(),
+        r.samples,
+        r.missing
+    );
+    match (&r.plant, &r.plant_skipped) {
+        (Some(p), _) => {
+            let _ = writeln!(
+                s,
+                "(a) plant replay [m = {:.4e}, b = {:.4e}, c = {:.4e}; {}]: {} samples in {} run(s): model − recording RMS {:.3} ticks, max {} ticks",
+                p.mass, p.viscous, p.coulomb, p.source, p.compared, p.runs, p.rms_ticks, p.max_ticks
+            );
+        }
+        (None, Some(why)) => {
+            let _ = writeln!(s, "(a) plant replay skipped: {why}");
+        }
+        (None, None) => {}
+    }
+    match (&r.servo, &r.servo_skipped) {
+        (Some(v), _) => {
+            let _ = writeln!(
+                s,
+                "(b) servo replay: {}/{} force codes reproduced bit for bit{} (excluded: {} warm-up, {} safe mode, {} hold/excitation)",
+                v.matched,
+                v.compared,
+                if v.mismatch_count == 0 { "" } else { " — MISMATCHES" },
+                v.excluded_warmup,
+                v.excluded_safe_mode,
+                v.excluded_experiment
+            );
+            for m in &v.mismatches {
+                let _ = writeln!(
+                    s,
+                    "    seq {}: count {} recorded {} replayed {}",
+                    m.seq, m.count, m.recorded, m.replayed
+                );
+            }
+        }
+        (None, Some(why)) => {
+            let _ = writeln!(s, "(b) servo replay skipped: {why}");
+        }
+        (None, None) => {}
+    }
+    s.pop();
+    s
+}
+
+fn plot(p: &PlantReplay, path: &Path) -> Result<()> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
+    {
+        let root = SVGBackend::new(path, (1000, 650)).into_drawing_area();
+        draw(&root, p)?;
+        root.present()?;
+    } else {
+        let root = BitMapBackend::new(path, (1000, 650)).into_drawing_area();
+        draw(&root, p)?;
+        root.present()?;
+    }
+    Ok(())
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    p: &PlantReplay,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (top, bottom) = root.split_vertically(430);
+    let t1 = p.trace.last().map_or(1.0, |r| r.0).max(1e-6);
+    let lo = p.trace.iter().map(|r| r.1.min(r.2)).min().unwrap_or(0) - 1;
+    let hi = p.trace.iter().map(|r| r.1.max(r.2)).max().unwrap_or(0) + 1;
+    let mut ch = ChartBuilder::on(&top)
+        .caption(
+            format!(
+                "replay through the plant: RMS {:.2} ticks, max {} ticks",
+                p.rms_ticks, p.max_ticks
+            ),
+            ("sans-serif", 18),
+        )
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t1, lo as f64..hi as f64)?;
+    ch.configure_mesh()
+        .x_desc("t [s]")
+        .y_desc("count [ticks]")
+        .draw()?;
+    ch.draw_series(LineSeries::new(
+        p.trace.iter().map(|r| (r.0, r.1 as f64)),
+        &BLUE,
+    ))?
+    .label("recorded")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+    ch.draw_series(LineSeries::new(
+        p.trace.iter().map(|r| (r.0, r.2 as f64)),
+        &RED,
+    ))?
+    .label("model")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    let emax = (p.max_ticks as f64).max(1.0) + 0.5;
+    let mut ce = ChartBuilder::on(&bottom)
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t1, -emax..emax)?;
+    ce.configure_mesh()
+        .x_desc("t [s]")
+        .y_desc("model − recorded [ticks]")
+        .draw()?;
+    ce.draw_series(LineSeries::new(
+        p.trace.iter().map(|r| (r.0, (r.2 - r.1) as f64)),
+        &BLACK,
+    ))?;
+    Ok(())
+}
 
 /// Runs `hostctl replay`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("hostctl replay is not implemented yet")
+pub fn run(args: &Args) -> Result<()> {
+    let rec = recording::read(&args.file)?;
+    if rec.rows.is_empty() {
+        bail!("{}: the recording holds no samples", args.file.display());
+    }
+    let report = replay(args, &rec)?;
+    if let (Some(path), Some(p)) = (&args.plot, &report.plant) {
+        plot(p, path).with_context(|| format!("writing the plot {}", path.display()))?;
+    } else if args.plot.is_some() {
+        bail!(
+            "--plot needs the plant replay, which did not run: {}",
+            report.plant_skipped.as_deref().unwrap_or("unknown reason")
+        );
+    }
+    if args.json {
+        emit(&serde_json::to_string_pretty(&report)?)?;
+    } else {
+        emit(&render(&args.file, &report))?;
+    }
+    if let Some(v) = &report.servo {
+        if v.mismatch_count > 0 {
+            bail!(
+                "servo replay: {} of {} comparable force codes differ from the recording (first at seq {})",
+                v.mismatch_count,
+                v.compared,
+                v.mismatches.first().map_or(0, |m| m.seq)
+            );
+        }
+    }
+    Ok(())
 }
