@@ -50,7 +50,7 @@ fn cfg() -> ServoConfig {
         force_limit: 0.3,
         max_velocity: 10.0,
         energy_monitor: true,
-        energy_limit: 1.0,
+        energy_limit: 1000.0,
         heartbeat_timeout_ms: 0,
         encoder_jump_counts: 100_000,
         ..ServoConfig::default()
@@ -77,6 +77,8 @@ fn stages<N: Numeric>(c: &mut Criterion) {
                 s.tick_supervised(now, &mut e, &mut o)
             })
         });
+        // The measured path must be the normal one, not safe mode.
+        assert_eq!(s.faults(), 0, "supervisor tripped during the benchmark");
     }
     {
         // Full tick with telemetry every tick; the consumer drains so the push succeeds.
@@ -94,6 +96,7 @@ fn stages<N: Numeric>(c: &mut Criterion) {
                 c
             })
         });
+        assert_eq!(s.faults(), 0, "supervisor tripped during the benchmark");
     }
     g.finish();
 }

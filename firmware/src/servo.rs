@@ -836,6 +836,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
                         still: 0,
                     };
                     self.start_experiment(now);
+                } else {
+                    self.refuse_experiment(ExperimentKind::Release);
                 }
             }
             ServoCmd::Excite { profile, ticks } => {
@@ -850,6 +852,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
                         cnt: 0,
                     };
                     self.start_experiment(now);
+                } else {
+                    self.refuse_experiment(ExperimentKind::Excite);
                 }
             }
             ServoCmd::TableChunk { offset, values } => {
@@ -867,6 +871,19 @@ impl<'a, N: Numeric> Servo<'a, N> {
             }
             ServoCmd::Stop => self.end_experiment(false),
         }
+    }
+
+    /// A start refused because faults latched after the main loop checked: report it ended.
+    fn refuse_experiment(&mut self, kind: ExperimentKind) {
+        if self.exp == Experiment::None {
+            self.port.shared.experiment.store(false, Ordering::Relaxed);
+        }
+        let _ = self.port.events.enqueue(ServoEvent::ExperimentDone {
+            kind,
+            completed: false,
+            faults: self.faults,
+            next_seq: self.seq,
+        });
     }
 
     fn start_experiment(&mut self, now: u32) {
@@ -1221,6 +1238,42 @@ mod tests {
             },
         );
         assert_eq!(run(&mut s, &mut out, 8), [1, 1, 2, 2, 3, 3, 1, 1]);
+    }
+
+    #[test]
+    fn experiment_refused_while_faulted_is_reported_ended() {
+        let b = board();
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            encoder_jump_counts: 5,
+            ..ServoConfig::default()
+        };
+        let mut ch = Channels::new();
+        let (sp, mut hp) = ch.split();
+        let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
+        let mut out = Out(0);
+        s.tick(0, &mut Enc(0), &mut out);
+        s.tick(1, &mut Enc(100), &mut out);
+        assert_eq!(s.faults(), fault::ENCODER_JUMP);
+        // The main loop had already set the flag when it accepted the request.
+        hp.shared.experiment.store(true, Ordering::Relaxed);
+        s.command(
+            2,
+            ServoCmd::Release {
+                deflection: 3,
+                ticks: 10,
+            },
+        );
+        assert!(!s.experiment_running());
+        assert!(!hp.shared.experiment.load(Ordering::Relaxed));
+        assert!(matches!(
+            hp.events.dequeue(),
+            Some(ServoEvent::ExperimentDone {
+                completed: false,
+                faults: fault::ENCODER_JUMP,
+                ..
+            })
+        ));
     }
 
     #[test]
