@@ -6,7 +6,7 @@
 //! # no_std core (no allocation)
 //! - [`exact`]: the exact event-driven solver ([`exact::Exact`], built for a runtime effect set
 //!   by [`exact::dispatch`]); ≥ 20 M periods/s on one core.
-//! - [`reference`]: fixed-step RK4 and adaptive Dormand–Prince 5(4) with event location, for
+//! - [`mod@reference`]: fixed-step RK4 and adaptive Dormand–Prince 5(4) with event location, for
 //!   comparison and for effects outside the exact solver's reach (amplifier filter, hand).
 //! - [`classify`]: growing / persistent / non-monotonically / monotonically decaying.
 //! - [`bounds`]: the paper's per-period energy bounds (47), (58) and the tight ones.
