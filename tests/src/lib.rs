@@ -232,6 +232,8 @@ pub struct Pipe {
     pub to_host: VecDeque<u8>,
     /// Bytes the device may write per poll (None = unlimited).
     pub device_tx_budget: Option<usize>,
+    /// Bytes the device has written in total.
+    pub bytes_to_host: u64,
 }
 
 /// The device's end of a [`Pipe`].
@@ -250,6 +252,7 @@ impl ByteLink for DeviceEnd<'_> {
             *n -= 1;
         }
         self.0.to_host.push_back(b);
+        self.0.bytes_to_host += 1;
         true
     }
 }

@@ -349,10 +349,41 @@ fn telemetry_is_gap_free_when_the_link_keeps_up() {
     let (received, dropped) = check_sequence(&s.batches);
     assert_eq!(dropped, 0);
     assert_eq!(s.batches[0].dropped, 0);
+    eprintln!(
+        "telemetry at rest: {received} samples in {} batches, {:.1} bytes/sample on the wire",
+        s.batches.len(),
+        s.pipe.bytes_to_host as f64 / received as f64
+    );
     assert!(received >= 9_950, "received {received}");
     for w in s.batches.windows(2) {
         assert_eq!(w[1].seq, w[0].seq + w[0].samples.len() as u32, "no gaps");
     }
+}
+
+#[test]
+fn telemetry_wire_cost_while_moving() {
+    let mut ch = Channels::new();
+    let cfg = ServoConfig {
+        heartbeat_timeout_ms: 0,
+        ..config(true)
+    };
+    let mut s = Sil::new(&mut ch, cfg);
+    let ex = HostMsg::Excite {
+        profile: ExciteProfile::Chirp {
+            amplitude: 3000,
+            f0_hz: 1.0,
+            f1_hz: 20.0,
+        },
+        ticks: 10_000,
+    };
+    assert_eq!(s.request(&ex), DeviceMsg::Ack(Request::Excite));
+    let b0 = s.pipe.bytes_to_host;
+    s.run(10_000);
+    let (received, dropped) = check_sequence(&s.batches);
+    assert_eq!(dropped, 0);
+    let per = (s.pipe.bytes_to_host - b0) as f64 / received as f64;
+    eprintln!("telemetry while moving: {received} samples, {per:.1} bytes/sample; 921600 baud carries {:.0} samples/s", 92160.0 / per);
+    assert!(per < 16.0, "{per} bytes per sample");
 }
 
 #[test]
