@@ -129,6 +129,7 @@ pub struct RefSim {
     mode: Mode,
     mass: f64,
     beta: f64,
+    own_beta: f64,
     sigma: f64,
     tau_d: f64,
     n: u64,
@@ -171,15 +172,16 @@ const E5: f64 = -17253.0 / 339200.0;
 const E6: f64 = 22.0 / 525.0;
 const E7: f64 = -1.0 / 40.0;
 
-#[inline]
-fn axpy(y: &Y, terms: &[(f64, &Y)], h: f64) -> Y {
+/// y + h·Σ c_j k_j, with the number of terms a compile-time constant (fully unrolled).
+#[inline(always)]
+fn axpy<const K: usize>(y: &Y, c: [f64; K], k: [&Y; K], h: f64) -> Y {
     let mut out = *y;
-    for (i, o) in out.iter_mut().enumerate() {
+    for i in 0..N {
         let mut s = 0.0;
-        for (c, k) in terms {
-            s += c * k[i];
+        for j in 0..K {
+            s += c[j] * k[j][i];
         }
-        *o += h * s;
+        out[i] += h * s;
     }
     out
 }
@@ -242,6 +244,7 @@ impl RefSim {
             mode: Mode::Stuck,
             mass,
             beta,
+            own_beta: if e.viscous { p.beta } else { 0.0 },
             sigma: if e.coulomb { p.sigma } else { 0.0 },
             tau_d,
             n: n as u64,
@@ -321,6 +324,7 @@ impl RefSim {
         }
     }
 
+    #[inline]
     fn rhs(&mut self, y: &Y, mode: Mode) -> Y {
         self.stats.rhs_evals += 1;
         let fa = self.phi_a(y);
@@ -329,7 +333,7 @@ impl RefSim {
         if let Mode::Moving(s) = mode {
             let v = y[1];
             // The hand's damping is part of φ_H, so the device's own β is used for E_d.
-            let own_beta = self.beta - self.m.hand.map_or(0.0, |h| h.beta);
+            let own_beta = self.own_beta;
             d[0] = v;
             d[1] = (fa + fh - own_beta * v - self.sigma * s) / self.mass;
             d[4] = own_beta * v * v + self.sigma * s * v;
@@ -349,43 +353,31 @@ impl RefSim {
         match self.method {
             Method::Rk4 { .. } => {
                 let k1 = self.rhs(y, mode);
-                let k2 = self.rhs(&axpy(y, &[(0.5, &k1)], h), mode);
-                let k3 = self.rhs(&axpy(y, &[(0.5, &k2)], h), mode);
-                let k4 = self.rhs(&axpy(y, &[(1.0, &k3)], h), mode);
+                let k2 = self.rhs(&axpy(y, [0.5], [&k1], h), mode);
+                let k3 = self.rhs(&axpy(y, [0.5], [&k2], h), mode);
+                let k4 = self.rhs(&axpy(y, [1.0], [&k3], h), mode);
                 let y1 = axpy(
                     y,
-                    &[
-                        (1.0 / 6.0, &k1),
-                        (1.0 / 3.0, &k2),
-                        (1.0 / 3.0, &k3),
-                        (1.0 / 6.0, &k4),
-                    ],
+                    [1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0],
+                    [&k1, &k2, &k3, &k4],
                     h,
                 );
                 (y1, 0.0)
             }
             Method::Dopri { rtol, atol } => {
                 let k1 = self.rhs(y, mode);
-                let k2 = self.rhs(&axpy(y, &[(A21, &k1)], h), mode);
-                let k3 = self.rhs(&axpy(y, &[(A31, &k1), (A32, &k2)], h), mode);
-                let k4 = self.rhs(&axpy(y, &[(A41, &k1), (A42, &k2), (A43, &k3)], h), mode);
+                let k2 = self.rhs(&axpy(y, [A21], [&k1], h), mode);
+                let k3 = self.rhs(&axpy(y, [A31, A32], [&k1, &k2], h), mode);
+                let k4 = self.rhs(&axpy(y, [A41, A42, A43], [&k1, &k2, &k3], h), mode);
                 let k5 = self.rhs(
-                    &axpy(y, &[(A51, &k1), (A52, &k2), (A53, &k3), (A54, &k4)], h),
+                    &axpy(y, [A51, A52, A53, A54], [&k1, &k2, &k3, &k4], h),
                     mode,
                 );
                 let k6 = self.rhs(
-                    &axpy(
-                        y,
-                        &[(A61, &k1), (A62, &k2), (A63, &k3), (A64, &k4), (A65, &k5)],
-                        h,
-                    ),
+                    &axpy(y, [A61, A62, A63, A64, A65], [&k1, &k2, &k3, &k4, &k5], h),
                     mode,
                 );
-                let y1 = axpy(
-                    y,
-                    &[(B1, &k1), (B3, &k3), (B4, &k4), (B5, &k5), (B6, &k6)],
-                    h,
-                );
+                let y1 = axpy(y, [B1, B3, B4, B5, B6], [&k1, &k3, &k4, &k5, &k6], h);
                 if !want_err {
                     return (y1, 0.0);
                 }
