@@ -61,3 +61,52 @@ fn boot_and_handshake() {
     .unwrap();
     check("boot_and_handshake", &t);
 }
+
+/// One release test on the QEMU image; returns a transcript line set.
+fn release_transcript(c: &mut Client, k: f32, deflection: i32, ticks: u32) -> String {
+    use stiffwall_host::tune::release::classify;
+    let mut cfg = c.get_config().expect("GetConfig");
+    cfg.stiffness = k;
+    c.clear_faults().expect("ClearFaults");
+    c.set_config(&cfg).expect("SetConfig");
+    let rec = c.release(deflection, ticks).expect("release");
+    let counts: Vec<i64> = rec
+        .samples
+        .iter()
+        .filter(|s| s.flags & stiffwall_proto::flags::RELEASED != 0)
+        .map(|s| i64::from(s.count))
+        .collect();
+    let verdict = classify(&counts, rec.faults != 0);
+    let mut t = String::new();
+    writeln!(t, "stiffness {k} deflection {deflection} ticks {ticks}").unwrap();
+    writeln!(t, "completed {} faults {:#x}", rec.completed, rec.faults).unwrap();
+    writeln!(t, "verdict {verdict:?}").unwrap();
+    writeln!(t, "telemetry gaps {}", rec.gaps.missing).unwrap();
+    t
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+fn release_in_region_a_settles() {
+    let (_q, mut c) = boot();
+    // Impulse Engine at 1 kHz, K = 20 N/m: β = 1.0, σ = 38 (region A).
+    let t = release_transcript(&mut c, 20.0, 20, 2000);
+    check("release_in_region_a_settles", &t);
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+fn release_in_region_c_trips_the_supervisor() {
+    let (_q, mut c) = boot();
+    // K = 3000 N/m: β = 0.0067, σ = 0.25 (region C): the energy monitor must trip.
+    let t = release_transcript(&mut c, 3000.0, 10, 2000);
+    let faults = c.faults().expect("GetFaults");
+    let mut t = t;
+    writeln!(
+        t,
+        "latched {:#x} safe_mode {}",
+        faults.latched, faults.safe_mode
+    )
+    .unwrap();
+    check("release_in_region_c_trips_the_supervisor", &t);
+}

@@ -1,7 +1,7 @@
 //! stiffwall device image for QEMU mps2-an386 (Cortex-M4F, 25 MHz SysTick clock).
 //!
 //! The servo tick runs in the SysTick interrupt at the configured rate against the simulated
-//! Sec. V rig ([`plant`]); the main loop runs the protocol on UART0 (`-serial pty` or
+//! Impulse Engine of Table II ([`plant`]); the main loop runs the protocol on UART0 (`-serial pty` or
 //! `-serial stdio`). A `Shutdown` request ends QEMU through semihosting exit.
 #![no_std]
 #![no_main]
@@ -41,7 +41,7 @@ impl ByteLink for Link {
     }
 }
 
-/// Boot configuration: wall off (K = 0) until the host sets one, force limit = the rig's
+/// Boot configuration: wall off (K = 0) until the host sets one, force limit = the output's
 /// full scale, energy monitor on.
 fn defaults() -> ServoConfig {
     let board = plant::board_info();

@@ -1,61 +1,66 @@
-//! The simulated bench: motor, encoder and current amplifier of the paper's Sec. V rig
-//! (Maxon RE35, 8192 counts/rev, 14-bit output), simulated exactly by `stiffwall-sim`.
+//! The simulated bench: the Impulse Engine 2000 row of the paper's Table II (m = 0.032 kg,
+//! b = 0.02 N·s/m, c = 0.024 N, Δ = 31.4 µm), simulated exactly by `stiffwall-sim`, behind a
+//! 16-bit encoder counter and a 16-bit bipolar current output.
 //!
-//! Units: SI (rad, rad/s, N·m). The encoder is read at the sample instant; the force code
-//! written by the servo is held (ZOH) for one servo period; the amplifier is ideal (the rig's
-//! 3 kHz amplifier lag is negligible at 1 kHz, Sec. V).
+//! Why this device and not the Sec. V rig: it is the one Table II device whose viscous friction
+//! was measured rather than bounded, so every region of Fig. 3 is reachable at 1 kHz with a
+//! usable force resolution (region A: K < 2b/T = 40 N/m is 4 output codes per tick; region C:
+//! K > 2c/Δ ≈ 1529 N/m). On the Sec. V rig region A needs K < 0.018 N·m/rad, less than one
+//! output code per tick.
+//!
+//! Units: SI (m, m/s, N). The encoder is read at the sample instant; the force code written by
+//! the servo is held (ZOH) for one servo period; the amplifier is ideal.
 
 use stiffwall_firmware::{BoardInfo, Encoder, ForceOutput};
 use stiffwall_sim::PhysicalPlant;
 
-/// Rotor inertia, kg·m² (Sec. V).
-pub const INERTIA: f64 = 6.28e-6;
-/// Viscous friction, N·m·s/rad (Sec. V).
-pub const VISCOUS: f64 = 9e-6;
-/// Coulomb friction, N·m (Sec. V).
-pub const COULOMB: f64 = 2e-3;
-/// Encoder counts per revolution (Sec. V).
-pub const COUNTS_PER_REV: u32 = 8192;
-/// Torque per output code, N·m: a 14-bit bipolar output (±8191 codes) spanning ±0.1 N·m.
-pub const TORQUE_PER_CODE: f32 = 0.1 / 8191.0;
+/// Mass, kg (Table II, Impulse Engine).
+pub const MASS: f64 = 0.032;
+/// Viscous friction, N·s/m (Table II).
+pub const VISCOUS: f64 = 0.02;
+/// Coulomb friction, N (Table II).
+pub const COULOMB: f64 = 0.024;
+/// Encoder resolution, m (Table II).
+pub const RESOLUTION: f64 = 31.4e-6;
+/// Force per output code, N: ±32767 codes span ±4.9 N.
+pub const FORCE_PER_CODE: f32 = 1.5e-4;
 
 /// What the firmware is told about this board.
 pub fn board_info() -> BoardInfo {
     BoardInfo {
         name: "qemu-an386",
-        resolution: core::f32::consts::TAU / COUNTS_PER_REV as f32,
-        counts_per_rev: COUNTS_PER_REV,
+        resolution: RESOLUTION as f32,
+        counts_per_rev: 0,
         // A 16-bit hardware counter, so the firmware's wrap handling is exercised.
         encoder_bits: 16,
-        force_per_code: TORQUE_PER_CODE,
-        max_code: 8191,
+        force_per_code: FORCE_PER_CODE,
+        max_code: 32_767,
         min_rate_hz: 100,
         max_rate_hz: 10_000,
     }
 }
 
-/// Simulated motor + encoder + amplifier.
+/// Simulated device + encoder + amplifier.
 #[derive(Debug)]
 pub struct Bench {
     plant: PhysicalPlant,
-    torque: f64,
+    force: f64,
 }
 
 impl Bench {
-    /// The rig at rest at angle 0.
+    /// The device at rest at x = 0.
     pub fn new() -> Self {
-        let resolution = core::f64::consts::TAU / f64::from(COUNTS_PER_REV);
         // The constants above are valid, so this cannot fail; trap if they ever are not.
-        let plant = match PhysicalPlant::new(INERTIA, VISCOUS, COULOMB, resolution) {
+        let plant = match PhysicalPlant::new(MASS, VISCOUS, COULOMB, RESOLUTION) {
             Ok(p) => p,
             Err(_) => cortex_m::asm::udf(),
         };
-        Self { plant, torque: 0.0 }
+        Self { plant, force: 0.0 }
     }
 
-    /// Advances the rig by one servo period with the torque last written.
+    /// Advances the device by one servo period with the force last written.
     pub fn advance(&mut self, period_s: f64) {
-        self.plant.advance(self.torque, period_s);
+        self.plant.advance(self.force, period_s);
     }
 }
 
@@ -67,7 +72,7 @@ impl Bench {
 
     /// Applies an output code (held until the next call).
     pub fn set_code(&mut self, code: i32) {
-        self.torque = f64::from(code) * f64::from(TORQUE_PER_CODE);
+        self.force = f64::from(code) * f64::from(FORCE_PER_CODE);
     }
 }
 
