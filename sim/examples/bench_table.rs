@@ -245,6 +245,7 @@ fn fig6_seconds() -> f64 {
                 n: 21,
             },
             periods: 50_000,
+            history: History::HoldInitial,
         };
         let idx: Vec<usize> = (0..spec.len()).collect();
         std::hint::black_box(map_run(&spec, &idx, &|| {}));

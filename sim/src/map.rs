@@ -69,6 +69,9 @@ pub struct MapSpec {
     pub sigma: Axis,
     /// Horizon in periods.
     pub periods: u64,
+    /// Delay-line history before τ = 0.
+    #[serde(default)]
+    pub history: History,
 }
 
 impl MapSpec {
@@ -115,7 +118,7 @@ pub struct MapPoint {
     pub tail_amplitude: f64,
 }
 
-/// Simulates and classifies one (β, σ) point.
+/// Simulates and classifies one (β, σ) point (delay-line history: [`History::HoldInitial`]).
 #[must_use]
 pub fn simulate_point(
     mu: f64,
@@ -124,6 +127,28 @@ pub fn simulate_point(
     tau_d: f64,
     xidot0: f64,
     periods: u64,
+) -> Outcome {
+    simulate_point_with(
+        mu,
+        beta,
+        sigma,
+        tau_d,
+        xidot0,
+        periods,
+        History::HoldInitial,
+    )
+}
+
+/// Simulates and classifies one (β, σ) point with the given delay-line history.
+#[must_use]
+pub fn simulate_point_with(
+    mu: f64,
+    beta: f64,
+    sigma: f64,
+    tau_d: f64,
+    xidot0: f64,
+    periods: u64,
+    history: History,
 ) -> Outcome {
     let p = Params {
         mu,
@@ -134,12 +159,12 @@ pub fn simulate_point(
     let init = Motion { x: 0.0, v: xidot0 };
     let th = Thresholds::default();
     if tau_d == 0.0 {
-        match NoDelay::new(p, init, History::HoldInitial) {
+        match NoDelay::new(p, init, history) {
             Ok(mut s) => classify(&mut s, periods, &th),
             Err(_) => invalid(),
         }
     } else {
-        match Full::new(p, init, History::HoldInitial) {
+        match Full::new(p, init, history) {
             Ok(mut s) => classify(&mut s, periods, &th),
             Err(_) => invalid(),
         }
@@ -165,7 +190,15 @@ pub fn run(spec: &MapSpec, indices: &[usize], progress: &(dyn Fn() + Sync)) -> V
         .with_max_len(1)
         .map(|&i| {
             let (beta, sigma) = spec.point(i);
-            let o = simulate_point(spec.mu, beta, sigma, spec.tau_d, spec.xidot0, spec.periods);
+            let o = simulate_point_with(
+                spec.mu,
+                beta,
+                sigma,
+                spec.tau_d,
+                spec.xidot0,
+                spec.periods,
+                spec.history,
+            );
             progress();
             MapPoint {
                 index: i,

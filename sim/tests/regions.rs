@@ -118,6 +118,7 @@ fn full_fig6_set_under_5_s() {
                 n: 21,
             },
             periods: 50_000,
+            history: stiffwall_sim::History::HoldInitial,
         };
         let idx: Vec<usize> = (0..spec.len()).collect();
         assert_eq!(run(&spec, &idx, &|| {}).len(), 714);
