@@ -21,14 +21,29 @@ const PER_BATCH: u32 = 200;
 /// Instructions per SysTick count with `-icount shift=0` and a 25 MHz SysTick clock.
 const INSTR_PER_COUNT: u64 = 40;
 
-/// An encoder sweeping a triangle of ±300 counts around the wall, one count per tick.
-struct Sweep(u32);
-impl Encoder for Sweep {
+/// Counts of a triangle sweep of ±256 counts around the wall, one count per tick.
+const SWEEP_LEN: usize = 1024;
+
+fn sweep_table() -> [u32; SWEEP_LEN] {
+    let mut t = [0u32; SWEEP_LEN];
+    for (i, v) in t.iter_mut().enumerate() {
+        let p = i as i32;
+        let tri = if p < 512 { p - 256 } else { 768 - p };
+        *v = tri as u32 & 0xffff;
+    }
+    t
+}
+
+/// An encoder replaying the sweep: one load per read, like a timer's counter register, so the
+/// measured instructions are the servo's and not a synthetic encoder's.
+struct Sweep<'t> {
+    table: &'t [u32; SWEEP_LEN],
+    i: usize,
+}
+impl Encoder for Sweep<'_> {
     fn count(&mut self) -> u32 {
-        self.0 = self.0.wrapping_add(1);
-        let p = (self.0 % 1200) as i32;
-        let tri = if p < 600 { p - 300 } else { 900 - p };
-        black_box(tri as u32 & 0xffff)
+        self.i = (self.i + 1) & (SWEEP_LEN - 1);
+        self.table[self.i]
     }
 }
 
@@ -87,7 +102,8 @@ fn stages<N: Numeric>(baseline: u64) {
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
-    let (mut enc, mut out) = (Sweep(0), Sink);
+    let table = black_box(sweep_table());
+    let (mut enc, mut out) = (Sweep { table: &table, i: 0 }, Sink);
     let c = measure(|_| { black_box(servo.tick_spring(&mut enc, &mut out)); }, || {});
     report("spring", N::NAME, c, baseline);
     let c = measure(|_| { black_box(servo.tick_spring_delay(&mut enc, &mut out)); }, || {});
