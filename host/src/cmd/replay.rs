@@ -4,8 +4,10 @@
 //! T = 1/`config.servo_rate_hz` (ZOH), to the exact simulated plant
 //! (`stiffwall_sim::PhysicalPlant`, m, b, c from `--mass/--viscous/--coulomb`, a `--device`
 //! preset, or the recording's virtual-device preset; Δ from the recorded `DeviceInfo`). Each
-//! run of consecutive samples starts at the first recorded count (mid-count, x₀ = (n₀ + ½)·Δ
-//! in raw counts) with the velocity estimated from the first ≤ 10 samples. The model's count
+//! run of consecutive samples starts inside its first recorded count n₀ (raw counts), at
+//! x₀ = (n₀ + f)·Δ with f the best of [`START_GRID`] positions in [0, 1) and v₀ the better of
+//! the estimate from the first ≤ 10 samples and 0, judged on the first [`FIT_WINDOW`] samples
+//! (the recording cannot say where inside a count the device was). The model's count
 //! ⌊x/Δ⌋ after each period is compared with the next recorded count; the error is reported in
 //! encoder ticks (raw counts), RMS and max. Needs decimation 1 (every tick's force).
 //!
@@ -64,6 +66,11 @@ pub struct Args {
     pub json: bool,
 }
 
+/// Samples at the start of each run used to fit its initial state in the plant replay.
+pub const FIT_WINDOW: usize = 20_000;
+/// Candidate positions within the first count tried for the plant replay's start.
+pub const START_GRID: usize = 20;
+
 /// Result of the plant replay (a).
 #[derive(Debug, Clone, Serialize)]
 pub struct PlantReplay {
@@ -83,6 +90,9 @@ pub struct PlantReplay {
     pub rms_ticks: f64,
     /// Largest |model − recorded count|, encoder ticks.
     pub max_ticks: i64,
+    /// Fitted start of each run: position within the first count (fraction of Δ) and
+    /// velocity (m/s or rad/s).
+    pub starts: Vec<(f64, f64)>,
     /// Time (s, from the first sample) and recorded / model counts, for plotting.
     #[serde(skip)]
     pub trace: Vec<(f64, i64, i64)>,
@@ -321,17 +331,39 @@ pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantRepl
     let t0 = rec.rows.first().map_or(0, |r| r.seq);
     let mut trace = Vec::with_capacity(rec.rows.len());
     let (mut sum2, mut max, mut n, mut runs) = (0.0f64, 0i64, 0usize, 0usize);
+    let mut starts = Vec::new();
     for seg in rec.segments() {
         let rows = &rec.rows[seg];
         runs += 1;
         let abs = |i: usize| i64::from(rows[i].sample.count) + wall;
         let k = (rows.len() - 1).min(10);
-        let v0 = if k > 0 {
+        let v_est = if k > 0 {
             (abs(k) - abs(0)) as f64 * delta / (k as f64 * period)
         } else {
             0.0
         };
-        plant.set_state((abs(0) as f64 + 0.5) * delta, v0);
+        // The recording cannot say where inside its first count the device was, nor its exact
+        // velocity: pick the start (x₀ within the first count, v₀ ∈ {estimate, 0}) that best
+        // explains the first FIT_WINDOW samples, then replay the whole run from it.
+        let window = rows.len().min(FIT_WINDOW);
+        let mut best = (f64::INFINITY, 0.5, v_est);
+        for v0 in [v_est, 0.0] {
+            for j in 0..START_GRID {
+                let frac = (j as f64 + 0.5) / START_GRID as f64;
+                plant.set_state((abs(0) as f64 + frac) * delta, v0);
+                let mut sse = 0.0;
+                for i in 1..window {
+                    plant.advance(f64::from(rows[i - 1].sample.force_code) * fpc, period);
+                    let e = (plant.encoder_count() - abs(i)) as f64;
+                    sse += e * e;
+                }
+                if sse < best.0 {
+                    best = (sse, frac, v0);
+                }
+            }
+        }
+        plant.set_state((abs(0) as f64 + best.1) * delta, best.2);
+        starts.push((best.1, best.2));
         let t = |i: usize| f64::from(rows[i].seq.wrapping_sub(t0)) * period;
         trace.push((t(0), abs(0) - wall, abs(0) - wall));
         for i in 1..rows.len() {
@@ -353,6 +385,7 @@ pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantRepl
         runs,
         rms_ticks: if n > 0 { (sum2 / n as f64).sqrt() } else { 0.0 },
         max_ticks: max,
+        starts,
         trace,
     })
 }
