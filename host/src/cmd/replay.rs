@@ -584,3 +584,104 @@ pub fn run(args: &Args) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::{Header, Row};
+    use stiffwall_proto::{DeviceInfo, Limits, Sample};
+
+    fn info(bits: u8) -> DeviceInfo {
+        DeviceInfo {
+            protocol_version: stiffwall_proto::PROTOCOL_VERSION,
+            firmware_name: "stiffwall".try_into().unwrap(),
+            firmware_version: "0.1.0".try_into().unwrap(),
+            board: "test".try_into().unwrap(),
+            servo_rate_hz: 1000,
+            counts_per_rev: 0,
+            resolution: 1.0 / 8192.0,
+            encoder_bits: bits,
+            force_per_code: 1.0 / 1024.0,
+            max_code: 30_000,
+            limits: Limits {
+                min_rate_hz: 100,
+                max_rate_hz: 20_000,
+                max_stiffness: 1.0e4,
+                max_force: 29.0,
+                max_delay_ticks: 31,
+                max_coarsen_shift: 16,
+                telemetry_batch: 24,
+                max_table: 1024,
+            },
+        }
+    }
+
+    /// A "device" run on the host: the firmware servo fed a trajectory that crosses the
+    /// 16-bit counter's wrap several times; the recording starts mid-way, where the device's
+    /// unwrapped position no longer fits the counter. Replay (b) must still match bit for bit,
+    /// and a changed code must be caught.
+    #[test]
+    fn sixteen_bit_counter_recording_mid_wrap_replays_bit_for_bit() {
+        const WALL: i32 = 38_000;
+        let dev = info(16);
+        let cfg = ServoConfig {
+            stiffness: 3.0,
+            damping: 0.01,
+            extra_delay_ticks: 3,
+            wall_position: WALL,
+            force_limit: 20.0,
+            energy_monitor: false,
+            encoder_jump_counts: 1 << 20,
+            ..ServoConfig::default()
+        };
+        let board = board_of(&dev);
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let mut servo: Servo<'_> = Servo::new(board, &cfg, sp);
+        let mut rows = Vec::new();
+        for t in 0..20_000u32 {
+            // Up to ±40000 counts: beyond the 16-bit counter's signed range, around the wall.
+            let pos = (40_000.0 * (f64::from(t) * 0.0005).sin()).round() as i64;
+            let raw = (pos as u32) & 0xffff;
+            let mut out = Out(0);
+            let code = servo.tick(t, &mut Enc(raw), &mut out);
+            // From t = 2500 on, the position (≈ 38000) no longer fits the counter.
+            if t >= 2_500 {
+                rows.push(Row {
+                    seq: t,
+                    sample: Sample {
+                        tick: t,
+                        // As the device reports it: its own unwrapped position relative to
+                        // the wall.
+                        count: servo.position() - WALL,
+                        force_code: code,
+                        flags: 0,
+                        energy: 0,
+                    },
+                });
+            }
+        }
+        let mut rec = Recording {
+            header: Header {
+                host_time_unix_s: 0.0,
+                target: "test".into(),
+                virtual_plant: None,
+                decimation: 1,
+                device: dev,
+                config: cfg,
+            },
+            rows,
+        };
+        let r = replay_servo(&rec).unwrap();
+        assert_eq!(r.excluded_warmup, 4);
+        assert_eq!((r.compared, r.mismatch_count), (17_496, 0), "{r:?}");
+        assert!(rec
+            .rows
+            .iter()
+            .any(|r| r.sample.force_code.abs() > 100 && r.sample.force_code.abs() < 20_000));
+        rec.rows[9_000].sample.force_code += 1;
+        let r = replay_servo(&rec).unwrap();
+        assert_eq!(r.mismatch_count, 1);
+        assert_eq!(r.mismatches[0].seq, 11_500);
+    }
+}
