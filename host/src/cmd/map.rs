@@ -15,6 +15,7 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use stiffwall_sim::classify::Class;
+use stiffwall_sim::exact::History;
 use stiffwall_sim::map::{self, Axis, MapPoint, MapSpec};
 
 /// Arguments of `hostctl map`.
@@ -59,6 +60,18 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Delay-line history before tau = 0: the spring force of the initial position, or zero.
+    #[arg(long, value_enum, default_value = "hold-initial")]
+    pub history: HistoryArg,
+}
+
+/// `--history` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum HistoryArg {
+    /// phi_A = phi_C(xi0) before the first delayed sample.
+    HoldInitial,
+    /// phi_A = 0 before the first delayed sample.
+    Zero,
 }
 
 /// `hostctl map merge`.
@@ -96,6 +109,9 @@ pub struct Spec {
     pub sigma: Axis,
     /// Horizon.
     pub periods: u64,
+    /// Delay-line history before tau = 0.
+    #[serde(default)]
+    pub history: History,
 }
 
 /// One panel (one ξ̇₀).
@@ -170,6 +186,10 @@ fn spec_of(a: &Args) -> Result<Spec> {
         beta,
         sigma,
         periods: a.periods,
+        history: match a.history {
+            HistoryArg::HoldInitial => History::HoldInitial,
+            HistoryArg::Zero => History::Zero,
+        },
     })
 }
 
@@ -181,6 +201,7 @@ fn panel_spec(s: &Spec, xidot0: f64) -> MapSpec {
         beta: s.beta,
         sigma: s.sigma,
         periods: s.periods,
+        history: s.history,
     }
 }
 
