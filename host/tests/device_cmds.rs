@@ -591,3 +591,38 @@ fn corrupted_csv_is_a_clear_error() {
     let e = fails(&["replay", tmp("missing.csv").to_str().unwrap()]);
     assert!(e.contains("reading recording"), "{e}");
 }
+
+/// The real Cortex-M firmware image under QEMU (16-bit counter, Impulse Engine plant): a
+/// release recording replays bit for bit through the host build of the servo core, and the
+/// plant replay with the board's preset stays within a tick.
+#[test]
+#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+fn qemu_recording_replays_bit_for_bit() {
+    let f = tmp("qemu.csv");
+    ok(&[
+        "record",
+        f.to_str().unwrap(),
+        "--qemu",
+        "--seconds",
+        "3",
+        "--stiffness",
+        "2000",
+        "--delay-ticks",
+        "1",
+        "--energy-monitor",
+        "off",
+        "--release",
+        "20",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&ok(&[
+        "replay",
+        f.to_str().unwrap(),
+        "--device",
+        "impulse-engine",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(v["servo"]["mismatch_count"], 0, "{v}");
+    assert!(v["servo"]["compared"].as_u64().unwrap() > 500, "{v}");
+    assert!(v["plant"]["max_ticks"].as_i64().unwrap() <= 2, "{v}");
+}
