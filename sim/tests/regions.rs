@@ -96,7 +96,7 @@ fn delay_1_25_grows_everywhere_below_beta_1_2_for_fast_starts() {
 }
 
 /// The full Fig. 6 set (4 × 714 points × 5×10⁴ periods) must take < 5 s on this 2-core
-/// machine. Opt-in: `cargo test --release -p stiffwall-sim --test regions -- --ignored`.
+/// machine. Opt-in: `cargo test --release -p stiffwall-sim --test regions -- --ignored --test-threads 1`.
 #[test]
 #[ignore = "timing, release build only"]
 fn full_fig6_set_under_5_s() {
@@ -125,4 +125,31 @@ fn full_fig6_set_under_5_s() {
     }
     let s = t.elapsed().as_secs_f64();
     assert!(s < 5.0, "{s} s");
+}
+
+/// ≥ 20 M simulated periods per second on one core for the paper's base scene with all effects.
+/// Opt-in: `cargo test --release -p stiffwall-sim --test regions -- --ignored --test-threads 1`.
+#[test]
+#[ignore = "timing, release build only"]
+fn base_scene_at_least_20_million_periods_per_second() {
+    use stiffwall_sim::exact::{ExactSim, Full, History};
+    use stiffwall_sim::{Motion, Params};
+    let runs = 200u64;
+    let t = std::time::Instant::now();
+    let mut acc = 0.0;
+    for _ in 0..runs {
+        let mut s = Full::new(
+            Params::BASE,
+            Motion { x: 0.0, v: 5.0 },
+            History::HoldInitial,
+        )
+        .unwrap();
+        for _ in 0..50_000 {
+            s.step_period();
+        }
+        acc += s.state().x;
+    }
+    let rate = (runs * 50_000) as f64 / t.elapsed().as_secs_f64();
+    assert!(acc.is_finite());
+    assert!(rate >= 20e6, "{:.1} M periods/s", rate / 1e6);
 }
