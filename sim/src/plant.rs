@@ -219,11 +219,11 @@ impl PhysicalPlant {
         };
     }
 
-    /// Applies `force_n` (N, constant) for `dt_s` seconds (≥ 0; negative or NaN is treated as 0)
-    /// and returns the exact state at the end. A NaN force is treated as 0 N.
+    /// Applies `force_n` (N, constant) for `dt_s` seconds and returns the exact state at the
+    /// end. A negative or non-finite duration is a no-op; a non-finite force is treated as 0 N.
     pub fn advance(&mut self, force_n: f64, dt_s: f64) -> Motion {
-        let f = if force_n.is_nan() { 0.0 } else { force_n };
-        if dt_s > 0.0 {
+        let f = if force_n.is_finite() { force_n } else { 0.0 };
+        if dt_s > 0.0 && dt_s.is_finite() {
             advance::<false>(&self.body, &mut self.state, f, dt_s);
         }
         self.state
@@ -277,11 +277,11 @@ impl DimensionlessPlant {
         self.state = Motion { x: xi, v: xidot };
     }
 
-    /// Applies the constant force `phi_a` (K·Δ) for `dtau` periods (≥ 0) and returns the exact
-    /// state at the end. NaN force or negative/NaN duration are treated as 0.
+    /// Applies the constant force `phi_a` (K·Δ) for `dtau` periods and returns the exact state
+    /// at the end. A negative or non-finite duration is a no-op; a non-finite force counts as 0.
     pub fn step(&mut self, phi_a: f64, dtau: f64) -> Motion {
-        let f = if phi_a.is_nan() { 0.0 } else { phi_a };
-        if dtau > 0.0 {
+        let f = if phi_a.is_finite() { phi_a } else { 0.0 };
+        if dtau > 0.0 && dtau.is_finite() {
             advance::<false>(&self.body, &mut self.state, f, dtau);
         }
         self.state
