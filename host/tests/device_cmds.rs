@@ -163,6 +163,26 @@ fn wrong_port_is_a_clear_error() {
 }
 
 #[test]
+fn silent_or_non_serial_port_is_a_clear_error() {
+    use serialport::SerialPort as _;
+    // A pty nobody answers on: the handshake gives up with a clear message.
+    let (_master, mut slave) = serialport::TTYPort::pair().unwrap();
+    slave.set_exclusive(false).unwrap();
+    let path = slave.name().unwrap();
+    let _keep = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&path)
+        .unwrap();
+    drop(slave);
+    let e = fails(&["info", "--port", &path]);
+    assert!(e.contains("the device never answered the handshake"), "{e}");
+    // Not a serial port at all.
+    let e = fails(&["config", "get", "--port", "/dev/null"]);
+    assert!(e.contains("cannot open serial port /dev/null"), "{e}");
+}
+
+#[test]
 fn stream_shows_a_summary_without_gaps() {
     let out = ok(&["stream", "--seconds", "1", "--rate", "2000", "--fast"]);
     assert!(
@@ -223,7 +243,7 @@ fn real_time_streaming_5_and_10_khz() {
         cfg.servo_rate_hz = rate;
         c.set_config(&cfg).unwrap();
         let plan = Plan::new(1, Some(2.0), rate).unwrap();
-        let h = header(&mut c, cfg, 1, None);
+        let h = header(&c, cfg, 1, None);
         let t = Instant::now();
         let o = record(&mut c, &plan, &h, Vec::new(), |_| {}).unwrap();
         eprintln!(
@@ -244,7 +264,7 @@ fn disconnect_keeps_what_was_received() {
     let mut c = Client::connect(port, None).unwrap();
     let cfg = c.get_config().unwrap();
     let plan = Plan::new(1, Some(5.0), cfg.servo_rate_hz).unwrap();
-    let h = header(&mut c, cfg, 1, None);
+    let h = header(&c, cfg, 1, None);
     let killer = std::thread::spawn(move || {
         std::thread::sleep(Duration::from_millis(700));
         drop(vd); // stops the device thread and closes its side of the pty
@@ -407,7 +427,7 @@ fn stalled_reader_gaps_are_noted_and_attributed() {
     cfg.servo_rate_hz = 20_000;
     c.set_config(&cfg).unwrap();
     let plan = Plan::new(1, Some(3.0), 20_000).unwrap();
-    let h = header(&mut c, cfg, 1, None);
+    let h = header(&c, cfg, 1, None);
     let mut stalled = false;
     let o = record(&mut c, &plan, &h, Vec::new(), |_| {
         if !stalled {

@@ -16,7 +16,7 @@ use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
 /// Arguments of `hostctl config`.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Examples:\n  hostctl config get --json\n  hostctl config set --stiffness 2.5 --delay-ticks 1\n  hostctl config set --rate 5000 --energy-monitor off\n  hostctl config save\n  hostctl config defaults"
+    after_help = "Examples:\n  hostctl config get --json\n  hostctl config set --stiffness 2.5 --delay-ticks 1\n  hostctl config set --rate 5000 --energy-monitor off\n  hostctl config save\n  hostctl config defaults\n\nThe built-in virtual device starts afresh with every hostctl run, so a `config set` on it\nlasts for that run only: `stream` and `record` take the same field flags (e.g.\n`hostctl record out.csv --stiffness 2 --rate 5000`)."
 )]
 pub struct Args {
     /// What to do.

@@ -261,7 +261,7 @@ pub fn pump(
 
 /// Header facts of a recording made through `client` now.
 pub fn header(
-    client: &mut Client,
+    client: &Client,
     cfg: ServoConfig,
     decimation: u16,
     connect: Option<&ConnectArgs>,
@@ -344,7 +344,7 @@ pub fn run(args: &Args) -> Result<()> {
     };
     let mut plan = Plan::new(args.decimation, Some(args.seconds), cfg.servo_rate_hz)?;
     plan.release = args.release;
-    let h = header(&mut client, cfg, plan.decimation, Some(&args.connect));
+    let h = header(&client, cfg, plan.decimation, Some(&args.connect));
     let file = std::fs::File::create(&args.file)
         .with_context(|| format!("creating {}", args.file.display()))?;
     let bar = indicatif::ProgressBar::new(plan.samples.unwrap_or(0));
