@@ -110,3 +110,116 @@ fn release_in_region_c_trips_the_supervisor() {
     .unwrap();
     check("release_in_region_c_trips_the_supervisor", &t);
 }
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
+    use stiffwall_proto::{encode, DeviceMsg, ErrorCode, HostMsg, MAX_FRAME};
+    let (_q, mut c) = boot();
+    c.stream_start(1).expect("StreamStart");
+    // Four kinds of bad frame, each a distinct error: CRC, oversize, COBS, unknown tag.
+    let mut buf = [0u8; MAX_FRAME];
+    let good = encode(&HostMsg::GetFaults, &mut buf).unwrap().to_vec();
+    let mut bad_crc = good.clone();
+    bad_crc[1] ^= 0x40;
+    let mut oversize = vec![0x55u8; 2000];
+    oversize.push(0);
+    let bad_cobs = vec![0x05u8, 0x01, 0x00];
+    // postcard encodes an enum tag as a varint, so the u32 100 is a message with tag 100.
+    let unknown_tag = encode(&100u32, &mut buf).unwrap().to_vec();
+    let rounds = 10;
+    for _ in 0..rounds {
+        for f in [&bad_crc, &oversize, &bad_cobs, &unknown_tag] {
+            if let Err(e) = c.send_raw(f) {
+                panic!("{e:#}");
+            }
+        }
+    }
+    let mut errors = std::collections::BTreeMap::<String, u32>::new();
+    let mut ticks = Vec::new();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+    while std::time::Instant::now() < deadline && errors.values().sum::<u32>() < 4 * rounds {
+        match c.recv(std::time::Duration::from_millis(50)).unwrap() {
+            Some(DeviceMsg::Error { code, .. }) => {
+                *errors.entry(format!("{code:?}")).or_default() += 1
+            }
+            Some(DeviceMsg::Telemetry(b)) => ticks.extend(b.samples.iter().map(|s| s.tick)),
+            _ => {}
+        }
+    }
+    // Keep streaming a little after the burst, then check every tick is there exactly once.
+    let until = std::time::Instant::now() + std::time::Duration::from_millis(300);
+    while std::time::Instant::now() < until {
+        if let Some(b) = c.next_batch(std::time::Duration::from_millis(50)).unwrap() {
+            ticks.extend(b.samples.iter().map(|s| s.tick));
+        }
+    }
+    c.stream_stop().unwrap();
+    let consecutive = ticks.windows(2).all(|w| w[1] == w[0].wrapping_add(1));
+    let mut t = String::new();
+    for (code, n) in &errors {
+        writeln!(t, "error {code} x{n}").unwrap();
+    }
+    writeln!(
+        t,
+        "servo ticks streamed over the burst: consecutive {consecutive}, at least 300: {}",
+        ticks.len() >= 300
+    )
+    .unwrap();
+    writeln!(t, "telemetry gaps {}", c.gaps.missing).unwrap();
+    assert!(errors.contains_key(&format!("{:?}", ErrorCode::Crc)), "{t}");
+    check("malformed_burst", &t);
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+fn tune_dry_run_on_the_qemu_image() {
+    use stiffwall_host::tune::procedure::{tune, Settings};
+    let (_q, mut c) = boot();
+    let before = c.get_config().unwrap();
+    let o = tune(
+        &mut c,
+        &Settings {
+            excite_seconds: 2.0,
+            ..Settings::default()
+        },
+        true,
+        &|m| eprintln!("tune: {m}"),
+    )
+    .expect("tune");
+    let (m, b, cc) = (0.032, 0.02, 0.024); // the board's simulated Impulse Engine (Table II)
+    let mut t = String::new();
+    writeln!(
+        t,
+        "mass within 5 %: {}",
+        (o.identified.mass[0] / m - 1.0).abs() < 0.05
+    )
+    .unwrap();
+    writeln!(
+        t,
+        "coulomb within 10 %: {}",
+        (o.identified.coulomb[0] / cc - 1.0).abs() < 0.10
+    )
+    .unwrap();
+    writeln!(
+        t,
+        "viscous within 20 %: {}",
+        (o.identified.viscous[0] / b - 1.0).abs() < 0.20
+    )
+    .unwrap();
+    writeln!(
+        t,
+        "set K confirmed from both sides: {}",
+        o.confirmation.iter().all(|v| v.settled())
+    )
+    .unwrap();
+    writeln!(
+        t,
+        "set K above the guaranteed limit: {}",
+        o.k_set >= o.predicted.guaranteed
+    )
+    .unwrap();
+    writeln!(t, "config untouched: {}", c.get_config().unwrap() == before).unwrap();
+    eprintln!("{o:#?}");
+    check("tune_dry_run", &t);
+}

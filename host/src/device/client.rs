@@ -147,16 +147,42 @@ impl Client {
     pub fn send(&mut self, msg: &HostMsg) -> Result<()> {
         let mut buf = [0u8; MAX_FRAME];
         let frame = encode(msg, &mut buf).map_err(|e| anyhow!("encoding {msg:?}: {e}"))?;
-        self.port
-            .write_all(frame)
-            .context("writing to the device")?;
-        self.port.flush().ok();
-        Ok(())
+        self.write_bytes(frame)
     }
 
     /// Writes raw bytes (tests of malformed input).
     pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
-        self.port.write_all(bytes).context("writing to the device")
+        self.write_bytes(bytes)
+    }
+
+    /// Writes all bytes, waiting while the port is full (a device may read its UART one byte at
+    /// a time); fails when the port errors or makes no progress for [`ANSWER_TIMEOUT`].
+    fn write_bytes(&mut self, mut bytes: &[u8]) -> Result<()> {
+        let mut stalled_since = Instant::now();
+        while !bytes.is_empty() {
+            match self.port.write(bytes) {
+                Ok(0) => {}
+                Ok(n) => {
+                    bytes = &bytes[n..];
+                    stalled_since = Instant::now();
+                    continue;
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                    ) => {}
+                Err(e) => return Err(e).context("writing to the device"),
+            }
+            if stalled_since.elapsed() > ANSWER_TIMEOUT {
+                bail!(
+                    "the device stopped reading (no progress writing for {} ms)",
+                    ANSWER_TIMEOUT.as_millis()
+                );
+            }
+        }
+        self.port.flush().ok();
+        Ok(())
     }
 
     /// Reads what is available and returns the next message, waiting up to `timeout`.

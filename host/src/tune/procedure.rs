@@ -226,6 +226,37 @@ pub fn identify(
         .context("identification failed at every excitation level")
 }
 
+/// Waits until the (wall-off) device has stopped and returns its count from the wall position.
+fn rest_position(c: &mut Client) -> Result<i32> {
+    let rate = c.info.servo_rate_hz.max(1);
+    // One sample every 5 ms of device time; at rest when 40 consecutive samples agree.
+    let decimation = u16::try_from((rate / 200).max(1)).unwrap_or(u16::MAX);
+    c.stream_start(decimation)?;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let (mut last, mut same) = (i32::MIN, 0u32);
+    let result = loop {
+        if std::time::Instant::now() > deadline {
+            break Err(anyhow::anyhow!(
+                "the device did not come to rest within 20 s after the excitation"
+            ));
+        }
+        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+            for x in &b.samples {
+                if x.count == last {
+                    same += 1;
+                } else {
+                    (last, same) = (x.count, 0);
+                }
+            }
+            if same >= 40 {
+                break Ok(last);
+            }
+        }
+    };
+    c.stream_stop()?;
+    result
+}
+
 /// Step 2: predictions for the identified device.
 pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
     use stiffwall_core::{criteria, limits};
@@ -341,7 +372,8 @@ fn tune_inner(
         energy_monitor: true,
         ..*original
     };
-    let (id, amplitude, rest) = identify(c, &base, s, progress)?;
+    let (id, amplitude, _) = identify(c, &base, s, progress)?;
+    let rest = rest_position(c)?;
     // The chirp leaves the device wherever it stopped: the release tests put the wall there,
     // so no test starts with a long, energetic approach (the user's wall position is kept
     // in the config that is finally set).
