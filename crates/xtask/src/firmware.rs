@@ -85,6 +85,19 @@ pub fn build(cross: Cross, image: &Image, extra_features: &[&str]) -> Result<Pat
     Ok(elf)
 }
 
+/// Links the QEMU no-panic proof image: it links only when the servo tick has no panic path.
+pub fn panic_check(cross: Cross) -> Result<()> {
+    let dir = root().join("firmware/boards/qemu-an386");
+    let mut cmd = toolchain::board_build(cross, &dir, &["panic-check"])?;
+    cmd.args(["--bin", "stiffwall-qemu-an386-panic-check"]);
+    crate::run(&mut cmd).map_err(|e| {
+        e.context(
+            "the servo tick has a panic path: the no-panic proof image did not link \
+             (look for `servo_path_must_not_panic` above)",
+        )
+    })
+}
+
 /// Reads text/data/bss of an ELF image.
 pub fn size_of(elf: &Path) -> Result<Size> {
     let bytes = std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))?;
@@ -154,6 +167,7 @@ pub fn firmware(args: &[String]) -> Result<()> {
         let elf = build(cross, image, &[])?;
         sizes.push((image.name.to_string(), size_of(&elf)?));
     }
+    panic_check(cross)?;
     let report_path = root().join(REPORT);
     let rendered = render_report(&sizes);
     print!("{rendered}");

@@ -5,6 +5,8 @@
 //! - `firmware [--update-size-report]`: builds every board image.
 //! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
 //! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
+//! - `bench [--quick] [--no-criterion]`: the simulator's accuracy-vs-time tables
+//!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
@@ -53,9 +55,37 @@ pub fn update_section(path: &std::path::Path, name: &str, body: &str) -> Result<
     std::fs::write(path, new).with_context(|| format!("writing {}", path.display()))
 }
 
+/// Copies the simulator's tables (docs/BENCHMARKS-sim.md, written by `bench`) into their
+/// section of docs/BENCHMARKS.md, one level down in the heading hierarchy.
+fn sync_sim_benchmarks() -> Result<()> {
+    let docs = firmware::root().join("docs");
+    let sim = std::fs::read_to_string(docs.join("BENCHMARKS-sim.md"))
+        .context("reading docs/BENCHMARKS-sim.md")?;
+    let body: String = sim
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') {
+                format!("#{l}\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    update_section(&docs.join("BENCHMARKS.md"), "sim", body.trim_end())
+}
+
 fn ci() -> Result<()> {
+    let started = std::time::Instant::now();
+    let step = |name: &str| {
+        eprintln!(
+            "xtask ci: {name} ({:.0} s in)",
+            started.elapsed().as_secs_f64()
+        )
+    };
     let cross = toolchain::ensure_cross()?;
+    step("format");
     run(cargo().args(["fmt", "--all", "--check"]))?;
+    step("clippy");
     run(cargo().args([
         "clippy",
         "--workspace",
@@ -65,6 +95,7 @@ fn ci() -> Result<()> {
         "warnings",
     ]))?;
     if cross == toolchain::Cross::Rustup {
+        step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {
             run(cargo()
                 .args(["check", "-p", krate, "--target", toolchain::TARGET])
@@ -73,8 +104,15 @@ fn ci() -> Result<()> {
     } else {
         eprintln!("xtask: no_std crates are checked through the board builds (build-std fallback)");
     }
+    step("firmware images, size report, no-panic proof");
     firmware::firmware(&[])?;
+    step("host tests (unit, SIL, end to end against the virtual device)");
     run(cargo().args(["test", "--workspace"]))?;
+    step("QEMU scenarios");
+    qemu::qemu(&[])?;
+    step("servo instruction budget under QEMU -icount");
+    bench_firmware::bench_firmware(&["--no-write".to_string()])?;
+    step("done");
     Ok(())
 }
 
@@ -83,9 +121,12 @@ fn main() -> Result<()> {
     match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("firmware") => firmware::firmware(&args[1..]),
-        Some("bench") => bench::bench(&args[1..]),
+        Some("bench") => {
+            bench::bench(&args[1..])?;
+            sync_sim_benchmarks()
+        }
         Some("qemu") => qemu::qemu(&args[1..]),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write]"),
+        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write], bench [--quick]"),
     }
 }
