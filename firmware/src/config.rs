@@ -235,6 +235,8 @@ pub struct Gains<N: Numeric> {
     pub k_half: N::Gain,
     /// Virtual damping B·Δ_eff·rate in codes per effective count per tick.
     pub damp: N::Gain,
+    /// `damp` is not zero.
+    pub damping_on: bool,
     /// Release-test hold damping (dimensionless β = `HOLD_BETA` = 2): 2·β·k_half, codes per effective count
     /// per tick.
     pub hold_damp: N::Gain,
@@ -261,6 +263,9 @@ pub struct Gains<N: Numeric> {
     pub energy_monitor: bool,
     /// Energy limit in units of K·Δ_eff²/8.
     pub energy_limit_e8: u64,
+    /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋, so that
+    /// |2n+1| > this ⟺ e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
+    pub energy_limit_m: u32,
     /// Growth score that trips the energy monitor.
     pub growth_trip: i32,
     /// Heartbeat timeout, ticks; 0 = off.
@@ -296,6 +301,12 @@ impl<N: Numeric> Gains<N> {
         } else {
             0.0
         };
+        let e8_limit = if e8.is_finite() && e8 > 0.0 {
+            e8 as u64
+        } else {
+            u64::MAX
+        };
+        let limit_m = isqrt(e8_limit.saturating_sub(1)).min(u64::from(u32::MAX)) as u32;
         let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
         let k_half = N::gain(k_half);
         let kf = N::to_f64(k_half);
@@ -308,6 +319,7 @@ impl<N: Numeric> Gains<N> {
             k_half,
             n_sat,
             damp: N::gain(f64::from(cfg.damping) * de * rate / fs),
+            damping_on: N::gain(f64::from(cfg.damping) * de * rate / fs) != N::ZERO,
             hold_damp: N::gain(2.0 * f64::from(crate::servo::HOLD_BETA) * kf),
             safe_damp: N::gain(
                 f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
@@ -324,17 +336,30 @@ impl<N: Numeric> Gains<N> {
             },
             jump: cfg.encoder_jump_counts.max(1),
             energy_monitor: cfg.energy_monitor && kd2 > 0.0,
-            energy_limit_e8: if e8.is_finite() && e8 > 0.0 {
-                e8 as u64
-            } else {
-                u64::MAX
-            },
+            energy_limit_e8: e8_limit,
+            energy_limit_m: limit_m,
             growth_trip: i32::from(cfg.energy_growth_cycles.max(1)),
             heartbeat_ticks: u32::try_from(hb).unwrap_or(u32::MAX),
             safe_damping: cfg.safe_mode == stiffwall_proto::SafeMode::Damping,
             rate_hz: cfg.servo_rate_hz,
         }
     }
+}
+
+/// ⌊√x⌋ (integer Newton iteration; config time only).
+fn isqrt(x: u64) -> u64 {
+    if x < 2 {
+        return x;
+    }
+    let mut r = libm::sqrt(x as f64) as u64;
+    // Correct the float estimate by at most a few steps.
+    while r.checked_mul(r).is_none_or(|p| p > x) {
+        r -= 1;
+    }
+    while (r + 1).checked_mul(r + 1).is_some_and(|p| p <= x) {
+        r += 1;
+    }
+    r
 }
 
 #[cfg(test)]
@@ -445,6 +470,27 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!((e.min, e.max), (100.0, 20_000.0));
+    }
+
+    #[test]
+    fn isqrt_is_exact() {
+        for x in [
+            0u64,
+            1,
+            2,
+            3,
+            4,
+            15,
+            16,
+            17,
+            1 << 40,
+            (1 << 62) + 12345,
+            u64::MAX,
+        ] {
+            let r = isqrt(x);
+            assert!(u128::from(r) * u128::from(r) <= u128::from(x));
+            assert!(u128::from(r + 1) * u128::from(r + 1) > u128::from(x));
+        }
     }
 
     #[test]

@@ -123,7 +123,15 @@ impl Numeric for F32 {
     }
     #[inline]
     fn mul_bounded(g: f32, m: i32) -> i32 {
-        libm::floorf(g * m as f32 + 0.5) as i32
+        // ⌊y⌋ without a libm call (the M4F has no VRINTM): truncate, then step down for
+        // negative non-integers. |y| < 2^30 by contract, so the casts are exact.
+        let y = g * m as f32 + 0.5;
+        let t = y as i32;
+        if (t as f32) > y {
+            t - 1
+        } else {
+            t
+        }
     }
 }
 
@@ -148,6 +156,8 @@ mod tests {
         for m in -1000..1000 {
             let g = Fx64::gain(0.3757);
             assert_eq!(Fx64::mul(g, i64::from(m)), Fx64::mul_bounded(g, m));
+            let want = (0.3757f32 * m as f32 + 0.5).floor() as i32;
+            assert_eq!(F32::mul_bounded(0.3757, m), want);
         }
     }
 }
