@@ -606,12 +606,18 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let mut fl = 0u16;
         let monitoring = self.g.energy_monitor && self.mode != Mode::Other;
         if monitoring {
-            let (f, turn) = self
-                .monitor
-                .update(n, self.g.growth_trip, self.g.energy_limit_m);
-            new_faults |= f;
-            if turn {
-                fl |= flags::TURN;
+            if self.g.one_sided && n < 0 {
+                // Outside a one-sided wall the spring stores nothing: free motion (the user
+                // moving the device around) must not count; start afresh on the next contact.
+                self.monitor.reset();
+            } else {
+                let (f, turn) = self
+                    .monitor
+                    .update(n, self.g.growth_trip, self.g.energy_limit_m);
+                new_faults |= f;
+                if turn {
+                    fl |= flags::TURN;
+                }
             }
         }
         if self.mode != Mode::Wall && self.g.heartbeat_ticks > 0 {
@@ -1202,6 +1208,38 @@ mod tests {
             s.tick(t, &mut Enc(200 + (t - 40) * 6), &mut out);
         }
         assert_eq!(s.faults(), fault::OVER_VELOCITY);
+    }
+
+    #[test]
+    fn energy_monitor_ignores_free_motion_outside_a_one_sided_wall() {
+        let b = board();
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            wall: WallMode::OneSided,
+            energy_limit: 1e-6, // e8 limit ≈ 8e-6/(8·2^-26) ≈ 67: |2n+1| ≤ 8
+            energy_growth_cycles: 1,
+            encoder_jump_counts: 1 << 20,
+            ..ServoConfig::default()
+        };
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
+        let mut out = Out(0);
+        // Growing swings far outside the wall (negative counts): no fault.
+        let mut t = 0;
+        for a in 1..40 {
+            for c in (-(a * 100)..=-10).rev().chain(-(a * 100 + 50)..-10) {
+                s.tick(t, &mut Enc(c as u32), &mut out);
+                t += 1;
+            }
+        }
+        assert_eq!(s.faults(), 0);
+        // Deep inside the wall the limit trips.
+        for c in (0..50).step_by(5) {
+            s.tick(t, &mut Enc(c), &mut out);
+            t += 1;
+        }
+        assert_eq!(s.faults() & fault::ENERGY_LIMIT, fault::ENERGY_LIMIT);
     }
 
     #[test]
