@@ -246,6 +246,14 @@ pub fn energy_e8(n: i32) -> u64 {
     m * m + 1
 }
 
+/// [`energy_e8`] saturated to `u32` (32-bit multiply only; for telemetry).
+#[inline]
+#[must_use]
+pub fn energy_e8_u32(n: i32) -> u32 {
+    let m = odd_abs(n);
+    m.checked_mul(m).map_or(u32::MAX, |p| p.saturating_add(1))
+}
+
 /// |2n+1| as `u32`, exact for every `i32` n (≤ 2^32 − 1): 2·(n or !n) + 1, three instructions.
 #[inline]
 #[must_use]
@@ -871,7 +879,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 count: rel,
                 force_code: code,
                 flags: fl,
-                energy: u32::try_from(energy_e8(n)).unwrap_or(u32::MAX),
+                energy: energy_e8_u32(n),
             },
         };
         self.seq = self.seq.wrapping_add(1);
@@ -1259,6 +1267,10 @@ mod tests {
             let want = (2 * i64::from(n) + 1).unsigned_abs();
             assert_eq!(u64::from(odd_abs(n)), want, "n = {n}");
             assert_eq!(energy_e8(n), want * want + 1);
+            assert_eq!(
+                u64::from(energy_e8_u32(n)),
+                (want * want + 1).min(u64::from(u32::MAX))
+            );
         }
     }
 
