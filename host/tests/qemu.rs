@@ -70,12 +70,7 @@ fn release_transcript(c: &mut Client, k: f32, deflection: i32, ticks: u32) -> St
     c.clear_faults().expect("ClearFaults");
     c.set_config(&cfg).expect("SetConfig");
     let rec = c.release(deflection, ticks).expect("release");
-    let counts: Vec<i64> = rec
-        .samples
-        .iter()
-        .filter(|s| s.flags & stiffwall_proto::flags::RELEASED != 0)
-        .map(|s| i64::from(s.count))
-        .collect();
+    let counts = stiffwall_host::tune::release::released_counts(&rec.samples, 0);
     let verdict = classify(&counts, rec.faults != 0);
     let mut t = String::new();
     writeln!(t, "stiffness {k} deflection {deflection} ticks {ticks}").unwrap();

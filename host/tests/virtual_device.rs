@@ -33,12 +33,7 @@ fn release_verdict(c: &mut Client, k: f32, deflection: i32) -> Verdict {
         rec.samples.first(),
         rec.samples.len()
     );
-    let counts: Vec<i64> = rec
-        .samples
-        .iter()
-        .filter(|s| s.flags & stiffwall_proto::flags::RELEASED != 0)
-        .map(|s| i64::from(s.count))
-        .collect();
+    let counts = stiffwall_host::tune::release::released_counts(&rec.samples, 0);
     eprintln!(
         "K={k} faults={:#x} completed={} n={} head={:?} tail={:?}",
         rec.faults,

@@ -103,10 +103,7 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         .copied()
         .filter(|s| s.flags & flags::RELEASED != 0)
         .collect();
-    let counts: Vec<i64> = released
-        .iter()
-        .map(|s| i64::from(s.count) >> cfg.coarsen_shift)
-        .collect();
+    let counts = crate::tune::release::released_counts(&released, cfg.coarsen_shift);
     let verdict = classify(&counts, rec.faults != 0);
     let rate = f64::from(c.info.servo_rate_hz);
     let delta = f64::from(c.info.resolution) * f64::from(1u32 << cfg.coarsen_shift);

@@ -321,12 +321,7 @@ pub fn release_test(
             rec.gaps.missing
         );
     }
-    let counts: Vec<i64> = rec
-        .samples
-        .iter()
-        .filter(|s| s.flags & flags::RELEASED != 0)
-        .map(|s| i64::from(s.count) >> base.coarsen_shift)
-        .collect();
+    let counts = super::release::released_counts(&rec.samples, base.coarsen_shift);
     Ok(classify(&counts, rec.faults != 0))
 }
 

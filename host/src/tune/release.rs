@@ -15,6 +15,17 @@
 //!
 //! Only `Settles` and `LocallyStable` count as a wall that renders without oscillation.
 
+/// The counts recorded after the release (samples flagged `RELEASED`), in effective ticks
+/// (raw counts shifted right by the coarsening shift).
+#[must_use]
+pub fn released_counts(samples: &[stiffwall_proto::Sample], coarsen_shift: u8) -> Vec<i64> {
+    samples
+        .iter()
+        .filter(|s| s.flags & stiffwall_proto::flags::RELEASED != 0)
+        .map(|s| i64::from(s.count) >> coarsen_shift)
+        .collect()
+}
+
 /// Fewest samples in the judged tail.
 pub const MIN_TAIL: usize = 50;
 
