@@ -21,8 +21,10 @@ use crate::config::{BoardInfo, Gains, VEL_WINDOW};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric};
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-use heapless::spsc::{Consumer, Producer, Queue};
+// heapless 0.8's SPSC queue: its capacity is a const generic, so enqueue/dequeue have no
+// division by a runtime capacity (0.9's has one, a panic path; see the workspace Cargo.toml).
 use heapless::Vec;
+use heapless08::spsc::{Consumer, Producer, Queue};
 use stiffwall_proto::{
     fault, flags, ExciteProfile, ExperimentKind, Sample, ServoConfig, MAX_TABLE, TABLE_CHUNK,
 };
@@ -202,20 +204,20 @@ impl Channels {
 
 /// The servo's end of [`Channels`].
 pub struct ServoPort<'a> {
-    telemetry: Producer<'a, TelemetryItem>,
-    commands: Consumer<'a, ServoCmd>,
-    events: Producer<'a, ServoEvent>,
+    telemetry: Producer<'a, TelemetryItem, TELEMETRY_QUEUE>,
+    commands: Consumer<'a, ServoCmd, COMMAND_QUEUE>,
+    events: Producer<'a, ServoEvent, EVENT_QUEUE>,
     shared: &'a Shared,
 }
 
 /// The main loop's end of [`Channels`].
 pub struct HostPort<'a> {
     /// Telemetry samples from the servo.
-    pub telemetry: Consumer<'a, TelemetryItem>,
+    pub telemetry: Consumer<'a, TelemetryItem, TELEMETRY_QUEUE>,
     /// Commands to the servo.
-    pub commands: Producer<'a, ServoCmd>,
+    pub commands: Producer<'a, ServoCmd, COMMAND_QUEUE>,
     /// Events from the servo.
-    pub events: Consumer<'a, ServoEvent>,
+    pub events: Consumer<'a, ServoEvent, EVENT_QUEUE>,
     /// Shared atomics.
     pub shared: &'a Shared,
 }
