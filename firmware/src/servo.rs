@@ -511,18 +511,14 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     /// Reads and unwraps the encoder; returns the raw count delta.
+    ///
+    /// No first-reading branch: `last_raw` and `pos` start at 0, so the first delta is the
+    /// sign-extended raw count and `pos` becomes exactly that. Only the supervisor needs to know
+    /// that it was the first reading (see `step`), so the spring path stays branch-free.
     #[inline]
     fn read(&mut self, enc: &mut impl Encoder) -> i32 {
         let raw = enc.count();
         let sh = self.sign_shift;
-        if !self.primed {
-            self.primed = true;
-            self.last_raw = raw;
-            self.pos = (raw.wrapping_shl(sh) as i32).wrapping_shr(sh);
-            self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.shift;
-            self.vel_hist = [self.pos; VEL_WINDOW];
-            return 0;
-        }
         let d = (raw.wrapping_sub(self.last_raw).wrapping_shl(sh) as i32).wrapping_shr(sh);
         self.last_raw = raw;
         self.pos = self.pos.saturating_add(d);
@@ -595,6 +591,15 @@ impl<'a, N: Numeric> Servo<'a, N> {
         out: &mut impl ForceOutput,
     ) -> i32 {
         let d = self.read(enc);
+        // First reading: the position is absolute, not a motion; seed the supervisor's history.
+        let d = if self.primed {
+            d
+        } else {
+            self.primed = true;
+            self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.shift;
+            self.vel_hist = [self.pos; VEL_WINDOW];
+            0
+        };
         let rel = self.pos.saturating_sub(self.g.wall);
         let n = rel >> self.g.shift;
         let dn = n.saturating_sub(self.prev_n);
