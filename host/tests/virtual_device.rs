@@ -62,3 +62,40 @@ fn soft_wall_settles_and_stiff_wall_does_not() {
     let stiff = release_verdict(&mut c, 40.0, 20);
     assert!(!stiff.settled(), "K=40 N·m/rad: {stiff:?}");
 }
+
+/// A fake device on a pty that answers the handshake claiming another protocol version.
+#[test]
+fn a_device_speaking_another_protocol_version_is_refused_clearly() {
+    use std::io::{Read, Write};
+    use stiffwall_proto::{encode, DeviceMsg, FrameDecoder, HostMsg, MAX_FRAME};
+    let (mut master, host, _name) = stiffwall_host::device::transport::pty_pair().unwrap();
+    let fake = std::thread::spawn(move || {
+        let mut dec = FrameDecoder::new();
+        let mut byte = [0u8; 1];
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+        while std::time::Instant::now() < deadline {
+            if master.read(&mut byte).unwrap_or(0) == 0 {
+                continue;
+            }
+            if let Some(Ok(HostMsg::Hello { .. })) = dec.feed::<HostMsg>(byte[0]) {
+                let mut info = stiffwall_firmware::BoardInfo::default().device_info(1000);
+                info.protocol_version = stiffwall_proto::PROTOCOL_VERSION + 1;
+                let mut buf = [0u8; MAX_FRAME];
+                let frame = encode(&DeviceMsg::HelloReply(info), &mut buf).unwrap();
+                master.write_all(frame).unwrap();
+                std::thread::sleep(std::time::Duration::from_millis(300));
+                return;
+            }
+        }
+    });
+    let err = Client::connect(host, None).unwrap_err();
+    let msg = format!("{err:#}");
+    assert!(
+        msg.contains(&format!(
+            "protocol version {}",
+            stiffwall_proto::PROTOCOL_VERSION + 1
+        )) && msg.contains("update the host"),
+        "{msg}"
+    );
+    fake.join().unwrap();
+}
