@@ -69,6 +69,7 @@ pub struct Device<'a, S: ConfigStorage> {
     dropped: u32,
     pending_event: Option<ServoEvent>,
     rate_change: Option<u32>,
+    shutdown: Option<u8>,
     stats: DeviceStats,
 }
 
@@ -127,6 +128,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             dropped: 0,
             pending_event: None,
             rate_change: None,
+            shutdown: None,
             stats: DeviceStats::default(),
         }
     }
@@ -149,6 +151,15 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
     /// A new servo rate the board must program (once per change).
     pub fn take_rate_change(&mut self) -> Option<u32> {
         self.rate_change.take()
+    }
+
+    /// An exit code the host asked the board to end its run with (`Shutdown`), once, after
+    /// the acknowledgement has been queued; boards that cannot exit ignore it.
+    pub fn take_shutdown(&mut self) -> Option<u8> {
+        if self.tx_pos < self.tx_len || !self.replies.is_empty() {
+            return None; // let the Ack leave first
+        }
+        self.shutdown.take()
     }
 
     /// Diagnostic counters.
@@ -516,6 +527,10 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
                 } else {
                     busy("servo queue full")
                 }
+            }
+            HostMsg::Shutdown { exit_code } => {
+                self.shutdown = Some(exit_code);
+                ack(Request::Shutdown)
             }
         }
     }

@@ -16,6 +16,16 @@ fn boot() -> (qemu::Qemu, Client) {
     (q, client)
 }
 
+/// Ends a scenario the way the issue asks: the host sends `Shutdown`, the image acknowledges and
+/// exits through semihosting with status 0.
+fn finish(mut q: qemu::Qemu, mut c: Client) {
+    c.shutdown(0).expect("Shutdown acknowledged");
+    let status = q
+        .wait_exit(std::time::Duration::from_secs(5))
+        .expect("QEMU exits");
+    assert!(status.success(), "semihosting exit status {status}");
+}
+
 /// Compares a transcript with its expected file (or writes it when blessing).
 fn check(name: &str, transcript: &str) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -38,7 +48,7 @@ fn check(name: &str, transcript: &str) {
 #[test]
 #[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
 fn boot_and_handshake() {
-    let (_q, mut c) = boot();
+    let (q, mut c) = boot();
     let i = c.info.clone();
     let mut t = String::new();
     writeln!(t, "protocol {}", i.protocol_version).unwrap();
@@ -59,6 +69,7 @@ fn boot_and_handshake() {
         cfg.stiffness, cfg.force_limit
     )
     .unwrap();
+    finish(q, c);
     check("boot_and_handshake", &t);
 }
 
@@ -83,16 +94,17 @@ fn release_transcript(c: &mut Client, k: f32, deflection: i32, ticks: u32) -> St
 #[test]
 #[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
 fn release_in_region_a_settles() {
-    let (_q, mut c) = boot();
+    let (q, mut c) = boot();
     // Impulse Engine at 1 kHz, K = 20 N/m: β = 1.0, σ = 38 (region A).
     let t = release_transcript(&mut c, 20.0, 20, 2000);
+    finish(q, c);
     check("release_in_region_a_settles", &t);
 }
 
 #[test]
 #[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
 fn release_in_region_c_trips_the_supervisor() {
-    let (_q, mut c) = boot();
+    let (q, mut c) = boot();
     // K = 3000 N/m: β = 0.0067, σ = 0.25 (region C): the energy monitor must trip.
     let t = release_transcript(&mut c, 3000.0, 10, 2000);
     let faults = c.faults().expect("GetFaults");
@@ -106,6 +118,7 @@ fn release_in_region_c_trips_the_supervisor() {
         faults.safe_mode
     )
     .unwrap();
+    finish(q, c);
     check("release_in_region_c_trips_the_supervisor", &t);
 }
 
@@ -113,7 +126,7 @@ fn release_in_region_c_trips_the_supervisor() {
 #[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
 fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
     use stiffwall_proto::{encode, DeviceMsg, ErrorCode, HostMsg, MAX_FRAME};
-    let (_q, mut c) = boot();
+    let (q, mut c) = boot();
     c.stream_start(1).expect("StreamStart");
     // Four kinds of bad frame, each a distinct error: CRC, oversize, COBS, unknown tag.
     let mut buf = [0u8; MAX_FRAME];
@@ -166,6 +179,7 @@ fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
     .unwrap();
     writeln!(t, "telemetry gaps {}", c.gaps.missing).unwrap();
     assert!(errors.contains_key(&format!("{:?}", ErrorCode::Crc)), "{t}");
+    finish(q, c);
     check("malformed_burst", &t);
 }
 
@@ -173,7 +187,7 @@ fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
 #[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
 fn tune_dry_run_on_the_qemu_image() {
     use stiffwall_host::tune::procedure::{tune, Settings};
-    let (_q, mut c) = boot();
+    let (q, mut c) = boot();
     let before = c.get_config().unwrap();
     let o = tune(
         &mut c,
@@ -219,5 +233,6 @@ fn tune_dry_run_on_the_qemu_image() {
     .unwrap();
     writeln!(t, "config untouched: {}", c.get_config().unwrap() == before).unwrap();
     eprintln!("{o:#?}");
+    finish(q, c);
     check("tune_dry_run", &t);
 }

@@ -33,7 +33,7 @@ pub trait Message: Serialize + DeserializeOwned {
 }
 
 impl Message for HostMsg {
-    const VARIANTS: u32 = 14;
+    const VARIANTS: u32 = 15;
 }
 
 impl Message for DeviceMsg {
@@ -444,6 +444,7 @@ mod tests {
             HostMsg::GetFaults,
             HostMsg::ClearFaults,
             HostMsg::Stop,
+            HostMsg::Shutdown { exit_code: 3 },
         ]
     }
 
@@ -534,7 +535,7 @@ mod tests {
         // The last variant's tag is VARIANTS - 1.
         let mut buf = [0u8; 8];
         assert_eq!(
-            postcard::to_slice(&HostMsg::Stop, &mut buf).unwrap()[0] as u32,
+            postcard::to_slice(&HostMsg::Shutdown { exit_code: 0 }, &mut buf).unwrap()[0] as u32,
             HostMsg::VARIANTS - 1
         );
         let m = DeviceMsg::Error {

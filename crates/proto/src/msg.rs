@@ -85,6 +85,13 @@ pub enum HostMsg {
     ClearFaults,
     /// Abort a running experiment (wall back on). Answer: `Ack`.
     Stop,
+    /// End the firmware's run with `exit_code` (0 = success), where the board can: the QEMU
+    /// image exits through semihosting after acknowledging. Boards that cannot (real hardware)
+    /// acknowledge and keep running. Answer: `Ack`.
+    Shutdown {
+        /// Exit status for the emulator (0 = success).
+        exit_code: u8,
+    },
 }
 
 /// Messages from the device to the host.
@@ -135,6 +142,7 @@ pub enum Request {
     Heartbeat,
     ClearFaults,
     Stop,
+    Shutdown,
 }
 
 /// Experiment kinds.

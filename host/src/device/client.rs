@@ -308,6 +308,11 @@ impl Client {
         }
     }
 
+    /// Asks the board to end its run (the QEMU image exits through semihosting).
+    pub fn shutdown(&mut self, exit_code: u8) -> Result<()> {
+        self.request(&HostMsg::Shutdown { exit_code }).map(drop)
+    }
+
     /// Clears latched faults.
     pub fn clear_faults(&mut self) -> Result<()> {
         self.request(&HostMsg::ClearFaults).map(drop)
@@ -423,6 +428,7 @@ fn ack_kind(msg: &HostMsg) -> Option<Request> {
         HostMsg::Heartbeat => Request::Heartbeat,
         HostMsg::ClearFaults => Request::ClearFaults,
         HostMsg::Stop => Request::Stop,
+        HostMsg::Shutdown { .. } => Request::Shutdown,
         _ => return None,
     })
 }

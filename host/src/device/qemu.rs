@@ -22,6 +22,22 @@ impl Drop for Qemu {
     }
 }
 
+impl Qemu {
+    /// Waits up to `timeout` for QEMU to exit by itself (semihosting exit) and returns its status.
+    pub fn wait_exit(&mut self, timeout: Duration) -> Result<std::process::ExitStatus> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some(status) = self.child.try_wait()? {
+                return Ok(status);
+            }
+            if Instant::now() > deadline {
+                bail!("QEMU did not exit within {} s", timeout.as_secs());
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
 /// Where `cargo xtask firmware` leaves the QEMU image, relative to the repository root.
 pub const DEFAULT_IMAGE: &str =
     "firmware/boards/qemu-an386/target/thumbv7em-none-eabihf/release/stiffwall-qemu-an386";

@@ -91,6 +91,10 @@ fn main() -> ! {
             });
             program_systick(&mut cp.SYST, hz);
         }
+        if let Some(code) = device.take_shutdown() {
+            // The Ack has been written to the UART (take_shutdown waits for that).
+            debug::exit(if code == 0 { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
+        }
     }
 }
 
