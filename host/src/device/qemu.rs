@@ -13,12 +13,15 @@ pub struct Qemu {
     child: Child,
     /// Path of the pseudo-terminal connected to the image's UART0.
     pub pty: String,
+    reaped: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 impl Drop for Qemu {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+        self.reaped
+            .store(true, std::sync::atomic::Ordering::Relaxed);
     }
 }
 
@@ -68,7 +71,11 @@ pub fn find_image(explicit: Option<&Path>) -> Result<PathBuf> {
     bail!("no QEMU image found; build it with `cargo xtask firmware` or pass --qemu-image PATH")
 }
 
+/// Longest a QEMU instance may live; a watchdog kills it after that even if the host hangs.
+pub const TIME_LIMIT: Duration = Duration::from_secs(600);
+
 /// Boots `image` under QEMU (mps2-an386, Cortex-M4F) with UART0 on a new pseudo-terminal.
+/// The instance is killed when the returned [`Qemu`] is dropped, or after [`TIME_LIMIT`].
 pub fn boot(image: &Path) -> Result<Qemu> {
     let mut child = Command::new("qemu-system-arm")
         .args([
@@ -102,6 +109,22 @@ pub fn boot(image: &Path) -> Result<Qemu> {
         })?;
     // QEMU announces the pty on stdout; the semihosting console shares stdout, so a thread
     // keeps draining it for the life of the process (and forwards the console to stderr).
+    // Time limit without `unsafe`: a thread that kills the process by PID unless it has
+    // already been reaped (checked through the shared flag set on drop).
+    let pid = child.id();
+    let reaped = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let reaped2 = std::sync::Arc::clone(&reaped);
+    std::thread::spawn(move || {
+        let start = Instant::now();
+        while start.elapsed() < TIME_LIMIT {
+            if reaped2.load(std::sync::atomic::Ordering::Relaxed) {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(200));
+        }
+        eprintln!("qemu: killing pid {pid} after {} s", TIME_LIMIT.as_secs());
+        let _ = Command::new("kill").args(["-9", &pid.to_string()]).status();
+    });
     let stdout = child.stdout.take().context("QEMU stdout")?;
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -118,7 +141,7 @@ pub fn boot(image: &Path) -> Result<Qemu> {
     let deadline = Instant::now() + Duration::from_secs(10);
     loop {
         if let Ok(pty) = rx.recv_timeout(Duration::from_millis(50)) {
-            return Ok(Qemu { child, pty });
+            return Ok(Qemu { child, pty, reaped });
         }
         if let Some(status) = child.try_wait()? {
             bail!("QEMU exited before creating its pty ({status})");
