@@ -250,6 +250,23 @@ impl Overrides {
         }
         Ok(now)
     }
+
+    /// Connects (after validating these changes on the host) and applies them, if any; returns
+    /// the client and the active configuration. Shared by `stream` and `record`.
+    pub fn connect_and_apply(
+        &self,
+        connect: &crate::device::connect::ConnectArgs,
+    ) -> Result<(crate::device::client::Client, ServoConfig)> {
+        self.apply(&ServoConfig::default())?;
+        let mut client = connect.connect()?;
+        let cfg = if self.is_empty() {
+            client.get_config()?
+        } else {
+            self.set_on(&mut client)
+                .context("applying the config changes")?
+        };
+        Ok((client, cfg))
+    }
 }
 
 /// Text rendering of a configuration.

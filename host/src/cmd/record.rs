@@ -332,16 +332,8 @@ pub fn record<W: Write>(
 pub fn run(args: &Args) -> Result<()> {
     // Validate what can be validated before connecting.
     Plan::new(args.decimation, Some(args.seconds), 1)?;
-    args.set.apply(&ServoConfig::default())?;
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
-    let mut client = args.connect.connect()?;
-    let cfg = if args.set.is_empty() {
-        client.get_config()?
-    } else {
-        args.set
-            .set_on(&mut client)
-            .context("applying the config changes")?
-    };
+    let (mut client, cfg) = args.set.connect_and_apply(&args.connect)?;
     let mut plan = Plan::new(args.decimation, Some(args.seconds), cfg.servo_rate_hz)?;
     plan.release = args.release;
     let h = header(&client, cfg, plan.decimation, Some(&args.connect));

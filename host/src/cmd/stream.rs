@@ -9,11 +9,10 @@ use super::config::Overrides;
 use super::info::emit;
 use super::record::{pump, End, Plan, INTERRUPTED};
 use crate::device::connect::ConnectArgs;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use std::io::IsTerminal as _;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
-use stiffwall_proto::ServoConfig;
 
 /// Arguments of `hostctl stream`.
 #[derive(Debug, clap::Args)]
@@ -38,16 +37,8 @@ pub struct Args {
 /// Runs `hostctl stream`.
 pub fn run(args: &Args) -> Result<()> {
     Plan::new(args.decimation, args.seconds, 1)?;
-    args.set.apply(&ServoConfig::default())?;
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
-    let mut client = args.connect.connect()?;
-    let cfg = if args.set.is_empty() {
-        client.get_config()?
-    } else {
-        args.set
-            .set_on(&mut client)
-            .context("applying the config changes")?
-    };
+    let (mut client, cfg) = args.set.connect_and_apply(&args.connect)?;
     let plan = Plan::new(args.decimation, args.seconds, cfg.servo_rate_hz)?;
     let fpc = f64::from(client.info.force_per_code);
     let tty = std::io::stderr().is_terminal();
