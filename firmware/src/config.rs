@@ -227,6 +227,97 @@ pub fn validate(cfg: &ServoConfig, board: &BoardInfo) -> Result<(), ConfigError>
     Ok(())
 }
 
+/// A shift amount 0..=31. Its type tells the compiler the range, so shifting by it needs no
+/// `& 31` mask (`wrapping_shl`/`wrapping_shr` by a plain `u32` do).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u8)]
+#[allow(missing_docs)]
+pub enum Shift {
+    #[default]
+    S0,
+    S1,
+    S2,
+    S3,
+    S4,
+    S5,
+    S6,
+    S7,
+    S8,
+    S9,
+    S10,
+    S11,
+    S12,
+    S13,
+    S14,
+    S15,
+    S16,
+    S17,
+    S18,
+    S19,
+    S20,
+    S21,
+    S22,
+    S23,
+    S24,
+    S25,
+    S26,
+    S27,
+    S28,
+    S29,
+    S30,
+    S31,
+}
+
+impl Shift {
+    const ALL: [Shift; 32] = [
+        Shift::S0,
+        Shift::S1,
+        Shift::S2,
+        Shift::S3,
+        Shift::S4,
+        Shift::S5,
+        Shift::S6,
+        Shift::S7,
+        Shift::S8,
+        Shift::S9,
+        Shift::S10,
+        Shift::S11,
+        Shift::S12,
+        Shift::S13,
+        Shift::S14,
+        Shift::S15,
+        Shift::S16,
+        Shift::S17,
+        Shift::S18,
+        Shift::S19,
+        Shift::S20,
+        Shift::S21,
+        Shift::S22,
+        Shift::S23,
+        Shift::S24,
+        Shift::S25,
+        Shift::S26,
+        Shift::S27,
+        Shift::S28,
+        Shift::S29,
+        Shift::S30,
+        Shift::S31,
+    ];
+
+    /// The shift `s`, saturated to 31.
+    #[must_use]
+    pub fn new(s: u32) -> Self {
+        *Self::ALL.get(s.min(31) as usize).unwrap_or(&Shift::S31)
+    }
+
+    /// The amount.
+    #[inline]
+    #[must_use]
+    pub fn get(self) -> u32 {
+        self as u32
+    }
+}
+
 /// Integer / fixed-point servo parameters derived from a valid config.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Gains<N: Numeric> {
@@ -244,6 +335,8 @@ pub struct Gains<N: Numeric> {
     pub safe_damp: N::Gain,
     /// Coarsening shift.
     pub shift: u32,
+    /// `shift` as a [`Shift`] (for the servo path).
+    pub coarsen: Shift,
     /// Wall position, raw counts.
     pub wall: i32,
     /// One-sided wall.
@@ -255,6 +348,17 @@ pub struct Gains<N: Numeric> {
     /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit. Clamping n
     /// to [−n_sat−1, n_sat] leaves the clamped force unchanged and keeps the product in range.
     pub n_sat: i32,
+    /// `k_half` precomputed for [`Numeric::spring`].
+    pub spring: N::Spring,
+    /// The spring code at n = `n_sat` (before the output clamp): the code for every n ≥ `n_sat`.
+    pub spring_hi: i32,
+    /// The spring code at n = −`n_sat`−1: the code for every n ≤ −`n_sat`−1.
+    pub spring_lo: i32,
+    /// The wall's lower count bound: −1 for a one-sided wall (the force is 0 for n < 0), else
+    /// −`n_sat`−1. At or below it the wall's code is `wall_lo`.
+    pub wall_n_lo: i32,
+    /// The wall's code for n ≤ `wall_n_lo`: 0 (one-sided) or `spring_lo`.
+    pub wall_lo: i32,
     /// Over-velocity threshold in raw counts per [`VEL_WINDOW`] ticks; 0 = off.
     pub vel_window_counts: u32,
     /// Encoder-jump threshold, raw counts per tick.
@@ -315,9 +419,24 @@ impl<N: Numeric> Gains<N> {
         } else {
             1 << 29
         };
+        let one_sided = cfg.wall == WallMode::OneSided;
+        // n_sat ≤ 2^29: |2n+1| < 2^31 (the codes at the bounds, as the servo used to compute
+        // them after clamping n).
+        let spring_hi =
+            N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1).wrapping_neg());
+        let spring_lo = N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1));
         Self {
             k_half,
             n_sat,
+            spring: N::spring_gain(k_half),
+            spring_hi,
+            spring_lo,
+            wall_n_lo: if one_sided {
+                -1
+            } else {
+                n_sat.wrapping_neg().wrapping_sub(1)
+            },
+            wall_lo: if one_sided { 0 } else { spring_lo },
             damp: N::gain(f64::from(cfg.damping) * de * rate / fs),
             damping_on: N::gain(f64::from(cfg.damping) * de * rate / fs) != N::ZERO,
             hold_damp: N::gain(2.0 * f64::from(crate::servo::HOLD_BETA) * kf),
@@ -325,8 +444,9 @@ impl<N: Numeric> Gains<N> {
                 f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
             ),
             shift: u32::from(cfg.coarsen_shift.min(MAX_COARSEN_SHIFT)),
+            coarsen: Shift::new(u32::from(cfg.coarsen_shift.min(MAX_COARSEN_SHIFT))),
             wall: cfg.wall_position,
-            one_sided: cfg.wall == WallMode::OneSided,
+            one_sided,
             delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
             limit,
             vel_window_counts: if vel.is_finite() && vel > 0.0 {

@@ -2,8 +2,9 @@
 //!
 //! A gain is "output codes per count" (e.g. K·Δ_eff/2 in codes). [`Numeric::mul`] computes
 //! `round(gain · m)` for an integer `m`, saturating to `i32` instead of wrapping, rounding to
-//! nearest with ties away from zero (used for damping). [`Numeric::mul_bounded`] is the spring's
-//! fast path: `⌊gain · m + ½⌋` for products the caller keeps below 2^30 codes.
+//! nearest with ties away from zero. [`Numeric::mul_bounded`] is the fast path (damping):
+//! `⌊gain · m + ½⌋` for products the caller keeps below 2^30 codes; [`Numeric::spring`] is the
+//! same for m = −(2n+1) with the gain precomputed ([`Numeric::spring_gain`]) for the spring.
 //!
 //! - [`Fx64`] (default): `I32F32` gain (resolution 2^-32 code, range ±2^31 codes), 64-bit
 //!   multiply with saturation. Exact integer arithmetic on the gain's bits.
@@ -35,6 +36,28 @@ pub trait Numeric: Copy + core::fmt::Debug + 'static {
     fn mul_bounded(g: Self::Gain, m: i32) -> i32 {
         Self::mul(g, i64::from(m))
     }
+    /// The spring gain `k_half` in the form [`Numeric::spring`] uses (precomputed at config
+    /// time).
+    type Spring: Copy + core::fmt::Debug + PartialEq;
+    /// Precomputes [`Numeric::Spring`] from `k_half`.
+    fn spring_gain(k_half: Self::Gain) -> Self::Spring;
+    /// The spring of eq. (2) at effective count `n`: `⌊−(2n+1)·k_half + ½⌋`, exactly
+    /// `mul_bounded(k_half, −(2n+1))`, for a caller that keeps `|(2n+1)·k_half| < 2^30` codes.
+    fn spring(s: Self::Spring, n: i32) -> i32;
+}
+
+/// [`Fx64`]'s precomputed spring gain: with g the `I32F32` bits of `k_half`,
+/// `−(2n+1)·g + 2^31 = n·h + c` where h = −2g = `hi`·2^32 + `lo` (`lo` signed) and
+/// c = 2^31 − g. So `⌊(n·h + c) / 2^32⌋ = n·hi + ⌊(n·lo + c) / 2^32⌋`: one 32×32→64
+/// multiply-accumulate (`smlal`) and one 32-bit multiply-add (`mla`), no 64×32 product.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fx64Spring {
+    /// 2^31 − g.
+    c: i64,
+    /// Low word of −2g, signed.
+    lo: i32,
+    /// (−2g − lo) / 2^32.
+    hi: i32,
 }
 
 /// `I32F32` gains, 64-bit arithmetic (default).
@@ -80,6 +103,24 @@ impl Numeric for Fx64 {
             .wrapping_add(I32F32::from_bits(1 << 31))
             .wrapping_to_num::<i32>()
     }
+    type Spring = Fx64Spring;
+    fn spring_gain(k_half: I32F32) -> Fx64Spring {
+        let g = k_half.to_bits();
+        let h = g.wrapping_mul(-2);
+        let lo = h as i32;
+        Fx64Spring {
+            c: (1i64 << 31).wrapping_sub(g),
+            lo,
+            hi: (h.wrapping_sub(i64::from(lo)) >> 32) as i32,
+        }
+    }
+    #[inline]
+    fn spring(s: Fx64Spring, n: i32) -> i32 {
+        // |n·lo| ≤ 2^62 and |c| < 2^47: no overflow. The sum is exact modulo 2^32 and in range
+        // by contract.
+        let low = ((i64::from(n) * i64::from(s.lo)).wrapping_add(s.c) >> 32) as i32;
+        n.wrapping_mul(s.hi).wrapping_add(low)
+    }
 }
 
 impl Numeric for Fx32 {
@@ -103,6 +144,14 @@ impl Numeric for Fx32 {
         g.saturating_mul_int(m)
             .saturating_round()
             .saturating_to_num::<i32>()
+    }
+    type Spring = I16F16;
+    fn spring_gain(k_half: I16F16) -> I16F16 {
+        k_half
+    }
+    #[inline]
+    fn spring(g: I16F16, n: i32) -> i32 {
+        Self::mul_bounded(g, n.wrapping_mul(2).wrapping_add(1).wrapping_neg())
     }
 }
 
@@ -137,6 +186,14 @@ impl Numeric for F32 {
             t
         }
     }
+    type Spring = f32;
+    fn spring_gain(k_half: f32) -> f32 {
+        k_half
+    }
+    #[inline]
+    fn spring(g: f32, n: i32) -> i32 {
+        Self::mul_bounded(g, n.wrapping_mul(2).wrapping_add(1).wrapping_neg())
+    }
 }
 
 #[cfg(test)]
@@ -162,6 +219,16 @@ mod tests {
             assert_eq!(Fx64::mul(g, i64::from(m)), Fx64::mul_bounded(g, m));
             let want = (0.3757f32 * m as f32 + 0.5).floor() as i32;
             assert_eq!(F32::mul_bounded(0.3757, m), want);
+        }
+        for k in [0.0, 0.3757, 1.0, 2.5, 0.5 + 1e-9, 16383.99, 1e-7] {
+            let g = Fx64::gain(k);
+            let s = Fx64::spring_gain(g);
+            for n in (-70_000..70_000).chain([-(1 << 29) - 1, 1 << 29, 12_345_678]) {
+                let m = n * 2 + 1;
+                if k * f64::from(m).abs() < f64::from(1 << 30) {
+                    assert_eq!(Fx64::spring(s, n), Fx64::mul_bounded(g, -m), "k {k} n {n}");
+                }
+            }
         }
     }
 }

@@ -7,17 +7,20 @@
 //! Spring (eq. (2)): the force code for effective count n is exactly
 //! `code(n) = clamp(⌊−(2n+1) · k_half + ½⌋, −limit, limit)` where `k_half` =
 //! K·Δ_eff/(2·force_per_code) is an `I32F32` gain ([`crate::numeric`]), the product computed
-//! exactly in 64 bits. Before the multiply n is clamped to [−n_sat−1, n_sat] where the force
-//! already exceeds the limit, so the output is exact for every n and the product never
-//! overflows. Positions are saturating `i32` counts: a count far outside the wall (or a counter
-//! that wrapped many times) gives the clamped force, never a wrapped one.
+//! exactly (`Numeric::spring`). For n outside (−n_sat−1, n_sat), where the force already
+//! exceeds the limit, the code at the bound (precomputed in `Gains`) is used instead, as if n
+//! were clamped first, so the output is exact for every n and the product never overflows; a
+//! one-sided wall moves the lower bound to −1 with code 0. Positions are saturating `i32`
+//! counts: a count far outside the wall (or a counter that wrapped many times) gives the
+//! clamped force, never a wrapped one. Shift amounts are [`Shift`]s (0..=31 by type), so the
+//! unwrap and the coarsening shift need no `& 31` masks.
 //!
 //! Invariants: `tick*` never allocates, blocks or panics (no indexing that can fail: the ring
 //! buffers are indexed with a power-of-two mask); it does at most one command per tick and
 //! bounded work. Time is only the `now` argument. It is the single producer of the telemetry
 //! and event queues and the single consumer of the command queue ([`Channels`]).
 
-use crate::config::{BoardInfo, Gains, VEL_WINDOW};
+use crate::config::{BoardInfo, Gains, Shift, VEL_WINDOW};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric};
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -388,7 +391,7 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     board: BoardInfo,
     g: Gains<N>,
     port: ServoPort<'a>,
-    sign_shift: u32,
+    sign_shift: Shift,
     primed: bool,
     last_raw: u32,
     pos: i32,
@@ -417,7 +420,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             board,
             g: Gains::from_config(cfg, &board),
             port,
-            sign_shift: 32 - bits,
+            sign_shift: Shift::new(32 - bits),
             primed: false,
             last_raw: 0,
             pos: 0,
@@ -486,28 +489,37 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     /// The spring of eq. (2) for effective count `n` before the output clamp:
-    /// `round(−(2n+1)·k_half)` for |n| ≤ `n_sat`; beyond, n is clamped to ±`n_sat`, where the
-    /// force already exceeds the limit, so the clamped output is exact for every n.
-    /// 0 outside a one-sided wall.
+    /// `round(−(2n+1)·k_half)` for |n| ≤ `n_sat`; beyond, the code at ±`n_sat` (precomputed),
+    /// where the force already exceeds the limit, so the clamped output is exact for every n.
+    /// 0 outside a one-sided wall (folded into the lower bound: n ≤ −1 gives 0).
     #[inline]
     #[must_use]
     pub fn spring_code(&self, n: i32) -> i32 {
-        if self.g.one_sided && n < 0 {
-            return 0;
-        }
-        self.spring_raw(n)
+        self.spring_between(n, self.g.wall_n_lo, self.g.wall_lo)
     }
 
+    /// The two-sided spring (release-test hold).
     #[inline]
     fn spring_raw(&self, n: i32) -> i32 {
-        let s = self.g.n_sat;
-        // max/min, not `clamp` (which has a panic path for min > max).
-        let n = n.max(s.wrapping_neg().wrapping_sub(1)).min(s);
-        // n_sat ≤ 2^29: |2n+1| < 2^31, and |(2n+1)·k_half| ≤ limit + 3·k_half < 2^25 codes.
-        N::mul_bounded(
-            self.g.k_half,
-            n.wrapping_mul(2).wrapping_add(1).wrapping_neg(),
+        self.spring_between(
+            n,
+            self.g.n_sat.wrapping_neg().wrapping_sub(1),
+            self.g.spring_lo,
         )
+    }
+
+    /// `code(n)` for `n_lo` < n < `n_sat`; `spring_hi` at or above `n_sat`, `lo` at or below
+    /// `n_lo` (same as clamping n to [`n_lo`, `n_sat`] first).
+    #[inline(always)]
+    fn spring_between(&self, n: i32, n_lo: i32, lo: i32) -> i32 {
+        if n >= self.g.n_sat {
+            self.g.spring_hi
+        } else if n <= n_lo {
+            lo
+        } else {
+            // |n| < n_sat ≤ 2^29: |(2n+1)·k_half| ≤ limit + 3·k_half < 2^25 codes.
+            N::spring(self.g.spring, n)
+        }
     }
 
     /// Reads and unwraps the encoder; returns the raw count delta.
@@ -518,7 +530,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline]
     fn read(&mut self, enc: &mut impl Encoder) -> i32 {
         let raw = enc.count();
-        let sh = self.sign_shift;
+        let sh = self.sign_shift.get();
         let d = (raw.wrapping_sub(self.last_raw).wrapping_shl(sh) as i32).wrapping_shr(sh);
         self.last_raw = raw;
         self.pos = self.pos.saturating_add(d);
@@ -548,7 +560,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// Spring alone: read, unwrap, coarsen, eq. (2), clamp, write. (Instruction budget stage 1.)
     pub fn tick_spring(&mut self, enc: &mut impl Encoder, out: &mut impl ForceOutput) -> i32 {
         self.read(enc);
-        let n = self.pos.saturating_sub(self.g.wall) >> self.g.shift;
+        let n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
         let (c, _) = self.clamp(self.spring_code(n));
         out.write(c);
         c
@@ -557,7 +569,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// Spring + extra delay line. (Stage 2.)
     pub fn tick_spring_delay(&mut self, enc: &mut impl Encoder, out: &mut impl ForceOutput) -> i32 {
         self.read(enc);
-        let n = self.pos.saturating_sub(self.g.wall) >> self.g.shift;
+        let n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
         let d = self.delay(self.spring_code(n));
         let (c, _) = self.clamp(d);
         out.write(c);
@@ -596,12 +608,12 @@ impl<'a, N: Numeric> Servo<'a, N> {
             d
         } else {
             self.primed = true;
-            self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.shift;
+            self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
             self.vel_hist = [self.pos; VEL_WINDOW];
             0
         };
         let rel = self.pos.saturating_sub(self.g.wall);
-        let n = rel >> self.g.shift;
+        let n = rel >> self.g.coarsen.get();
         let dn = n.saturating_sub(self.prev_n);
         self.prev_n = n;
 
@@ -1053,8 +1065,56 @@ mod tests {
         Ok(())
     }
 
+    /// The spring code as computed before the precomputed bounds: clamp n to
+    /// [−n_sat−1, n_sat], then `mul_bounded(k_half, −(2n+1))`; 0 for n < 0 one-sided.
+    fn spring_reference<Nm: Numeric>(g: &Gains<Nm>, n: i32) -> i32 {
+        if g.one_sided && n < 0 {
+            return 0;
+        }
+        let n = n.max(-g.n_sat - 1).min(g.n_sat);
+        Nm::mul_bounded(g.k_half, -(2 * n + 1))
+    }
+
+    fn check_same_as_reference<Nm: Numeric>(
+        k: f32,
+        limit: f32,
+        one_sided: bool,
+        n: i32,
+    ) -> Result<(), TestCaseError> {
+        let cfg = ServoConfig {
+            stiffness: k,
+            force_limit: limit,
+            wall: if one_sided {
+                WallMode::OneSided
+            } else {
+                WallMode::Bidirectional
+            },
+            ..ServoConfig::default()
+        };
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let s: Servo<'_, Nm> = Servo::new(board(), &cfg, sp);
+        let g = s.gains();
+        prop_assert_eq!(s.spring_code(n), spring_reference(g, n), "n={}", n);
+        let two = Gains {
+            one_sided: false,
+            ..*g
+        };
+        prop_assert_eq!(s.spring_raw(n), spring_reference(&two, n), "raw n={}", n);
+        Ok(())
+    }
+
     proptest! {
         // K·Δ_eff/2 from 1e-4 to ~15 codes; counts over the whole i32 range and beyond.
+        #[test]
+        fn spring_code_same_as_clamp_then_multiply(k in 0.0f32..600.0, limit in 0.0f32..29.0, one_sided in any::<bool>(), n in any::<i32>(), near in -3000i32..3000) {
+            for n in [n, near, i32::MIN, i32::MAX, -1, 0] {
+                check_same_as_reference::<Fx64>(k, limit, one_sided, n)?;
+                check_same_as_reference::<Fx32>(k.min(300.0), limit, one_sided, n)?;
+                check_same_as_reference::<F32>(k, limit, one_sided, n)?;
+            }
+        }
+
         #[test]
         fn fixed_point_force_matches_eq2(k in 0.002f32..300.0, shift in 0u8..4, n in any::<i32>()) {
             check_backend::<Fx64>(k, shift, n, 0.0, 2147483648.0)?;

@@ -4,9 +4,8 @@
 //! one virtual ns per instruction, SysTick one count per 40 instructions), parses its
 //! `BENCH <stage> <numeric> <instructions ×100>` lines, prints a table, writes it into
 //! `docs/BENCHMARKS.md` between the `firmware-icount` markers, and fails when the default
-//! back-end (I32F32) exceeds the full-tick budget of 250 instructions. The spring stage's
-//! budget (40) is not met yet (49 measured, see docs/BENCHMARKS.md): it is reported as a
-//! warning, not enforced, until the spring path is reworked.
+//! back-end (I32F32) exceeds the full-tick budget of 250 instructions or the spring stage's
+//! budget of 40 (see docs/BENCHMARKS.md).
 
 use crate::firmware::{root, IMAGES};
 use crate::{toolchain, update_section};
@@ -131,8 +130,7 @@ pub fn bench_firmware(args: &[String]) -> Result<()> {
              cumulative; the full tick adds the command queue and the telemetry push. The bench's\n\
              encoder and output stand-ins are measured alone (`io-stand-ins`) and subtracted; on\n\
              hardware they are one register load and one store. Budgets for the default back-end\n\
-             ({DEFAULT_NUMERIC}): full tick ≤ {FULL_BUDGET} (enforced in CI), spring ≤ {SPRING_BUDGET}\n\
-             (not met yet: the count clamp before the 64-bit multiply and the output clamp cost ~18).\n\n{t}"
+             ({DEFAULT_NUMERIC}): full tick ≤ {FULL_BUDGET}, spring ≤ {SPRING_BUDGET} (both enforced in CI).\n\n{t}"
         );
         update_section(&root().join("docs/BENCHMARKS.md"), "firmware-icount", &body)?;
     }
@@ -141,10 +139,12 @@ pub fn bench_firmware(args: &[String]) -> Result<()> {
             .find(|r| r.0 == stage && r.1 == DEFAULT_NUMERIC)
             .map(|r| r.2)
     };
-    if let Some(v) = get("spring") {
-        if v > SPRING_BUDGET {
-            eprintln!("xtask: WARNING: the spring stage takes {v:.1} instructions, over its budget of {SPRING_BUDGET} (not enforced yet)");
+    match get("spring") {
+        Some(v) if v > SPRING_BUDGET => {
+            bail!("spring stage over its instruction budget: {v:.1} > {SPRING_BUDGET}")
         }
+        Some(_) => {}
+        None => bail!("the bench printed no spring figure for {DEFAULT_NUMERIC}"),
     }
     match get("full(+telemetry)") {
         Some(v) if v > FULL_BUDGET => {
