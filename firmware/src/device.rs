@@ -539,7 +539,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hal::{Encoder, ForceOutput};
+    use crate::hal::{HeldCode, SampledCount};
     use crate::servo::{Channels, Servo};
     use crate::store::MemStorage;
     use std::collections::VecDeque;
@@ -586,16 +586,6 @@ mod tests {
             out
         }
     }
-    struct Enc;
-    impl Encoder for Enc {
-        fn count(&mut self) -> u32 {
-            0
-        }
-    }
-    struct Out;
-    impl ForceOutput for Out {
-        fn write(&mut self, _: i32) {}
-    }
 
     #[test]
     fn hello_config_and_refusal() {
@@ -623,7 +613,7 @@ mod tests {
         link.send(&HostMsg::GetConfig);
         for t in 0..10 {
             dev.poll(t, &mut link);
-            servo.tick(t, &mut Enc, &mut Out);
+            servo.tick(t, &mut SampledCount(0), &mut HeldCode(0));
         }
         let f = link.frames();
         assert_eq!(f.len(), 4);

@@ -17,6 +17,28 @@ pub trait ForceOutput {
     fn write(&mut self, code: i32);
 }
 
+/// An encoder reading taken at the sample instant: what a simulated or replayed device's
+/// counter showed when the servo sampled it (the raw counter value, as [`Encoder::count`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SampledCount(pub u32);
+
+impl Encoder for SampledCount {
+    fn count(&mut self) -> u32 {
+        self.0
+    }
+}
+
+/// A force output that keeps the last code written: a simulated amplifier holds it for one
+/// servo period (ZOH), a replay compares it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct HeldCode(pub i32);
+
+impl ForceOutput for HeldCode {
+    fn write(&mut self, code: i32) {
+        self.0 = code;
+    }
+}
+
 /// A monotonic servo tick counter (wraps at 2^32).
 pub trait TickSource {
     /// The current tick.

@@ -67,7 +67,10 @@ pub mod store;
 
 pub use config::{validate, BoardInfo, ConfigError, Gains};
 pub use device::Device;
-pub use hal::{ByteLink, ConfigStorage, Encoder, ForceOutput, NoStorage, StorageError, TickSource};
+pub use hal::{
+    ByteLink, ConfigStorage, Encoder, ForceOutput, HeldCode, NoStorage, SampledCount, StorageError,
+    TickSource,
+};
 pub use numeric::{Fx32, Fx64, Numeric, F32};
 pub use servo::{
     Channels, EnergyMonitor, HostPort, Servo, ServoCmd, ServoEvent, ServoPort, Shared,

@@ -991,22 +991,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::hal::{HeldCode as Out, SampledCount as Enc};
     use crate::numeric::{Fx32, F32};
     use proptest::prelude::*;
     use stiffwall_proto::WallMode;
-
-    struct Enc(u32);
-    impl Encoder for Enc {
-        fn count(&mut self) -> u32 {
-            self.0
-        }
-    }
-    struct Out(i32);
-    impl ForceOutput for Out {
-        fn write(&mut self, code: i32) {
-            self.0 = code;
-        }
-    }
 
     /// Binary-exact units: Δ = 2^-13 m, 2^-10 N per code, so k_half = K/16 codes exactly.
     fn board() -> BoardInfo {

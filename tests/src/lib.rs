@@ -10,9 +10,7 @@
 //! integrator kept as a cross-check.
 
 use std::collections::VecDeque;
-use stiffwall_firmware::{
-    BoardInfo, ByteLink, ConfigStore, Device, Encoder, ForceOutput, MemStorage, Servo,
-};
+use stiffwall_firmware::{BoardInfo, ByteLink, ConfigStore, Device, Encoder, MemStorage, Servo};
 use stiffwall_proto::{
     encode, DeviceMsg, FrameDecoder, FrameError, HostMsg, ServoConfig, MAX_FRAME,
 };
@@ -187,16 +185,6 @@ impl Encoder for PlantEncoder {
     }
 }
 
-/// Records the last written code.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct LastCode(pub i32);
-
-impl ForceOutput for LastCode {
-    fn write(&mut self, code: i32) {
-        self.0 = code;
-    }
-}
-
 /// Encoder count of a plant.
 #[must_use]
 pub fn count_of(p: &impl Plant) -> i64 {
@@ -214,7 +202,7 @@ pub fn tick_offset<P: Plant>(servo: &mut Servo<'_>, plant: &mut P, now: u32, off
     let mut enc = PlantEncoder {
         count: count_of(plant).wrapping_add(offset),
     };
-    let mut out = LastCode::default();
+    let mut out = stiffwall_firmware::HeldCode::default();
     servo.tick(now, &mut enc, &mut out);
     plant.apply(
         f64::from(out.0) * f64::from(board().force_per_code),

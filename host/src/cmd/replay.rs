@@ -33,7 +33,7 @@ use plotters::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use stiffwall_firmware::{BoardInfo, Channels, Encoder, ForceOutput, Servo};
+use stiffwall_firmware::{BoardInfo, Channels, HeldCode, SampledCount, Servo};
 use stiffwall_proto::{flags, ServoConfig};
 use stiffwall_sim::PhysicalPlant;
 
@@ -147,19 +147,6 @@ pub struct Report {
     pub servo_skipped: Option<String>,
 }
 
-struct Enc(u32);
-impl Encoder for Enc {
-    fn count(&mut self) -> u32 {
-        self.0
-    }
-}
-struct Out(i32);
-impl ForceOutput for Out {
-    fn write(&mut self, code: i32) {
-        self.0 = code;
-    }
-}
-
 /// The firmware's board facts, rebuilt from the recorded handshake.
 #[must_use]
 pub fn board_of(d: &stiffwall_proto::DeviceInfo) -> BoardInfo {
@@ -225,8 +212,8 @@ pub fn replay_servo(rec: &Recording) -> Result<ServoReplay> {
         for row in rows {
             let s = row.sample;
             let raw = ((i64::from(s.count) + i64::from(wall)) as u32) & mask;
-            let mut out = Out(0);
-            let code = servo.tick(s.tick, &mut Enc(raw), &mut out);
+            let mut out = HeldCode(0);
+            let code = servo.tick(s.tick, &mut SampledCount(raw), &mut out);
             if s.flags & flags::SAFE_MODE != 0 {
                 r.excluded_safe_mode += 1;
                 since_clean = 0;
@@ -643,8 +630,8 @@ mod tests {
             // Up to ±40000 counts: beyond the 16-bit counter's signed range, around the wall.
             let pos = (40_000.0 * (f64::from(t) * 0.0005).sin()).round() as i64;
             let raw = (pos as u32) & 0xffff;
-            let mut out = Out(0);
-            let code = servo.tick(t, &mut Enc(raw), &mut out);
+            let mut out = HeldCode(0);
+            let code = servo.tick(t, &mut SampledCount(raw), &mut out);
             // From t = 2500 on, the position (≈ 38000) no longer fits the counter.
             if t >= 2_500 {
                 rows.push(Row {

@@ -20,7 +20,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_firmware::{
-    BoardInfo, ByteLink, Channels, ConfigStore, Device, Encoder, ForceOutput, MemStorage, Servo,
+    BoardInfo, ByteLink, Channels, ConfigStore, Device, HeldCode, MemStorage, SampledCount, Servo,
 };
 use stiffwall_proto::ServoConfig;
 use stiffwall_sim::PhysicalPlant;
@@ -117,20 +117,6 @@ impl ByteLink for MemLink {
     }
 }
 
-struct Sampled(u32);
-impl Encoder for Sampled {
-    fn count(&mut self) -> u32 {
-        self.0
-    }
-}
-
-struct Written(i32);
-impl ForceOutput for Written {
-    fn write(&mut self, code: i32) {
-        self.0 = code;
-    }
-}
-
 /// Starts the virtual device; returns it and the host side of its pty, opened by path.
 pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPort>)> {
     let p = &spec.plant;
@@ -210,8 +196,8 @@ fn run(spec: &Spec, mut plant: PhysicalPlant, pty: &mut serialport::TTYPort, sto
             tick = tick.wrapping_add(1);
             ticks_since_epoch += 1;
             let raw = (plant.encoder_count() as u64 & mask) as u32;
-            let mut out = Written(0);
-            servo.tick(tick, &mut Sampled(raw), &mut out);
+            let mut out = HeldCode(0);
+            servo.tick(tick, &mut SampledCount(raw), &mut out);
             plant.advance(f64::from(out.0) * f64::from(board.force_per_code), period_s);
             // Let the main loop drain telemetry before the servo's queue fills.
             device.poll(tick, &mut link);

@@ -13,9 +13,11 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{entry, exception};
 use cortex_m_semihosting::debug;
 use static_cell::StaticCell;
-use stiffwall_board_qemu_an386::plant::{self, Bench, Sampled, Written};
+use stiffwall_board_qemu_an386::plant::{self, Bench};
 use stiffwall_board_qemu_an386::{uart::Uart0, CORE_CLOCK_HZ};
-use stiffwall_firmware::{ByteLink, Channels, ConfigStore, Device, NoStorage, Servo};
+use stiffwall_firmware::{
+    ByteLink, Channels, ConfigStore, Device, HeldCode, NoStorage, SampledCount, Servo,
+};
 use stiffwall_proto::ServoConfig;
 
 /// The servo and the simulated bench, owned by the SysTick handler.
@@ -93,7 +95,11 @@ fn main() -> ! {
         }
         if let Some(code) = device.take_shutdown() {
             // The Ack has been written to the UART (take_shutdown waits for that).
-            debug::exit(if code == 0 { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
+            debug::exit(if code == 0 {
+                debug::EXIT_SUCCESS
+            } else {
+                debug::EXIT_FAILURE
+            });
         }
     }
 }
@@ -104,8 +110,8 @@ fn SysTick() {
     cortex_m::interrupt::free(|cs| {
         if let Some(s) = SERVO.borrow(cs).borrow_mut().as_mut() {
             // Sample the encoder at the instant, compute, then hold the code for one period.
-            let mut enc = Sampled(s.bench.raw_count());
-            let mut out = Written(0);
+            let mut enc = SampledCount(s.bench.raw_count());
+            let mut out = HeldCode(0);
             s.servo.tick(now, &mut enc, &mut out);
             s.bench.set_code(out.0);
             s.bench.advance(s.period_s);
@@ -116,5 +122,7 @@ fn SysTick() {
 #[panic_handler]
 fn panic(_info: &core::panic::PanicInfo) -> ! {
     debug::exit(debug::EXIT_FAILURE);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }

@@ -64,6 +64,12 @@ impl Bench {
     }
 }
 
+impl Default for Bench {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl Bench {
     /// The raw 16-bit quadrature counter at this instant: the low 16 bits of the true count.
     pub fn raw_count(&self) -> u32 {
@@ -73,26 +79,6 @@ impl Bench {
     /// Applies an output code (held until the next call).
     pub fn set_code(&mut self, code: i32) {
         self.force = f64::from(code) * f64::from(FORCE_PER_CODE);
-    }
-}
-
-/// The encoder as sampled at a servo instant.
-#[derive(Debug, Clone, Copy)]
-pub struct Sampled(pub u32);
-
-impl Encoder for Sampled {
-    fn count(&mut self) -> u32 {
-        self.0
-    }
-}
-
-/// The output code the servo wrote this tick.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Written(pub i32);
-
-impl ForceOutput for Written {
-    fn write(&mut self, code: i32) {
-        self.0 = code;
     }
 }
 

@@ -15,7 +15,9 @@ use core::hint::black_box;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use stiffwall_firmware::{Channels, Encoder, ForceOutput, Fx32, Fx64, Numeric, Servo, ServoCmd, F32};
+use stiffwall_firmware::{
+    Channels, Encoder, ForceOutput, Fx32, Fx64, Numeric, Servo, ServoCmd, F32,
+};
 use stiffwall_proto::ServoConfig;
 
 const BATCHES: u32 = 40;
@@ -105,20 +107,45 @@ fn stages<N: Numeric>(baseline: u64) {
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
     let table = black_box(sweep_table());
-    let (mut enc, mut out) = (Sweep { table: &table, i: 0 }, Sink);
+    let (mut enc, mut out) = (
+        Sweep {
+            table: &table,
+            i: 0,
+        },
+        Sink,
+    );
     // The loop plus the encoder and output stand-ins alone: subtracted from every stage.
     let io = measure(|_| out.write(enc.count() as i32), || {});
     if N::NAME == "I32F32" {
         report("io-stand-ins", "all", io, baseline);
     }
     let baseline = io;
-    let c = measure(|_| { black_box(servo.tick_spring(&mut enc, &mut out)); }, || {});
+    let c = measure(
+        |_| {
+            black_box(servo.tick_spring(&mut enc, &mut out));
+        },
+        || {},
+    );
     report("spring", N::NAME, c, baseline);
-    let c = measure(|_| { black_box(servo.tick_spring_delay(&mut enc, &mut out)); }, || {});
+    let c = measure(
+        |_| {
+            black_box(servo.tick_spring_delay(&mut enc, &mut out));
+        },
+        || {},
+    );
     report("spring+delay", N::NAME, c, baseline);
-    let c = measure(|t| { black_box(servo.tick_supervised(t, &mut enc, &mut out)); }, || {});
+    let c = measure(
+        |t| {
+            black_box(servo.tick_supervised(t, &mut enc, &mut out));
+        },
+        || {},
+    );
     report("spring+delay+supervisor", N::NAME, c, baseline);
-    if host.commands.enqueue(ServoCmd::Stream { decimation: 1 }).is_err() {
+    if host
+        .commands
+        .enqueue(ServoCmd::Stream { decimation: 1 })
+        .is_err()
+    {
         hprintln!("BENCH-ERROR command queue full");
     }
     let c = measure(
@@ -129,7 +156,11 @@ fn stages<N: Numeric>(baseline: u64) {
     );
     report("full(+telemetry)", N::NAME, c, baseline);
     if servo.faults() != 0 {
-        hprintln!("BENCH-ERROR faults {:#x} latched during {}", servo.faults(), N::NAME);
+        hprintln!(
+            "BENCH-ERROR faults {:#x} latched during {}",
+            servo.faults(),
+            N::NAME
+        );
     }
 }
 
@@ -143,18 +174,30 @@ fn main() -> ! {
     cp.SYST.set_reload(0x00ff_ffff);
     cp.SYST.clear_current();
     cp.SYST.enable_counter();
-    let baseline = measure(|t| { black_box(t); }, || {});
-    hprintln!("BENCH baseline loop {}", baseline * INSTR_PER_COUNT * 100 / u64::from(BATCHES * PER_BATCH));
+    let baseline = measure(
+        |t| {
+            black_box(t);
+        },
+        || {},
+    );
+    hprintln!(
+        "BENCH baseline loop {}",
+        baseline * INSTR_PER_COUNT * 100 / u64::from(BATCHES * PER_BATCH)
+    );
     stages::<Fx64>(baseline);
     stages::<Fx32>(baseline);
     stages::<F32>(baseline);
     debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }
 
 #[panic_handler]
 fn panic(_info: &core::panic::PanicInfo) -> ! {
     hprintln!("BENCH-ERROR panic");
     debug::exit(debug::EXIT_FAILURE);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }
