@@ -28,6 +28,9 @@ use stiffwall_proto::{flags, ExciteProfile, ServoConfig};
 /// Default maximum velocity, in encoder ticks per servo period (ξ̇ of Table I; independent of K).
 pub const DEFAULT_XIDOT: f64 = 5.0;
 
+/// Factor applied to K when a confirmation release (from either side) does not settle.
+pub const CONFIRM_BACKOFF: f64 = 0.95;
+
 /// Set by the Ctrl-C handler; checked between experiments.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
@@ -304,6 +307,15 @@ pub fn release_test(
         stiffness: k as f32,
         ..*base
     };
+    // A reproducible start: wall off until the device has stopped, then clear the faults.
+    // After a test that grew (the supervisor cut the force) the device may still be coasting;
+    // a hold that begins while it moves releases it with sub-tick motion left over, which
+    // decides borderline tests, and faults cleared while it coasts can latch again.
+    c.set_config(&ServoConfig {
+        stiffness: 0.0,
+        ..*base
+    })?;
+    rest_position(c)?;
     c.clear_faults().ok();
     c.set_config(&cfg)?;
     let f = c.faults()?;
@@ -419,7 +431,8 @@ fn tune_inner(
     })?;
     let mut k_set = found.k_pass * s.margin;
     let mut confirmation = Vec::new();
-    for _ in 0..4 {
+    // A confirmation that fails backs off in steps of CONFIRM_BACKOFF (finer than the margin).
+    for _ in 0..6 {
         let d = deflection_for(&p, k_set, v);
         progress(&format!("confirming K={k_set:.4} from ±{d} ticks"));
         confirmation = vec![
@@ -429,7 +442,7 @@ fn tune_inner(
         if confirmation.iter().all(|v| v.settled()) {
             break;
         }
-        k_set *= s.margin;
+        k_set *= CONFIRM_BACKOFF;
     }
     if !confirmation.iter().all(|v| v.settled()) {
         bail!("no stiffness confirmed by releases from both sides (last tried {k_set:.4})");
