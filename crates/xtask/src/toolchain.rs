@@ -1,6 +1,6 @@
 //! Finds (and, when it may, installs) what the cross builds and QEMU runs need.
 //!
-//! Order of preference, per TOOLCHAIN.md:
+//! Order of preference (see docs/toolchain.md):
 //! 1. rustup's toolchain with the `thumbv7em-none-eabihf` target (`rustup target add`), linked by
 //!    `rust-lld` (the thumb targets' default);
 //! 2. Debian's `rustc-web`/`cargo-web`/`rust-web-src` building `core` from source
@@ -49,29 +49,85 @@ fn is_debian() -> bool {
 }
 
 /// Installs Debian packages when allowed, otherwise fails naming the command to run.
+///
+/// Never removes or downgrades anything the machine has: the install runs with `--no-remove`,
+/// and what it will install is printed (from `apt-get install -s`) before it does so. A plan
+/// that needs a removal fails with the plan in the message instead.
 pub fn apt_install(packages: &[&str], why: &str) -> Result<()> {
-    let line = format!("apt-get install -y {}", packages.join(" "));
+    let line = format!("apt-get install -y --no-remove {}", packages.join(" "));
     if !(is_root() && is_debian()) {
         bail!("{why} is missing; install it with: sudo {line}");
     }
-    eprintln!("xtask: installing {why}: {line}");
-    let install = |update: bool| -> bool {
+    let apt = |args: &[&str]| {
+        let mut c = Command::new("apt-get");
+        c.args(args)
+            .args(["-q", "--no-install-recommends", "--no-remove"])
+            .args(packages)
+            .env("DEBIAN_FRONTEND", "noninteractive");
+        c
+    };
+    let plan = |update: bool| -> Option<String> {
         if update {
             let _ = Command::new("apt-get").args(["update", "-q"]).status();
         }
-        Command::new("apt-get")
-            .args(["install", "-y", "-q", "--no-install-recommends"])
-            .args(packages)
-            .env("DEBIAN_FRONTEND", "noninteractive")
-            .status()
-            .map(|s| s.success())
-            .unwrap_or(false)
+        output(&mut apt(&["install", "-s"]))
     };
-    if install(false) || install(true) {
+    let Some(plan) = plan(false).or_else(|| plan(true)) else {
+        bail!(
+            "`{line}` cannot be done without removing or downgrading installed packages \
+             (see `apt-get install -s {}`); {why} is needed",
+            packages.join(" ")
+        );
+    };
+    let new: Vec<&str> = plan
+        .lines()
+        .filter_map(|l| l.strip_prefix("Inst "))
+        .map(|l| l.split_whitespace().next().unwrap_or(l))
+        .collect();
+    eprintln!(
+        "xtask: installing {why}: {line}\nxtask: this installs {} package(s): {}",
+        new.len(),
+        new.join(" ")
+    );
+    if apt(&["install", "-y"])
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false)
+    {
         Ok(())
     } else {
         bail!("`{line}` failed; {why} is needed")
     }
+}
+
+/// The installed version of a Debian package, if any.
+fn installed_version(package: &str) -> Option<String> {
+    let v = output(Command::new("dpkg-query").args(["-W", "-f=${Status} ${Version}", package]))?;
+    let v = v.strip_prefix("install ok installed ")?.trim();
+    (!v.is_empty()).then(|| v.to_owned())
+}
+
+/// True when `apt-cache` knows `version` of `package` in a configured source.
+fn apt_has_version(package: &str, version: &str) -> bool {
+    output(Command::new("apt-cache").args(["madison", package])).is_some_and(|s| {
+        s.lines()
+            .any(|l| l.split('|').nth(1).is_some_and(|v| v.trim() == version))
+    })
+}
+
+/// Debian's backports suite, added (and announced) only when an installed QEMU package came
+/// from it, so that `qemu-system-arm` can be installed at the same version.
+const BACKPORTS_SOURCES: &str = "/etc/apt/sources.list.d/stiffwall-backports.sources";
+
+fn add_backports(codename: &str) -> Result<()> {
+    let text = format!(
+        "Types: deb\nURIs: http://deb.debian.org/debian\nSuites: {codename}-backports\n\
+         Components: main\nSigned-By: /usr/share/keyrings/debian-archive-keyring.gpg\n"
+    );
+    eprintln!("xtask: adding Debian's {codename}-backports suite ({BACKPORTS_SOURCES}) to match the installed QEMU packages");
+    std::fs::write(BACKPORTS_SOURCES, text)?;
+    let _ = Command::new("apt-get").args(["update", "-q"]).status();
+    Ok(())
 }
 
 /// Makes sure the thumb target can be built, preferring rustup.
@@ -114,12 +170,49 @@ pub fn which(prog: &str) -> bool {
         .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(prog).is_file()))
 }
 
-/// Makes sure `qemu-system-arm` is installed.
+/// Makes sure `qemu-system-arm` is installed, at the version of any QEMU package the machine
+/// already has (e.g. a backported `qemu-utils`): installing Debian's default version beside a
+/// newer `qemu-utils` would remove it, which a test command must never do.
 pub fn ensure_qemu() -> Result<()> {
     if which("qemu-system-arm") {
         return Ok(());
     }
-    apt_install(&["qemu-system-arm"], "QEMU (qemu-system-arm)")?;
+    let pinned = [
+        "qemu-system-common",
+        "qemu-system-data",
+        "qemu-utils",
+        "qemu-block-extra",
+    ]
+    .iter()
+    .find_map(|p| installed_version(p));
+    match pinned {
+        Some(v) => {
+            if !apt_has_version("qemu-system-arm", &v) && is_root() && is_debian() {
+                if let Some(code) = v.split("~bpo").nth(1).and_then(|s| s.split('+').next()) {
+                    let codename = match code {
+                        "11" => "bullseye",
+                        "12" => "bookworm",
+                        "13" => "trixie",
+                        _ => "",
+                    };
+                    if !codename.is_empty() {
+                        add_backports(codename)?;
+                    }
+                }
+            }
+            let pkgs = [
+                format!("qemu-system-arm={v}"),
+                format!("qemu-system-common={v}"),
+                format!("qemu-system-data={v}"),
+            ];
+            let pkgs: Vec<&str> = pkgs.iter().map(String::as_str).collect();
+            apt_install(
+                &pkgs,
+                "QEMU (qemu-system-arm, at the installed QEMU version)",
+            )?;
+        }
+        None => apt_install(&["qemu-system-arm"], "QEMU (qemu-system-arm)")?,
+    }
     if !which("qemu-system-arm") {
         bail!("qemu-system-arm still not on PATH after installing it");
     }
