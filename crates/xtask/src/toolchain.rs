@@ -1,6 +1,6 @@
 //! Finds (and, when it may, installs) what the cross builds and QEMU runs need.
 //!
-//! Order of preference, per TOOLCHAIN.md:
+//! Order of preference (docs/toolchain.md):
 //! 1. rustup's toolchain with the `thumbv7em-none-eabihf` target (`rustup target add`), linked by
 //!    `rust-lld` (the thumb targets' default);
 //! 2. Debian's `rustc-web`/`cargo-web`/`rust-web-src` building `core` from source
