@@ -9,7 +9,7 @@
 #[cfg(feature = "defmt")]
 use defmt_rtt as _;
 
-/// Logs at level `$level` (`info`, `warn`, `error`) through defmt, or does nothing.
+/// Logs at defmt level `$level` (`info`, `warn`, `error`) through defmt, or does nothing.
 macro_rules! log_at {
     ($level:ident, $fmt:literal $(, $arg:expr)* $(,)?) => {{
         #[cfg(feature = "defmt")]
@@ -26,8 +26,10 @@ macro_rules! info {
     ($($t:tt)*) => { $crate::log::log_at!(info, $($t)*) };
 }
 
-/// A fault latched by the servo's supervisor.
-macro_rules! warn {
+/// A fault latched by the servo's supervisor (defmt's `warn`; only the `defmt` build watches the
+/// fault bits, so only it has this macro).
+#[cfg(feature = "defmt")]
+macro_rules! warning {
     ($($t:tt)*) => { $crate::log::log_at!(warn, $($t)*) };
 }
 
@@ -36,4 +38,6 @@ macro_rules! error {
     ($($t:tt)*) => { $crate::log::log_at!(error, $($t)*) };
 }
 
-pub(crate) use {error, info, log_at, warn};
+#[cfg(feature = "defmt")]
+pub(crate) use warning;
+pub(crate) use {error, info, log_at};

@@ -159,7 +159,7 @@ fn main() -> ! {
             let faults = shared.faults.load(Relaxed);
             if faults != logged_faults {
                 let first = shared.first_fault_tick.load(Relaxed);
-                log::warn!(
+                log::warning!(
                     "servo faults {=u32:#x} (first at tick {=u32})",
                     faults,
                     first
