@@ -134,6 +134,18 @@ pub struct ConfigError {
     pub max: f64,
 }
 
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "{} must be within [{}, {}]",
+            self.field, self.min, self.max
+        )
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
 fn check_f(field: ConfigField, v: f32, min: f32, max: f32) -> Result<(), ConfigError> {
     if v.is_finite() && v >= min && v <= max {
         Ok(())
@@ -631,5 +643,20 @@ mod tests {
         assert!((Fx64::to_f64(g.k_half) - 10.0).abs() < 1e-4);
         assert_eq!(g.limit, 1000);
         assert_eq!(g.shift, 1);
+    }
+
+    #[test]
+    fn config_error_names_the_field_and_its_range() {
+        use std::string::ToString;
+        let e = validate(
+            &ServoConfig {
+                servo_rate_hz: 50_000,
+                ..ServoConfig::default()
+            },
+            &BoardInfo::default(),
+        )
+        .unwrap_err();
+        let err: &dyn core::error::Error = &e;
+        assert_eq!(err.to_string(), "servo_rate_hz must be within [100, 20000]");
     }
 }

@@ -4,6 +4,8 @@
 //! [`crate::config::BoardInfo::encoder_bits`]); force codes are signed output codes (one code =
 //! `BoardInfo::force_per_code` N or N·m); ticks are servo ticks. Implementations must not block.
 
+use embedded_storage::nor_flash::{NorFlashError, NorFlashErrorKind};
+
 /// A quadrature (or simulated) encoder: the raw hardware counter.
 pub trait Encoder {
     /// The raw counter value. Only the low `encoder_bits` bits are used; the firmware unwraps
@@ -71,9 +73,69 @@ pub trait ConfigStorage {
     fn write(&mut self, slot: usize, data: &[u8]) -> Result<(), StorageError>;
 }
 
-/// A storage failure.
+/// A storage failure, with the board's flash error kind kept.
+///
+/// Boards speak `embedded-storage`'s vocabulary at their edge: a flash driver's error implements
+/// [`NorFlashError`] and reaches the core as [`StorageError::Flash`] through
+/// [`StorageError::flash`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct StorageError;
+pub enum StorageError {
+    /// The slot index is outside `0..=1`.
+    Slot {
+        /// The slot asked for.
+        slot: usize,
+    },
+    /// A request of `len` bytes does not fit a slot of `slot_len` bytes.
+    TooLong {
+        /// Bytes asked for.
+        len: usize,
+        /// Bytes per slot.
+        slot_len: usize,
+    },
+    /// The config does not encode into a record of at most `max` bytes.
+    RecordTooLong {
+        /// Largest record, bytes.
+        max: usize,
+    },
+    /// The board has no non-volatile storage.
+    Unsupported,
+    /// The write stopped after `written` bytes (a simulated power cut).
+    Interrupted {
+        /// Bytes written before the stop.
+        written: usize,
+    },
+    /// The board's flash driver failed, with its error kind.
+    Flash(NorFlashErrorKind),
+}
+
+impl StorageError {
+    /// A board flash driver's error, keeping its kind.
+    pub fn flash(e: impl NorFlashError) -> Self {
+        Self::Flash(e.kind())
+    }
+}
+
+impl core::fmt::Display for StorageError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Slot { slot } => write!(f, "config slot {slot} out of range 0..=1"),
+            Self::TooLong { len, slot_len } => write!(
+                f,
+                "{len} bytes do not fit a config slot: allowed 0..={slot_len} bytes"
+            ),
+            Self::RecordTooLong { max } => {
+                write!(f, "config record too long: allowed at most {max} bytes")
+            }
+            Self::Unsupported => write!(f, "this board has no config storage"),
+            Self::Interrupted { written } => {
+                write!(f, "config write interrupted after {written} bytes")
+            }
+            Self::Flash(kind) => write!(f, "flash error: {kind}"),
+        }
+    }
+}
+
+impl core::error::Error for StorageError {}
 
 /// Storage for boards without non-volatile memory: every read and write fails, so the device
 /// boots with its defaults and `SaveConfig` answers `StoreFailed`.
@@ -85,9 +147,9 @@ impl ConfigStorage for NoStorage {
         0
     }
     fn read(&mut self, _slot: usize, _buf: &mut [u8]) -> Result<(), StorageError> {
-        Err(StorageError)
+        Err(StorageError::Unsupported)
     }
     fn write(&mut self, _slot: usize, _data: &[u8]) -> Result<(), StorageError> {
-        Err(StorageError)
+        Err(StorageError::Unsupported)
     }
 }

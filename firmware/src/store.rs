@@ -110,9 +110,10 @@ impl<S: ConfigStorage> ConfigStore<S> {
             None => (0, 1),
         };
         let mut buf = [0u8; RECORD_MAX];
-        let n = build(cfg, gen, &mut buf).ok_or(StorageError)?;
-        if n > self.storage.slot_len() {
-            return Err(StorageError);
+        let n = build(cfg, gen, &mut buf).ok_or(StorageError::RecordTooLong { max: RECORD_MAX })?;
+        let slot_len = self.storage.slot_len();
+        if n > slot_len {
+            return Err(StorageError::TooLong { len: n, slot_len });
         }
         self.storage.write(slot, &buf[..n])
     }
@@ -144,17 +145,26 @@ impl ConfigStorage for MemStorage {
         RECORD_MAX
     }
     fn read(&mut self, slot: usize, buf: &mut [u8]) -> Result<(), StorageError> {
-        let s = self.slots.get(slot).ok_or(StorageError)?;
-        let src = s.get(..buf.len()).ok_or(StorageError)?;
+        let s = self.slots.get(slot).ok_or(StorageError::Slot { slot })?;
+        let src = s.get(..buf.len()).ok_or(StorageError::TooLong {
+            len: buf.len(),
+            slot_len: RECORD_MAX,
+        })?;
         buf.copy_from_slice(src);
         Ok(())
     }
     fn write(&mut self, slot: usize, data: &[u8]) -> Result<(), StorageError> {
         let cut = self.interrupt_after.take();
         let erase = self.erase_first;
-        let s = self.slots.get_mut(slot).ok_or(StorageError)?;
+        let s = self
+            .slots
+            .get_mut(slot)
+            .ok_or(StorageError::Slot { slot })?;
         if data.len() > s.len() {
-            return Err(StorageError);
+            return Err(StorageError::TooLong {
+                len: data.len(),
+                slot_len: RECORD_MAX,
+            });
         }
         if erase {
             s.fill(0xff);
@@ -162,7 +172,7 @@ impl ConfigStorage for MemStorage {
         let n = cut.map_or(data.len(), |k| k.min(data.len()));
         s[..n].copy_from_slice(&data[..n]);
         if cut.is_some() {
-            Err(StorageError)
+            Err(StorageError::Interrupted { written: n })
         } else {
             Ok(())
         }
@@ -245,5 +255,51 @@ mod tests {
         let (slot, _, _) = s.newest().unwrap();
         s.storage.slots[slot][12] ^= 0x40;
         assert_eq!(s.load(), Some(cfg(1.0)));
+    }
+
+    #[test]
+    fn storage_errors_name_what_failed() {
+        use crate::hal::NoStorage;
+        use embedded_storage::nor_flash::{NorFlashError, NorFlashErrorKind};
+        use std::string::ToString;
+
+        let mut m = MemStorage::default();
+        assert_eq!(m.read(2, &mut [0; 4]), Err(StorageError::Slot { slot: 2 }));
+        assert_eq!(
+            m.write(0, &[0; RECORD_MAX + 1]),
+            Err(StorageError::TooLong {
+                len: RECORD_MAX + 1,
+                slot_len: RECORD_MAX
+            })
+        );
+        m.interrupt_after = Some(3);
+        assert_eq!(
+            m.write(1, &[1; 10]),
+            Err(StorageError::Interrupted { written: 3 })
+        );
+        assert_eq!(
+            ConfigStore::new(NoStorage).save(&cfg(1.0)),
+            Err(StorageError::TooLong {
+                len: build(&cfg(1.0), 1, &mut [0; RECORD_MAX]).unwrap(),
+                slot_len: 0
+            })
+        );
+
+        // A board driver's own error keeps its kind on the way into the core.
+        #[derive(Debug)]
+        struct Misaligned;
+        impl NorFlashError for Misaligned {
+            fn kind(&self) -> NorFlashErrorKind {
+                NorFlashErrorKind::NotAligned
+            }
+        }
+        let e = StorageError::flash(Misaligned);
+        assert_eq!(e, StorageError::Flash(NorFlashErrorKind::NotAligned));
+        let e: &dyn core::error::Error = &e;
+        assert!(e.to_string().starts_with("flash error: "));
+        assert_eq!(
+            StorageError::Slot { slot: 2 }.to_string(),
+            "config slot 2 out of range 0..=1"
+        );
     }
 }

@@ -106,8 +106,7 @@ impl core::fmt::Display for FrameError {
     }
 }
 
-#[cfg(feature = "std")]
-impl std::error::Error for FrameError {}
+impl core::error::Error for FrameError {}
 
 /// Encodes `msg` as one frame (terminator included) into `out`; returns the frame.
 ///
@@ -270,6 +269,19 @@ impl FrameDecoder {
 mod tests {
     use super::*;
     use crate::msg::*;
+
+    #[test]
+    fn frame_error_is_a_core_error_naming_its_limit() {
+        use std::string::ToString;
+        // A no_std caller can hold it as `&dyn core::error::Error` (no `std` feature needed).
+        let e: &dyn core::error::Error = &FrameError::Oversize;
+        assert!(e.to_string().contains(&MAX_FRAME.to_string()));
+        let v = FrameError::VersionMismatch { got: 9 }.to_string();
+        assert!(
+            v.contains('9') && v.contains(&PROTOCOL_VERSION.to_string()),
+            "{v}"
+        );
+    }
 
     fn roundtrip<M: Message + PartialEq + core::fmt::Debug>(m: &M) -> usize {
         let mut out = [0u8; MAX_FRAME];

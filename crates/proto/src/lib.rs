@@ -14,7 +14,7 @@
 #![no_std]
 #![cfg_attr(not(test), warn(missing_docs))]
 
-#[cfg(any(feature = "std", test))]
+#[cfg(test)]
 extern crate std;
 
 pub mod frame;

@@ -443,6 +443,38 @@ pub enum ConfigField {
     Argument,
 }
 
+impl ConfigField {
+    /// The field's name in [`ServoConfig`] (`"argument"` for experiment / table parameters).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Stiffness => "stiffness",
+            Self::Damping => "damping",
+            Self::ServoRateHz => "servo_rate_hz",
+            Self::ExtraDelayTicks => "extra_delay_ticks",
+            Self::CoarsenShift => "coarsen_shift",
+            Self::Wall => "wall",
+            Self::WallPosition => "wall_position",
+            Self::ForceLimit => "force_limit",
+            Self::MaxVelocity => "max_velocity",
+            Self::EnergyMonitor => "energy_monitor",
+            Self::EnergyLimit => "energy_limit",
+            Self::EnergyGrowthCycles => "energy_growth_cycles",
+            Self::EncoderJumpCounts => "encoder_jump_counts",
+            Self::HeartbeatTimeoutMs => "heartbeat_timeout_ms",
+            Self::SafeMode => "safe_mode",
+            Self::SafeDamping => "safe_damping",
+            Self::Argument => "argument",
+        }
+    }
+}
+
+impl core::fmt::Display for ConfigField {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Details of an error.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum ErrorDetail {

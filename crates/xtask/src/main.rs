@@ -4,6 +4,8 @@
 //!   for the Cortex-M target, firmware cross-builds with the size report, QEMU scenarios.
 //! - `firmware [--update-size-report]`: builds every board image.
 //! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
+//! - `flash BOARD --features dac|pwm[,defmt]`: builds a real board's image and flashes it with
+//!   probe-rs (the board's runner; docs/toolchain.md).
 //! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
 //! - `bench [--quick] [--no-criterion]`: the simulator's accuracy-vs-time tables
 //!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
@@ -13,6 +15,7 @@ use std::process::Command;
 mod bench;
 mod bench_firmware;
 mod firmware;
+mod flash;
 mod qemu;
 mod toolchain;
 
@@ -126,7 +129,8 @@ fn main() -> Result<()> {
             sync_sim_benchmarks()
         }
         Some("qemu") => qemu::qemu(&args[1..]),
+        Some("flash") => flash::flash(&args[1..]),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write], bench [--quick]"),
+        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick]"),
     }
 }

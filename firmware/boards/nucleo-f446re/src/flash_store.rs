@@ -18,7 +18,11 @@
 //! receiver therefore stop for up to ~1–2 s during an erase. `ConfigStorage::write` holds the
 //! force output at zero with the amplifier disabled for the whole save (`force::inhibit`) and
 //! stretches the watchdog for the erase; the host waits for the save's reply.
+//!
+//! Errors: [`FlashError`] implements `embedded-storage`'s `NorFlashError`, so its kind
+//! (out of bounds, not aligned, other) reaches the firmware core as `StorageError::Flash`.
 
+use embedded_storage::nor_flash::{NorFlashError, NorFlashErrorKind};
 use stm32f4xx_hal::pac::FLASH;
 
 /// Number of slots.
@@ -33,13 +37,30 @@ const SLOT_SECTOR: [u8; SLOTS] = [6, 7];
 const KEY1: u32 = 0x4567_0123;
 const KEY2: u32 = 0xCDEF_89AB;
 
+/// Programming alignment and parallelism errors (PGAERR, PGPERR) in FLASH_SR.
+const SR_ALIGNMENT: u32 = 0b110_0000;
+
 /// What can go wrong with a flash operation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FlashError {
-    /// Slot index, offset or length outside the slot, or an offset not 4-byte aligned.
+    /// Slot index, offset or length outside the slot.
     OutOfRange,
-    /// The flash controller reported an error (its SR bits).
+    /// A program offset not 4-byte aligned.
+    NotAligned,
+    /// The flash controller reported an error (its SR error bits).
     Hardware(u32),
+}
+
+impl NorFlashError for FlashError {
+    fn kind(&self) -> NorFlashErrorKind {
+        match self {
+            FlashError::OutOfRange => NorFlashErrorKind::OutOfBounds,
+            FlashError::NotAligned => NorFlashErrorKind::NotAligned,
+            FlashError::Hardware(sr) if sr & SR_ALIGNMENT != 0 => NorFlashErrorKind::NotAligned,
+            FlashError::Hardware(_) => NorFlashErrorKind::Other,
+        }
+    }
 }
 
 /// The two config slots. One instance (owns the FLASH controller).
@@ -100,7 +121,10 @@ impl FlashSlots {
         let end = offset
             .checked_add(data.len())
             .ok_or(FlashError::OutOfRange)?;
-        if !offset.is_multiple_of(4) || end > SLOT_LEN {
+        if !offset.is_multiple_of(4) {
+            return Err(FlashError::NotAligned);
+        }
+        if end > SLOT_LEN {
             return Err(FlashError::OutOfRange);
         }
         self.unlock();
@@ -217,13 +241,17 @@ impl stiffwall_firmware::ConfigStorage for FlashSlots {
         slot: usize,
         buf: &mut [u8],
     ) -> Result<(), stiffwall_firmware::StorageError> {
-        FlashSlots::read(self, slot, 0, buf).map_err(|_| stiffwall_firmware::StorageError)
+        FlashSlots::read(self, slot, 0, buf).map_err(stiffwall_firmware::StorageError::flash)
     }
 
     fn write(&mut self, slot: usize, data: &[u8]) -> Result<(), stiffwall_firmware::StorageError> {
         crate::force::inhibit(true);
         let result = self.rewrite(slot, data);
         crate::force::inhibit(false);
-        result.map_err(|_| stiffwall_firmware::StorageError)
+        match result {
+            Ok(()) => crate::log::info!("config saved: slot {}, {} bytes", slot, data.len()),
+            Err(e) => crate::log::error!("config save to slot {} failed: {}", slot, e),
+        }
+        result.map_err(stiffwall_firmware::StorageError::flash)
     }
 }

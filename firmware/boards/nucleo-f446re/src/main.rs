@@ -11,8 +11,8 @@ mod encoder;
 mod flash_store;
 mod force;
 mod handoff;
+mod log;
 mod rig;
-mod ring;
 mod serial;
 mod servo_timer;
 mod watchdog;
@@ -103,6 +103,9 @@ fn main() -> ! {
     // the servo starts from that config.
     let channels: &'static mut Channels = CHANNELS.init_with(Channels::new);
     let (servo_port, host_port) = channels.split();
+    // The latched fault bits, read by thread mode for the optional log.
+    #[cfg(feature = "defmt")]
+    let shared = host_port.shared;
     let board = rig::board_info();
     let mut device = Device::new(
         board,
@@ -132,6 +135,16 @@ fn main() -> ! {
         NVIC::unmask(Interrupt::TIM7);
     }
 
+    log::info!(
+        "stiffwall boot on {=str} ({=str} output): servo {=u32} Hz, stiffness {=f32} N/m",
+        board.name,
+        if cfg!(feature = "pwm") { "PWM" } else { "DAC" },
+        device.servo_rate_hz(),
+        device.config().stiffness
+    );
+    #[cfg(feature = "defmt")]
+    let mut logged_faults = 0u32;
+
     let mut dog = watchdog::Watchdog::start(dp.IWDG, &dp.DBGMCU, servo_timer::ticks());
     loop {
         device.poll(servo_timer::ticks(), &mut port);
@@ -140,6 +153,20 @@ fn main() -> ! {
             servo_timer::request_rate(hz);
         }
         let now = servo_timer::ticks();
+        #[cfg(feature = "defmt")]
+        {
+            use core::sync::atomic::Ordering::Relaxed;
+            let faults = shared.faults.load(Relaxed);
+            if faults != logged_faults {
+                let first = shared.first_fault_tick.load(Relaxed);
+                log::warning!(
+                    "servo faults {=u32:#x} (first at tick {=u32})",
+                    faults,
+                    first
+                );
+                logged_faults = faults;
+            }
+        }
         dog.feed_if_ticking(now);
         // Half a second of ticks per LED phase.
         led.set_state(((now / (device.servo_rate_hz() / 2).max(1)) & 1 == 1).into());
@@ -188,16 +215,20 @@ fn halt() -> ! {
 }
 
 #[exception]
-unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
     force::emergency_off();
+    log::error!("HardFault at pc {=u32:#010x}", frame.pc());
     loop {
         cortex_m::asm::nop();
     }
 }
 
 #[panic_handler]
-fn panic(_info: &core::panic::PanicInfo) -> ! {
+fn panic(info: &core::panic::PanicInfo) -> ! {
     force::emergency_off();
+    if let Some(at) = info.location() {
+        log::error!("panic at {=str}:{=u32}", at.file(), at.line());
+    }
     loop {
         cortex_m::asm::nop();
     }

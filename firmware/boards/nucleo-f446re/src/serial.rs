@@ -6,12 +6,15 @@
 //! the ±2 % a UART tolerates against the ST-LINK's own −/+0.2 %.
 //!
 //! Data path: the USART2 interrupt (highest priority in the system, a few dozen cycles per byte)
-//! moves each received byte into a lock-free SPSC ring (`ring.rs`; `RX_CAPACITY` bytes, ~11 ms
-//! of line time at full rate) and feeds the transmitter from a second ring (`TX_CAPACITY` bytes),
-//! one byte per TXE interrupt. Thread mode (`SerialPort`) only touches the other ends of the two
-//! rings, so no lock is needed. One byte time at 921600 baud is 10.9 µs; because the RX
+//! moves each received byte into a lock-free SPSC queue (`heapless::spsc`, the same 0.8 queue
+//! the firmware core's channels use; `RX_SLOTS − 1` = 1023 bytes, ~11 ms of line time at full
+//! rate) and feeds the transmitter from a second queue (`TX_SLOTS − 1` = 2047 bytes), one byte per
+//! TXE interrupt. Thread mode (`SerialPort`) only holds the other ends of the two queues (the
+//! `Producer`/`Consumer` split makes one producer and one consumer per queue a type-level
+//! fact), so no lock is needed. The slot counts are powers of two, so heapless's index wrap
+//! `(i + 1) % N` compiles to a mask: no division and no panic path in the interrupt. One byte time at 921600 baud is 10.9 µs; because the RX
 //! interrupt preempts everything else, a byte is read well within that and the hardware never
-//! overruns. Invariants: a byte is lost only if the RX ring is full (counted in `rx_dropped`) or
+//! overruns. Invariants: a byte is lost only if the RX queue is full (counted in `rx_dropped`) or
 //! on an overrun/framing/noise error (counted in `rx_errors`); writing never blocks: a byte that
 //! doesn't fit is refused (`ByteLink::write` returns false) and the firmware core retries it.
 //!
@@ -19,8 +22,9 @@
 //! included; bytes that arrive then are lost (`flash_store.rs`). The host waits for the reply to
 //! a config save before sending more.
 
-use crate::ring::Ring;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicU32, Ordering};
+use heapless08::spsc::{Consumer, Producer, Queue};
+use static_cell::ConstStaticCell;
 use stm32f4xx_hal::{
     gpio::{PA2, PA3},
     nb,
@@ -32,38 +36,37 @@ use stm32f4xx_hal::{
 
 /// Line rate of the link to the host.
 pub const BAUD: u32 = 921_600;
-/// Receive queue size in bytes.
-pub const RX_CAPACITY: usize = 1024;
-/// Transmit queue size in bytes.
-pub const TX_CAPACITY: usize = 2048;
+/// Receive queue slots (a power of two); the queue holds one byte less.
+pub const RX_SLOTS: usize = 1024;
+/// Transmit queue slots (a power of two); the queue holds one byte less.
+pub const TX_SLOTS: usize = 2048;
+const _: () = assert!(RX_SLOTS.is_power_of_two() && TX_SLOTS.is_power_of_two());
 
-static RX_RING: Ring<RX_CAPACITY> = Ring::new();
-static TX_RING: Ring<TX_CAPACITY> = Ring::new();
-static TAKEN: AtomicBool = AtomicBool::new(false);
+static RX_QUEUE: ConstStaticCell<Queue<u8, RX_SLOTS>> = ConstStaticCell::new(Queue::new());
+static TX_QUEUE: ConstStaticCell<Queue<u8, TX_SLOTS>> = ConstStaticCell::new(Queue::new());
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 static RX_ERRORS: AtomicU32 = AtomicU32::new(0);
 
 /// Thread-mode end of the link: reads received bytes, queues bytes to send.
 pub struct SerialPort {
-    rx: &'static Ring<RX_CAPACITY>,
-    tx: &'static Ring<TX_CAPACITY>,
+    rx: Consumer<'static, u8, RX_SLOTS>,
+    tx: Producer<'static, u8, TX_SLOTS>,
 }
 
 /// Interrupt end of the link, owned by the `USART2` handler.
 pub struct SerialIsr {
     rx: Rx<USART2>,
     tx: Tx<USART2>,
-    rx_queue: &'static Ring<RX_CAPACITY>,
-    tx_queue: &'static Ring<TX_CAPACITY>,
+    rx_queue: Producer<'static, u8, RX_SLOTS>,
+    tx_queue: Consumer<'static, u8, TX_SLOTS>,
 }
 
 /// Configures USART2 on PA2/PA3 at `BAUD` and returns both ends. Returns `None` if called twice
-/// (each ring must have one producer and one consumer) or if the clock tree can't make the
-/// baud rate.
+/// (the queues are handed out once) or if the clock tree can't make the baud rate.
 pub fn new(usart: USART2, pa2: PA2, pa3: PA3, rcc: &mut Rcc) -> Option<(SerialPort, SerialIsr)> {
-    if TAKEN.swap(true, Ordering::AcqRel) {
-        return None;
-    }
+    // The interrupt produces received bytes and consumes bytes to send; thread mode the reverse.
+    let (rx_queue, rx) = RX_QUEUE.try_take()?.split();
+    let (tx, tx_queue) = TX_QUEUE.try_take()?.split();
 
     let serial: Serial<USART2> = Serial::new(
         usart,
@@ -72,18 +75,15 @@ pub fn new(usart: USART2, pa2: PA2, pa3: PA3, rcc: &mut Rcc) -> Option<(SerialPo
         rcc,
     )
     .ok()?;
-    let (tx, mut rx) = serial.split();
-    rx.listen();
+    let (usart_tx, mut usart_rx) = serial.split();
+    usart_rx.listen();
     Some((
-        SerialPort {
-            rx: &RX_RING,
-            tx: &TX_RING,
-        },
+        SerialPort { rx, tx },
         SerialIsr {
-            rx,
-            tx,
-            rx_queue: &RX_RING,
-            tx_queue: &TX_RING,
+            rx: usart_rx,
+            tx: usart_tx,
+            rx_queue,
+            tx_queue,
         },
     ))
 }
@@ -95,7 +95,7 @@ impl SerialIsr {
         loop {
             match self.rx.read() {
                 Ok(byte) => {
-                    if !self.rx_queue.push(byte) {
+                    if self.rx_queue.enqueue(byte).is_err() {
                         RX_DROPPED.fetch_add(1, Ordering::Relaxed);
                     }
                 }
@@ -107,12 +107,12 @@ impl SerialIsr {
             }
         }
         // TXE is set whenever the data register can take a byte; one byte per interrupt.
-        if let Some(byte) = self.tx_queue.peek() {
+        if let Some(&byte) = self.tx_queue.peek() {
             if self.tx.write(byte).is_ok() {
-                let _ = self.tx_queue.pop();
+                let _ = self.tx_queue.dequeue();
             }
         }
-        if !self.tx_queue.is_empty() {
+        if self.tx_queue.ready() {
             self.tx.listen();
         } else {
             self.tx.unlisten();
@@ -124,21 +124,21 @@ impl SerialPort {
     /// The next received byte, if any. Never blocks.
     #[inline]
     pub fn read_byte(&mut self) -> Option<u8> {
-        self.rx.pop()
+        self.rx.dequeue()
     }
 
     /// Queues one byte; `false` if the transmit queue is full. Never blocks. The byte goes out
     /// once `kick` runs (thread mode calls it after each batch of writes).
     #[inline]
     pub fn write_byte(&mut self, byte: u8) -> bool {
-        self.tx.push(byte)
+        self.tx.enqueue(byte).is_ok()
     }
 
     /// Starts the transmitter if bytes are waiting: pends the USART2 interrupt, which enables
     /// its TXE interrupt itself (so thread mode never read-modify-writes USART2's CR1).
     #[inline]
     pub fn kick(&mut self) {
-        if !self.tx.is_empty() {
+        if self.tx.len() != 0 {
             cortex_m::peripheral::NVIC::pend(Interrupt::USART2);
         }
     }
@@ -146,7 +146,7 @@ impl SerialPort {
     /// Whether received bytes are waiting.
     #[inline]
     pub fn rx_pending(&self) -> bool {
-        !self.rx.is_empty()
+        self.rx.ready()
     }
 
     /// Bytes lost because the receive queue was full.

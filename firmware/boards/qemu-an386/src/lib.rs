@@ -8,5 +8,5 @@
 pub mod plant;
 pub mod uart;
 
-/// SysTick clock of the mps2-an386 model, Hz (TOOLCHAIN.md).
+/// SysTick clock of the mps2-an386 model, Hz (docs/toolchain.md).
 pub const CORE_CLOCK_HZ: u32 = 25_000_000;

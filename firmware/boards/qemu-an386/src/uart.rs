@@ -1,6 +1,6 @@
 //! CMSDK APB UART0 of the mps2-an386 (QEMU), polled.
 //!
-//! Registers (TOOLCHAIN.md): DATA +0x00, STATE +0x04 (bit0 TX full, bit1 RX full),
+//! Registers (docs/toolchain.md): DATA +0x00, STATE +0x04 (bit0 TX full, bit1 RX full),
 //! CTRL +0x08 (bit0 TX enable, bit1 RX enable), BAUDDIV +0x10. QEMU's model has a one-byte
 //! receive holding register, so the main loop must poll often enough: at the rates used here
 //! (bytes arrive from a host through a pty, flow-controlled by QEMU's chardev, which only
