@@ -1,7 +1,9 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
-//! - `ci`: everything CI runs (the README's test command): fmt, clippy, host tests, no_std checks
-//!   for the Cortex-M target, firmware cross-builds with the size report, QEMU scenarios.
+//! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
+//!   host tests, no_std checks for the Cortex-M target, firmware cross-builds with the size
+//!   report, QEMU scenarios.
+//! - `unused-deps`: every declared dependency of the root workspace is used (also in `ci`).
 //! - `firmware [--update-size-report]`: builds every board image.
 //! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
 //! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
@@ -15,6 +17,7 @@ mod bench_firmware;
 mod firmware;
 mod qemu;
 mod toolchain;
+mod unused_deps;
 
 /// Runs a command, echoing it, and fails when it fails.
 pub fn run(cmd: &mut Command) -> Result<()> {
@@ -94,6 +97,8 @@ fn ci() -> Result<()> {
         "-D",
         "warnings",
     ]))?;
+    step("every declared dependency is used");
+    unused_deps::unused_deps()?;
     if cross == toolchain::Cross::Rustup {
         step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {
@@ -126,7 +131,8 @@ fn main() -> Result<()> {
             sync_sim_benchmarks()
         }
         Some("qemu") => qemu::qemu(&args[1..]),
+        Some("unused-deps") => unused_deps::unused_deps(),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write], bench [--quick]"),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write], bench [--quick]"),
     }
 }
