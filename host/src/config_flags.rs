@@ -134,7 +134,12 @@ fn real(flag: &'static str, value: f32, positive: bool) -> Result<f32, FlagError
 }
 
 fn int<T: TryFrom<i64>>(flag: &'static str, value: i64, lo: i64, hi: i64) -> Result<T, FlagError> {
-    let err = FlagError::Int { flag, value, lo, hi };
+    let err = FlagError::Int {
+        flag,
+        value,
+        lo,
+        hi,
+    };
     if value < lo || value > hi {
         return Err(err);
     }
@@ -255,10 +260,7 @@ impl Overrides {
 
     /// Connects (after validating these changes on the host) and applies them, if any; returns
     /// the client and the active configuration. Shared by `stream` and `record`.
-    pub fn connect_and_apply(
-        &self,
-        connect: &ConnectArgs,
-    ) -> Result<(Client, ServoConfig)> {
+    pub fn connect_and_apply(&self, connect: &ConnectArgs) -> Result<(Client, ServoConfig)> {
         self.apply(&ServoConfig::default())?;
         let mut client = connect.connect()?;
         let cfg = if self.is_empty() {

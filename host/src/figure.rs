@@ -79,7 +79,10 @@ pub fn write<F: Figure + ?Sized>(
     };
     let drawn = match format_of(path)? {
         Format::Svg => render(SVGBackend::new(path, size_px).into_drawing_area(), figure),
-        Format::Png => render(BitMapBackend::new(path, size_px).into_drawing_area(), figure),
+        Format::Png => render(
+            BitMapBackend::new(path, size_px).into_drawing_area(),
+            figure,
+        ),
     };
     drawn.map_err(draw_err)
 }

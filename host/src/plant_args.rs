@@ -55,7 +55,9 @@ pub enum PlantArgsError {
         source: ParamError,
     },
     /// Neither a preset nor all of m, b, c.
-    #[error("the plant needs m, b and c: give --device NAME or all of --mass, --viscous and --coulomb")]
+    #[error(
+        "the plant needs m, b and c: give --device NAME or all of --mass, --viscous and --coulomb"
+    )]
     Incomplete,
 }
 
@@ -97,7 +99,10 @@ impl PlantArgs {
     /// Whether any plant flag was given.
     #[must_use]
     pub fn any(&self) -> bool {
-        self.device.is_some() || self.mass.is_some() || self.viscous.is_some() || self.coulomb.is_some()
+        self.device.is_some()
+            || self.mass.is_some()
+            || self.viscous.is_some()
+            || self.coulomb.is_some()
     }
 
     /// The preset named by `--device`, if given.
@@ -135,10 +140,18 @@ impl PlantArgs {
         if let (Some(n), Some(_)) = (name, preset) {
             source.push(format!(
                 "preset {n}{}",
-                if from_recording { " (from the recording)" } else { "" }
+                if from_recording {
+                    " (from the recording)"
+                } else {
+                    ""
+                }
             ));
         }
-        for (flag, v) in [("--mass", mass), ("--viscous", viscous), ("--coulomb", coulomb)] {
+        for (flag, v) in [
+            ("--mass", mass),
+            ("--viscous", viscous),
+            ("--coulomb", coulomb),
+        ] {
             if v.is_some() {
                 source.push(flag.to_string());
             }
@@ -213,30 +226,51 @@ mod tests {
             check_positive("mass", -1.0).unwrap_err().to_string()
         );
         let e = args(None, None, Some(-0.1), None).overrides().unwrap_err();
-        assert_eq!(e.to_string(), "--viscous must be a finite number >= 0 (got -0.1)");
-        let e = args(None, None, None, Some(f64::NAN)).overrides().unwrap_err();
-        assert_eq!(e.to_string(), "--coulomb must be a finite number >= 0 (got NaN)");
+        assert_eq!(
+            e.to_string(),
+            "--viscous must be a finite number >= 0 (got -0.1)"
+        );
+        let e = args(None, None, None, Some(f64::NAN))
+            .overrides()
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--coulomb must be a finite number >= 0 (got NaN)"
+        );
         // The boundaries are core's: zero friction is allowed, zero mass is not.
         assert!(args(None, Some(0.0), None, None).overrides().is_err());
-        assert!(args(None, Some(1e-9), Some(0.0), Some(0.0)).overrides().is_ok());
+        assert!(args(None, Some(1e-9), Some(0.0), Some(0.0))
+            .overrides()
+            .is_ok());
     }
 
     #[test]
     fn preset_then_flags_with_their_source() {
         let omega = devices::find("omega").unwrap().params;
-        let f = args(Some("OMEGA"), Some(2.0), None, None).friction(None).unwrap();
-        assert_eq!((f.mass, f.viscous, f.coulomb), (2.0, omega.viscous, omega.coulomb));
+        let f = args(Some("OMEGA"), Some(2.0), None, None)
+            .friction(None)
+            .unwrap();
+        assert_eq!(
+            (f.mass, f.viscous, f.coulomb),
+            (2.0, omega.viscous, omega.coulomb)
+        );
         assert_eq!(f.source, "preset OMEGA + --mass");
-        let f = args(None, None, None, Some(0.5)).friction(Some("omega")).unwrap();
+        let f = args(None, None, None, Some(0.5))
+            .friction(Some("omega"))
+            .unwrap();
         assert_eq!((f.mass, f.coulomb), (omega.mass, 0.5));
         assert_eq!(f.source, "preset omega (from the recording) + --coulomb");
-        let f = args(None, Some(1.0), Some(0.0), Some(0.0)).friction(None).unwrap();
+        let f = args(None, Some(1.0), Some(0.0), Some(0.0))
+            .friction(None)
+            .unwrap();
         assert_eq!(f.source, "--mass + --viscous + --coulomb");
     }
 
     #[test]
     fn unknown_or_incomplete_is_refused() {
-        let e = args(Some("nope"), None, None, None).friction(None).unwrap_err();
+        let e = args(Some("nope"), None, None, None)
+            .friction(None)
+            .unwrap_err();
         assert!(e.to_string().starts_with("unknown device \"nope\""), "{e}");
         assert!(e.to_string().contains("phantom-1.0"), "{e}");
         assert!(matches!(

@@ -59,7 +59,9 @@ fn inherits(table: Option<&toml::Value>, key: &str) -> bool {
 fn unused_workspace_entries() -> Result<Vec<String>> {
     let root = crate::firmware::root();
     let top = manifest(&root.join("Cargo.toml"))?;
-    let ws = top.get("workspace").context("root Cargo.toml has no [workspace]")?;
+    let ws = top
+        .get("workspace")
+        .context("root Cargo.toml has no [workspace]")?;
     let members: Vec<&str> = ws
         .get("members")
         .and_then(toml::Value::as_array)
@@ -110,7 +112,10 @@ fn unused_member_deps() -> Result<Vec<String>> {
         .output()
         .context("running cargo metadata")?;
     if !out.status.success() {
-        bail!("cargo metadata failed: {}", String::from_utf8_lossy(&out.stderr));
+        bail!(
+            "cargo metadata failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     let meta: Value = serde_json::from_slice(&out.stdout).context("parsing cargo metadata")?;
     let mut deps: BTreeMap<String, (String, Vec<Dep>)> = BTreeMap::new();
@@ -180,7 +185,9 @@ fn unused_member_deps() -> Result<Vec<String>> {
         match v["reason"].as_str() {
             Some("compiler-artifact") => {
                 let test = v["profile"]["test"].as_bool() == Some(true)
-                    || kinds.iter().any(|k| ["test", "bench", "example"].contains(k));
+                    || kinds
+                        .iter()
+                        .any(|k| ["test", "bench", "example"].contains(k));
                 let u = units.entry(pkg).or_default();
                 u.0 += 1;
                 u.1 += usize::from(test);
@@ -205,7 +212,10 @@ fn unused_member_deps() -> Result<Vec<String>> {
         let (all, test) = units.get(id).copied().unwrap_or_default();
         for d in list {
             let seen_by = if d.dev_only { test } else { all };
-            let reported = unused.get(&(id.clone(), d.krate.clone())).copied().unwrap_or(0);
+            let reported = unused
+                .get(&(id.clone(), d.krate.clone()))
+                .copied()
+                .unwrap_or(0);
             if seen_by > 0 && reported >= seen_by {
                 problems.push(format!(
                     "{}: {}dependency of {name}, used by none of its {seen_by} compiled unit(s)",

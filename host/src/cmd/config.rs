@@ -8,8 +8,8 @@
 //! is sent. Nothing is persisted unless `save` is run.
 
 pub use crate::config_flags::{OnOff, Overrides, SafeModeArg, WallArg};
-use crate::output::{emit, emit_json};
 use crate::device::connect::ConnectArgs;
+use crate::output::{emit, emit_json};
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use stiffwall_proto::{SafeMode, ServoConfig, WallMode};

@@ -11,8 +11,8 @@ use crate::figure::{self, Figure};
 use crate::output::{emit, emit_json};
 use crate::tune::release::{classify, Verdict};
 use anyhow::{bail, Result};
-use plotters::prelude::*;
 use plotters::coord::Shift;
+use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use stiffwall_core::params::PhysicalParams;
@@ -208,7 +208,13 @@ impl Figure for Release<'_> {
     where
         DB::ErrorType: 'static,
     {
-        draw(root.clone(), self.counts, self.rate, self.verdict, self.report)
+        draw(
+            root.clone(),
+            self.counts,
+            self.rate,
+            self.verdict,
+            self.report,
+        )
     }
 }
 

@@ -415,10 +415,7 @@ impl Figure for PlantFigure<'_> {
     }
 }
 
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    p: &PlantReplay,
-) -> Result<()>
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &PlantReplay) -> Result<()>
 where
     DB::ErrorType: 'static,
 {

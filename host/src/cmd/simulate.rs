@@ -94,10 +94,7 @@ impl Figure for Trajectory<'_> {
     }
 }
 
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    rows: &[Row],
-) -> Result<()>
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Result<()>
 where
     DB::ErrorType: 'static,
 {

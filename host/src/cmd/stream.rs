@@ -6,9 +6,9 @@
 //! queue vs link), never hidden. `--seconds` is device time, as for `hostctl record`.
 
 use crate::config_flags::Overrides;
+use crate::device::connect::ConnectArgs;
 use crate::output::emit;
 use crate::session::{pump, End, Plan};
-use crate::device::connect::ConnectArgs;
 use anyhow::{bail, Result};
 use std::io::IsTerminal as _;
 use std::time::{Duration, Instant};
