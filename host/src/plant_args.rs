@@ -61,6 +61,9 @@ pub enum PlantArgsError {
     Incomplete,
 }
 
+/// `--mass`, `--viscous`, `--coulomb` as given (None: not given), checked.
+pub type GivenFriction = (Option<f64>, Option<f64>, Option<f64>);
+
 /// The plant's friction model, resolved from a preset and flags.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Friction {
@@ -117,7 +120,7 @@ impl PlantArgs {
     ///
     /// # Errors
     /// [`PlantArgsError::OutOfRange`] for the first flag out of range.
-    pub fn overrides(&self) -> Result<(Option<f64>, Option<f64>, Option<f64>), PlantArgsError> {
+    pub fn overrides(&self) -> Result<GivenFriction, PlantArgsError> {
         Ok((
             checked("mass", self.mass, check_positive)?,
             checked("viscous", self.viscous, check_non_negative)?,

@@ -20,7 +20,7 @@
 
 use anyhow::{bail, Context, Result};
 use serde_json::Value;
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::io::BufRead as _;
 use std::process::Stdio;
 
