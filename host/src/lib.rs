@@ -2,8 +2,24 @@
 //! [`cmd`], exposing a clap `Args` struct and a `run` function, so the binary is a thin dispatcher
 //! and the end-to-end tests can call the same code. [`device`] holds the transports and the
 //! protocol client shared by every device command.
+//!
+//! Commands never import each other: what several of them share lives beside them —
+//! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
+//! [`plant_args`] (the plant flags, checked by `stiffwall-core`), [`config_flags`] (servo
+//! configuration changes), [`session`] (the telemetry stream and recorder), [`analysis`] (the
+//! paper's analysis of one device and its (β, σ) figure), [`recording`] and [`tune`].
+//!
+//! Units: as documented per module (SI on the command line, device integers on the wire).
+//! Errors: library modules return `thiserror` enums naming the field and its range; the
+//! commands' `run` functions add context with `anyhow` at the edge.
 
+pub mod analysis;
 pub mod cmd;
+pub mod config_flags;
 pub mod device;
+pub mod figure;
+pub mod output;
+pub mod plant_args;
 pub mod recording;
+pub mod session;
 pub mod tune;

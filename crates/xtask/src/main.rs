@@ -1,7 +1,9 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
-//! - `ci`: everything CI runs (the README's test command): fmt, clippy, host tests, no_std checks
-//!   for the Cortex-M target, firmware cross-builds with the size report, QEMU scenarios.
+//! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
+//!   host tests, no_std checks for the Cortex-M target, firmware cross-builds with the size
+//!   report, QEMU scenarios.
+//! - `unused-deps`: every declared dependency of the root workspace is used (also in `ci`).
 //! - `firmware [--update-size-report]`: builds every board image.
 //! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
 //! - `flash BOARD --features dac|pwm[,defmt]`: builds a real board's image and flashes it with
@@ -18,6 +20,7 @@ mod firmware;
 mod flash;
 mod qemu;
 mod toolchain;
+mod unused_deps;
 
 /// Runs a command, echoing it, and fails when it fails.
 pub fn run(cmd: &mut Command) -> Result<()> {
@@ -97,6 +100,8 @@ fn ci() -> Result<()> {
         "-D",
         "warnings",
     ]))?;
+    step("every declared dependency is used");
+    unused_deps::unused_deps()?;
     if cross == toolchain::Cross::Rustup {
         step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {
@@ -130,7 +135,8 @@ fn main() -> Result<()> {
         }
         Some("qemu") => qemu::qemu(&args[1..]),
         Some("flash") => flash::flash(&args[1..]),
+        Some("unused-deps") => unused_deps::unused_deps(),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick]"),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick]"),
     }
 }

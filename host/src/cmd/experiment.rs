@@ -5,11 +5,16 @@
 //! beside the (β, σ) operating point and its critical line for the equivalent velocity (all
 //! spring energy turned into kinetic energy, as in Sec. V).
 
+use crate::analysis;
 use crate::device::connect::ConnectArgs;
+use crate::figure::{self, Figure};
+use crate::output::{emit, emit_json};
 use crate::tune::release::{classify, Verdict};
 use anyhow::{bail, Result};
+use plotters::coord::Shift;
 use plotters::prelude::*;
-use std::path::{Path, PathBuf};
+use std::fmt::Write as _;
+use std::path::PathBuf;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::{flags, Sample};
 
@@ -70,6 +75,9 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     if !(100..=10_000_000).contains(&a.ticks) {
         bail!("--ticks must be within [100, 10000000] (got {})", a.ticks);
     }
+    if let Some(p) = &a.plot {
+        figure::format_of(p)?;
+    }
     if let Some(k) = a.stiffness {
         if !(k.is_finite() && k > 0.0) {
             bail!("--stiffness must be finite and > 0 (got {k})");
@@ -121,11 +129,17 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     let start = counts.first().copied().unwrap_or(i64::from(a.deflection));
     let v_eq = params.map(|p| (start as f64 + 0.5).abs() * delta * (p.stiffness / p.mass).sqrt());
     let report = match (params, v_eq) {
-        (Some(p), Some(v)) => Some(crate::cmd::analyze::analyze(None, &p, Some(v), None)?),
+        (Some(p), Some(v)) => Some(analysis::analyze(None, &p, Some(v), None)?),
         _ => None,
     };
     if let Some(path) = &a.plot {
-        plot(path, &counts, rate, verdict, report.as_ref())?;
+        let fig = Release {
+            counts: &counts,
+            rate,
+            verdict,
+            report: report.as_ref(),
+        };
+        figure::write(path, (1500, 600), &fig)?;
     }
     let peak_tail = counts
         .iter()
@@ -150,71 +164,66 @@ fn release(a: &ReleaseArgs) -> Result<()> {
             "region": report.as_ref().map(|r| r.region),
             "gaps": rec.gaps,
         });
-        println!("{}", serde_json::to_string_pretty(&j)?);
+        emit_json(&j)?;
     } else {
-        println!("release test on the {}", a.connect.describe());
-        println!(
+        let mut s = String::new();
+        let _ = writeln!(s, "release test on the {}", a.connect.describe());
+        let _ = writeln!(
+            s,
             "  K = {} , released from {start} ticks, {} ticks recorded",
             cfg.stiffness,
             counts.len()
         );
-        println!("  verdict: {}", verdict.describe());
-        println!(
+        let _ = writeln!(s, "  verdict: {}", verdict.describe());
+        let _ = writeln!(
+            s,
             "  peak |x| over the last quarter: {peak_tail:.1} ticks; faults {:#x}",
             rec.faults
         );
         if let Some(r) = &report {
-            println!(
+            let _ = writeln!(
+                s,
                 "  (β, σ) = ({:.4}, {:.4}), μ = {:.3}; region {:?} for the equivalent velocity {:.4}",
                 r.beta, r.sigma, r.mu, r.region, v_eq.unwrap_or(0.0)
             );
         }
         if let Some(p) = &a.plot {
-            println!("  plot: {}", p.display());
+            let _ = writeln!(s, "  plot: {}", p.display());
         }
+        emit(&s)?;
     }
     Ok(())
 }
 
-fn plot(
-    path: &Path,
-    counts: &[i64],
+/// The release figure: the (β, σ) plane (when a model is known) beside x(t).
+struct Release<'a> {
+    counts: &'a [i64],
     rate: f64,
     verdict: Verdict,
-    report: Option<&crate::cmd::analyze::Report>,
-) -> Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("svg") => draw(
-            SVGBackend::new(path, (1500, 600)).into_drawing_area(),
-            counts,
-            rate,
-            verdict,
-            report,
-        ),
-        Some("png") => draw(
-            BitMapBackend::new(path, (1500, 600)).into_drawing_area(),
-            counts,
-            rate,
-            verdict,
-            report,
-        ),
-        _ => bail!(
-            "--plot file must end in .svg or .png (got '{}')",
-            path.display()
-        ),
+    report: Option<&'a analysis::Report>,
+}
+
+impl Figure for Release<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(
+            root.clone(),
+            self.counts,
+            self.rate,
+            self.verdict,
+            self.report,
+        )
     }
 }
 
 fn draw<DB: DrawingBackend>(
-    root: DrawingArea<DB, plotters::coord::Shift>,
+    root: DrawingArea<DB, Shift>,
     counts: &[i64],
     rate: f64,
     verdict: Verdict,
-    report: Option<&crate::cmd::analyze::Report>,
+    report: Option<&analysis::Report>,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
@@ -223,7 +232,7 @@ where
     root.fill(&WHITE).map_err(err)?;
     let (left, right) = root.split_horizontally(600);
     if let Some(r) = report {
-        crate::cmd::analyze::plot::draw(left, r)?;
+        analysis::plot::draw(left, r)?;
     }
     let t_end = counts.len() as f64 / rate;
     let lo = counts.iter().copied().min().unwrap_or(-2).min(-2) as f64 - 0.5;

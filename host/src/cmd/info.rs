@@ -4,6 +4,7 @@
 //! device integers. Read-only: nothing on the device changes.
 
 use crate::device::connect::ConnectArgs;
+use crate::output::{emit, emit_json};
 use anyhow::Result;
 use std::fmt::Write as _;
 use stiffwall_proto::{fault, DeviceInfo, FaultReport};
@@ -119,16 +120,6 @@ pub fn render(target: &str, d: &DeviceInfo, f: &FaultReport) -> String {
     s
 }
 
-/// Prints `text` and a newline to stdout; a closed pipe (`hostctl info | head`) is not an error.
-pub fn emit(text: &str) -> Result<()> {
-    use std::io::Write as _;
-    let mut out = std::io::stdout().lock();
-    match writeln!(out, "{text}").and_then(|()| out.flush()) {
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-        r => Ok(r?),
-    }
-}
-
 /// Runs `hostctl info`.
 pub fn run(args: &Args) -> Result<()> {
     let mut c = args.connect.connect()?;
@@ -144,7 +135,7 @@ pub fn run(args: &Args) -> Result<()> {
                 "safe_mode": faults.safe_mode,
             },
         });
-        emit(&serde_json::to_string_pretty(&v)?)?;
+        emit_json(&v)?;
     } else {
         emit(&render(&args.connect.describe(), &c.info, &faults))?;
     }

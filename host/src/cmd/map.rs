@@ -9,8 +9,11 @@
 //! JSON output: `{ "spec": {...}, "shard": [k, n] | null, "panels": [{ "xidot0", "points":
 //! [{ index, beta, sigma, class, periods_run, h0, h_end, tail_amplitude }] }] }`.
 
+use crate::figure::{self, Figure, FigureError};
+use crate::output::emit_json;
 use anyhow::{bail, ensure, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -45,7 +48,7 @@ pub struct Args {
     /// JSON output file.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// PNG (or .svg) image of the map.
+    /// Image of the map (.svg or .png).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Draw the analytic region boundaries of Fig. 3/5 over the map.
@@ -85,7 +88,7 @@ pub enum Sub {
         /// Merged JSON output.
         #[arg(long)]
         out: PathBuf,
-        /// PNG (or .svg) image of the merged map.
+        /// Image of the merged map (.svg or .png).
         #[arg(long)]
         plot: Option<PathBuf>,
         /// Draw the analytic region boundaries.
@@ -308,27 +311,43 @@ fn class_color(c: Class) -> RGBColor {
     }
 }
 
-/// Draws the map (one panel per ξ̇₀) to PNG or SVG (by extension).
-pub fn plot(m: &MapFile, path: &Path, overlay: bool) -> Result<()> {
+/// The map (one panel per ξ̇₀) as a [`Figure`].
+struct MapFigure<'a> {
+    map: &'a MapFile,
+    cols: usize,
+    rows: usize,
+    overlay: bool,
+}
+
+impl Figure for MapFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(root, self.map, self.cols, self.rows, self.overlay)
+    }
+}
+
+/// Draws the map (one panel per ξ̇₀) to `path` (.svg or .png, any case).
+///
+/// # Errors
+/// An unsupported extension, or a drawing or file error.
+pub fn plot(m: &MapFile, path: &Path, overlay: bool) -> Result<(), FigureError> {
     let n = m.panels.len();
     let cols = if n >= 4 { 2 } else { n.max(1) };
     let rows = n.div_ceil(cols);
     let size = (cols as u32 * 480, rows as u32 * 440 + 30);
-    let svg = path.extension().is_some_and(|e| e == "svg");
-    if svg {
-        let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(&root, m, cols, rows, overlay)?;
-        root.present()?;
-    } else {
-        let root = BitMapBackend::new(path, size).into_drawing_area();
-        draw(&root, m, cols, rows, overlay)?;
-        root.present()?;
-    }
-    Ok(())
+    let fig = MapFigure {
+        map: m,
+        cols,
+        rows,
+        overlay,
+    };
+    figure::write(path, size, &fig)
 }
 
 fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
+    root: &DrawingArea<DB, Shift>,
     m: &MapFile,
     cols: usize,
     rows: usize,
@@ -436,6 +455,9 @@ pub fn run(args: &Args) -> Result<()> {
         overlay,
     }) = &args.cmd
     {
+        if let Some(img) = img {
+            figure::format_of(img)?;
+        }
         let files = inputs
             .iter()
             .map(|p| read_json(p))
@@ -448,6 +470,9 @@ pub fn run(args: &Args) -> Result<()> {
         return Ok(());
     }
     let spec = spec_of(args)?;
+    if let Some(img) = &args.plot {
+        figure::format_of(img)?;
+    }
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
     if shard.is_some() && args.plot.is_some() {
         bail!("--plot needs the complete map: plot after `hostctl map merge`");
@@ -471,7 +496,7 @@ pub fn run(args: &Args) -> Result<()> {
     eprintln!("computed in {:.2} s", m.seconds);
     match &args.out {
         Some(out) => write_json(out, &m)?,
-        None if args.plot.is_none() => println!("{}", serde_json::to_string_pretty(&m)?),
+        None if args.plot.is_none() => emit_json(&m)?,
         None => {}
     }
     if let Some(img) = &args.plot {

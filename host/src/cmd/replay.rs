@@ -26,9 +26,12 @@
 //! Invariants: a corrupted file is an error naming the line and the column
 //! ([`crate::recording`]); nothing panics on bad input; a mismatch in (b) exits non-zero.
 
-use super::info::emit;
+use crate::figure::{self, Figure};
+use crate::output::emit_report;
+use crate::plant_args::{PlantArgs, PlantArgsError};
 use crate::recording::{self, Recording};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -45,19 +48,10 @@ use stiffwall_sim::PhysicalPlant;
 pub struct Args {
     /// Recording made by `hostctl record`.
     pub file: PathBuf,
-    /// Plant preset for (a) (see `hostctl analyze --list-devices`); default: the recording's
-    /// virtual-device preset, if any.
-    #[arg(long = "device", value_name = "NAME")]
-    pub device: Option<String>,
-    /// Inertia m [kg or kg·m²], > 0 (overrides the preset).
-    #[arg(long, allow_negative_numbers = true)]
-    pub mass: Option<f64>,
-    /// Viscous friction b [N·s/m or N·m·s/rad], >= 0 (overrides the preset).
-    #[arg(long, allow_negative_numbers = true)]
-    pub viscous: Option<f64>,
-    /// Coulomb friction c [N or N·m], >= 0 (overrides the preset).
-    #[arg(long, allow_negative_numbers = true)]
-    pub coulomb: Option<f64>,
+    /// Plant for (a): a preset (default: the recording's virtual-device preset, if any) and
+    /// m, b, c overriding its fields.
+    #[command(flatten)]
+    pub plant: PlantArgs,
     /// Plot of recorded vs model position and the error (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
@@ -248,59 +242,6 @@ pub fn replay_servo(rec: &Recording) -> Result<ServoReplay> {
     Ok(r)
 }
 
-/// Plant parameters for (a): preset (given or recorded), then explicit overrides.
-fn plant_params(args: &Args, rec: &Recording) -> Result<(f64, f64, f64, String)> {
-    let preset = args
-        .device
-        .clone()
-        .or_else(|| rec.header.virtual_plant.clone());
-    let (mut m, mut b, mut c, mut src) = (None, None, None, Vec::new());
-    if let Some(name) = &preset {
-        let d = stiffwall_core::devices::find(name).ok_or_else(|| {
-            anyhow!(
-                "unknown device {name:?} for --device (allowed: {})",
-                stiffwall_core::devices::NAMES
-            )
-        })?;
-        m = Some(d.params.mass);
-        b = Some(d.params.viscous);
-        c = Some(d.params.coulomb);
-        src.push(format!(
-            "preset {name}{}",
-            if args.device.is_none() {
-                " (from the recording)"
-            } else {
-                ""
-            }
-        ));
-    }
-    if let Some(v) = args.mass {
-        if !(v.is_finite() && v > 0.0) {
-            bail!("--mass must be a finite number > 0 (got {v})");
-        }
-        m = Some(v);
-        src.push("--mass".into());
-    }
-    if let Some(v) = args.viscous {
-        if !(v.is_finite() && v >= 0.0) {
-            bail!("--viscous must be a finite number >= 0 (got {v})");
-        }
-        b = Some(v);
-        src.push("--viscous".into());
-    }
-    if let Some(v) = args.coulomb {
-        if !(v.is_finite() && v >= 0.0) {
-            bail!("--coulomb must be a finite number >= 0 (got {v})");
-        }
-        c = Some(v);
-        src.push("--coulomb".into());
-    }
-    match (m, b, c) {
-        (Some(m), Some(b), Some(c)) => Ok((m, b, c, src.join(" + "))),
-        _ => bail!("plant replay needs m, b and c: give --device NAME or all of --mass, --viscous and --coulomb"),
-    }
-}
-
 /// Replay (a): the recorded forces through the exact simulated plant.
 pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantReplay> {
     if rec.header.decimation != 1 {
@@ -379,19 +320,19 @@ pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantRepl
 
 /// Both replays of a parsed recording; plant parameters from `args`.
 pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
-    let (plant, plant_skipped) = match plant_params(args, rec) {
-        Err(e)
-            if args.device.is_some()
-                || args.mass.is_some()
-                || args.viscous.is_some()
-                || args.coulomb.is_some() =>
-        {
-            return Err(e)
-        }
+    let friction = args
+        .plant
+        .friction(rec.header.virtual_plant.as_deref())
+        .map_err(|e| match e {
+            PlantArgsError::Incomplete => anyhow!("plant replay needs m, b and c: give --device NAME or all of --mass, --viscous and --coulomb"),
+            e => e.into(),
+        });
+    let (plant, plant_skipped) = match friction {
+        Err(e) if args.plant.any() => return Err(e),
         Err(e) => (None, Some(format!("{e:#}"))),
-        Ok((m, b, c, src)) => match replay_plant(rec, m, b, c) {
+        Ok(f) => match replay_plant(rec, f.mass, f.viscous, f.coulomb) {
             Ok(mut p) => {
-                p.source = src;
+                p.source = f.source;
                 (Some(p), None)
             }
             Err(e) => (None, Some(format!("{e:#}"))),
@@ -462,26 +403,19 @@ fn render(file: &Path, r: &Report) -> String {
     s
 }
 
-fn plot(p: &PlantReplay, path: &Path) -> Result<()> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
+/// Recorded vs model count above their difference.
+struct PlantFigure<'a>(&'a PlantReplay);
+
+impl Figure for PlantFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
     {
-        let root = SVGBackend::new(path, (1000, 650)).into_drawing_area();
-        draw(&root, p)?;
-        root.present()?;
-    } else {
-        let root = BitMapBackend::new(path, (1000, 650)).into_drawing_area();
-        draw(&root, p)?;
-        root.present()?;
+        draw(root, self.0)
     }
-    Ok(())
 }
 
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
-    p: &PlantReplay,
-) -> Result<()>
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &PlantReplay) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
@@ -541,24 +475,23 @@ where
 
 /// Runs `hostctl replay`.
 pub fn run(args: &Args) -> Result<()> {
+    if let Some(path) = &args.plot {
+        figure::format_of(path)?;
+    }
     let rec = recording::read(&args.file)?;
     if rec.rows.is_empty() {
         bail!("{}: the recording holds no samples", args.file.display());
     }
     let report = replay(args, &rec)?;
     if let (Some(path), Some(p)) = (&args.plot, &report.plant) {
-        plot(p, path).with_context(|| format!("writing the plot {}", path.display()))?;
+        figure::write(path, (1000, 650), &PlantFigure(p))?;
     } else if args.plot.is_some() {
         bail!(
             "--plot needs the plant replay, which did not run: {}",
             report.plant_skipped.as_deref().unwrap_or("unknown reason")
         );
     }
-    if args.json {
-        emit(&serde_json::to_string_pretty(&report)?)?;
-    } else {
-        emit(&render(&args.file, &report))?;
-    }
+    emit_report(args.json, &report, |r| render(&args.file, r))?;
     if let Some(v) = &report.servo {
         if v.mismatch_count > 0 {
             bail!(

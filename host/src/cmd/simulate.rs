@@ -5,7 +5,9 @@
 //! the energy audit of the period ending at that instant: `e_d` (28), `e_g` (29), `residual` of
 //! the balance (26). Physical scenes are converted to these units when loaded.
 
+use crate::figure::{self, Figure};
 use anyhow::{Context, Result};
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -19,7 +21,7 @@ pub struct Args {
     /// CSV output file (default: standard output).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
-    /// Also draw ξ(τ) and H_T(τ) to this PNG (or .svg) file.
+    /// Also draw ξ(τ) and H_T(τ) to this figure file (.svg or .png).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Write every n-th sample only (the audit columns still cover the last period only).
@@ -41,6 +43,9 @@ pub fn run(args: &Args) -> Result<()> {
         "--every {}: allowed range is >= 1",
         args.every
     );
+    if let Some(p) = &args.plot {
+        figure::format_of(p)?;
+    }
     let scene = load(&args.scene)?;
     let mut w: Box<dyn Write> = match &args.out {
         Some(p) => Box::new(std::io::BufWriter::new(
@@ -72,28 +77,24 @@ pub fn run(args: &Args) -> Result<()> {
     }
     w.flush()?;
     if let Some(p) = &args.plot {
-        plot(&rows, p)?;
+        figure::write(p, (900, 600), &Trajectory(&rows))?;
     }
     Ok(())
 }
 
-fn plot(rows: &[Row], path: &Path) -> Result<()> {
-    if path.extension().is_some_and(|e| e == "svg") {
-        let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
-        draw(&root, rows)?;
-        root.present()?;
-    } else {
-        let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
-        draw(&root, rows)?;
-        root.present()?;
+/// ξ(τ) above H_T(τ).
+struct Trajectory<'a>(&'a [Row]);
+
+impl Figure for Trajectory<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(root, self.0)
     }
-    Ok(())
 }
 
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
-    rows: &[Row],
-) -> Result<()>
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Result<()>
 where
     DB::ErrorType: 'static,
 {

@@ -5,13 +5,12 @@
 //! wall second). Gaps in the device's sample numbers are counted and attributed (device
 //! queue vs link), never hidden. `--seconds` is device time, as for `hostctl record`.
 
-use super::config::Overrides;
-use super::info::emit;
-use super::record::{pump, End, Plan, INTERRUPTED};
+use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;
+use crate::output::emit;
+use crate::session::{pump, End, Plan};
 use anyhow::{bail, Result};
 use std::io::IsTerminal as _;
-use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 /// Arguments of `hostctl stream`.
@@ -37,7 +36,7 @@ pub struct Args {
 /// Runs `hostctl stream`.
 pub fn run(args: &Args) -> Result<()> {
     Plan::new(args.decimation, args.seconds, 1)?;
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
+    crate::session::stop_on_ctrl_c();
     let (mut client, cfg) = args.set.connect_and_apply(&args.connect)?;
     let plan = Plan::new(args.decimation, args.seconds, cfg.servo_rate_hz)?;
     let fpc = f64::from(client.info.force_per_code);

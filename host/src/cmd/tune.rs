@@ -1,13 +1,15 @@
 //! `hostctl tune`: finds and sets the largest stable wall stiffness on a device, with evidence
 //! (see [`crate::tune::procedure`] for the method).
 
+use crate::analysis;
 use crate::device::connect::ConnectArgs;
-use crate::tune::procedure::{self, Outcome, Settings, INTERRUPTED};
+use crate::output::{emit, emit_json};
+use crate::session;
+use crate::tune::procedure::{self, Outcome, Settings};
 use anyhow::Result;
 use std::fmt::Write as _;
 use std::io::IsTerminal as _;
 use std::path::PathBuf;
-use std::sync::atomic::Ordering;
 
 /// Arguments of `hostctl tune`.
 #[derive(Debug, clap::Args)]
@@ -71,9 +73,12 @@ pub fn settings(a: &Args) -> Result<Settings> {
 /// Runs `hostctl tune`.
 pub fn run(a: &Args) -> Result<()> {
     let s = settings(a)?;
+    if let Some(path) = &a.plot {
+        crate::figure::format_of(path)?;
+    }
     // Ctrl-C: finish the current experiment, restore the previous config, exit. A second
     // registration (tests calling run twice) is harmless.
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
+    session::stop_on_ctrl_c();
     let bar = indicatif::ProgressBar::new_spinner();
     let tty = std::io::stderr().is_terminal();
     if tty {
@@ -92,14 +97,14 @@ pub fn run(a: &Args) -> Result<()> {
     bar.finish_and_clear();
     let o = match outcome {
         Ok(o) => o,
-        Err(e) if INTERRUPTED.load(Ordering::Relaxed) => {
+        Err(e) if session::interrupted() => {
             return Err(e.context("interrupted; the previous config was restored"))
         }
         Err(e) => return Err(e.context("tune failed; the previous config was restored")),
     };
-    let report = crate::cmd::analyze::analyze(None, &o.params, Some(o.max_velocity), None)?;
+    let report = analysis::analyze(None, &o.params, Some(o.max_velocity), None)?;
     if let Some(path) = &a.plot {
-        crate::cmd::analyze::plot::write(path, &report)?;
+        analysis::plot::write(path, &report)?;
     }
     if a.json {
         let j = serde_json::json!({
@@ -107,14 +112,14 @@ pub fn run(a: &Args) -> Result<()> {
             "tune": o,
             "analysis": report,
         });
-        println!("{}", serde_json::to_string_pretty(&j)?);
+        emit_json(&j)?;
     } else {
-        print!("{}", render(a, &o, &report));
+        emit(&render(a, &o, &report))?;
     }
     Ok(())
 }
 
-fn render(a: &Args, o: &Outcome, r: &crate::cmd::analyze::Report) -> String {
+fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
     let u = if o.params.rotational {
         ("N·m/rad", "kg·m²", "N·m·s/rad", "N·m", "rad/s")
     } else {

@@ -21,7 +21,6 @@ use super::release::{classify, Verdict};
 use super::search::{largest_settling_k, Found, Search};
 use crate::device::client::Client;
 use anyhow::{bail, Context, Result};
-use std::sync::atomic::{AtomicBool, Ordering};
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::{flags, ExciteProfile, ServoConfig};
 
@@ -31,8 +30,8 @@ pub const DEFAULT_XIDOT: f64 = 5.0;
 /// Factor applied to K when a confirmation release (from either side) does not settle.
 pub const CONFIRM_BACKOFF: f64 = 0.95;
 
-/// Set by the Ctrl-C handler; checked between experiments.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// Set by the Ctrl-C handler; checked between experiments (the one flag of every session).
+pub use crate::session::INTERRUPTED;
 
 /// Tune settings.
 #[derive(Debug, Clone)]
@@ -117,7 +116,7 @@ pub struct IdentifiedReport {
 }
 
 fn check_interrupt() -> Result<()> {
-    if INTERRUPTED.load(Ordering::Relaxed) {
+    if crate::session::interrupted() {
         bail!("interrupted");
     }
     Ok(())

@@ -7,7 +7,8 @@
 //! critical line σ = σ* + ξ̇(β* − β)).
 
 use super::Report;
-use anyhow::{anyhow, bail};
+use crate::figure::{self, Figure, FigureError};
+use anyhow::anyhow;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -15,23 +16,28 @@ use std::path::Path;
 const W: u32 = 1000;
 const H: u32 = 720;
 
-/// Writes the plot to `path` (`.svg` or `.png`).
+/// Figure size in pixels.
+pub const SIZE_PX: (u32, u32) = (W, H);
+
+/// The plane of one report as a [`Figure`].
+#[derive(Debug, Clone, Copy)]
+pub struct Plane<'a>(pub &'a Report);
+
+impl Figure for Plane<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(root.clone(), self.0)
+    }
+}
+
+/// Writes the plot to `path` (`.svg` or `.png`, any case).
 ///
 /// # Errors
 /// Unsupported extension, or a drawing/IO error.
-pub fn write(path: &Path, r: &Report) -> anyhow::Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("svg") => draw(SVGBackend::new(path, (W, H)).into_drawing_area(), r),
-        Some("png") => draw(BitMapBackend::new(path, (W, H)).into_drawing_area(), r),
-        _ => bail!(
-            "--plot file must end in .svg or .png (got '{}')",
-            path.display()
-        ),
-    }
+pub fn write(path: &Path, r: &Report) -> Result<(), FigureError> {
+    figure::write(path, SIZE_PX, &Plane(r))
 }
 
 fn e<E: std::fmt::Display>(err: E) -> anyhow::Error {

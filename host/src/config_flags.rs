@@ -1,0 +1,274 @@
+//! Servo-configuration flags shared by `hostctl config set`, `stream` and `record`: the
+//! fields to change on the device before anything else happens.
+//!
+//! Units: SI (N/m or N·m/rad, N·s/m or N·m·s/rad, N or N·m, m/s or rad/s, J, Hz); ticks,
+//! counts and shifts are integers. Invariants: obviously bad numbers (NaN, infinite, negative,
+//! zero where a positive value is needed) are refused on the host, naming the flag and its
+//! range, before anything is sent; the device validates the rest and a refused config changes
+//! nothing.
+
+use crate::device::client::Client;
+use crate::device::connect::ConnectArgs;
+use anyhow::{bail, Context, Result};
+use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
+
+/// `on` / `off`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnOff {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
+}
+
+/// Wall geometry on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WallArg {
+    /// Spring on both sides of the wall position.
+    Bidirectional,
+    /// Wall at counts ≥ the wall position only.
+    OneSided,
+}
+
+/// Safe mode on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SafeModeArg {
+    /// Zero force after a fault.
+    ZeroForce,
+    /// Virtual damping (`--safe-damping`) after a fault.
+    Damping,
+}
+
+/// Configuration fields to change; fields not given keep their current value. Shared by
+/// `config set`, `stream` and `record`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct Overrides {
+    /// Wall stiffness K [N/m or N·m/rad], >= 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub stiffness: Option<f32>,
+    /// Virtual damping B [N·s/m or N·m·s/rad], >= 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub damping: Option<f32>,
+    /// Servo rate 1/T [Hz], >= 1 (the device enforces its own range).
+    #[arg(long, allow_negative_numbers = true)]
+    pub rate: Option<i64>,
+    /// Extra delay T_V [servo ticks], 0..=31.
+    #[arg(long, allow_negative_numbers = true)]
+    pub delay_ticks: Option<i64>,
+    /// Encoder coarsening shift s (Δ_eff = 2^s counts), 0..=16.
+    #[arg(long, allow_negative_numbers = true)]
+    pub coarsen_shift: Option<i64>,
+    /// Wall geometry.
+    #[arg(long, value_enum)]
+    pub wall: Option<WallArg>,
+    /// Wall position [raw encoder counts].
+    #[arg(long, allow_negative_numbers = true)]
+    pub wall_position: Option<i32>,
+    /// Force limit [N or N·m], > 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub force_limit: Option<f32>,
+    /// Over-velocity fault threshold [m/s or rad/s], >= 0 (0 disables).
+    #[arg(long, allow_negative_numbers = true)]
+    pub max_velocity: Option<f32>,
+    /// Energy monitor.
+    #[arg(long, value_enum)]
+    pub energy_monitor: Option<OnOff>,
+    /// Energy fault threshold on H_T (35) [J], > 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub energy_limit: Option<f32>,
+    /// Growing oscillation peaks that trip the energy fault, 1..=64.
+    #[arg(long, allow_negative_numbers = true)]
+    pub energy_growth_cycles: Option<i64>,
+    /// Encoder-jump fault threshold [raw counts per tick], >= 1.
+    #[arg(long, allow_negative_numbers = true)]
+    pub encoder_jump: Option<i64>,
+    /// Heartbeat timeout during experiments [ms], >= 0 (0 disables).
+    #[arg(long, allow_negative_numbers = true)]
+    pub heartbeat_timeout_ms: Option<i64>,
+    /// Behaviour after a fault.
+    #[arg(long, value_enum)]
+    pub safe_mode: Option<SafeModeArg>,
+    /// Virtual damping in safe mode `damping` [N·s/m or N·m·s/rad], >= 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub safe_damping: Option<f32>,
+}
+
+/// A configuration flag outside its allowed range (checked on the host, before sending).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FlagError {
+    /// A real-valued field.
+    #[error("--{flag} must be a finite number {range} (got {value})")]
+    Real {
+        /// The flag, without dashes.
+        flag: &'static str,
+        /// The value given.
+        value: f32,
+        /// The allowed range, `> 0` or `>= 0`.
+        range: &'static str,
+    },
+    /// An integer field.
+    #[error("--{flag} must be within [{lo}, {hi}] (got {value})")]
+    Int {
+        /// The flag, without dashes.
+        flag: &'static str,
+        /// The value given.
+        value: i64,
+        /// Smallest allowed value.
+        lo: i64,
+        /// Largest allowed value.
+        hi: i64,
+    },
+}
+
+fn real(flag: &'static str, value: f32, positive: bool) -> Result<f32, FlagError> {
+    let ok = value.is_finite() && if positive { value > 0.0 } else { value >= 0.0 };
+    if ok {
+        Ok(value)
+    } else {
+        Err(FlagError::Real {
+            flag,
+            value,
+            range: if positive { "> 0" } else { ">= 0" },
+        })
+    }
+}
+
+fn int<T: TryFrom<i64>>(flag: &'static str, value: i64, lo: i64, hi: i64) -> Result<T, FlagError> {
+    let err = FlagError::Int {
+        flag,
+        value,
+        lo,
+        hi,
+    };
+    if value < lo || value > hi {
+        return Err(err);
+    }
+    T::try_from(value).map_err(|_| err)
+}
+
+impl Overrides {
+    /// `true` when no field is given.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.stiffness.is_none()
+            && self.damping.is_none()
+            && self.rate.is_none()
+            && self.delay_ticks.is_none()
+            && self.coarsen_shift.is_none()
+            && self.wall.is_none()
+            && self.wall_position.is_none()
+            && self.force_limit.is_none()
+            && self.max_velocity.is_none()
+            && self.energy_monitor.is_none()
+            && self.energy_limit.is_none()
+            && self.energy_growth_cycles.is_none()
+            && self.encoder_jump.is_none()
+            && self.heartbeat_timeout_ms.is_none()
+            && self.safe_mode.is_none()
+            && self.safe_damping.is_none()
+    }
+
+    /// `base` with the given fields changed; host-side validation of each given number.
+    ///
+    /// # Errors
+    /// The first field out of range, named with its range.
+    pub fn apply(&self, base: &ServoConfig) -> Result<ServoConfig, FlagError> {
+        let mut c = *base;
+        if let Some(v) = self.stiffness {
+            c.stiffness = real("stiffness", v, false)?;
+        }
+        if let Some(v) = self.damping {
+            c.damping = real("damping", v, false)?;
+        }
+        if let Some(v) = self.rate {
+            c.servo_rate_hz = int("rate", v, 1, i64::from(u32::MAX))?;
+        }
+        if let Some(v) = self.delay_ticks {
+            c.extra_delay_ticks = int(
+                "delay-ticks",
+                v,
+                0,
+                i64::from(stiffwall_proto::MAX_DELAY_TICKS),
+            )?;
+        }
+        if let Some(v) = self.coarsen_shift {
+            c.coarsen_shift = int(
+                "coarsen-shift",
+                v,
+                0,
+                i64::from(stiffwall_proto::MAX_COARSEN_SHIFT),
+            )?;
+        }
+        if let Some(w) = self.wall {
+            c.wall = match w {
+                WallArg::Bidirectional => WallMode::Bidirectional,
+                WallArg::OneSided => WallMode::OneSided,
+            };
+        }
+        if let Some(v) = self.wall_position {
+            c.wall_position = v;
+        }
+        if let Some(v) = self.force_limit {
+            c.force_limit = real("force-limit", v, true)?;
+        }
+        if let Some(v) = self.max_velocity {
+            c.max_velocity = real("max-velocity", v, false)?;
+        }
+        if let Some(v) = self.energy_monitor {
+            c.energy_monitor = v == OnOff::On;
+        }
+        if let Some(v) = self.energy_limit {
+            c.energy_limit = real("energy-limit", v, true)?;
+        }
+        if let Some(v) = self.energy_growth_cycles {
+            c.energy_growth_cycles = int("energy-growth-cycles", v, 1, 64)?;
+        }
+        if let Some(v) = self.encoder_jump {
+            c.encoder_jump_counts = int("encoder-jump", v, 1, i64::from(u32::MAX))?;
+        }
+        if let Some(v) = self.heartbeat_timeout_ms {
+            c.heartbeat_timeout_ms = int("heartbeat-timeout-ms", v, 0, i64::from(u32::MAX))?;
+        }
+        if let Some(v) = self.safe_mode {
+            c.safe_mode = match v {
+                SafeModeArg::ZeroForce => SafeMode::ZeroForce,
+                SafeModeArg::Damping => SafeMode::Damping,
+            };
+        }
+        if let Some(v) = self.safe_damping {
+            c.safe_damping = real("safe-damping", v, false)?;
+        }
+        Ok(c)
+    }
+
+    /// Validates on the host, then reads, changes and writes the device's config. Returns the
+    /// config now active (re-read from the device).
+    pub fn set_on(&self, client: &mut Client) -> Result<ServoConfig> {
+        // Validate before talking to the device at all.
+        self.apply(&ServoConfig::default())?;
+        let cur = client.get_config()?;
+        let new = self.apply(&cur)?;
+        if new != cur {
+            client.set_config(&new)?;
+        }
+        let now = client.get_config()?;
+        if now != new {
+            bail!("the device reports a different configuration than the one it accepted: {now:?}");
+        }
+        Ok(now)
+    }
+
+    /// Connects (after validating these changes on the host) and applies them, if any; returns
+    /// the client and the active configuration. Shared by `stream` and `record`.
+    pub fn connect_and_apply(&self, connect: &ConnectArgs) -> Result<(Client, ServoConfig)> {
+        self.apply(&ServoConfig::default())?;
+        let mut client = connect.connect()?;
+        let cfg = if self.is_empty() {
+            client.get_config()?
+        } else {
+            self.set_on(&mut client)
+                .context("applying the config changes")?
+        };
+        Ok((client, cfg))
+    }
+}

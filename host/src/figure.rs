@@ -1,0 +1,172 @@
+//! Figure files of every `hostctl` command: the format by extension, one writer for both.
+//!
+//! Units: sizes in pixels. Invariants: the format is chosen by the file's extension, `.svg` or
+//! `.png` in any case (`.SVG`, `.Png`); any other name is refused before anything is drawn,
+//! with an error naming the path and the allowed extensions. The file is presented (written)
+//! exactly once, after the whole figure is drawn.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// File format of a figure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Scalable vector graphics.
+    Svg,
+    /// Portable network graphics (bitmap).
+    Png,
+}
+
+/// Why a figure could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum FigureError {
+    /// The file name does not end in an allowed extension.
+    #[error("figure file '{}' must end in .svg or .png (any case)", .path.display())]
+    Extension {
+        /// The refused path.
+        path: PathBuf,
+    },
+    /// Drawing or writing the file failed.
+    #[error("writing the figure {}: {source}", .path.display())]
+    Draw {
+        /// The figure's path.
+        path: PathBuf,
+        /// What failed.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
+
+/// Something that can draw itself on any plotters backend.
+pub trait Figure {
+    /// Draws the whole figure into `root` (which it fills); the writer presents it.
+    ///
+    /// # Errors
+    /// A drawing error.
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// The format of `path` by its extension (case-insensitive).
+///
+/// # Errors
+/// [`FigureError::Extension`] for any other name.
+pub fn format_of(path: &Path) -> Result<Format, FigureError> {
+    let ext = path.extension().and_then(|e| e.to_str());
+    match ext {
+        Some(e) if e.eq_ignore_ascii_case("svg") => Ok(Format::Svg),
+        Some(e) if e.eq_ignore_ascii_case("png") => Ok(Format::Png),
+        _ => Err(FigureError::Extension {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// Draws `figure` at `size_px` (width, height) into `path`, SVG or PNG by extension.
+///
+/// # Errors
+/// An unsupported extension, or a drawing or file error (naming the path).
+pub fn write<F: Figure + ?Sized>(
+    path: &Path,
+    size_px: (u32, u32),
+    figure: &F,
+) -> Result<(), FigureError> {
+    let draw_err = |source: Box<dyn std::error::Error + Send + Sync>| FigureError::Draw {
+        path: path.to_path_buf(),
+        source,
+    };
+    let drawn = match format_of(path)? {
+        Format::Svg => render(SVGBackend::new(path, size_px).into_drawing_area(), figure),
+        Format::Png => render(
+            BitMapBackend::new(path, size_px).into_drawing_area(),
+            figure,
+        ),
+    };
+    drawn.map_err(draw_err)
+}
+
+fn render<DB: DrawingBackend, F: Figure + ?Sized>(
+    root: DrawingArea<DB, Shift>,
+    figure: &F,
+) -> Result<(), Box<dyn std::error::Error + Send + Sync>>
+where
+    DB::ErrorType: 'static,
+{
+    figure.draw(&root)?;
+    root.present()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Square;
+    impl Figure for Square {
+        fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+        where
+            DB::ErrorType: 'static,
+        {
+            root.fill(&WHITE)?;
+            root.draw(&Rectangle::new([(2, 2), (8, 8)], RED.filled()))?;
+            Ok(())
+        }
+    }
+
+    struct Broken;
+    impl Figure for Broken {
+        fn draw<DB: DrawingBackend>(&self, _: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+        where
+            DB::ErrorType: 'static,
+        {
+            anyhow::bail!("no data to draw")
+        }
+    }
+
+    #[test]
+    fn extension_picks_the_format_in_any_case() {
+        for (name, want) in [
+            ("a.svg", Format::Svg),
+            ("a.SVG", Format::Svg),
+            ("dir.png/a.Svg", Format::Svg),
+            ("a.png", Format::Png),
+            ("a.PNG", Format::Png),
+            ("a.pNg", Format::Png),
+        ] {
+            assert_eq!(format_of(Path::new(name)).unwrap(), want, "{name}");
+        }
+    }
+
+    #[test]
+    fn other_names_are_refused_naming_path_and_extensions() {
+        for name in ["a.jpg", "a", "a.svg.gz", "svg", ".png.txt"] {
+            let e = format_of(Path::new(name)).unwrap_err().to_string();
+            assert!(e.contains(&format!("'{name}'")), "{e}");
+            assert!(e.contains(".svg or .png"), "{e}");
+        }
+    }
+
+    #[test]
+    fn writes_svg_and_png_by_extension_and_nothing_for_other_names() {
+        let dir = std::env::temp_dir().join(format!("stiffwall-figure-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let svg = dir.join("square.SVG");
+        write(&svg, (10, 10), &Square).unwrap();
+        assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+        let png = dir.join("square.Png");
+        write(&png, (10, 10), &Square).unwrap();
+        assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+        let jpg = dir.join("square.jpg");
+        assert!(matches!(
+            write(&jpg, (10, 10), &Square),
+            Err(FigureError::Extension { .. })
+        ));
+        assert!(!jpg.exists());
+        let e = write(&dir.join("broken.svg"), (10, 10), &Broken).unwrap_err();
+        assert!(e.to_string().contains("broken.svg"), "{e}");
+        assert!(e.to_string().contains("no data to draw"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
