@@ -58,13 +58,19 @@
 #[cfg(any(feature = "std", test))]
 extern crate std;
 
+pub mod channels;
 pub mod config;
 pub mod device;
+pub mod experiment;
 pub mod hal;
 pub mod numeric;
 pub mod servo;
 pub mod store;
 
+pub use channels::{
+    Channels, HostPort, ServoCmd, ServoEvent, ServoPort, Shared, TelemetryItem, COMMAND_QUEUE,
+    EVENT_QUEUE, TELEMETRY_QUEUE,
+};
 pub use config::{validate, BoardInfo, ConfigError, Gains};
 pub use device::Device;
 pub use hal::{
@@ -72,8 +78,8 @@ pub use hal::{
     TickSource,
 };
 pub use numeric::{Fx32, Fx64, Numeric, F32};
-pub use servo::{
-    Channels, EnergyMonitor, HostPort, Servo, ServoCmd, ServoEvent, ServoPort, Shared,
-    TelemetryItem,
-};
+pub use servo::Servo;
+/// The energy monitor (the dissipation check, eq. (35)), from `stiffwall-core`.
+pub use stiffwall_core::monitor;
+pub use stiffwall_core::monitor::EnergyMonitor;
 pub use store::{ConfigStore, MemStorage};

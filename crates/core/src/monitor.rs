@@ -219,7 +219,14 @@ mod tests {
             8.0 * spring_energy(f64::from(n) + 1.0),
         );
         let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-        prop_assert!(e8 as f64 >= lo && e8 as f64 <= hi, "n = {}: {} ∉ [{}, {}]", n, e8, lo, hi);
+        prop_assert!(
+            e8 as f64 >= lo && e8 as f64 <= hi,
+            "n = {}: {} ∉ [{}, {}]",
+            n,
+            e8,
+            lo,
+            hi
+        );
         // The telemetry value is the same number, saturated.
         prop_assert_eq!(u64::from(energy_e8_u32(n)), e8.min(u64::from(u32::MAX)));
         Ok(())
@@ -227,7 +234,16 @@ mod tests {
 
     #[test]
     fn energy_e8_is_8_h_t_at_the_edges() {
-        for n in [i32::MIN, i32::MIN + 1, -(1 << 24), -1, 0, 1, (1 << 24) - 1, i32::MAX] {
+        for n in [
+            i32::MIN,
+            i32::MIN + 1,
+            -(1 << 24),
+            -1,
+            0,
+            1,
+            (1 << 24) - 1,
+            i32::MAX,
+        ] {
             check_tied_to_h_t(n, 0.0).unwrap();
             check_tied_to_h_t(n, 100.0).unwrap();
         }
