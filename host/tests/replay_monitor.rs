@@ -32,15 +32,16 @@ fn tmp(name: &str) -> PathBuf {
 #[test]
 fn replay_finds_the_growth_of_a_region_c_release_where_the_device_latched_it() {
     let f = tmp("region-c.csv");
-    // maxon-re35 (c = 2e-3 N·m, b = 9e-6 N·m·s/rad, Δ = 2π/8192) at K = 10 N·m/rad, 1 kHz:
-    // σ = c/(KΔ) ≈ 0.26, β = b/(KT) ≈ 0.0009: region C, the oscillation grows.
+    // maxon-re35 (c = 2e-3 N·m, b = 9e-6 N·m·s/rad, Δ = 2π/8192) at K = 8 N·m/rad, 1 kHz:
+    // σ = c/(KΔ) ≈ 0.33, β = b/(KT) ≈ 0.0011: region C, the oscillation grows (from 3 ticks;
+    // the virtual amplifier's full scale, 0.066 N·m, clamps the spring beyond ≈ 10 ticks).
     let args = [
         "record",
         f.to_str().unwrap(),
         "--seconds",
         "3",
         "--stiffness",
-        "10",
+        "8",
         "--energy-monitor",
         "on",
         "--energy-limit",
@@ -50,7 +51,7 @@ fn replay_finds_the_growth_of_a_region_c_release_where_the_device_latched_it() {
         "--encoder-jump",
         "1073741824",
         "--release",
-        "10",
+        "3",
         "--fast",
     ];
     let (ok, out, err) = hostctl(&args);
