@@ -18,6 +18,7 @@ pub mod cmd;
 pub mod config_flags;
 pub mod device;
 pub mod figure;
+pub mod monitor_report;
 pub mod output;
 pub mod plant_args;
 pub mod recording;
