@@ -209,7 +209,10 @@ mod tests {
             assert!((generation_tight_bound(d, 0.0) - sup).abs() < 1e-12);
             assert!((generation_tight_bound(-d, 0.0) - sup).abs() < 1e-12);
         }
-        assert!(generation_tight_bound(0.5, 0.7) <= generation_upper_bound_delayed(0.5, 1.0, 0.7).unwrap() + 0.125);
+        assert!(
+            generation_tight_bound(0.5, 0.7)
+                <= generation_upper_bound_delayed(0.5, 1.0, 0.7).unwrap() + 0.125
+        );
     }
 
     #[test]

@@ -283,22 +283,28 @@ impl Scale {
         })
     }
 
-    /// μ = m/(K T²) (divided step by step so that K·T² cannot overflow first).
+    /// μ = m/(K T²).
     #[must_use]
     pub fn mu(&self, mass: f64) -> f64 {
-        mass / self.stiffness / self.period_s / self.period_s
+        ratio(mass, self.stiffness * self.period_s * self.period_s, || {
+            mass / self.stiffness / self.period_s / self.period_s
+        })
     }
 
     /// β = b/(K T).
     #[must_use]
     pub fn beta(&self, viscous: f64) -> f64 {
-        viscous / self.stiffness / self.period_s
+        ratio(viscous, self.stiffness * self.period_s, || {
+            viscous / self.stiffness / self.period_s
+        })
     }
 
     /// σ = c/(K Δ).
     #[must_use]
     pub fn sigma(&self, coulomb: f64) -> f64 {
-        coulomb / self.stiffness / self.resolution
+        ratio(coulomb, self.stiffness * self.resolution, || {
+            coulomb / self.stiffness / self.resolution
+        })
     }
 
     /// τ_D = T_D/T (any time in s → periods).
@@ -341,6 +347,16 @@ impl Scale {
     #[must_use]
     pub fn omega(&self, rad_per_s: f64) -> f64 {
         rad_per_s * self.period_s
+    }
+}
+
+/// `num / den`, or `step_by_step()` when the product `den` overflowed or underflowed (then
+/// dividing factor by factor keeps the ratio finite and non-zero where it can be).
+fn ratio(num: f64, den: f64, step_by_step: impl FnOnce() -> f64) -> f64 {
+    if den.is_normal() {
+        num / den
+    } else {
+        step_by_step()
     }
 }
 

@@ -505,11 +505,7 @@ pub fn boundaries(
             out.len += 1;
         }
     };
-    add(
-        Boundary::BetaStar,
-        (bs, w.sigma_min),
-        (bs, w.sigma_max),
-    );
+    add(Boundary::BetaStar, (bs, w.sigma_min), (bs, w.sigma_max));
     add(Boundary::SigmaHalf, (w.beta_min, 0.5), (w.beta_max, 0.5));
     if let Some(ss) = ss {
         if tau_d > 0.0 && ss > 0.5 {
@@ -585,11 +581,7 @@ pub fn region_polygon(
             Some(s) => [Some(high_beta), Some((0.0, -1.0, -s)), None],
             None => return Ok(empty),
         },
-        Region::F2 if delayed => [
-            Some(high_beta),
-            Some(high_sigma),
-            ss.map(|s| (0.0, 1.0, s)),
-        ],
+        Region::F2 if delayed => [Some(high_beta), Some(high_sigma), ss.map(|s| (0.0, 1.0, s))],
         _ => return Ok(empty),
     };
     for h in half_planes.into_iter().flatten() {
@@ -626,11 +618,7 @@ fn poly_area(p: &Polygon) -> f64 {
 }
 
 /// Clips the segment p–q to the window (Liang–Barsky); `None` when it misses it or is a point.
-fn clip_segment(
-    p: (f64, f64),
-    q: (f64, f64),
-    w: &Window,
-) -> Option<((f64, f64), (f64, f64))> {
+fn clip_segment(p: (f64, f64), q: (f64, f64), w: &Window) -> Option<((f64, f64), (f64, f64))> {
     let (dx, dy) = (q.0 - p.0, q.1 - p.1);
     let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
     for (den, num) in [
@@ -744,7 +732,11 @@ mod tests {
                     .vertices()
                     .iter()
                     .fold((0.0, 0.0), |(x, y), q| (x + q.0 / n, y + q.1 / n));
-                assert_eq!(classify_delayed(cb, cs, t, v, a).unwrap(), r, "{t} {v:?} {a:?}");
+                assert_eq!(
+                    classify_delayed(cb, cs, t, v, a).unwrap(),
+                    r,
+                    "{t} {v:?} {a:?}"
+                );
             }
             assert!((total - 12.0).abs() < 1e-9, "{t} {v:?} {a:?}: {total}");
         }
