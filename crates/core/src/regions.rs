@@ -640,7 +640,7 @@ fn clip_segment(p: (f64, f64), q: (f64, f64), w: &Window) -> Option<((f64, f64),
             }
         }
     }
-    if !(t0 < t1) {
+    if t0 >= t1 || t0.is_nan() || t1.is_nan() {
         return None;
     }
     let at = |t: f64| (p.0 + t * dx, p.1 + t * dy);
