@@ -6,53 +6,49 @@
 //!
 //!   E_g = ∫_{ξ(l)}^{ξ(τ₁)} (⌊ξ⌋ − ⌊ξ(h)⌋) dξ.
 //!
+//! The formulas live in `stiffwall_core::energy`; this module names them in the (d, d₀) form
+//! the solvers' tests use:
 //! - [`paper_47`]: ½d² + ½|d|                       (eq. (47), τ_D = 0)
 //! - [`paper_58`]: ½d² + (½ + |d₀|)|d|              (eq. (58), with τ_D|ξ̇(η)| = |d₀|)
-//! - [`tight`]:    ∫_{s·d₀}^{s·d₀+|d|} ⌈u⌉ du, s = sgn d — the least upper bound given (d, d₀),
-//!   from ⌊a⌋ − ⌊b⌋ ≤ ⌈a − b⌉. For d₀ = 0 it is c|d| − c(c−1)/2 with c = ⌈|d|⌉, i.e.
-//!   ½d² + ½|d| + ½δ(1−δ) with δ = frac|d|: (47) is short by up to ⅛ (erratum, see
-//!   `docs/model-notes-sim.md`: the step (45)→(46) uses |⌊ξ₁⌋ − ⌊ξ₀⌋| ≤ |ξ₁ − ξ₀|, false).
+//! - [`tight`]:    ∫_{s·d₀}^{s·d₀+|d|} ⌈u⌉ du, s = sgn d — the least upper bound given (d, d₀);
+//!   (47) is short of it by up to ⅛ (erratum, see `docs/model-notes-sim.md`: the step
+//!   (45)→(46) uses |⌊ξ₁⌋ − ⌊ξ₀⌋| ≤ |ξ₁ − ξ₀|, false).
 //!
-//! Invariant: all functions are pure and finite for finite inputs.
+//! Invariant: all functions are pure and finite for finite inputs (NaN otherwise).
 
-use crate::math::floor_fast;
+use stiffwall_core::energy;
+pub use stiffwall_core::energy::ceil_integral;
 
 /// Generated energy over an interval of constant force: φ_A·d + H_e(ξ₁) − H_e(ξ_l).
 #[must_use]
 pub fn generated(phi_a: f64, xi_l: f64, xi_1: f64) -> f64 {
-    phi_a * (xi_1 - xi_l) + crate::exact::potential(xi_1) - crate::exact::potential(xi_l)
+    phi_a * (xi_1 - xi_l) + energy::spring_energy(xi_1) - energy::spring_energy(xi_l)
 }
 
-/// The paper's bound (47).
+/// The paper's bound (47), [`energy::generation_upper_bound`].
 #[must_use]
 pub fn paper_47(d: f64) -> f64 {
-    0.5 * d * d + 0.5 * d.abs()
+    energy::generation_upper_bound(d).unwrap_or(f64::NAN)
 }
 
-/// The paper's bound (58) with the delay term |ξ(l) − ξ(h)| = τ_D|ξ̇(η)| (57).
+/// The paper's bound (58), [`energy::generation_upper_bound_delayed`], with the delay term
+/// τ_D|ξ̇(η)| (57) given as the displacement |d₀| = |ξ(l) − ξ(h)|.
 #[must_use]
 pub fn paper_58(d: f64, d0: f64) -> f64 {
-    0.5 * d * d + (0.5 + d0.abs()) * d.abs()
+    energy::generation_upper_bound_delayed(d, 1.0, d0).unwrap_or(f64::NAN)
 }
 
-/// ∫₀ᵘ ⌈w⌉ dw = u²/2 + u − ½⌊u⌋ − ½ρ(u)², valid for every real u.
-#[must_use]
-pub fn ceil_integral(u: f64) -> f64 {
-    let fl = floor_fast(u);
-    let r = u - fl;
-    0.5 * u * u + u - 0.5 * fl - 0.5 * r * r
-}
-
-/// The tight bound: sup of E_g over all positions with the given d and d₀.
+/// The tight bound: sup of E_g over all positions with the given d and d₀
+/// ([`energy::generation_tight_bound`]).
 #[must_use]
 pub fn tight(d: f64, d0: f64) -> f64 {
-    let a = if d >= 0.0 { d0 } else { -d0 };
-    ceil_integral(a + d.abs()) - ceil_integral(a)
+    energy::generation_tight_bound(d, d0)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::floor_fast;
 
     #[test]
     fn tight_equals_paper_at_integer_displacements_without_delay() {

@@ -26,8 +26,9 @@
 //! past |ξ| ≈ 1e150, which [`ExactSim::diverged`] reports.
 
 use crate::math::{e1, floor_fast, g, g1, g2};
-use crate::params::{Effects, ParamError, Params};
+use crate::params::{validate, Effects, ParamError, Params};
 use crate::plant::{advance, Body, Motion};
+use stiffwall_core::params::check_range;
 
 /// Capacity of the delay line (a power of two, > MAX_TAU_D + 2).
 const LINE: usize = 256;
@@ -88,24 +89,10 @@ pub struct PeriodAudit {
     pub residual: f64,
 }
 
-/// Potential energy of the quantized spring H_e (34): ½ξ² + ½(ρ − ρ²).
-#[inline]
-#[must_use]
-pub fn potential(xi: f64) -> f64 {
-    let r = xi - floor_fast(xi);
-    let r = if r >= 1.0 { 0.0 } else { r };
-    0.5 * xi * xi + 0.5 * (r - r * r)
-}
-
-/// H_T (35) with the fast floor; equal to `stiffwall_core::energy::storage_energy`.
-#[inline]
-#[must_use]
-pub fn storage(mu: f64, xi: f64, xidot: f64) -> f64 {
-    let r = xi - floor_fast(xi);
-    let r = if r >= 1.0 { 0.0 } else { r };
-    // Same operation order as `stiffwall_core::energy::storage_energy` (bit-identical).
-    0.5 * mu * xidot * xidot + 0.5 * xi * xi + 0.5 * (r - r * r)
-}
+/// Potential energy of the quantized spring H_e (34): `stiffwall_core::energy::spring_energy`.
+pub use stiffwall_core::energy::spring_energy as potential;
+/// H_T (35): `stiffwall_core::energy::storage_energy` (inlined, fast floor).
+pub use stiffwall_core::energy::storage_energy as storage;
 
 /// Common interface of every monomorphised exact solver (and of the reference solvers).
 pub trait ExactSim: Clone {
@@ -160,19 +147,23 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
 {
     /// A solver starting at τ = 0 in `init`. Disabled effects ignore their parameter.
     pub fn new(params: Params, init: Motion, history: History) -> Result<Self, ParamError> {
-        params.validate()?;
-        if !(init.x.is_finite() && init.x.abs() <= 1e150) {
-            return Err(ParamError {
-                field: "xi0",
-                allowed: "finite, |xi0| <= 1e150",
-            });
-        }
-        if !(init.v.is_finite() && init.v.abs() <= 1e150) {
-            return Err(ParamError {
-                field: "xidot0",
-                allowed: "finite, |xidot0| <= 1e150",
-            });
-        }
+        validate(&params)?;
+        check_range(
+            "xi0",
+            init.x,
+            -1e150,
+            false,
+            1e150,
+            "finite and in [-1e150, 1e150]",
+        )?;
+        check_range(
+            "xidot0",
+            init.v,
+            -1e150,
+            false,
+            1e150,
+            "finite and in [-1e150, 1e150]",
+        )?;
         let beta = if V { params.beta } else { 0.0 };
         let sigma = if C { params.sigma } else { 0.0 };
         let tau_d = if D { params.tau_d } else { 0.0 };

@@ -223,26 +223,9 @@ pub fn shard(spec: &MapSpec, k: usize, n: usize) -> Vec<usize> {
 }
 
 /// Analytic region of Fig. 3 (τ_D = 0) for a given ξ̇_max: 'A'..'E' (boundaries belong to the
-/// more stable side).
+/// more stable side): `stiffwall_core::regions::classify` as a letter ('?' for invalid input).
 #[must_use]
 pub fn region_no_delay(beta: f64, sigma: f64, xidot_max: f64) -> char {
-    match (beta >= 0.5, sigma >= 0.5) {
-        (true, true) => 'A',
-        (true, false) => 'B',
-        (false, false) => 'C',
-        (false, true) => {
-            if sigma >= 0.5 + xidot_max * (0.5 - beta) {
-                'E'
-            } else {
-                'D'
-            }
-        }
-    }
-}
-
-/// Critical line of (19): the σ above which the delayed loop is proven dissipating, for
-/// ξ̇_max and ξ̈_max (≈ ξ̇_max/√μ for an oscillation at the natural frequency).
-#[must_use]
-pub fn critical_sigma_delay(beta: f64, tau_d: f64, xidot_max: f64, xiddot_max: f64) -> f64 {
-    0.5 + xiddot_max * (tau_d * tau_d + tau_d) - xidot_max * (beta - 0.5 - tau_d)
+    stiffwall_core::regions::classify(beta, sigma, Some(xidot_max))
+        .map_or('?', |r| r.label().chars().next().unwrap_or('?'))
 }

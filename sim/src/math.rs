@@ -104,25 +104,8 @@ fn pow2(n: usize) -> f64 {
     f64::from_bits(((1023 + n as u64) & 0x7ff) << 52)
 }
 
-/// Largest f64 below which every f64 with |x| < LIMIT converts exactly to i64 and back.
-const FLOOR_LIMIT: f64 = 4.0e15;
-
-/// ⌊x⌋ without a libm call (x86-64 baseline has no `roundsd`). Exact for all finite x:
-/// beyond 4·10¹⁵ every f64 is already an integer. NaN maps to NaN.
-#[inline]
-#[must_use]
-pub fn floor_fast(x: f64) -> f64 {
-    if x.abs() < FLOOR_LIMIT {
-        let t = x as i64 as f64;
-        if t > x {
-            t - 1.0
-        } else {
-            t
-        }
-    } else {
-        x
-    }
-}
+/// ⌊x⌋ without a libm call: `stiffwall_core`'s, shared with the storage function (35).
+pub use stiffwall_core::energy::floor_fast;
 
 /// Encoder count ⌊x⌋ as an integer, saturating at the i64 range (NaN → 0).
 #[inline]

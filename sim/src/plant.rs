@@ -15,6 +15,8 @@
 //! closed-form sub-steps, never allocates and never loops.
 
 use crate::math::{e1, g, g1, g2, log1p_over};
+use crate::params::{ParamError, Params};
+use stiffwall_core::params::{check_non_negative, check_positive};
 
 /// Mass, viscous and Coulomb coefficients with derived constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -158,52 +160,23 @@ pub struct PhysicalPlant {
     state: Motion,
 }
 
-/// Invalid physical plant parameter (names the parameter).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PlantError {
-    /// mass_kg must be finite and > 0.
-    Mass,
-    /// viscous_ns_per_m must be finite and ≥ 0.
-    Viscous,
-    /// coulomb_n must be finite and ≥ 0.
-    Coulomb,
-    /// resolution_m must be finite and > 0.
-    Resolution,
-}
-
-impl core::fmt::Display for PlantError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let s = match self {
-            Self::Mass => "mass_kg must be finite and > 0",
-            Self::Viscous => "viscous_ns_per_m must be finite and >= 0",
-            Self::Coulomb => "coulomb_n must be finite and >= 0",
-            Self::Resolution => "resolution_m must be finite and > 0",
-        };
-        f.write_str(s)
-    }
-}
-
 impl PhysicalPlant {
     /// A plant at rest at x = 0. Mass in kg, viscous friction in N·s/m, dynamic Coulomb friction
     /// in N, encoder resolution Δ in m.
+    ///
+    /// # Errors
+    /// [`ParamError`] naming `mass_kg`, `viscous_ns_per_m`, `coulomb_n` or `resolution_m` and
+    /// its allowed range (mass and resolution finite and > 0, frictions finite and ≥ 0).
     pub fn new(
         mass_kg: f64,
         viscous_ns_per_m: f64,
         coulomb_n: f64,
         resolution_m: f64,
-    ) -> Result<Self, PlantError> {
-        if !(mass_kg.is_finite() && mass_kg > 0.0) {
-            return Err(PlantError::Mass);
-        }
-        if !(viscous_ns_per_m.is_finite() && viscous_ns_per_m >= 0.0) {
-            return Err(PlantError::Viscous);
-        }
-        if !(coulomb_n.is_finite() && coulomb_n >= 0.0) {
-            return Err(PlantError::Coulomb);
-        }
-        if !(resolution_m.is_finite() && resolution_m > 0.0) {
-            return Err(PlantError::Resolution);
-        }
+    ) -> Result<Self, ParamError> {
+        check_positive("mass_kg", mass_kg)?;
+        check_non_negative("viscous_ns_per_m", viscous_ns_per_m)?;
+        check_non_negative("coulomb_n", coulomb_n)?;
+        check_positive("resolution_m", resolution_m)?;
         Ok(Self {
             body: Body::new(mass_kg, viscous_ns_per_m, coulomb_n),
             resolution_m,
@@ -264,7 +237,10 @@ pub struct DimensionlessPlant {
 
 impl DimensionlessPlant {
     /// A plant with μ, β, σ of `params` (τ_D is the controller's business), at rest at ξ = 0.
-    pub fn new(params: &crate::params::Params) -> Result<Self, crate::params::ParamError> {
+    ///
+    /// # Errors
+    /// [`ParamError`] when μ, β or σ is out of range (core's [`Params::validate`]).
+    pub fn new(params: &Params) -> Result<Self, ParamError> {
         params.validate()?;
         Ok(Self {
             body: Body::new(params.mu, params.beta, params.sigma),
@@ -347,7 +323,7 @@ mod tests {
     fn physical_and_dimensionless_agree() {
         let (m, b, c, delta, k, t) = (0.25, 0.01, 0.06, 20e-6, 2400.0, 1e-3);
         let mut phys = PhysicalPlant::new(m, b, c, delta).unwrap();
-        let p = crate::params::Params {
+        let p = Params {
             mu: m / (k * t * t),
             beta: b / (k * t),
             sigma: c / (k * delta),
@@ -369,8 +345,8 @@ mod tests {
     #[test]
     fn physical_plant_validates() {
         assert_eq!(
-            PhysicalPlant::new(0.0, 0.0, 0.0, 1e-5),
-            Err(PlantError::Mass)
+            PhysicalPlant::new(0.0, 0.0, 0.0, 1e-5).map_err(|e| e.name()),
+            Err("mass_kg")
         );
         let mut p = PhysicalPlant::new(0.25, 0.01, 0.06, 20e-6).unwrap();
         p.set_state(-1e-6, 0.0);

@@ -20,8 +20,9 @@
 
 use crate::exact::{potential, ExactSim, History, PeriodAudit};
 use crate::math::floor_fast;
-use crate::params::{Effects, ParamError, Params};
+use crate::params::{validate, Effects, ParamError, Params};
 use crate::plant::Motion;
+use stiffwall_core::params::{check_non_negative, check_positive, check_range};
 
 const N: usize = 7;
 type Y = [f64; N];
@@ -190,51 +191,47 @@ impl RefSim {
     /// A reference simulation starting at τ = 0 in `init`.
     pub fn new(model: RefModel, method: Method, init: Motion) -> Result<Self, ParamError> {
         let p = model.params;
-        p.validate()?;
+        validate(&p)?;
         match method {
-            Method::Rk4 {
-                steps_per_period: 0,
-            } => {
-                return Err(ParamError {
-                    field: "steps_per_period",
-                    allowed: ">= 1",
-                })
+            Method::Rk4 { steps_per_period } => {
+                check_range(
+                    "steps_per_period",
+                    f64::from(steps_per_period),
+                    1.0,
+                    false,
+                    f64::from(u32::MAX),
+                    ">= 1",
+                )?;
             }
-            Method::Dopri { rtol, atol } if !(rtol > 0.0 && atol > 0.0) => {
-                return Err(ParamError {
-                    field: "rtol/atol",
-                    allowed: "> 0",
-                })
+            Method::Dopri { rtol, atol } => {
+                check_positive("rtol", rtol)?;
+                check_positive("atol", atol)?;
             }
-            _ => {}
         }
         let e = model.effects;
         let tau_d = if e.delay { p.tau_d } else { 0.0 };
-        if !model.zoh && tau_d > 0.0 {
-            return Err(ParamError {
-                field: "zoh",
-                allowed: "true when a delay is simulated",
-            });
+        if !model.zoh {
+            check_range(
+                "tau_d",
+                tau_d,
+                0.0,
+                false,
+                0.0,
+                "0 without the sample-and-hold (zoh = false)",
+            )?;
         }
         let mut mass = p.mu;
         let mut beta = if e.viscous { p.beta } else { 0.0 };
         if let Some(hand) = model.hand {
-            if !(hand.mu >= 0.0 && hand.beta >= 0.0 && hand.kappa >= 0.0) {
-                return Err(ParamError {
-                    field: "hand",
-                    allowed: "mass, damping, stiffness >= 0",
-                });
-            }
+            check_non_negative("hand.mu", hand.mu)?;
+            check_non_negative("hand.beta", hand.beta)?;
+            check_non_negative("hand.kappa", hand.kappa)?;
             mass += hand.mu;
             beta += hand.beta;
         }
         if let Some(a) = model.amp {
-            if !(a.omega > 0.0 && a.zeta > 0.0 && a.omega.is_finite() && a.zeta.is_finite()) {
-                return Err(ParamError {
-                    field: "amplifier",
-                    allowed: "omega > 0, zeta > 0",
-                });
-            }
+            check_positive("amplifier.omega", a.omega)?;
+            check_positive("amplifier.zeta", a.zeta)?;
         }
         let n = libm::floor(tau_d);
         let mut s = Self {
@@ -590,6 +587,8 @@ impl ExactSim for RefSim {
         }
         let end = self.y;
         let m = self.mass;
+        // H_T (35) with the hand's mass added; kinetic term first, as the audit always summed it
+        // (core's `storage_energy` associates the other way, which moves the last bit).
         let h0 = 0.5 * m * start[1] * start[1] + potential(start[0]);
         let h1 = 0.5 * m * end[1] * end[1] + potential(end[0]);
         let e_d = end[4] - start[4];

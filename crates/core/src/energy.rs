@@ -10,10 +10,34 @@
 
 use crate::params::{check_finite, check_non_negative, check_positive, ParamError};
 
+/// Below this magnitude every f64 converts exactly to i64 and back; above it every f64 is
+/// already an integer.
+const FLOOR_LIMIT: f64 = 4.0e15;
+
+/// ⌊x⌋ without a libm call (the x86-64 baseline has no `roundsd`; an integer conversion is
+/// several times faster in the simulator's hot loops). Exact for every finite x; NaN and ±∞
+/// map to themselves.
+#[inline]
+#[must_use]
+pub fn floor_fast(x: f64) -> f64 {
+    if x.abs() < FLOOR_LIMIT {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_precision_loss)]
+        let t = x as i64 as f64;
+        if t > x {
+            t - 1.0
+        } else {
+            t
+        }
+    } else {
+        x
+    }
+}
+
 /// Quantization error ρ(ξ) = ξ − ⌊ξ⌋ of eq. (32), in [0, 1).
+#[inline]
 #[must_use]
 pub fn quantization_error(xi: f64) -> f64 {
-    let r = xi - libm::floor(xi);
+    let r = xi - floor_fast(xi);
     // Guard the rounding case where xi is a tiny negative number and xi - floor(xi) == 1.0.
     if r >= 1.0 {
         0.0
@@ -23,6 +47,7 @@ pub fn quantization_error(xi: f64) -> f64 {
 }
 
 /// Storage function H_T(ξ, ξ̇) of eq. (35): ½μξ̇² + ½ξ² + ½(ρ − ρ²).
+#[inline]
 #[must_use]
 pub fn storage_energy(mu: f64, xi: f64, xidot: f64) -> f64 {
     let rho = quantization_error(xi);
@@ -40,6 +65,7 @@ fn mul0(a: f64, b: f64) -> f64 {
 
 /// Pseudo-elastic potential energy H_e(ξ) of the quantized spring, eq. (34):
 /// ½ξ² + ½(ρ − ρ²).
+#[inline]
 #[must_use]
 pub fn spring_energy(xi: f64) -> f64 {
     let rho = quantization_error(xi);
@@ -92,6 +118,27 @@ pub fn generation_upper_bound_delayed(
     Ok(0.5 * dxi * dxi + mul0(0.5 + mul0(tau_d, xidot_eta.abs()), dxi.abs()))
 }
 
+/// ∫₀ᵘ ⌈w⌉ dw = u²/2 + u − ½⌊u⌋ − ½ρ(u)², valid for every real u (helper of
+/// [`generation_tight_bound`]).
+#[must_use]
+pub fn ceil_integral(u: f64) -> f64 {
+    let fl = floor_fast(u);
+    let r = u - fl;
+    0.5 * u * u + u - 0.5 * fl - 0.5 * r * r
+}
+
+/// Least upper bound of the energy generated over [l, τ₁] (l = h + τ_D, constant force
+/// −⌊ξ(h)⌋ − ½) given the displacement `dxi` = ξ(τ₁) − ξ(l) and the delay displacement
+/// `dxi_delay` = ξ(l) − ξ(h) (0 without delay): ∫_{s·d₀}^{s·d₀+|d|} ⌈u⌉ du with s = sgn d,
+/// from ⌊a⌋ − ⌊b⌋ ≤ ⌈a − b⌉. For d₀ = 0 it is ½d² + ½|d| + ½δ(1 − δ), δ = frac|d|: the
+/// corrected form of (47) (erratum, see `docs/model-notes-core.md`), and it is ≤ (58) with
+/// τ_D|ξ̇(η)| = |d₀| up to the same ⅛. Finite for finite input.
+#[must_use]
+pub fn generation_tight_bound(dxi: f64, dxi_delay: f64) -> f64 {
+    let a = if dxi >= 0.0 { dxi_delay } else { -dxi_delay };
+    ceil_integral(a + dxi.abs()) - ceil_integral(a)
+}
+
 /// Exact energy generated within one sampling interval for τ_D = 0, eq. (42)–(44):
 /// E_gz + E_gq with E_gz = ½(ξ₁ − ξ_h)² (43) and
 /// E_gq = (ρ_h − ½)(⌊ξ₁⌋ − ⌊ξ_h⌋) − ½(ρ₁ − ρ_h)² (44), where ξ_h is the position at the
@@ -104,7 +151,7 @@ pub fn generation_sampled(xi_h: f64, xi_1: f64) -> Result<f64, ParamError> {
     check_finite("xi_1", xi_1)?;
     let (rh, r1) = (quantization_error(xi_h), quantization_error(xi_1));
     let d = xi_1 - xi_h;
-    let jumps = libm::floor(xi_1) - libm::floor(xi_h);
+    let jumps = floor_fast(xi_1) - floor_fast(xi_h);
     Ok(0.5 * d * d + (rh - 0.5) * jumps - 0.5 * (r1 - rh) * (r1 - rh))
 }
 
@@ -141,6 +188,31 @@ mod tests {
             }
             xi_h += 0.0913;
         }
+    }
+
+    #[test]
+    fn floor_fast_is_floor() {
+        for x in [
+            -3.5, -1.0, -1e-300, -0.0, 0.0, 0.3, 1.0, 2.999_999, 4.5e15, -4.5e15, 1e300,
+        ] {
+            assert_eq!(floor_fast(x), libm::floor(x), "{x}");
+        }
+        assert!(floor_fast(f64::NAN).is_nan());
+    }
+
+    /// The tight bound is the supremum checked in `exact_generation_vs_bound_47` (d₀ = 0).
+    #[test]
+    fn tight_bound_is_attained() {
+        for d in [0.25, 0.5, 1.5, 2.75] {
+            let r = quantization_error(d);
+            let sup = generation_upper_bound(d).unwrap() + 0.5 * r * (1.0 - r);
+            assert!((generation_tight_bound(d, 0.0) - sup).abs() < 1e-12);
+            assert!((generation_tight_bound(-d, 0.0) - sup).abs() < 1e-12);
+        }
+        assert!(
+            generation_tight_bound(0.5, 0.7)
+                <= generation_upper_bound_delayed(0.5, 1.0, 0.7).unwrap() + 0.125
+        );
     }
 
     #[test]

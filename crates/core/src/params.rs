@@ -121,6 +121,38 @@ pub fn check_non_negative(name: &'static str, value: f64) -> Result<f64, ParamEr
     }
 }
 
+/// Checks `value` is finite and inside `lo ..= hi` (`lo` excluded when `lo_open`); `allowed`
+/// states that range in words for the error, e.g. `"finite and in (0, 1e12]"`.
+///
+/// # Errors
+/// [`ParamError`] naming `name` when the check fails.
+pub fn check_range(
+    name: &'static str,
+    value: f64,
+    lo: f64,
+    lo_open: bool,
+    hi: f64,
+    allowed: &'static str,
+) -> Result<f64, ParamError> {
+    if !value.is_finite() {
+        return Err(ParamError::NotFinite {
+            name,
+            value,
+            allowed,
+        });
+    }
+    let above_lo = if lo_open { value > lo } else { value >= lo };
+    if above_lo && value <= hi {
+        Ok(value)
+    } else {
+        Err(ParamError::OutOfRange {
+            name,
+            value,
+            allowed,
+        })
+    }
+}
+
 /// Checks `value` is finite (any sign).
 ///
 /// # Errors
@@ -174,6 +206,14 @@ pub struct Dimensionless {
 }
 
 impl Dimensionless {
+    /// The paper's base scene (Sec. IV): μ = 100, β = 0.1, σ = 1, τ_D = 0.
+    pub const BASE: Self = Self {
+        mu: 100.0,
+        beta: 0.1,
+        sigma: 1.0,
+        tau_d: 0.0,
+    };
+
     /// Validates every field: μ > 0, β ≥ 0, σ ≥ 0, τ_D ≥ 0, all finite.
     ///
     /// # Errors
@@ -217,7 +257,128 @@ impl Dimensionless {
     }
 }
 
+/// The scale of Table I: stiffness K, sampling period T and resolution Δ (SI, as in
+/// [`PhysicalParams`]). Every conversion between physical and dimensionless quantities of this
+/// crate goes through it, so each ratio of Table I is written once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scale {
+    /// K: N/m (N·m/rad). > 0.
+    pub stiffness: f64,
+    /// T: s. > 0.
+    pub period_s: f64,
+    /// Δ: m (rad). > 0.
+    pub resolution: f64,
+}
+
+impl Scale {
+    /// A validated scale.
+    ///
+    /// # Errors
+    /// [`ParamError`] naming `stiffness`, `period` or `resolution` when not finite and > 0.
+    pub fn new(stiffness: f64, period_s: f64, resolution: f64) -> Result<Self, ParamError> {
+        Ok(Self {
+            stiffness: check_positive("stiffness", stiffness)?,
+            period_s: check_positive("period", period_s)?,
+            resolution: check_positive("resolution", resolution)?,
+        })
+    }
+
+    /// μ = m/(K T²).
+    #[must_use]
+    pub fn mu(&self, mass: f64) -> f64 {
+        ratio(mass, self.stiffness * self.period_s * self.period_s, || {
+            mass / self.stiffness / self.period_s / self.period_s
+        })
+    }
+
+    /// β = b/(K T).
+    #[must_use]
+    pub fn beta(&self, viscous: f64) -> f64 {
+        ratio(viscous, self.stiffness * self.period_s, || {
+            viscous / self.stiffness / self.period_s
+        })
+    }
+
+    /// σ = c/(K Δ).
+    #[must_use]
+    pub fn sigma(&self, coulomb: f64) -> f64 {
+        ratio(coulomb, self.stiffness * self.resolution, || {
+            coulomb / self.stiffness / self.resolution
+        })
+    }
+
+    /// τ_D = T_D/T (any time in s → periods).
+    #[must_use]
+    pub fn tau(&self, time_s: f64) -> f64 {
+        time_s / self.period_s
+    }
+
+    /// A stiffness relative to K, κ = k/K (e.g. the hand's stiffness).
+    #[must_use]
+    pub fn kappa(&self, stiffness: f64) -> f64 {
+        stiffness / self.stiffness
+    }
+
+    /// ξ = x/Δ (position in ticks).
+    #[must_use]
+    pub fn xi(&self, position: f64) -> f64 {
+        position / self.resolution
+    }
+
+    /// ξ̇ = ẋT/Δ (velocity in ticks per period).
+    #[must_use]
+    pub fn xidot(&self, velocity: f64) -> f64 {
+        velocity * self.period_s / self.resolution
+    }
+
+    /// ẋ = ξ̇Δ/T (inverse of [`Scale::xidot`]).
+    #[must_use]
+    pub fn velocity(&self, xidot: f64) -> f64 {
+        xidot * self.resolution / self.period_s
+    }
+
+    /// ξ̈ = ẍT²/Δ (acceleration in ticks per period²).
+    #[must_use]
+    pub fn xiddot(&self, acceleration: f64) -> f64 {
+        acceleration * self.period_s * self.period_s / self.resolution
+    }
+
+    /// A frequency in rad/s → radians per period, ωT.
+    #[must_use]
+    pub fn omega(&self, rad_per_s: f64) -> f64 {
+        rad_per_s * self.period_s
+    }
+}
+
+/// `num / den`, or `step_by_step()` when the product `den` overflowed or underflowed (then
+/// dividing factor by factor keeps the ratio finite and non-zero where it can be).
+fn ratio(num: f64, den: f64, step_by_step: impl FnOnce() -> f64) -> f64 {
+    if den.is_normal() {
+        num / den
+    } else {
+        step_by_step()
+    }
+}
+
+/// Amplifier delay of eq. (5): a second-order amplifier of cut-off ω_A and damping ratio δ_A
+/// acts, at low frequency, as the pure delay T_A = 2δ_A/ω_A. With ω_A in rad per period the
+/// result is in periods; with rad/s, in seconds.
+#[must_use]
+pub fn amplifier_delay(omega: f64, damping: f64) -> f64 {
+    2.0 * damping / omega
+}
+
 impl PhysicalParams {
+    /// The scale (K, T, Δ) of these parameters, unvalidated.
+    #[must_use]
+    pub fn scale(&self) -> Scale {
+        Scale {
+            stiffness: self.stiffness,
+            period_s: self.period_s,
+            resolution: self.resolution,
+        }
+    }
+
     /// Validates every field (see the field docs for the ranges).
     ///
     /// # Errors
@@ -240,14 +401,12 @@ impl PhysicalParams {
     /// underflows to a value outside its range (e.g. μ = 0 from an extreme ratio).
     pub fn to_dimensionless(&self) -> Result<Dimensionless, ParamError> {
         self.validate()?;
-        let k = self.stiffness;
-        let t = self.period_s;
-        // Divide step by step so that K·T² cannot overflow before the division.
+        let s = self.scale();
         let d = Dimensionless {
-            mu: self.mass / k / t / t,
-            beta: self.viscous / k / t,
-            sigma: self.coulomb / k / self.resolution,
-            tau_d: self.delay_s / t,
+            mu: s.mu(self.mass),
+            beta: s.beta(self.viscous),
+            sigma: s.sigma(self.coulomb),
+            tau_d: s.tau(self.delay_s),
         };
         d.validate()
     }
@@ -261,19 +420,19 @@ impl PhysicalParams {
     /// Physical velocity (m/s or rad/s) → dimensionless ξ̇ = ẋT/Δ (Table I).
     #[must_use]
     pub fn xidot_from_velocity(&self, velocity: f64) -> f64 {
-        velocity * self.period_s / self.resolution
+        self.scale().xidot(velocity)
     }
 
     /// Dimensionless ξ̇ → physical velocity ẋ = ξ̇Δ/T (m/s or rad/s).
     #[must_use]
     pub fn velocity_from_xidot(&self, xidot: f64) -> f64 {
-        xidot * self.resolution / self.period_s
+        self.scale().velocity(xidot)
     }
 
     /// Physical acceleration (m/s² or rad/s²) → dimensionless ξ̈ = ẍT²/Δ.
     #[must_use]
     pub fn xiddot_from_acceleration(&self, acceleration: f64) -> f64 {
-        acceleration * self.period_s * self.period_s / self.resolution
+        self.scale().xiddot(acceleration)
     }
 
     /// Unit label of positions: `"m"` or `"rad"`.

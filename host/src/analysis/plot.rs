@@ -2,9 +2,10 @@
 //! operating point, the critical line of (12)/(19) for the velocity bound, and the path of the
 //! point as K grows (Fig. 4: a ray towards the origin, β and σ both ∝ 1/K).
 //!
-//! Units: dimensionless axes. Invariants: the region polygons use the same boundaries as
-//! `stiffwall_core::regions::classify_delayed` (β* = ½ + τ_D, σ = ½, σ* = ½ + ξ̈(τ_D² + τ_D),
-//! critical line σ = σ* + ξ̇(β* − β)).
+//! Units: dimensionless axes. Invariants: the region polygons and the critical line come from
+//! `stiffwall_core::regions::{region_polygon, boundaries}`, the same thresholds as
+//! `classify_delayed` (β* = ½ + τ_D, σ = ½, σ* = ½ + ξ̈(τ_D² + τ_D), critical line
+//! σ = σ* + ξ̇(β* − β)); nothing here restates them.
 
 use super::Report;
 use crate::figure::{self, Figure, FigureError};
@@ -12,6 +13,7 @@ use anyhow::anyhow;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
+use stiffwall_core::regions::{self, Boundary, Region, Window};
 
 const W: u32 = 1000;
 const H: u32 = 720;
@@ -56,8 +58,8 @@ where
     root.fill(&WHITE).map_err(e)?;
     let tau = r.tau_d;
     let delayed = tau > 0.0;
-    let b_star = 0.5 + tau;
-    let s_star = 0.5 + r.xiddot.unwrap_or(0.0) * (tau * tau + tau);
+    let b_star = regions::beta_star(tau);
+    let s_star = regions::sigma_star(tau, r.xiddot).unwrap_or(0.5);
     // Slope of the critical line: the given velocity bound, else the velocity limit (15)
     // (the line through the operating point).
     let (slope, slope_label) = match (r.xidot, r.xidot_max) {
@@ -119,87 +121,32 @@ where
             .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], color.filled()));
         Ok(())
     };
-    let s_lo = 0.5_f64.min(smax);
-    region(
-        vec![(0.0, 0.0), (b_star, 0.0), (b_star, s_lo), (0.0, s_lo)],
-        c_c,
-        "C: unstable".into(),
-    )?;
-    region(
-        vec![(b_star, 0.0), (bmax, 0.0), (bmax, s_lo), (b_star, s_lo)],
-        c_b,
-        "B: limit cycle < 1 tick".into(),
-    )?;
-    if delayed && s_star > 0.5 {
-        region(
-            vec![(b_star, 0.5), (bmax, 0.5), (bmax, s_star), (b_star, s_star)],
-            c_f2,
-            "F2: stable, brief energy generation".into(),
-        )?;
-    }
-    region(
-        vec![
-            (b_star, s_star),
-            (bmax, s_star),
-            (bmax, smax),
-            (b_star, smax),
-        ],
-        c_a,
-        if delayed {
-            "F1: stable, energy decreasing".into()
-        } else {
-            "A: passive, globally stable".into()
-        },
-    )?;
-    // D and E, split by the critical line σ = σ* + s(β* − β) (E empty without a slope).
-    let s = slope.unwrap_or(f64::INFINITY);
-    let line = |b: f64| s_star + s * (b_star - b);
-    let (d_poly, e_poly) = if s.is_finite() && line(0.0) <= smax {
-        (
-            vec![
-                (0.0, 0.5),
-                (b_star, 0.5),
-                (b_star, s_star),
-                (0.0, line(0.0)),
-            ],
-            vec![
-                (0.0, line(0.0)),
-                (b_star, s_star),
-                (b_star, smax),
-                (0.0, smax),
-            ],
-        )
-    } else if s.is_finite() {
-        let b1 = b_star - (smax - s_star) / s;
-        (
-            vec![
-                (0.0, 0.5),
-                (b_star, 0.5),
-                (b_star, s_star),
-                (b1, smax),
-                (0.0, smax),
-            ],
-            vec![(b1, smax), (b_star, s_star), (b_star, smax)],
-        )
-    } else {
-        (
-            vec![(0.0, 0.5), (b_star, 0.5), (b_star, smax), (0.0, smax)],
-            Vec::new(),
-        )
+    let window = Window {
+        beta_min: 0.0,
+        beta_max: bmax,
+        sigma_min: 0.0,
+        sigma_max: smax,
     };
-    region(d_poly, c_d, "D: locally unstable".into())?;
-    region(e_poly, c_e, "E: locally stable".into())?;
+    let regions_drawn = [
+        (Region::C, c_c, "C: unstable"),
+        (Region::B, c_b, "B: limit cycle < 1 tick"),
+        (Region::F2, c_f2, "F2: stable, brief energy generation"),
+        (Region::A, c_a, "A: passive, globally stable"),
+        (Region::F1, c_a, "F1: stable, energy decreasing"),
+        (Region::D, c_d, "D: locally unstable"),
+        (Region::E, c_e, "E: locally stable"),
+    ];
+    for (reg, color, label) in regions_drawn {
+        let poly = regions::region_polygon(reg, tau, slope, r.xiddot, &window).map_err(e)?;
+        region(poly.vertices().to_vec(), color, label.into())?;
+    }
 
     // Critical line.
-    if let Some(sl) = slope {
-        let b0 = if line(0.0) <= smax {
-            0.0
-        } else {
-            b_star - (smax - s_star) / sl
-        };
+    let lines = regions::boundaries(tau, slope, r.xiddot, &window).map_err(e)?;
+    if let Some(seg) = lines.get(Boundary::Critical) {
         chart
             .draw_series(LineSeries::new(
-                vec![(b0, s_star + sl * (b_star - b0)), (b_star, s_star)],
+                vec![seg.from, seg.to],
                 BLACK.stroke_width(2),
             ))
             .map_err(e)?

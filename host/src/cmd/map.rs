@@ -17,6 +17,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use stiffwall_core::regions;
 use stiffwall_sim::classify::Class;
 use stiffwall_sim::exact::History;
 use stiffwall_sim::map::{self, Axis, MapPoint, MapSpec};
@@ -405,41 +406,19 @@ where
             )
         }))?;
         if overlay {
+            // The boundaries of Fig. 3 (tau_D = 0) or Fig. 5 / (19), with the panel's xidot0 as
+            // the velocity bound and xiddot_max ~ xidot_max / sqrt(mu) (harmonic motion).
             let red = RED.stroke_width(2);
             let v = panel.xidot0.abs();
-            if s.tau_d == 0.0 {
-                // Fig. 3: beta = 1/2, sigma = 1/2, critical line sigma = 1/2 + v (1/2 - beta).
-                chart.draw_series(LineSeries::new(vec![(0.5, sy0), (0.5, sy1)], red))?;
-                chart.draw_series(LineSeries::new(vec![(bx0, 0.5), (bx1, 0.5)], red))?;
-                let b_end = (0.5 - (sy1 - 0.5) / v.max(1e-9)).max(bx0);
-                chart.draw_series(LineSeries::new(
-                    vec![(b_end, 0.5 + v * (0.5 - b_end)), (0.5, 0.5)],
-                    red,
-                ))?;
-            } else {
-                // Fig. 5 / (19) with xiddot_max ~ xidot_max / sqrt(mu).
-                let td = s.tau_d;
-                let a = v / s.mu.sqrt();
-                let b_c = 0.5 + td;
-                chart.draw_series(LineSeries::new(vec![(b_c, sy0), (b_c, sy1)], red))?;
-                // (19) is a straight line in (beta, sigma): clip it to the panel.
-                let at = |b: f64| map::critical_sigma_delay(b, td, v, a);
-                let b_of = |sg: f64| b_c + (at(b_c) - sg) / v.max(1e-12);
-                let (b_lo, b_hi) = {
-                    let (p, q) = (b_of(sy1), b_of(sy0));
-                    (p.min(q).max(bx0), p.max(q).min(bx1))
-                };
-                if b_lo < b_hi {
-                    chart.draw_series(LineSeries::new(
-                        vec![(b_lo, at(b_lo)), (b_hi, at(b_hi))],
-                        red,
-                    ))?;
-                }
-                let s_f = 0.5 + a * (td * td + td);
-                if s_f <= sy1 {
-                    // F1/F2 boundary sigma* of Fig. 5.
-                    chart.draw_series(LineSeries::new(vec![(b_c, s_f), (bx1, s_f)], red))?;
-                }
+            let window = regions::Window {
+                beta_min: bx0,
+                beta_max: bx1,
+                sigma_min: sy0,
+                sigma_max: sy1,
+            };
+            let lines = regions::boundaries(s.tau_d, Some(v), Some(v / s.mu.sqrt()), &window)?;
+            for seg in lines.as_slice() {
+                chart.draw_series(LineSeries::new(vec![seg.from, seg.to], red))?;
             }
         }
     }

@@ -1,0 +1,115 @@
+//! The TOML layout of a scene, as read by serde: every table and key of the format, unchecked.
+//!
+//! Units are in the key names (`mass_kg`, `period_s`, …); dimensionless keys (`mu`, `beta`,
+//! `sigma`, `tau_d`, `xi`, `xidot`) are in Table I units. Invariant: unknown keys are rejected
+//! (`deny_unknown_fields`); ranges and unit-system consistency are checked in `resolve`.
+
+use crate::exact::History;
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawScene {
+    pub device: RawDevice,
+    #[serde(default)]
+    pub controller: RawController,
+    pub effects: RawEffects,
+    pub initial: RawInitial,
+    pub run: RawRun,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawDevice {
+    pub mu: Option<f64>,
+    pub beta: Option<f64>,
+    pub sigma: Option<f64>,
+    pub mass_kg: Option<f64>,
+    pub viscous_ns_per_m: Option<f64>,
+    pub coulomb_n: Option<f64>,
+    pub resolution_m: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawController {
+    pub stiffness_n_per_m: Option<f64>,
+    pub period_s: Option<f64>,
+    pub extra_delay_s: Option<f64>,
+    pub tau_d: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawEffects {
+    pub zoh: bool,
+    pub quantization: bool,
+    pub coulomb: bool,
+    pub viscous: bool,
+    pub delay: bool,
+    pub one_sided_wall: bool,
+    pub amplifier: RawAmp,
+    pub hand: RawHand,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, tag = "kind", rename_all = "snake_case")]
+pub(super) enum RawAmp {
+    None,
+    /// Pure delay of eq. (5): T_A = 2δ_A/ω_A.
+    Delay {
+        omega: Option<f64>,
+        zeta: Option<f64>,
+        cutoff_hz: Option<f64>,
+        damping: Option<f64>,
+    },
+    /// Second-order low-pass filter.
+    SecondOrder {
+        omega: Option<f64>,
+        zeta: Option<f64>,
+        cutoff_hz: Option<f64>,
+        damping: Option<f64>,
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, tag = "kind", rename_all = "snake_case")]
+pub(super) enum RawHand {
+    None,
+    Dimensionless {
+        mu: f64,
+        beta: f64,
+        kappa: f64,
+    },
+    Physical {
+        mass_kg: f64,
+        damping_ns_per_m: f64,
+        stiffness_n_per_m: f64,
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawInitial {
+    pub xi: Option<f64>,
+    pub xidot: Option<f64>,
+    pub position_m: Option<f64>,
+    pub velocity_m_per_s: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawRun {
+    pub periods: u64,
+    pub solver: RawSolver,
+    #[serde(default)]
+    pub history: History,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields, tag = "kind", rename_all = "snake_case")]
+pub(super) enum RawSolver {
+    Exact,
+    Rk4 { steps_per_period: u32 },
+    Dopri { rtol: f64, atol: f64 },
+}

@@ -1,0 +1,470 @@
+//! Resolution of a [`RawScene`] into a validated [`Scene`]: unit system, ranges, Table I.
+//!
+//! Units: a physical scene is converted once through `stiffwall_core`'s Table I
+//! ([`PhysicalParams::to_dimensionless`] and [`Scale`]); the amplifier delay is core's eq. (5)
+//! ([`amplifier_delay`]). Every range check is `stiffwall_core::params::check_range`, so an
+//! error names the TOML key and the allowed range. Invariant: the returned scene passes the
+//! solver's own validation (μ > 0, β, σ ≥ 0, 0 ≤ τ_D ≤ [`MAX_TAU_D`]).
+
+use super::raw::{RawAmp, RawDevice, RawHand, RawInitial, RawRun, RawScene, RawSolver};
+use super::{Scene, SceneError, Solver};
+use crate::params::{Effects, Params, MAX_TAU_D};
+use crate::plant::Motion;
+use crate::reference::{AmpFilter, Hand, Method};
+use stiffwall_core::params::{amplifier_delay, check_range, PhysicalParams, Scale};
+
+/// `check_range` with the error converted to a [`SceneError`].
+fn range(
+    key: &'static str,
+    value: f64,
+    lo: f64,
+    lo_open: bool,
+    hi: f64,
+    allowed: &'static str,
+) -> Result<f64, SceneError> {
+    Ok(check_range(key, value, lo, lo_open, hi, allowed)?)
+}
+
+fn need(key: &'static str, value: Option<f64>, allowed: &'static str) -> Result<f64, SceneError> {
+    value.ok_or(SceneError::Missing { key, allowed })
+}
+
+fn conflict<T>(key: &'static str, reason: &'static str) -> Result<T, SceneError> {
+    Err(SceneError::Conflict { key, reason })
+}
+
+/// [`Params`] of the device and controller, and the Table I scale of a physical scene.
+fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
+    let d: &RawDevice = &raw.device;
+    let c = &raw.controller;
+    let dimless = d.mu.is_some() || d.beta.is_some() || d.sigma.is_some();
+    let physical = d.mass_kg.is_some()
+        || d.viscous_ns_per_m.is_some()
+        || d.coulomb_n.is_some()
+        || d.resolution_m.is_some();
+    if dimless == physical {
+        return conflict(
+            "device",
+            "give either mu, beta, sigma (dimensionless) or mass_kg, viscous_ns_per_m, \
+             coulomb_n, resolution_m (physical), not both or neither",
+        );
+    }
+    if dimless {
+        let mu = need("device.mu", d.mu, "> 0")?;
+        let beta = need("device.beta", d.beta, ">= 0")?;
+        let sigma = need("device.sigma", d.sigma, ">= 0")?;
+        if c.stiffness_n_per_m.is_some() || c.period_s.is_some() || c.extra_delay_s.is_some() {
+            return conflict(
+                "controller",
+                "stiffness_n_per_m, period_s, extra_delay_s belong to physical scenes; \
+                 a dimensionless scene uses controller.tau_d",
+            );
+        }
+        let params = Params {
+            mu: range("device.mu", mu, 0.0, true, 1e12, "finite and in (0, 1e12]")?,
+            beta: range(
+                "device.beta",
+                beta,
+                0.0,
+                false,
+                1e6,
+                "finite and in [0, 1e6]",
+            )?,
+            sigma: range(
+                "device.sigma",
+                sigma,
+                0.0,
+                false,
+                1e6,
+                "finite and in [0, 1e6]",
+            )?,
+            tau_d: range(
+                "controller.tau_d",
+                c.tau_d.unwrap_or(0.0),
+                0.0,
+                false,
+                MAX_TAU_D,
+                "finite and in [0, 250] periods",
+            )?,
+        };
+        return Ok((params, None));
+    }
+    let m = need("device.mass_kg", d.mass_kg, "kg, > 0")?;
+    let b = need("device.viscous_ns_per_m", d.viscous_ns_per_m, "N s/m, >= 0")?;
+    let cc = need("device.coulomb_n", d.coulomb_n, "N, >= 0")?;
+    let delta = need("device.resolution_m", d.resolution_m, "m, > 0")?;
+    let k = need(
+        "controller.stiffness_n_per_m",
+        c.stiffness_n_per_m,
+        "N/m, > 0",
+    )?;
+    let t = need("controller.period_s", c.period_s, "s, > 0")?;
+    if c.tau_d.is_some() {
+        return conflict(
+            "controller.tau_d",
+            "belongs to dimensionless scenes; use controller.extra_delay_s",
+        );
+    }
+    let t = range(
+        "controller.period_s",
+        t,
+        0.0,
+        true,
+        10.0,
+        "finite and in (0, 10] s",
+    )?;
+    let p = PhysicalParams {
+        mass: range(
+            "device.mass_kg",
+            m,
+            0.0,
+            true,
+            1e6,
+            "finite and in (0, 1e6] kg",
+        )?,
+        viscous: range(
+            "device.viscous_ns_per_m",
+            b,
+            0.0,
+            false,
+            1e9,
+            "finite and in [0, 1e9] N s/m",
+        )?,
+        coulomb: range(
+            "device.coulomb_n",
+            cc,
+            0.0,
+            false,
+            1e9,
+            "finite and in [0, 1e9] N",
+        )?,
+        resolution: range(
+            "device.resolution_m",
+            delta,
+            0.0,
+            true,
+            1.0,
+            "finite and in (0, 1] m",
+        )?,
+        period_s: t,
+        stiffness: range(
+            "controller.stiffness_n_per_m",
+            k,
+            0.0,
+            true,
+            1e12,
+            "finite and in (0, 1e12] N/m",
+        )?,
+        delay_s: range(
+            "controller.extra_delay_s",
+            c.extra_delay_s.unwrap_or(0.0),
+            0.0,
+            false,
+            MAX_TAU_D * t,
+            "finite and in [0, 250 periods] s",
+        )?,
+        rotational: false,
+    };
+    Ok((p.to_dimensionless()?, Some(p.scale())))
+}
+
+/// The amplifier: a pure delay added to τ_D, or a filter for the reference solvers.
+fn amplifier(
+    amp: &RawAmp,
+    delay: bool,
+    scale: Option<Scale>,
+    tau_d: &mut f64,
+) -> Result<Option<AmpFilter>, SceneError> {
+    const KEY: &str = "effects.amplifier";
+    let (omega, zeta, hz, damp, pure_delay) = match *amp {
+        RawAmp::None => return Ok(None),
+        RawAmp::Delay {
+            omega,
+            zeta,
+            cutoff_hz,
+            damping,
+        } => (omega, zeta, cutoff_hz, damping, true),
+        RawAmp::SecondOrder {
+            omega,
+            zeta,
+            cutoff_hz,
+            damping,
+        } => (omega, zeta, cutoff_hz, damping, false),
+    };
+    let (w, z) = match (omega, zeta, hz, damp, scale) {
+        (Some(w), Some(z), None, None, None) => (
+            range(
+                "effects.amplifier.omega",
+                w,
+                0.0,
+                true,
+                1e9,
+                "finite and in (0, 1e9] rad/period",
+            )?,
+            range(
+                "effects.amplifier.zeta",
+                z,
+                0.0,
+                true,
+                100.0,
+                "finite and in (0, 100]",
+            )?,
+        ),
+        (None, None, Some(f), Some(z), Some(s)) => (
+            s.omega(
+                range(
+                    "effects.amplifier.cutoff_hz",
+                    f,
+                    0.0,
+                    true,
+                    1e12,
+                    "finite and in (0, 1e12] Hz",
+                )? * core::f64::consts::TAU,
+            ),
+            range(
+                "effects.amplifier.damping",
+                z,
+                0.0,
+                true,
+                100.0,
+                "finite and in (0, 100]",
+            )?,
+        ),
+        _ => {
+            return conflict(
+                KEY,
+                "dimensionless scenes give omega (rad/period) and zeta; physical scenes give \
+                 cutoff_hz and damping",
+            )
+        }
+    };
+    if !pure_delay {
+        return Ok(Some(AmpFilter { omega: w, zeta: z }));
+    }
+    if !delay {
+        return conflict(KEY, "kind = \"delay\" needs effects.delay = true");
+    }
+    *tau_d += amplifier_delay(w, z);
+    Ok(None)
+}
+
+/// The hand in contact, in Table I units.
+fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError> {
+    Ok(match *hand {
+        RawHand::None => None,
+        RawHand::Dimensionless { mu, beta, kappa } => {
+            if scale.is_some() {
+                return conflict("effects.hand", "a physical scene uses kind = \"physical\"");
+            }
+            Some(Hand {
+                mu: range(
+                    "effects.hand.mu",
+                    mu,
+                    0.0,
+                    false,
+                    1e12,
+                    "finite and in [0, 1e12]",
+                )?,
+                beta: range(
+                    "effects.hand.beta",
+                    beta,
+                    0.0,
+                    false,
+                    1e9,
+                    "finite and in [0, 1e9]",
+                )?,
+                kappa: range(
+                    "effects.hand.kappa",
+                    kappa,
+                    0.0,
+                    false,
+                    1e9,
+                    "finite and in [0, 1e9]",
+                )?,
+            })
+        }
+        RawHand::Physical {
+            mass_kg,
+            damping_ns_per_m,
+            stiffness_n_per_m,
+        } => {
+            let Some(s) = scale else {
+                return conflict(
+                    "effects.hand",
+                    "a dimensionless scene uses kind = \"dimensionless\"",
+                );
+            };
+            Some(Hand {
+                mu: s.mu(range(
+                    "effects.hand.mass_kg",
+                    mass_kg,
+                    0.0,
+                    false,
+                    1e6,
+                    "finite and in [0, 1e6] kg",
+                )?),
+                beta: s.beta(range(
+                    "effects.hand.damping_ns_per_m",
+                    damping_ns_per_m,
+                    0.0,
+                    false,
+                    1e9,
+                    "finite and in [0, 1e9] N s/m",
+                )?),
+                kappa: s.kappa(range(
+                    "effects.hand.stiffness_n_per_m",
+                    stiffness_n_per_m,
+                    0.0,
+                    false,
+                    1e12,
+                    "finite and in [0, 1e12] N/m",
+                )?),
+            })
+        }
+    })
+}
+
+/// The initial state in ticks and ticks per period.
+fn initial(i: &RawInitial, scale: Option<Scale>) -> Result<Motion, SceneError> {
+    match (i.xi, i.xidot, i.position_m, i.velocity_m_per_s, scale) {
+        (Some(x), Some(v), None, None, None) => Ok(Motion {
+            x: range(
+                "initial.xi",
+                x,
+                -1e12,
+                false,
+                1e12,
+                "finite and in [-1e12, 1e12] ticks",
+            )?,
+            v: range(
+                "initial.xidot",
+                v,
+                -1e12,
+                false,
+                1e12,
+                "finite and in [-1e12, 1e12] ticks/period",
+            )?,
+        }),
+        (None, None, Some(x), Some(v), Some(s)) => Ok(Motion {
+            x: s.xi(range(
+                "initial.position_m",
+                x,
+                -1e6,
+                false,
+                1e6,
+                "finite and in [-1e6, 1e6] m",
+            )?),
+            v: s.xidot(range(
+                "initial.velocity_m_per_s",
+                v,
+                -1e6,
+                false,
+                1e6,
+                "finite and in [-1e6, 1e6] m/s",
+            )?),
+        }),
+        (_, _, _, _, None) => conflict("initial", "a dimensionless scene gives xi and xidot"),
+        _ => conflict(
+            "initial",
+            "a physical scene gives position_m and velocity_m_per_s",
+        ),
+    }
+}
+
+/// The solver of `[run]`.
+fn solver(r: &RawRun) -> Result<Solver, SceneError> {
+    if r.periods == 0 || r.periods > 100_000_000 {
+        return Err(SceneError::Count {
+            key: "run.periods",
+            value: r.periods,
+            allowed: "[1, 1e8]",
+        });
+    }
+    Ok(match r.solver {
+        RawSolver::Exact => Solver::Exact,
+        RawSolver::Rk4 { steps_per_period } => {
+            if !(1..=100_000).contains(&steps_per_period) {
+                return Err(SceneError::Count {
+                    key: "run.solver.steps_per_period",
+                    value: u64::from(steps_per_period),
+                    allowed: "[1, 100000]",
+                });
+            }
+            Solver::Reference(Method::Rk4 { steps_per_period })
+        }
+        RawSolver::Dopri { rtol, atol } => Solver::Reference(Method::Dopri {
+            rtol: range(
+                "run.solver.rtol",
+                rtol,
+                1e-15,
+                false,
+                1.0,
+                "finite and in [1e-15, 1]",
+            )?,
+            atol: range(
+                "run.solver.atol",
+                atol,
+                1e-300,
+                false,
+                1.0,
+                "finite and in [1e-300, 1]",
+            )?,
+        }),
+    })
+}
+
+impl Scene {
+    pub(super) fn resolve(raw: RawScene) -> Result<Self, SceneError> {
+        let (mut params, scale) = device(&raw)?;
+        let e = &raw.effects;
+        let amp = amplifier(&e.amplifier, e.delay, scale, &mut params.tau_d)?;
+        if !e.delay && params.tau_d > 0.0 {
+            range(
+                "controller.tau_d",
+                params.tau_d,
+                0.0,
+                false,
+                0.0,
+                "0 when effects.delay = false",
+            )?;
+        }
+        range(
+            "controller.tau_d",
+            params.tau_d,
+            0.0,
+            false,
+            MAX_TAU_D,
+            "total delay in [0, 250] periods",
+        )?;
+        let hand = hand(&e.hand, scale)?;
+        let init = initial(&raw.initial, scale)?;
+        let solver = solver(&raw.run)?;
+        if solver == Solver::Exact && (amp.is_some() || hand.is_some() || !e.zoh) {
+            return conflict(
+                "run.solver",
+                "kind = \"exact\" needs effects.zoh = true, amplifier kind \"none\" or \"delay\" \
+                 and hand kind \"none\"; use rk4 or dopri",
+            );
+        }
+        if !e.zoh && params.tau_d > 0.0 {
+            return conflict("effects.zoh", "true when a delay is simulated");
+        }
+        Ok(Self {
+            params,
+            effects: Effects {
+                quantization: e.quantization,
+                coulomb: e.coulomb,
+                viscous: e.viscous,
+                delay: e.delay,
+                one_sided: e.one_sided_wall,
+            },
+            zoh: e.zoh,
+            amp,
+            hand,
+            init,
+            periods: raw.run.periods,
+            solver,
+            history: raw.run.history,
+        })
+    }
+}
