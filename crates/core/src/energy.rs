@@ -10,9 +10,10 @@
 
 use crate::params::{check_finite, check_non_negative, check_positive, ParamError};
 
-/// Below this magnitude every f64 converts exactly to i64 and back; above it every f64 is
-/// already an integer.
-const FLOOR_LIMIT: f64 = 4.0e15;
+/// 2⁵²: below it every f64 converts exactly to i64 and back; from it on every f64 is already
+/// an integer (its ulp is ≥ 1). (A limit of 4·10¹⁵ passed the fractions of [4·10¹⁵, 2⁵²)
+/// through unfloored.)
+const FLOOR_LIMIT: f64 = 4_503_599_627_370_496.0;
 
 /// ⌊x⌋ without a libm call (the x86-64 baseline has no `roundsd`; an integer conversion is
 /// several times faster in the simulator's hot loops). Exact for every finite x; NaN and ±∞
@@ -198,6 +199,29 @@ mod tests {
             assert_eq!(floor_fast(x), libm::floor(x), "{x}");
         }
         assert!(floor_fast(f64::NAN).is_nan());
+        // [4e15, 2^52) still holds fractions (ulp 0.5).
+        for x in [
+            4.1e15 + 0.5,
+            -(4.1e15 + 0.5),
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+        ] {
+            assert!(x % 1.0 != 0.0, "{x} must be a non-integer for this test");
+            assert_eq!(floor_fast(x), libm::floor(x), "{x}");
+        }
+    }
+
+    proptest::proptest! {
+        /// Every f64 bit pattern (all exponents, so every range of fractions).
+        #[test]
+        fn floor_fast_is_floor_for_every_f64(bits in proptest::prelude::any::<u64>()) {
+            let x = f64::from_bits(bits);
+            if x.is_nan() {
+                proptest::prop_assert!(floor_fast(x).is_nan());
+            } else {
+                proptest::prop_assert_eq!(floor_fast(x), libm::floor(x), "x = {:e}", x);
+            }
+        }
     }
 
     /// The tight bound is the supremum checked in `exact_generation_vs_bound_47` (d₀ = 0).
