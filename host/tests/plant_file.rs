@@ -151,3 +151,44 @@ fn bad_plant_files_name_the_key_and_range() {
     ]);
     assert!(err.contains("--plant") && err.contains("--device"), "{err}");
 }
+
+/// A recording made with `--plant` replays through the same plant file (named in its header),
+/// and `replay --plant FILE` picks it explicitly.
+#[test]
+fn record_and_replay_through_the_plant_file() {
+    let p = file("rig-record.toml", PLANT);
+    let csv = file("rig-record.csv", "");
+    ok(&[
+        "record",
+        csv.to_str().unwrap(),
+        "--plant",
+        p.to_str().unwrap(),
+        "--seconds",
+        "2",
+        "--stiffness",
+        "0.5",
+        "--energy-monitor",
+        "off",
+        "--release",
+        "30",
+        "--fast",
+    ]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        text.contains("# virtual_plant: plant:"),
+        "header names the plant file"
+    );
+    for extra in [&[][..], &["--plant", p.to_str().unwrap()][..]] {
+        let mut args = vec!["replay", csv.to_str().unwrap(), "--json"];
+        args.extend_from_slice(extra);
+        let json = ok(&args);
+        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let plant = &v["plant"];
+        assert!(
+            plant["source"].as_str().unwrap().contains("plant file"),
+            "{json}"
+        );
+        assert!(plant["compared"].as_u64().unwrap() > 500, "{json}");
+        assert!(plant["rms_ticks"].as_f64().unwrap() <= 1.0, "{json}");
+    }
+}
