@@ -50,7 +50,8 @@ pub struct Spec {
     /// Initial position of the plant, m (rad).
     pub initial_position: f64,
     /// The plant and controller of a scene file (`--plant`). `None`: the rigid plant of
-    /// `plant`, wall off at boot.
+    /// `plant`, wall off at boot. The firmware always quantises, so `controller.quantization`
+    /// and the scene's `[initial]`/`[run]` are not used by the device.
     pub scene: Option<ScenePlant>,
 }
 
