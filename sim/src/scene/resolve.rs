@@ -41,7 +41,8 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
     let physical = d.mass_kg.is_some()
         || d.viscous_ns_per_m.is_some()
         || d.coulomb_n.is_some()
-        || d.resolution_m.is_some();
+        || d.resolution_m.is_some()
+        || d.counts_per_rev.is_some();
     if dimless == physical {
         return conflict(
             "device",
@@ -92,7 +93,13 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
     let m = need("device.mass_kg", d.mass_kg, "kg, > 0")?;
     let b = need("device.viscous_ns_per_m", d.viscous_ns_per_m, "N s/m, >= 0")?;
     let cc = need("device.coulomb_n", d.coulomb_n, "N, >= 0")?;
-    let delta = need("device.resolution_m", d.resolution_m, "m, > 0")?;
+    let delta = match (d.resolution_m, d.counts_per_rev) {
+        (Some(_), Some(_)) => {
+            return conflict("device", "give resolution_m or counts_per_rev, not both")
+        }
+        (None, Some(n)) => crate::rich::scene::rotary_resolution(n)?,
+        (r, None) => need("device.resolution_m", r, "m, > 0")?,
+    };
     let k = need(
         "controller.stiffness_n_per_m",
         c.stiffness_n_per_m,
@@ -163,7 +170,7 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             MAX_TAU_D * t,
             "finite and in [0, 250 periods] s",
         )?,
-        rotational: false,
+        rotational: d.counts_per_rev.is_some(),
     };
     Ok((p.to_dimensionless()?, Some(p.scale())))
 }
@@ -177,18 +184,20 @@ fn amplifier(
 ) -> Result<Option<AmpFilter>, SceneError> {
     const KEY: &str = "effects.amplifier";
     let (omega, zeta, hz, damp, pure_delay) = match *amp {
-        RawAmp::None => return Ok(None),
+        RawAmp::None { .. } => return Ok(None),
         RawAmp::Delay {
             omega,
             zeta,
             cutoff_hz,
             damping,
+            ..
         } => (omega, zeta, cutoff_hz, damping, true),
         RawAmp::SecondOrder {
             omega,
             zeta,
             cutoff_hz,
             damping,
+            ..
         } => (omega, zeta, cutoff_hz, damping, false),
     };
     let (w, z) = match (omega, zeta, hz, damp, scale) {
@@ -414,7 +423,8 @@ fn solver(r: &RawRun) -> Result<Solver, SceneError> {
 }
 
 impl Scene {
-    pub(super) fn resolve(raw: RawScene) -> Result<Self, SceneError> {
+    /// The scene and, for a physical scene, its Table I scale.
+    pub(super) fn resolve(raw: RawScene) -> Result<(Self, Option<Scale>), SceneError> {
         let (mut params, scale) = device(&raw)?;
         let e = &raw.effects;
         let amp = amplifier(&e.amplifier, e.delay, scale, &mut params.tau_d)?;
@@ -449,22 +459,26 @@ impl Scene {
         if !e.zoh && params.tau_d > 0.0 {
             return conflict("effects.zoh", "true when a delay is simulated");
         }
-        Ok(Self {
-            params,
-            effects: Effects {
-                quantization: e.quantization,
-                coulomb: e.coulomb,
-                viscous: e.viscous,
-                delay: e.delay,
-                one_sided: e.one_sided_wall,
+        Ok((
+            Self {
+                params,
+                effects: Effects {
+                    quantization: e.quantization,
+                    coulomb: e.coulomb,
+                    viscous: e.viscous,
+                    delay: e.delay,
+                    one_sided: e.one_sided_wall,
+                },
+                zoh: e.zoh,
+                amp,
+                hand,
+                init,
+                periods: raw.run.periods,
+                solver,
+                history: raw.run.history,
+                rich: None,
             },
-            zoh: e.zoh,
-            amp,
-            hand,
-            init,
-            periods: raw.run.periods,
-            solver,
-            history: raw.run.history,
-        })
+            scale,
+        ))
     }
 }
