@@ -31,7 +31,7 @@ pub enum SceneError {
     #[error(transparent)]
     Toml(#[from] toml::de::Error),
     /// A value outside its allowed range (the name is the TOML key, e.g. `device.sigma`).
-    #[error(transparent)]
+    #[error("{} = {}: allowed range is {}", .0.name(), .0.value(), .0.allowed())]
     Param(#[from] ParamError),
     /// A key the scene's unit system requires is missing.
     #[error("{key} is missing ({allowed})")]

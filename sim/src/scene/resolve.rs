@@ -62,30 +62,16 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             );
         }
         let params = Params {
-            mu: range("device.mu", mu, 0.0, true, 1e12, "finite and in (0, 1e12]")?,
-            beta: range(
-                "device.beta",
-                beta,
-                0.0,
-                false,
-                1e6,
-                "finite and in [0, 1e6]",
-            )?,
-            sigma: range(
-                "device.sigma",
-                sigma,
-                0.0,
-                false,
-                1e6,
-                "finite and in [0, 1e6]",
-            )?,
+            mu: range("device.mu", mu, 0.0, true, 1e12, "(0, 1e12]")?,
+            beta: range("device.beta", beta, 0.0, false, 1e6, "[0, 1e6]")?,
+            sigma: range("device.sigma", sigma, 0.0, false, 1e6, "[0, 1e6]")?,
             tau_d: range(
                 "controller.tau_d",
                 c.tau_d.unwrap_or(0.0),
                 0.0,
                 false,
                 MAX_TAU_D,
-                "finite and in [0, 250] periods",
+                "[0, 250] periods",
             )?,
         };
         return Ok((params, None));
@@ -112,47 +98,19 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             "belongs to dimensionless scenes; use controller.extra_delay_s",
         );
     }
-    let t = range(
-        "controller.period_s",
-        t,
-        0.0,
-        true,
-        10.0,
-        "finite and in (0, 10] s",
-    )?;
+    let t = range("controller.period_s", t, 0.0, true, 10.0, "(0, 10] s")?;
     let p = PhysicalParams {
-        mass: range(
-            "device.mass_kg",
-            m,
-            0.0,
-            true,
-            1e6,
-            "finite and in (0, 1e6] kg",
-        )?,
+        mass: range("device.mass_kg", m, 0.0, true, 1e6, "(0, 1e6] kg")?,
         viscous: range(
             "device.viscous_ns_per_m",
             b,
             0.0,
             false,
             1e9,
-            "finite and in [0, 1e9] N s/m",
+            "[0, 1e9] N s/m",
         )?,
-        coulomb: range(
-            "device.coulomb_n",
-            cc,
-            0.0,
-            false,
-            1e9,
-            "finite and in [0, 1e9] N",
-        )?,
-        resolution: range(
-            "device.resolution_m",
-            delta,
-            0.0,
-            true,
-            1.0,
-            "finite and in (0, 1] m",
-        )?,
+        coulomb: range("device.coulomb_n", cc, 0.0, false, 1e9, "[0, 1e9] N")?,
+        resolution: range("device.resolution_m", delta, 0.0, true, 1.0, "(0, 1] m")?,
         period_s: t,
         stiffness: range(
             "controller.stiffness_n_per_m",
@@ -160,7 +118,7 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             0.0,
             true,
             1e12,
-            "finite and in (0, 1e12] N/m",
+            "(0, 1e12] N/m",
         )?,
         delay_s: range(
             "controller.extra_delay_s",
@@ -168,7 +126,7 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             0.0,
             false,
             MAX_TAU_D * t,
-            "finite and in [0, 250 periods] s",
+            "[0, 250 periods] s",
         )?,
         rotational: d.counts_per_rev.is_some(),
     };
@@ -208,16 +166,9 @@ fn amplifier(
                 0.0,
                 true,
                 1e9,
-                "finite and in (0, 1e9] rad/period",
+                "(0, 1e9] rad/period",
             )?,
-            range(
-                "effects.amplifier.zeta",
-                z,
-                0.0,
-                true,
-                100.0,
-                "finite and in (0, 100]",
-            )?,
+            range("effects.amplifier.zeta", z, 0.0, true, 100.0, "(0, 100]")?,
         ),
         (None, None, Some(f), Some(z), Some(s)) => (
             s.omega(
@@ -227,17 +178,10 @@ fn amplifier(
                     0.0,
                     true,
                     1e12,
-                    "finite and in (0, 1e12] Hz",
+                    "(0, 1e12] Hz",
                 )? * core::f64::consts::TAU,
             ),
-            range(
-                "effects.amplifier.damping",
-                z,
-                0.0,
-                true,
-                100.0,
-                "finite and in (0, 100]",
-            )?,
+            range("effects.amplifier.damping", z, 0.0, true, 100.0, "(0, 100]")?,
         ),
         _ => {
             return conflict(
@@ -266,30 +210,9 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                 return conflict("effects.hand", "a physical scene uses kind = \"physical\"");
             }
             Some(Hand {
-                mu: range(
-                    "effects.hand.mu",
-                    mu,
-                    0.0,
-                    false,
-                    1e12,
-                    "finite and in [0, 1e12]",
-                )?,
-                beta: range(
-                    "effects.hand.beta",
-                    beta,
-                    0.0,
-                    false,
-                    1e9,
-                    "finite and in [0, 1e9]",
-                )?,
-                kappa: range(
-                    "effects.hand.kappa",
-                    kappa,
-                    0.0,
-                    false,
-                    1e9,
-                    "finite and in [0, 1e9]",
-                )?,
+                mu: range("effects.hand.mu", mu, 0.0, false, 1e12, "[0, 1e12]")?,
+                beta: range("effects.hand.beta", beta, 0.0, false, 1e9, "[0, 1e9]")?,
+                kappa: range("effects.hand.kappa", kappa, 0.0, false, 1e9, "[0, 1e9]")?,
             })
         }
         RawHand::Physical {
@@ -310,7 +233,7 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                     0.0,
                     false,
                     1e6,
-                    "finite and in [0, 1e6] kg",
+                    "[0, 1e6] kg",
                 )?),
                 beta: s.beta(range(
                     "effects.hand.damping_ns_per_m",
@@ -318,7 +241,7 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                     0.0,
                     false,
                     1e9,
-                    "finite and in [0, 1e9] N s/m",
+                    "[0, 1e9] N s/m",
                 )?),
                 kappa: s.kappa(range(
                     "effects.hand.stiffness_n_per_m",
@@ -326,7 +249,7 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                     0.0,
                     false,
                     1e12,
-                    "finite and in [0, 1e12] N/m",
+                    "[0, 1e12] N/m",
                 )?),
             })
         }
@@ -337,21 +260,14 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
 fn initial(i: &RawInitial, scale: Option<Scale>) -> Result<Motion, SceneError> {
     match (i.xi, i.xidot, i.position_m, i.velocity_m_per_s, scale) {
         (Some(x), Some(v), None, None, None) => Ok(Motion {
-            x: range(
-                "initial.xi",
-                x,
-                -1e12,
-                false,
-                1e12,
-                "finite and in [-1e12, 1e12] ticks",
-            )?,
+            x: range("initial.xi", x, -1e12, false, 1e12, "[-1e12, 1e12] ticks")?,
             v: range(
                 "initial.xidot",
                 v,
                 -1e12,
                 false,
                 1e12,
-                "finite and in [-1e12, 1e12] ticks/period",
+                "[-1e12, 1e12] ticks/period",
             )?,
         }),
         (None, None, Some(x), Some(v), Some(s)) => Ok(Motion {
@@ -361,7 +277,7 @@ fn initial(i: &RawInitial, scale: Option<Scale>) -> Result<Motion, SceneError> {
                 -1e6,
                 false,
                 1e6,
-                "finite and in [-1e6, 1e6] m",
+                "[-1e6, 1e6] m",
             )?),
             v: s.xidot(range(
                 "initial.velocity_m_per_s",
@@ -369,7 +285,7 @@ fn initial(i: &RawInitial, scale: Option<Scale>) -> Result<Motion, SceneError> {
                 -1e6,
                 false,
                 1e6,
-                "finite and in [-1e6, 1e6] m/s",
+                "[-1e6, 1e6] m/s",
             )?),
         }),
         (_, _, _, _, None) => conflict("initial", "a dimensionless scene gives xi and xidot"),
@@ -402,22 +318,8 @@ fn solver(r: &RawRun) -> Result<Solver, SceneError> {
             Solver::Reference(Method::Rk4 { steps_per_period })
         }
         RawSolver::Dopri { rtol, atol } => Solver::Reference(Method::Dopri {
-            rtol: range(
-                "run.solver.rtol",
-                rtol,
-                1e-15,
-                false,
-                1.0,
-                "finite and in [1e-15, 1]",
-            )?,
-            atol: range(
-                "run.solver.atol",
-                atol,
-                1e-300,
-                false,
-                1.0,
-                "finite and in [1e-300, 1]",
-            )?,
+            rtol: range("run.solver.rtol", rtol, 1e-15, false, 1.0, "[1e-15, 1]")?,
+            atol: range("run.solver.atol", atol, 1e-300, false, 1.0, "[1e-300, 1]")?,
         }),
     })
 }
