@@ -70,7 +70,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         return Ok(emit(&list_devices())?);
     }
     if let Some(path) = &args.plot {
-        crate::figure::format_of(path)?;
+        crate::figure::prepare(path)?;
     }
     let (name, p) = resolve_params(args)?;
     let report = analyze(name, &p, args.velocity, args.acceleration)?;

@@ -51,6 +51,11 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     // Validate what can be validated before connecting.
     Plan::new(args.decimation, Some(args.seconds), 1)?;
+    if let Some(d) = args.release {
+        if d == 0 || d.unsigned_abs() > 1 << 20 {
+            bail!("--release must be non-zero and within [-1048576, 1048576] (got {d})");
+        }
+    }
     crate::session::stop_on_ctrl_c();
     let (mut client, cfg) = args.set.connect_and_apply(&args.connect)?;
     let mut plan = Plan::new(args.decimation, Some(args.seconds), cfg.servo_rate_hz)?;
