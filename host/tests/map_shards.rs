@@ -102,12 +102,12 @@ fn merge_is_order_independent_and_refuses_every_bad_set_of_shards() {
     // Shards of different splits.
     let other = make_shards(&dir("refuse-other"), 2, &[]);
     refused(&[s[0].clone(), other[1].clone()], &d, "a shard of 3");
-    // A mismatched sweep (another horizon), named by field.
-    let longer = make_shards(&dir("refuse-longer"), 3, &["--periods", "600"]);
+    // A mismatched sweep (another delay-line history), named by field.
+    let zero = make_shards(&dir("refuse-zero"), 3, &["--history", "zero"]);
     refused(
-        &[s[0].clone(), s[1].clone(), longer[2].clone()],
+        &[s[0].clone(), s[1].clone(), zero[2].clone()],
         &d,
-        "periods differs",
+        "history differs",
     );
     // A truncated file.
     let text = std::fs::read_to_string(&s[1]).unwrap();
