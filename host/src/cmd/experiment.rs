@@ -41,15 +41,15 @@ pub struct ReleaseArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub deflection: i32,
     /// Servo ticks to record after the release (100–10000000).
-    #[arg(long, default_value_t = 3000, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 3000, allow_hyphen_values = true)]
     pub ticks: u32,
     /// Wall stiffness for the test, N/m (N·m/rad); default: the device's configured K
     /// (needed when the device's wall is off, K = 0, as on a fresh virtual device).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub stiffness: Option<f64>,
     /// Device model for the (β, σ) panel: mass, viscous and Coulomb friction (SI); default:
     /// the `--device` preset of the virtual device.
-    #[arg(long, num_args = 3, value_names = ["M", "B", "C"], allow_negative_numbers = true)]
+    #[arg(long, num_args = 3, value_names = ["M", "B", "C"], allow_hyphen_values = true)]
     pub model: Option<Vec<f64>>,
     /// Write the figure (.svg or .png).
     #[arg(long, value_name = "FILE")]

@@ -9,7 +9,7 @@
 use crate::device::connect::ConnectArgs;
 use crate::device::virtual_device;
 use crate::session;
-use anyhow::{ensure, Result};
+use anyhow::{ensure, Context, Result};
 use std::io::Write;
 use std::time::Duration;
 
@@ -38,8 +38,15 @@ pub fn run(args: &Args) -> Result<()> {
         .virtual_spec()?
         .ok_or_else(|| anyhow::anyhow!("no virtual device to serve"))?;
     session::stop_on_ctrl_c();
-    // Keep our handle of the pty's host side open: the pty never hangs up between clients.
-    let (vd, _host) = virtual_device::spawn(spec)?;
+    let (vd, host) = virtual_device::spawn(spec)?;
+    // Keep the pty's host side open with a plain file (no exclusive lock, unlike the serial
+    // port handle from `spawn`, which is closed) so it never hangs up between clients.
+    let _keep_open = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&vd.pty)
+        .with_context(|| format!("opening {}", vd.pty))?;
+    drop(host);
     {
         let mut out = std::io::stdout().lock();
         writeln!(out, "pty: {}", vd.pty)?;

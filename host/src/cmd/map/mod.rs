@@ -35,17 +35,17 @@ pub struct Args {
     #[command(subcommand)]
     pub cmd: Option<Sub>,
     /// Dimensionless mass μ.
-    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 100.0, allow_hyphen_values = true)]
     pub mu: f64,
     /// Delay τ_D in sampling periods.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub tau_d: f64,
     /// Initial velocities ξ̇₀ (comma separated, one panel each).
     #[arg(
         long,
         value_delimiter = ',',
         default_value = "5",
-        allow_negative_numbers = true
+        allow_hyphen_values = true
     )]
     pub xidot0: Vec<f64>,
     /// β axis lo:hi:n.
