@@ -74,6 +74,9 @@ fn refused(inputs: &[PathBuf], d: &Path, want: &str) {
     assert!(!out.exists(), "a refused merge must not write its output");
 }
 
+/// An edit of a shard file's JSON.
+type Edit = dyn Fn(&mut Value);
+
 fn edit(src: &Path, dst: &Path, f: impl FnOnce(&mut Value)) -> PathBuf {
     let mut v: Value = serde_json::from_str(&std::fs::read_to_string(src).unwrap()).unwrap();
     f(&mut v);
@@ -117,7 +120,7 @@ fn merge_is_order_independent_and_refuses_every_bad_set_of_shards() {
 
     // Edited files: shard index out of range, n = 0, periods = 0, a huge grid, an extra panel,
     // a point contradicting its index, a dropped point, an edited spec with a stale hash.
-    let cases: Vec<(&str, Box<dyn Fn(&mut Value)>)> = vec![
+    let cases: Vec<(&str, Box<Edit>)> = vec![
         (
             "need n >= 1 and 0 <= k < n",
             Box::new(|v| v["shard"] = serde_json::json!([5, 3])),
