@@ -118,16 +118,20 @@ fn merge_is_order_independent_and_refuses_every_bad_set_of_shards() {
     std::fs::write(&cut, &text[..text.len() / 2]).unwrap();
     refused(&[s[0].clone(), cut, s[2].clone()], &d, "truncated");
 
-    // Edited files: shard index out of range, n = 0, periods = 0, a huge grid, an extra panel,
+    // Edited files: shard index out of range, n = 0, n = 1e18, periods = 0, a huge grid, an extra panel,
     // a point contradicting its index, a dropped point, an edited spec with a stale hash.
     let cases: Vec<(&str, Box<Edit>)> = vec![
         (
-            "need n >= 1 and 0 <= k < n",
+            "need 0 <= k < n",
             Box::new(|v| v["shard"] = serde_json::json!([5, 3])),
         ),
         (
-            "need n >= 1 and 0 <= k < n",
+            "need 0 <= k < n",
             Box::new(|v| v["shard"] = serde_json::json!([1, 0])),
+        ),
+        (
+            "1 <= n <= 100000",
+            Box::new(|v| v["shard"] = serde_json::json!([0, 1_000_000_000_000_000_000u64])),
         ),
         ("periods = 0", Box::new(|v| v["spec"]["periods"] = 0.into())),
         (

@@ -20,6 +20,9 @@ use stiffwall_sim::map::{self, Axis, MapPoint, MapSpec};
 /// Largest number of panels (ξ̇₀ values) of one map.
 pub const MAX_PANELS: usize = 64;
 
+/// Largest number of shards of one sweep.
+pub const MAX_SHARDS: usize = 100_000;
+
 /// The sweep description stored in the JSON.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Spec {
@@ -162,8 +165,8 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
     );
     let (k, n) = f.shard_or_whole();
     ensure!(
-        n >= 1 && k < n,
-        "{name}: shard [{k}, {n}]: need n >= 1 and 0 <= k < n"
+        (1..=MAX_SHARDS).contains(&n) && k < n,
+        "{name}: shard [{k}, {n}]: need 0 <= k < n and 1 <= n <= {MAX_SHARDS}"
     );
     ensure!(
         f.panels.len() == f.spec.xidot0.len(),

@@ -124,7 +124,11 @@ fn parse_shard(s: &str) -> Result<(usize, usize)> {
         .trim()
         .parse()
         .with_context(|| format!("--shard {s:?}: n"))?;
-    ensure!(n >= 1 && k < n, "--shard {s:?}: need 0 <= k < n");
+    ensure!(
+        (1..=file::MAX_SHARDS).contains(&n) && k < n,
+        "--shard {s:?}: need 0 <= k < n and 1 <= n <= {}",
+        file::MAX_SHARDS
+    );
     Ok((k, n))
 }
 
