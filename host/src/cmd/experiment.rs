@@ -107,9 +107,11 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     }
     if cfg.stiffness.is_nan() || cfg.stiffness <= 0.0 {
         bail!(
-            "the device's wall is off (K = {}): give the test's stiffness with --stiffness K              (N/m or N·m/rad, > 0 and ≤ {:.4} for this device at coarsening shift 0), or set              one with `hostctl config --stiffness K --save`",
+            "the device's wall is off (K = {}): give the test's stiffness with --stiffness K \
+             (N/m or N·m/rad, > 0 and ≤ {} for this device at coarsening shift 0); a board \
+             keeps one set with `hostctl config set --stiffness K` and `hostctl config save`",
             cfg.stiffness,
-            c.info.limits.max_stiffness
+            crate::device::client::readable(f64::from(c.info.limits.max_stiffness))
         );
     }
     c.clear_faults().ok();
