@@ -208,7 +208,8 @@ pub enum SafeMode {
 /// Ranges are checked by the firmware (`stiffwall_firmware::config::validate`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ServoConfig {
-    /// Wall stiffness K, N/m (N·m/rad). ≥ 0, and K·Δ_eff/2 ≤ 2^20 output codes.
+    /// Wall stiffness K, N/m (N·m/rad). ≥ 0, and K·Δ_eff/2 ≤ 2^14 output codes (the
+    /// firmware's `MAX_GAIN_CODES`, which its config validation enforces).
     pub stiffness: f32,
     /// Virtual damping B, N·s/m, on the backward-difference velocity. ≥ 0.
     pub damping: f32,

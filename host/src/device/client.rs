@@ -83,13 +83,42 @@ pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
     match detail {
         ErrorDetail::None => what.to_string(),
         ErrorDetail::Field { field, min, max } => {
-            format!("{what}: {field:?} must be within [{min}, {max}]")
+            // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
+            if *min == f64::from(f32::MIN_POSITIVE) {
+                format!("{what}: {field:?} must be > 0 and ≤ {}", readable(*max))
+            } else {
+                format!(
+                    "{what}: {field:?} must be within [{}, {}]",
+                    readable(*min),
+                    readable(*max)
+                )
+            }
         }
         ErrorDetail::Version { got, expected } => {
             format!("{what}: device got version {got}, expects {expected}")
         }
         ErrorDetail::Tag(t) => format!("{what}: tag {t}"),
         ErrorDetail::Text(t) => format!("{what}: {t}"),
+    }
+}
+
+/// `x` with about 6 significant digits, in scientific notation outside [1e-3, 1e7):
+/// `85.4457`, `1.18e-38`, `1048576`.
+#[must_use]
+pub fn readable(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    if !(1e-3..1e7).contains(&a) {
+        return format!("{x:.2e}");
+    }
+    let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
     }
 }
 

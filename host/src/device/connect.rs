@@ -110,6 +110,8 @@ impl ConnectArgs {
 
     /// Connects and performs the handshake.
     pub fn connect(&self) -> Result<Client> {
+        // Refuses --device with --port or --qemu (instead of ignoring it).
+        let spec = self.virtual_spec()?;
         if let Some(port) = &self.port {
             let p = transport::open_port(port, self.baud)?;
             return Client::connect(p, None);
@@ -120,7 +122,7 @@ impl ConnectArgs {
             let p = transport::open_port(&q.pty, transport::DEFAULT_BAUD)?;
             return Client::connect(p, Some(Box::new(q)));
         }
-        let spec = self.virtual_spec()?.expect("virtual target");
+        let spec = spec.expect("virtual target");
         let (vd, p) = virtual_device::spawn(spec)?;
         Client::connect(p, Some(Box::new(vd)))
     }
