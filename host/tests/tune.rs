@@ -14,6 +14,10 @@ fn preset(name: &str) -> PhysicalParams {
 }
 
 fn connect(p: PhysicalParams) -> Client {
+    connect_paced(p, true)
+}
+
+fn connect_paced(p: PhysicalParams, fast: bool) -> Client {
     let counts_per_rev = if p.rotational {
         (std::f64::consts::TAU / p.resolution).round() as u32
     } else {
@@ -22,7 +26,7 @@ fn connect(p: PhysicalParams) -> Client {
     let (vd, port) = spawn(Spec {
         plant: p,
         counts_per_rev,
-        fast: true,
+        fast,
         initial_position: 0.0,
     })
     .unwrap();
@@ -159,4 +163,42 @@ fn bad_max_velocity_is_refused_before_touching_the_device() {
     };
     assert!(procedure::tune(&mut c, &s, false, &|_| {}).is_err());
     assert_eq!(c.get_config().unwrap(), before);
+}
+
+/// Issue 10: the same plant gives the same K in `--fast` and in real time. Every decision of
+/// the tune depends on the device's counts only (tests start from rest with the wall off and
+/// end at points computed from their counts), so the two runs must agree exactly, test by test.
+#[test]
+fn fast_and_real_time_tunes_set_the_same_k_on_three_plants() {
+    for name in ["maxon-re35", "phantom-1.0", "delta"] {
+        let truth = preset(name);
+        let fast = procedure::tune(
+            &mut connect_paced(truth, true),
+            &Settings::default(),
+            true,
+            &|_| {},
+        )
+        .unwrap();
+        let started = std::time::Instant::now();
+        let paced = procedure::tune(
+            &mut connect_paced(truth, false),
+            &Settings::default(),
+            true,
+            &|_| {},
+        )
+        .unwrap();
+        eprintln!(
+            "{name}: K fast {:.6} real time {:.6} ({:.1} s real time)",
+            fast.k_set,
+            paced.k_set,
+            started.elapsed().as_secs_f64()
+        );
+        assert_eq!(fast.search.trials, paced.search.trials, "{name}: search");
+        assert_eq!(
+            fast.verification, paced.verification,
+            "{name}: verification"
+        );
+        assert_eq!(fast.k_set, paced.k_set, "{name}: K set");
+        assert_eq!(fast.model_mismatch, paced.model_mismatch, "{name}");
+    }
 }

@@ -482,10 +482,13 @@ fn tune_inner(
         evidence.model_hz = Some((k / id.mass).sqrt() / std::f64::consts::TAU);
     }
     let mut model_mismatch = model_check::findings(&id, &evidence, units);
-    model_mismatch.extend(model_check::prediction_finding(
-        found.k_pass,
-        predicted.expected,
-    ));
+    // Only a search that found a failing K measured the limit (otherwise the force cap did).
+    if found.k_fail.is_some() {
+        model_mismatch.extend(model_check::prediction_finding(
+            found.k_pass,
+            predicted.expected,
+        ));
+    }
     let thorough = !model_mismatch.is_empty();
     for f in &model_mismatch {
         progress(&format!("model mismatch: {f}"));
