@@ -217,9 +217,10 @@ fn excite_and_identify(
 }
 
 /// Step 1: identification with the wall off. A low-frequency chirp (0.5 Hz up to 4 Hz, or
-/// rate/250) keeps the velocity fit accurate; the amplitude grows from 5 % of the force limit
-/// until a fit succeeds, then the chirp is repeated at about 5·c (when the limit allows) so
-/// that the device slides most of the time and Coulomb friction acts as c·sgn(v).
+/// rate/250) keeps the velocity fit accurate; the amplitude of half-length probes grows from
+/// 5 % of the force limit until a fit succeeds, then the full chirp runs at about 5·c (when the
+/// limit allows, else at the probe's level) so that the device slides most of the time and
+/// Coulomb friction acts as c·sgn(v).
 /// Returns the fit, the amplitude used (codes) and where the device ended, in raw counts from
 /// the configured wall position.
 pub fn identify(
@@ -238,18 +239,19 @@ pub fn identify(
     for frac in [0.05, 0.1, 0.2, 0.4] {
         check_interrupt()?;
         let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
-        match excite_and_identify(c, amplitude, ticks, f1, progress) {
-            Ok((first, end)) => {
-                let wanted = ((5.0 * first.coulomb / fpc) as i32)
+        // A probe of half the length finds the level; the full chirp then gives the fit.
+        match excite_and_identify(c, amplitude, (ticks / 2).max(500), f1, progress) {
+            Ok((probe, end)) => {
+                let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
                     .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
-                if wanted > amplitude * 5 / 4 {
-                    check_interrupt()?;
-                    if let Ok((second, end2)) = excite_and_identify(c, wanted, ticks, f1, progress)
-                    {
-                        return Ok((second, wanted, end2));
-                    }
+                if wanted <= amplitude * 5 / 4 {
+                    wanted = amplitude;
                 }
-                return Ok((first, amplitude, end));
+                check_interrupt()?;
+                if let Ok((full, end2)) = excite_and_identify(c, wanted, ticks, f1, progress) {
+                    return Ok((full, wanted, end2));
+                }
+                return Ok((probe, amplitude, end));
             }
             Err(e) => last_err = Some(e),
         }
