@@ -39,6 +39,10 @@ pub struct GapStats {
     pub bad_frames: u64,
 }
 
+/// Judges the samples of a running experiment so far: true ends it early (see
+/// [`Client::release_until`]).
+pub type EnoughFn<'a> = dyn FnMut(&[Sample]) -> bool + 'a;
+
 /// Samples of one experiment with their bookkeeping.
 #[derive(Debug, Clone)]
 pub struct Record {
@@ -381,7 +385,7 @@ impl Client {
         &mut self,
         deflection_ticks: i32,
         ticks: u32,
-        enough: &mut dyn FnMut(&[Sample]) -> bool,
+        enough: &mut EnoughFn<'_>,
     ) -> Result<Record> {
         self.experiment_until(
             &HostMsg::Release {
@@ -412,7 +416,7 @@ impl Client {
         msg: &HostMsg,
         kind: ExperimentKind,
         ticks: u32,
-        mut enough: Option<&mut dyn FnMut(&[Sample]) -> bool>,
+        mut enough: Option<&mut EnoughFn<'_>>,
     ) -> Result<Record> {
         self.pending
             .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
