@@ -191,10 +191,7 @@ fn render(a: &Args, o: &Outcome, r: &crate::cmd::analyze::Report) -> String {
         o.verification.len(),
         o.verification
             .iter()
-            .map(|r| {
-                let crate::tune::verify::Test::Release { deflection_ticks } = r.test;
-                format!("release {deflection_ticks:+} {}", r.verdict.describe())
-            })
+            .map(|r| format!("{} {}", r.test.describe(), r.verdict.describe()))
             .collect::<Vec<_>>()
             .join("; ")
     );

@@ -398,6 +398,27 @@ impl Client {
         )
     }
 
+    /// Runs an impact test (see [`HostMsg::Impact`]), ending it early like
+    /// [`Client::release_until`].
+    pub fn impact_until(
+        &mut self,
+        start_ticks: i32,
+        velocity_milliticks: i32,
+        ticks: u32,
+        enough: &mut EnoughFn<'_>,
+    ) -> Result<Record> {
+        self.experiment_until(
+            &HostMsg::Impact {
+                start_ticks,
+                velocity_milliticks,
+                ticks,
+            },
+            ExperimentKind::Impact,
+            ticks,
+            Some(enough),
+        )
+    }
+
     /// Runs an open-loop excitation and collects every sample.
     pub fn excite(&mut self, profile: ExciteProfile, ticks: u32) -> Result<Record> {
         self.experiment(
@@ -488,6 +509,7 @@ fn ack_kind(msg: &HostMsg) -> Option<Request> {
         HostMsg::ClearFaults => Request::ClearFaults,
         HostMsg::Stop => Request::Stop,
         HostMsg::Shutdown { .. } => Request::Shutdown,
+        HostMsg::Impact { .. } => Request::Impact,
         _ => return None,
     })
 }

@@ -503,11 +503,12 @@ fn tune_inner(
     for _ in 0..8 {
         let d = deflection_for(&p, k_set, v);
         progress(&format!(
-            "verifying K={k_set:.4}: releases from ±{d} ticks and below"
+            "verifying K={k_set:.4}: releases from ±{d} ticks and below, impacts"
         ));
         verification.clear();
         confirmed = true;
-        for test in test_set(d, thorough) {
+        let natural_ticks = std::f64::consts::TAU * (id.mass / k_set).sqrt() / t;
+        for test in test_set(d, v * t / delta, natural_ticks, thorough, true) {
             let (verdict, counts) = run_test(
                 c,
                 &base,

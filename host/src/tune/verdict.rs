@@ -19,7 +19,10 @@
 //!    half-cycle peaks never grew; [`Verdict::LocallyStable`] (passes): the same, after a swing
 //!    that exceeded the one before it;
 //! 3. [`Verdict::Departs`] (passes, one-sided walls only): the whole tail is outside the wall
-//!    (counts < 0), where the wall exerts no force;
+//!    (counts < 0), where the wall exerts no force; for an impact ([`classify_impact`]) only
+//!    if the device left no faster than it came in (exit speed over the first
+//!    [`EXIT_WINDOW`] ticks outside ≤ entry speed + one count per window), else it is
+//!    [`Verdict::Growing`] (the wall gave it energy);
 //! 4. [`Verdict::LimitCycle`] (passes): the count keeps changing, but within two adjacent counts
 //!    (an oscillation of at most one count, region B);
 //! 5. [`Verdict::Persistent`] (fails): a *buzz*, an oscillation over more than one count that
@@ -152,6 +155,43 @@ pub fn classify_trajectory(counts: &[i64], wall: Wall, supervisor_tripped: bool)
     }
 }
 
+/// Ticks over which the exit speed of an impact is measured.
+pub const EXIT_WINDOW: usize = 10;
+
+/// Speed (counts per tick) at which the trajectory first leaves a one-sided wall, over
+/// [`EXIT_WINDOW`] ticks (fewer if it turns or the record ends), or None if it never leaves.
+#[must_use]
+pub fn exit_speed(counts: &[i64]) -> Option<f64> {
+    let inside = counts.iter().position(|&n| n >= 0)?;
+    let out = inside + counts[inside..].iter().position(|&n| n < 0)?;
+    let mut end = out;
+    while end + 1 < counts.len() && end - out < EXIT_WINDOW && counts[end + 1] <= counts[end] {
+        end += 1;
+    }
+    (end > out).then(|| (counts[out] - counts[end]) as f64 / (end - out) as f64)
+}
+
+/// Classifies an impact from contact on, with the speed at contact (counts per tick): as
+/// [`classify_trajectory`], and on a one-sided wall a device that leaves faster than it came
+/// (beyond one count per [`EXIT_WINDOW`]) is growing.
+#[must_use]
+pub fn classify_impact(
+    counts: &[i64],
+    wall: Wall,
+    entry_speed: f64,
+    supervisor_tripped: bool,
+) -> Verdict {
+    let v = classify_trajectory(counts, wall, supervisor_tripped);
+    if v == Verdict::Departs {
+        if let Some(out) = exit_speed(counts) {
+            if out > entry_speed.abs() + 1.0 / EXIT_WINDOW as f64 {
+                return Verdict::Growing;
+            }
+        }
+    }
+    v
+}
+
 /// Classifies a release test on a bidirectional wall from the counts after release.
 #[must_use]
 pub fn classify(counts: &[i64], supervisor_tripped: bool) -> Verdict {
@@ -251,6 +291,24 @@ mod tests {
             classify_trajectory(&c, Wall::Bidirectional, false),
             Verdict::Growing
         );
+    }
+
+    #[test]
+    fn an_impact_that_leaves_faster_than_it_came_grows() {
+        // In at 1 count per tick, out at 2: the wall gave it energy.
+        let mut c: Vec<i64> = (0..8).collect();
+        c.extend((0..8).rev());
+        c.extend((1..300).map(|k| -2 * k));
+        assert_eq!(exit_speed(&c), Some(2.0));
+        assert_eq!(
+            classify_impact(&c, Wall::OneSided, 1.0, false),
+            Verdict::Growing
+        );
+        assert_eq!(
+            classify_impact(&c, Wall::OneSided, 2.0, false),
+            Verdict::Departs
+        );
+        assert_eq!(exit_speed(&[0, 1, 2, 3]), None);
     }
 
     #[test]

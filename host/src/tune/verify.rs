@@ -6,8 +6,12 @@
 //! - releases (Fig. 8) on the bidirectional wall from +d and −d (full energy) and from
 //!   ±max(2, ⌈d/2⌉) (a quarter of it): each swing through the wall is an impact from one side
 //!   at a velocity up to v_max, and the release is a user letting go while pressing;
-//! - when the model does not fit the device (`thorough`), also from ±max(2, ⌈d/4⌉) (a
-//!   sixteenth), and every test runs twice as long.
+//! - impacts ([`HostMsg::Impact`](stiffwall_proto::HostMsg::Impact): the firmware launches the
+//!   device at a velocity toward the wall and releases it at contact): on a one-sided wall from
+//!   its free side at v_max and v_max/2, and through the bidirectional wall from both sides at
+//!   v_max; the launch starts [`launch_distance`] ticks away;
+//! - when the model does not fit the device (`thorough`), also releases from ±max(2, ⌈d/4⌉)
+//!   (a sixteenth of the energy) and an impact at v_max/4, and every test runs twice as long.
 //!
 //! A K passes when every test of the set passes by [`super::verdict`]: the motion settles or
 //! stays within one count and never grows; a buzz over more than one count fails.
@@ -18,11 +22,11 @@
 //! at a point computed from its counts alone ([`settled_at`]), so the verdict does not depend on
 //! how quickly the host reacts.
 
-use super::verdict::{classify, Verdict, MIN_TAIL};
+use super::verdict::{classify, classify_impact, Verdict, Wall, EXIT_WINDOW, MIN_TAIL};
 use crate::device::client::Client;
 use anyhow::{bail, Result};
 use std::sync::atomic::Ordering;
-use stiffwall_proto::{flags, ServoConfig};
+use stiffwall_proto::{flags, ServoConfig, WallMode};
 
 /// One test of the verification set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -33,6 +37,59 @@ pub enum Test {
         /// Signed deflection, effective ticks.
         deflection_ticks: i32,
     },
+    /// Launch from `start_ticks` at `velocity_milliticks` (effective ticks per 1000 servo
+    /// ticks) toward the wall, released at contact.
+    Impact {
+        /// Start, effective ticks from the wall.
+        start_ticks: i32,
+        /// Launch velocity, effective ticks per 1000 ticks, toward the wall.
+        velocity_milliticks: i32,
+        /// One-sided wall (occupying counts ≥ 0) instead of the bidirectional one.
+        one_sided: bool,
+    },
+}
+
+impl Test {
+    /// One line for the report.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        match *self {
+            Test::Release { deflection_ticks } => format!("release {deflection_ticks:+}"),
+            Test::Impact {
+                velocity_milliticks,
+                one_sided,
+                ..
+            } => format!(
+                "impact {:+.2} ticks/tick{}",
+                f64::from(velocity_milliticks) / 1000.0,
+                if one_sided { " (one-sided)" } else { "" }
+            ),
+        }
+    }
+}
+
+/// Distance, effective ticks, from which an impact at `v_ticks` ticks per servo tick is
+/// launched: enough for the hold spring to bring the device to speed (the larger of 20 ticks
+/// and one natural period `natural_ticks`, plus the spring's lag of two ticks of motion).
+#[must_use]
+pub fn launch_distance(v_ticks: f64, natural_ticks: f64) -> i32 {
+    (v_ticks.abs() * (natural_ticks.max(20.0) + 2.0))
+        .ceil()
+        .clamp(3.0, f64::from(1 << 20)) as i32
+}
+
+/// An impact test at `v_ticks` ticks per tick (sign: direction of motion), launched from the
+/// side it moves away from.
+#[must_use]
+pub fn impact(v_ticks: f64, natural_ticks: f64, one_sided: bool) -> Test {
+    let milli = ((v_ticks * 1000.0).round() as i32).clamp(-1_000_000, 1_000_000);
+    let milli = if milli == 0 { 1 } else { milli };
+    let d = launch_distance(v_ticks, natural_ticks);
+    Test::Impact {
+        start_ticks: if milli > 0 { -d } else { d },
+        velocity_milliticks: milli,
+        one_sided,
+    }
 }
 
 /// A test with its stiffness and verdict.
@@ -48,20 +105,39 @@ pub struct TestResult {
     pub ticks_judged: usize,
 }
 
-/// The verification set for full-energy deflection `d` (see the module header).
+/// The verification set for full-energy deflection `d`, maximum velocity `v_ticks` (ticks per
+/// servo tick) and natural period `natural_ticks` (see the module header); `impacts`: the
+/// device runs impact tests.
 #[must_use]
-pub fn test_set(d: i32, thorough: bool) -> Vec<Test> {
+pub fn test_set(
+    d: i32,
+    v_ticks: f64,
+    natural_ticks: f64,
+    thorough: bool,
+    impacts: bool,
+) -> Vec<Test> {
     let d = d.abs().max(2);
     let mut levels = vec![d, ((d + 1) / 2).max(2)];
     if thorough {
         levels.push(((d + 3) / 4).max(2));
     }
     levels.dedup();
-    levels
+    let mut set: Vec<Test> = levels
         .into_iter()
         .flat_map(|l| [l, -l])
         .map(|deflection_ticks| Test::Release { deflection_ticks })
-        .collect()
+        .collect();
+    if impacts {
+        let v = v_ticks.abs();
+        set.push(impact(v, natural_ticks, true));
+        set.push(impact(v / 2.0, natural_ticks, true));
+        if thorough {
+            set.push(impact(v / 4.0, natural_ticks, true));
+        }
+        set.push(impact(v, natural_ticks, false));
+        set.push(impact(-v, natural_ticks, false));
+    }
+    set
 }
 
 /// The length at which a record counts as settled: the first L at which the last
@@ -150,16 +226,27 @@ pub fn run_test(
     if super::procedure::INTERRUPTED.load(Ordering::Relaxed) {
         bail!("interrupted");
     }
-    let Test::Release { deflection_ticks } = test;
     // A reproducible start (see the module header).
     c.set_config(&ServoConfig {
         stiffness: 0.0,
         ..*base
     })?;
     let rest = rest_position(c)?;
+    let one_sided = matches!(
+        test,
+        Test::Impact {
+            one_sided: true,
+            ..
+        }
+    );
     let cfg = ServoConfig {
         stiffness: k as f32,
         wall_position: base.wall_position.saturating_add(rest),
+        wall: if one_sided {
+            WallMode::OneSided
+        } else {
+            WallMode::Bidirectional
+        },
         ..*base
     };
     clear_faults(c)?;
@@ -176,7 +263,16 @@ pub fn run_test(
         seen = s.len();
         settled_at(&released, min_run).is_some()
     };
-    let rec = c.release_until(deflection_ticks, ticks, &mut enough)?;
+    let rec = match test {
+        Test::Release { deflection_ticks } => {
+            c.release_until(deflection_ticks, ticks, &mut enough)?
+        }
+        Test::Impact {
+            start_ticks,
+            velocity_milliticks,
+            ..
+        } => c.impact_until(start_ticks, velocity_milliticks, ticks, &mut enough)?,
+    };
     if rec.gaps.missing > 0 {
         bail!(
             "{} telemetry samples lost during a wall test",
@@ -191,7 +287,32 @@ pub fn run_test(
     } else if !tripped {
         counts.truncate(ticks as usize);
     }
-    Ok((classify(&counts, tripped), counts))
+    let verdict = match test {
+        Test::Release { .. } => classify(&counts, tripped),
+        Test::Impact { one_sided, .. } => {
+            // Speed at contact: the launch's last EXIT_WINDOW ticks before the release.
+            let launch: Vec<i64> = rec
+                .samples
+                .iter()
+                .filter(|x| x.flags & flags::HOLD != 0)
+                .map(|x| i64::from(x.count) >> shift)
+                .collect();
+            let w = EXIT_WINDOW.min(launch.len().saturating_sub(1));
+            let first = counts.first().copied().unwrap_or(0);
+            let entry = if w > 0 {
+                (first - launch[launch.len() - w]) as f64 / (w as f64 + 1.0)
+            } else {
+                0.0
+            };
+            let wall = if one_sided {
+                Wall::OneSided
+            } else {
+                Wall::Bidirectional
+            };
+            classify_impact(&counts, wall, entry.abs(), tripped)
+        }
+    };
+    Ok((verdict, counts))
 }
 
 /// Minimum constant run for [`settled_at`]: three natural periods 2π√(m/K)/T, at least
@@ -208,17 +329,45 @@ mod tests {
 
     #[test]
     fn the_set_has_both_sides_at_two_or_three_energies() {
-        let s = test_set(12, false);
+        let s = test_set(12, 5.0, 14.0, false, false);
         assert_eq!(
             s,
             [12, -12, 6, -6].map(|d| Test::Release {
                 deflection_ticks: d
             })
         );
-        let s = test_set(12, true);
+        let s = test_set(12, 5.0, 14.0, true, false);
         assert_eq!(s.len(), 6);
-        assert_eq!(test_set(2, true).len(), 2, "levels never repeat");
-        assert!(test_set(0, false).iter().all(
+        assert_eq!(
+            test_set(2, 5.0, 14.0, true, false).len(),
+            2,
+            "levels never repeat"
+        );
+        let s = test_set(12, 5.0, 14.0, false, true);
+        assert_eq!(s.len(), 8);
+        // Impacts from the free side of the one-sided wall at v and v/2, through the
+        // bidirectional wall from both sides, always launched toward the wall.
+        assert_eq!(
+            s[4],
+            Test::Impact {
+                start_ticks: -110,
+                velocity_milliticks: 5000,
+                one_sided: true
+            }
+        );
+        assert!(s[4..].iter().all(
+            |t| matches!(t, Test::Impact { start_ticks, velocity_milliticks, .. }
+            if start_ticks.signum() == -velocity_milliticks.signum())
+        ));
+        assert!(matches!(
+            s[7],
+            Test::Impact {
+                start_ticks: 110,
+                one_sided: false,
+                ..
+            }
+        ));
+        assert!(test_set(0, 5.0, 14.0, false, false).iter().all(
             |t| matches!(t, Test::Release { deflection_ticks } if deflection_ticks.abs() == 2)
         ));
     }
