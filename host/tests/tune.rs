@@ -202,3 +202,41 @@ fn fast_and_real_time_tunes_set_the_same_k_on_three_plants() {
         assert_eq!(fast.model_mismatch, paced.model_mismatch, "{name}");
     }
 }
+
+/// Issue 10: the firmware's impact test on the virtual device. At K below the true limit every
+/// impact of the set passes and the launch reaches the commanded speed at contact; far above
+/// it an impact through the two-sided wall grows (the verdict, not only the release, fails K).
+#[test]
+fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
+    use stiffwall_host::tune::verify::{impact, run_test, Test};
+    let truth = preset("maxon-re35");
+    let mut c = connect(truth);
+    let base = stiffwall_proto::ServoConfig {
+        energy_monitor: true,
+        ..c.get_config().unwrap()
+    };
+    let v_ticks = DEFAULT_XIDOT;
+    let natural = |k: f64| std::f64::consts::TAU * (truth.mass / k).sqrt() / truth.period_s;
+    // The true limit of this plant at ξ̇ = 5 is about 1.3 (see the first test).
+    for (k, one_sided) in [(1.0, true), (1.0, false)] {
+        for v in [v_ticks, -v_ticks] {
+            if one_sided && v < 0.0 {
+                continue;
+            }
+            let test = impact(v, natural(k), one_sided);
+            let (verdict, counts) = run_test(&mut c, &base, k, test, 3000, 100).unwrap();
+            assert!(verdict.passes(), "K {k} {test:?}: {verdict:?}");
+            // Entry: the first released samples move at about v ticks per tick.
+            let entry = (counts[2] - counts[0]) as f64 / 2.0;
+            assert!(
+                (entry / v - 1.0).abs() < 0.5,
+                "entry speed {entry} for {v}: {:?}",
+                &counts[..10]
+            );
+        }
+    }
+    let test = impact(v_ticks, natural(3.0), false);
+    assert!(matches!(test, Test::Impact { .. }));
+    let (verdict, _) = run_test(&mut c, &base, 3.0, test, 3000, 100).unwrap();
+    assert!(!verdict.passes(), "K = 3 (above 2 K*): {verdict:?}");
+}
