@@ -169,30 +169,76 @@ fn bad_max_velocity_is_refused_before_touching_the_device() {
 /// Issue 10: the same plant gives the same K in `--fast` and in real time. Every decision of
 /// the tune depends on the device's counts only (tests start from rest with the wall off and
 /// end at points computed from their counts), so the two runs must agree exactly, test by test.
+/// A rotary rig like maxon-re35 with static friction 1.5 × Coulomb, a lightly damped 250 Hz
+/// transmission and a 60 mN·m current limit: a plant the tune does not model.
+const STICKY_PLANT: &str = r#"
+[device]
+mass_kg = 6.28e-6
+viscous_ns_per_m = 9e-6
+coulomb_n = 2e-3
+counts_per_rev = 8192
+
+[controller]
+stiffness_n_per_m = 1.0
+period_s = 1e-3
+extra_delay_s = 0.0
+
+[effects]
+zoh = true
+quantization = true
+coulomb = true
+viscous = true
+delay = false
+one_sided_wall = false
+amplifier = { kind = "none", force_limit_n = 0.06 }
+hand = { kind = "none" }
+stiction = { static_n = 3.0e-3, stribeck_m_per_s = 0.0 }
+transmission = { link_mass_kg = 3e-6, stiffness_n_per_m = 5.0, damping_ns_per_m = 1e-4 }
+"#;
+
+fn connect_plant_file(text: &str, fast: bool) -> Client {
+    let dir = std::env::temp_dir().join(format!("stiffwall-tune-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("sticky.toml");
+    std::fs::write(&path, text).unwrap();
+    let (vd, port) = spawn(Spec::from_plant_file(&path, fast).unwrap()).unwrap();
+    Client::connect(port, Some(Box::new(vd))).unwrap()
+}
+
 #[test]
 fn fast_and_real_time_tunes_set_the_same_k_on_three_plants() {
-    for name in ["maxon-re35", "phantom-1.0", "delta"] {
-        let truth = preset(name);
-        let fast = procedure::tune(
-            &mut connect_paced(truth, true),
-            &Settings::default(),
-            true,
-            &|_| {},
-        )
-        .unwrap();
+    let plants: Vec<(&str, Box<dyn Fn(bool) -> Client>)> = vec![
+        (
+            "maxon-re35",
+            Box::new(|f| connect_paced(preset("maxon-re35"), f)),
+        ),
+        (
+            "phantom-1.0",
+            Box::new(|f| connect_paced(preset("phantom-1.0"), f)),
+        ),
+        ("delta", Box::new(|f| connect_paced(preset("delta"), f))),
+        (
+            "sticky plant file",
+            Box::new(|f| connect_plant_file(STICKY_PLANT, f)),
+        ),
+    ];
+    for (name, connect_with) in &plants {
+        let fast =
+            procedure::tune(&mut connect_with(true), &Settings::default(), true, &|_| {}).unwrap();
         let started = std::time::Instant::now();
         let paced = procedure::tune(
-            &mut connect_paced(truth, false),
+            &mut connect_with(false),
             &Settings::default(),
             true,
             &|_| {},
         )
         .unwrap();
         eprintln!(
-            "{name}: K fast {:.6} real time {:.6} ({:.1} s real time)",
+            "{name}: K fast {:.6} real time {:.6} ({:.1} s real time), mismatch {:?}",
             fast.k_set,
             paced.k_set,
-            started.elapsed().as_secs_f64()
+            started.elapsed().as_secs_f64(),
+            paced.model_mismatch
         );
         assert_eq!(fast.search.trials, paced.search.trials, "{name}: search");
         assert_eq!(
@@ -202,6 +248,37 @@ fn fast_and_real_time_tunes_set_the_same_k_on_three_plants() {
         assert_eq!(fast.k_set, paced.k_set, "{name}: K set");
         assert_eq!(fast.model_mismatch, paced.model_mismatch, "{name}");
     }
+}
+
+/// Issue 10: a plant with static friction 1.5 × Coulomb is reported as not fitting the model,
+/// and the verification adapts (smaller margin, a longer set with more energies).
+#[test]
+fn static_friction_is_reported_and_makes_the_verification_thorough() {
+    let o = procedure::tune(
+        &mut connect_plant_file(STICKY_PLANT, true),
+        &Settings::default(),
+        true,
+        &|_| {},
+    )
+    .unwrap();
+    assert!(
+        o.model_mismatch
+            .iter()
+            .any(|f| f.contains("static friction")),
+        "{:?}",
+        o.model_mismatch
+    );
+    assert!(o.margin_used < Settings::default().margin);
+    assert!(o.verification.len() > 8, "{:?}", o.verification);
+    // The rigid preset fits its own model.
+    let o = procedure::tune(
+        &mut connect(preset("maxon-re35")),
+        &Settings::default(),
+        true,
+        &|_| {},
+    )
+    .unwrap();
+    assert!(o.model_mismatch.is_empty(), "{:?}", o.model_mismatch);
 }
 
 /// Issue 10: the firmware's impact test on the virtual device. At K below the true limit every
