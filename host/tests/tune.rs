@@ -196,6 +196,9 @@ stiction = { static_n = 3.0e-3, stribeck_m_per_s = 0.0 }
 transmission = { link_mass_kg = 3e-6, stiffness_n_per_m = 5.0, damping_ns_per_m = 1e-4 }
 "#;
 
+/// Connects to a virtual device, fast (true) or paced in real time.
+type Connector = dyn Fn(bool) -> Client;
+
 fn connect_plant_file(text: &str, fast: bool) -> Client {
     let dir = std::env::temp_dir().join(format!("stiffwall-tune-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -210,7 +213,7 @@ fn connect_plant_file(text: &str, fast: bool) -> Client {
 // tests is not a frozen state there.
 #[test]
 fn fast_and_real_time_tunes_set_the_same_k_on_three_plants() {
-    let plants: Vec<(&str, Box<dyn Fn(bool) -> Client>)> = vec![
+    let plants: Vec<(&str, Box<Connector>)> = vec![
         (
             "maxon-re35",
             Box::new(|f| connect_paced(preset("maxon-re35"), f)),
