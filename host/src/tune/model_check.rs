@@ -210,7 +210,8 @@ mod tests {
         let model = id(m, 0.0, c);
         let counts = model_counts(&model, &f, t, delta);
         let fb = breakaway_force(&counts, &f).unwrap();
-        assert!(fb > c && fb < 1.15 * c, "{fb}");
+        // The model itself needs a little more than c to move two counts on a ramp (inertia).
+        assert!(fb > c && fb < 1.3 * c, "{fb}");
         // A device whose static friction is 1.5 c: it cannot move before |F| > 1.5 c.
         let sticky: Vec<i64> = f
             .iter()

@@ -251,10 +251,10 @@ mod tests {
     #[test]
     fn a_fast_buzz_that_grows_within_the_tail_is_growing_even_while_small() {
         // A large release that decays, then a high-frequency (Nyquist) oscillation that grows
-        // from one to four counts: still far below the release amplitude.
+        // from one to nine counts: still far below the release amplitude.
         let mut c = decaying(40.0, 0.02, 600);
         c.extend((0..600).map(|k| {
-            let a = 1.0 + 3.0 * f64::from(k) / 600.0;
+            let a = 1.0 + 8.0 * f64::from(k) / 600.0;
             let s = if k % 2 == 0 { 1.0 } else { -1.0 };
             (a * s).floor() as i64
         }));
