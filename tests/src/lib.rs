@@ -9,6 +9,8 @@
 //! (closed-form, exact stick–slip), [`EulerPlant`] an independent sub-stepped semi-implicit
 //! integrator kept as a cross-check.
 
+pub mod kstar;
+
 use std::collections::VecDeque;
 use stiffwall_firmware::{BoardInfo, ByteLink, ConfigStore, Device, Encoder, MemStorage, Servo};
 use stiffwall_proto::{

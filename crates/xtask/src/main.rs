@@ -7,6 +7,8 @@
 //! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
 //! - `bench [--quick] [--no-criterion]`: the simulator's accuracy-vs-time tables
 //!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
+//! - `tune-table [--quick] [--only NAME]`: K* vs the K `hostctl tune` sets on the plants of
+//!   `sim/plants/`, and the supervisor at 1.5 K* (docs/TUNE.md).
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
@@ -15,6 +17,7 @@ mod bench_firmware;
 mod firmware;
 mod qemu;
 mod toolchain;
+mod tune_table;
 
 /// Runs a command, echoing it, and fails when it fails.
 pub fn run(cmd: &mut Command) -> Result<()> {
@@ -127,6 +130,7 @@ fn main() -> Result<()> {
         }
         Some("qemu") => qemu::qemu(&args[1..]),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write], bench [--quick]"),
+        Some("tune-table") => tune_table::tune_table(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, firmware [--update-size-report], qemu [--bless], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME]"),
     }
 }
