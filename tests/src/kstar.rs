@@ -20,6 +20,10 @@
 //!   (motor side + link + hand);
 //! - with cogging, every trial is repeated with the wall a quarter cogging period further on.
 //!
+//! On a one-sided wall the plant may leave the wall (count < −1, moving away): the trial ends
+//! there and settles when the plant leaves no faster than a passive wall could send it back
+//! (the impact speed; for a release from count d, the speed of kinetic energy ½K((d + 1)Δ)²).
+//!
 //! A trial runs for 120 natural periods 2π√(m/K) (at least 2000, at most 40000 ticks) and
 //! **settles** when over its last third the count stays within one count (max − min ≤ 1: at
 //! rest, or toggling between two neighbouring counts) — so a persistent oscillation above one
@@ -56,6 +60,8 @@ pub trait SampledPlant {
     fn advance(&mut self, force_n: f64, dt_s: f64);
     /// ⌊x/Δ⌋ of the encoder side.
     fn encoder_count(&self) -> i64;
+    /// Velocity of the encoder side, m/s (rad/s).
+    fn velocity_m_per_s(&self) -> f64;
 }
 
 impl SampledPlant for stiffwall_sim::PhysicalPlant {
@@ -67,6 +73,9 @@ impl SampledPlant for stiffwall_sim::PhysicalPlant {
     }
     fn encoder_count(&self) -> i64 {
         stiffwall_sim::PhysicalPlant::encoder_count(self)
+    }
+    fn velocity_m_per_s(&self) -> f64 {
+        stiffwall_sim::PhysicalPlant::velocity_m_per_s(self)
     }
 }
 
@@ -177,21 +186,47 @@ pub struct Trial {
     pub kind: TrialKind,
 }
 
+impl Trial {
+    /// Initial position and velocity for resolution Δ = `resolution_m`: an impact starts at the
+    /// wall surface (just below it for the negative side), a release at rest in the middle of
+    /// its count.
+    #[must_use]
+    pub fn initial_state(&self, resolution_m: f64) -> (f64, f64) {
+        let d = resolution_m;
+        let wall_x = self.wall as f64 * d;
+        let s = f64::from(self.side);
+        match self.kind {
+            TrialKind::Impact { velocity_m_per_s } => {
+                let x = if self.side > 0 { wall_x } else { wall_x - 1e-9 * d };
+                (x, s * velocity_m_per_s)
+            }
+            TrialKind::Release { counts } => (wall_x + s * (counts as f64 + 0.5) * d, 0.0),
+        }
+    }
+}
+
 /// The recorded counts (relative to the wall) of one trial and its verdict.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct TrialRun {
     /// Counts relative to the wall, one per tick (shorter when stopped early).
     pub counts: Vec<i64>,
     /// Stopped early: |n| exceeded the runaway bound.
     pub ran_away: bool,
+    /// One-sided wall: the plant left the wall (the run stops there) at this speed, with the
+    /// largest speed a passive wall could give it back (m/s, rad/s).
+    pub exit: Option<(f64, f64)>,
 }
 
 impl TrialRun {
-    /// Settled: not run away, and over the last third the count stays within one count.
+    /// Settled: not run away; on a one-sided wall that was left, left no faster than it could
+    /// passively; otherwise over the last third the count stays within one count.
     #[must_use]
     pub fn settled(&self) -> bool {
         if self.ran_away || self.counts.is_empty() {
             return false;
+        }
+        if let Some((v, passive)) = self.exit {
+            return v <= passive;
         }
         let tail = &self.counts[self.counts.len() * 2 / 3..];
         let lo = tail.iter().min().copied().unwrap_or(0);
@@ -212,22 +247,15 @@ impl TrialRun {
 pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: Trial) -> TrialRun {
     let d = rig.resolution_m;
     let mut plant = proto.clone();
-    let wall_x = trial.wall as f64 * d;
-    let s = f64::from(trial.side);
-    match trial.kind {
-        TrialKind::Impact { velocity_m_per_s } => {
-            // At the surface (x = wall) moving up, or just below it moving down.
-            let x = if trial.side > 0 {
-                wall_x
-            } else {
-                wall_x - 1e-9 * d
-            };
-            plant.set_state(x, s * velocity_m_per_s);
-        }
-        TrialKind::Release { counts } => {
-            plant.set_state(wall_x + s * (counts as f64 + 0.5) * d, 0.0);
-        }
-    }
+    let (x0, v0) = trial.initial_state(d);
+    plant.set_state(x0, v0);
+    // One-sided wall: the speed a passive wall could return — the impact speed, or the speed
+    // whose kinetic energy is the spring energy ½K((d + 1)Δ)² of a release from count d.
+    let passive = match trial.kind {
+        TrialKind::Impact { velocity_m_per_s } => velocity_m_per_s,
+        TrialKind::Release { counts } => (k / rig.moving_mass_kg).sqrt() * (counts as f64 + 1.0) * d,
+    };
+    let mut touched = false;
     let ticks = rig.trial_ticks(k);
     let bound = (10.0 * (rig.d_max(k) + 2.0) + 100.0) as i64;
     let delay = rig.delay_ticks as usize;
@@ -240,7 +268,19 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
             return TrialRun {
                 counts,
                 ran_away: true,
+                exit: None,
             };
+        }
+        if rig.one_sided {
+            touched |= n >= 0;
+            if touched && n < -1 && plant.velocity_m_per_s() < 0.0 {
+                // Left the wall, moving away with no force on it: judged by its speed.
+                return TrialRun {
+                    counts,
+                    ran_away: false,
+                    exit: Some((-plant.velocity_m_per_s(), passive)),
+                };
+            }
         }
         // Delay line of `delay` whole periods (zeros first), as the firmware's ring.
         line.push_back(rig.spring_n(k, n));
@@ -254,6 +294,7 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
     TrialRun {
         counts,
         ran_away: false,
+        exit: None,
     }
 }
 

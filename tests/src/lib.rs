@@ -10,6 +10,7 @@
 //! integrator kept as a cross-check.
 
 pub mod kstar;
+pub mod supervise;
 
 use std::collections::VecDeque;
 use stiffwall_firmware::{BoardInfo, ByteLink, ConfigStore, Device, Encoder, MemStorage, Servo};

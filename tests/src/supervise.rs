@@ -8,12 +8,12 @@
 //! force limit at full scale, no heartbeat) with the stiffness forced to a chosen K.
 //!
 //! One tick: read ⌊x/Δ⌋ → `Servo::tick` → hold the written code × force-per-code on the plant
-//! for T (ZOH). The impact starts at the wall surface (count 0, the firmware's origin and wall
-//! position) moving into the wall; "onset" is that first contact, tick 0.
+//! for T (ZOH). Runs start like the trials of the K* criterion: an impact at the wall surface
+//! moving into the wall, or a release from rest; "onset" is tick 0 (first contact, release).
 //!
 //! Invariant: deterministic; the run stops only at its length.
 
-use crate::kstar::SampledPlant;
+use crate::kstar::{SampledPlant, Trial};
 use stiffwall_firmware::{BoardInfo, Channels, HeldCode, SampledCount, Servo};
 use stiffwall_proto::{ServoConfig, WallMode};
 
@@ -90,22 +90,25 @@ impl SupervisedRun {
     }
 }
 
-/// An impact at `velocity_m_per_s` (sign = direction) from the wall surface, `ticks` long,
-/// the firmware servo of `b`/`cfg` driving `plant`.
-pub fn impact<P: SampledPlant>(
+/// A trial of the K* criterion ([`Trial::initial_state`]: an impact from the wall surface or
+/// a release from rest) under the firmware servo of `b`/`cfg`, `ticks` long. The wall is at
+/// count `trial.wall`; the firmware's origin is the count of the first reading.
+pub fn run<P: SampledPlant>(
     mut plant: P,
     b: BoardInfo,
     cfg: &ServoConfig,
     period_s: f64,
-    velocity_m_per_s: f64,
+    trial: Trial,
+    resolution_m: f64,
     ticks: usize,
 ) -> SupervisedRun {
-    let x0 = if velocity_m_per_s >= 0.0 {
-        0.0
-    } else {
-        -1e-9 * f64::from(b.resolution)
+    let (x0, v0) = trial.initial_state(resolution_m);
+    plant.set_state(x0, v0);
+    let cfg = ServoConfig {
+        wall_position: trial.wall as i32,
+        ..*cfg
     };
-    plant.set_state(x0, velocity_m_per_s);
+    let cfg = &cfg;
     let mut ch = Channels::new();
     let (sp, _hp) = ch.split();
     let mut servo: Servo<'_> = Servo::new(b, cfg, sp);
@@ -118,9 +121,13 @@ pub fn impact<P: SampledPlant>(
         codes: Vec::with_capacity(ticks),
     };
     for t in 0..ticks {
-        let n = plant.encoder_count();
+        let n = plant.encoder_count() - trial.wall;
         let mut out = HeldCode(0);
-        servo.tick(t as u32, &mut SampledCount(n as u32), &mut out);
+        servo.tick(
+            t as u32,
+            &mut SampledCount((n + trial.wall) as u32),
+            &mut out,
+        );
         plant.advance(f64::from(out.0) * fpc, period_s);
         run.counts.push(n);
         run.codes.push(out.0);
