@@ -24,6 +24,8 @@ pub const MAX_JUMP_COUNTS: u32 = 1 << 30;
 pub const MAX_ENERGY_J: f32 = 1.0e6;
 /// Velocity window of the over-velocity check, ticks (power of two).
 pub const VEL_WINDOW: usize = 8;
+/// Dimensionless hold damping β of the release test's holding controller (see [`Gains`]).
+pub const HOLD_BETA: f32 = 2.0;
 
 /// Fixed facts about the board the firmware runs on.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -367,8 +369,9 @@ pub struct Gains<N: Numeric> {
     pub energy_monitor: bool,
     /// Energy limit in units of K·Δ_eff²/8.
     pub energy_limit_e8: u64,
-    /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋, so that
-    /// |2n+1| > this ⟺ e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
+    /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋
+    /// ([`stiffwall_core::monitor::limit_m`], `u64::isqrt`), so that |2n+1| > this ⟺
+    /// e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
     pub energy_limit_m: u32,
     /// Growth score that trips the energy monitor.
     pub growth_trip: i32,
@@ -410,7 +413,7 @@ impl<N: Numeric> Gains<N> {
         } else {
             u64::MAX
         };
-        let limit_m = isqrt(e8_limit.saturating_sub(1)).min(u64::from(u32::MAX)) as u32;
+        let limit_m = stiffwall_core::monitor::limit_m(e8_limit);
         let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
         let k_half = N::gain(k_half);
         let kf = N::to_f64(k_half);
@@ -439,7 +442,7 @@ impl<N: Numeric> Gains<N> {
             wall_lo: if one_sided { 0 } else { spring_lo },
             damp: N::gain(f64::from(cfg.damping) * de * rate / fs),
             damping_on: N::gain(f64::from(cfg.damping) * de * rate / fs) != N::ZERO,
-            hold_damp: N::gain(2.0 * f64::from(crate::servo::HOLD_BETA) * kf),
+            hold_damp: N::gain(2.0 * f64::from(HOLD_BETA) * kf),
             safe_damp: N::gain(
                 f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
             ),
@@ -464,22 +467,6 @@ impl<N: Numeric> Gains<N> {
             rate_hz: cfg.servo_rate_hz,
         }
     }
-}
-
-/// ⌊√x⌋ (integer Newton iteration; config time only).
-fn isqrt(x: u64) -> u64 {
-    if x < 2 {
-        return x;
-    }
-    let mut r = libm::sqrt(x as f64) as u64;
-    // Correct the float estimate by at most a few steps.
-    while r.checked_mul(r).is_none_or(|p| p > x) {
-        r -= 1;
-    }
-    while (r + 1).checked_mul(r + 1).is_some_and(|p| p <= x) {
-        r += 1;
-    }
-    r
 }
 
 #[cfg(test)]
@@ -590,27 +577,6 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!((e.min, e.max), (100.0, 20_000.0));
-    }
-
-    #[test]
-    fn isqrt_is_exact() {
-        for x in [
-            0u64,
-            1,
-            2,
-            3,
-            4,
-            15,
-            16,
-            17,
-            1 << 40,
-            (1 << 62) + 12345,
-            u64::MAX,
-        ] {
-            let r = isqrt(x);
-            assert!(u128::from(r) * u128::from(r) <= u128::from(x));
-            assert!(u128::from(r + 1) * u128::from(r + 1) > u128::from(x));
-        }
     }
 
     #[test]

@@ -15,9 +15,9 @@
 //! - `ExperimentDone` is sent after the last telemetry sample of the experiment.
 //! - No allocation; bounded work per `poll`.
 
+use crate::channels::{HostPort, ServoCmd, ServoEvent};
 use crate::config::{validate, BoardInfo};
 use crate::hal::{ByteLink, ConfigStorage};
-use crate::servo::{HostPort, ServoCmd, ServoEvent};
 use crate::store::ConfigStore;
 use core::sync::atomic::Ordering;
 use heapless::Deque;
@@ -539,8 +539,9 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::channels::Channels;
     use crate::hal::{HeldCode, SampledCount};
-    use crate::servo::{Channels, Servo};
+    use crate::servo::Servo;
     use crate::store::MemStorage;
     use std::collections::VecDeque;
     use std::vec::Vec;

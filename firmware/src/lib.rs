@@ -2,22 +2,60 @@
 //! `unsafe`), host-testable.
 //!
 //! # Using it on a board (stable API)
-//! ```text
-//! // Once, at boot (no `unsafe`: e.g. `static_cell::StaticCell<Channels>` or
-//! // `cortex_m::singleton!`; the servo needs 32-bit atomics, present on thumbv7em):
-//! let ch: &'static mut Channels = CHANNELS.init(Channels::new());
+//! Compiled and run as a doctest: the board's statics are on the stack here, the hardware is
+//! [`SampledCount`]/[`HeldCode`] and a byte loop that never receives anything.
+//! ```
+//! use stiffwall_firmware::{
+//!     BoardInfo, ByteLink, Channels, ConfigStore, Device, HeldCode, MemStorage, SampledCount,
+//!     Servo,
+//! };
+//! use stiffwall_proto::ServoConfig;
+//!
+//! /// The board's UART (here: nothing arrives, everything sent is accepted).
+//! struct Uart;
+//! impl ByteLink for Uart {
+//!     fn read(&mut self) -> Option<u8> {
+//!         None
+//!     }
+//!     fn write(&mut self, _byte: u8) -> bool {
+//!         true
+//!     }
+//! }
+//!
+//! const BOARD: BoardInfo = BoardInfo {
+//!     name: "example",
+//!     resolution: 1.0e-5,
+//!     counts_per_rev: 0,
+//!     encoder_bits: 32,
+//!     force_per_code: 1.0e-3,
+//!     max_code: 2047,
+//!     min_rate_hz: 100,
+//!     max_rate_hz: 20_000,
+//! };
+//!
+//! // Once, at boot (on a board without `unsafe`: e.g. `static_cell::StaticCell<Channels>` or
+//! // `cortex_m::singleton!`, so the ports are `'static`; the servo needs 32-bit atomics,
+//! // present on thumbv7em):
+//! let mut ch = Channels::new();
 //! let (servo_port, host_port) = ch.split();
-//! let store = ConfigStore::new(my_flash_slots);        // impl ConfigStorage (or NoStorage)
-//! let mut device: Device<'static, _> = Device::new(BOARD, store, host_port, ServoConfig::default());
-//! let mut servo: Servo<'static> = Servo::new(BOARD, device.config(), servo_port);
-//! // program the tick timer at device.servo_rate_hz(), move `servo` into the interrupt.
+//! let store = ConfigStore::new(MemStorage::default()); // impl ConfigStorage (or NoStorage)
+//! let defaults = ServoConfig { stiffness: 1000.0, ..ServoConfig::default() }; // N/m
+//! let mut device: Device<'_, _> = Device::new(BOARD, store, host_port, defaults);
+//! let mut servo: Servo<'_> = Servo::new(BOARD, device.config(), servo_port);
+//! // Program the tick timer at device.servo_rate_hz(), move `servo` into the interrupt.
+//! assert_eq!(device.servo_rate_hz(), 1000);
 //!
-//! // Servo interrupt, once per period T:
-//! servo.tick(now_tick, &mut encoder, &mut force_output);   // -> i32 code written
-//!
-//! // Main loop, as often as possible:
-//! device.poll(now_tick, &mut uart);                         // impl ByteLink
-//! if let Some(hz) = device.take_rate_change() { /* reprogram the tick timer */ }
+//! let (mut encoder, mut force_output, mut uart) = (SampledCount(0), HeldCode(0), Uart);
+//! for now_tick in 0..10u32 {
+//!     // Servo interrupt, once per period T (the encoder reads 100 counts into the wall):
+//!     encoder.0 = 100;
+//!     let code = servo.tick(now_tick, &mut encoder, &mut force_output); // the code written
+//!     assert_eq!(code, force_output.0);
+//!     // Main loop, as often as possible:
+//!     device.poll(now_tick, &mut uart);
+//!     if let Some(_hz) = device.take_rate_change() { /* reprogram the tick timer */ }
+//! }
+//! assert!(force_output.0 < 0, "the wall pushes back");
 //! ```
 //! Signatures:
 //! - `Channels::new() -> Channels` (const), `Channels::split(&mut self) -> (ServoPort, HostPort)`.
@@ -58,13 +96,19 @@
 #[cfg(any(feature = "std", test))]
 extern crate std;
 
+pub mod channels;
 pub mod config;
 pub mod device;
+pub mod experiment;
 pub mod hal;
 pub mod numeric;
 pub mod servo;
 pub mod store;
 
+pub use channels::{
+    Channels, HostPort, ServoCmd, ServoEvent, ServoPort, Shared, TelemetryItem, COMMAND_QUEUE,
+    EVENT_QUEUE, TELEMETRY_QUEUE,
+};
 pub use config::{validate, BoardInfo, ConfigError, Gains};
 pub use device::Device;
 pub use hal::{
@@ -72,8 +116,8 @@ pub use hal::{
     TickSource,
 };
 pub use numeric::{Fx32, Fx64, Numeric, F32};
-pub use servo::{
-    Channels, EnergyMonitor, HostPort, Servo, ServoCmd, ServoEvent, ServoPort, Shared,
-    TelemetryItem,
-};
+pub use servo::Servo;
+/// The energy monitor (the dissipation check, eq. (35)), from `stiffwall-core`.
+pub use stiffwall_core::monitor;
+pub use stiffwall_core::monitor::EnergyMonitor;
 pub use store::{ConfigStore, MemStorage};

@@ -5,5 +5,6 @@
 
 pub mod cmd;
 pub mod device;
+pub mod monitor_report;
 pub mod recording;
 pub mod tune;

@@ -17,6 +17,7 @@ pub mod describing;
 pub mod devices;
 pub mod energy;
 pub mod limits;
+pub mod monitor;
 pub mod params;
 pub mod regions;
 

@@ -23,6 +23,11 @@
 //! velocity history must hold the same values as the device's). The configuration must not
 //! have changed during the recording (`hostctl record` never changes it).
 //!
+//! (c) **Energy monitor.** The firmware's dissipation check (`stiffwall_core::monitor`) runs
+//! over the recorded counts as the device ran it and reports each growth or limit event: tick,
+//! count, the peak's energy, and whether the device latched there
+//! ([`crate::monitor_report`]). Needs decimation 1.
+//!
 //! Invariants: a corrupted file is an error naming the line and the column
 //! ([`crate::recording`]); nothing panics on bad input; a mismatch in (b) exits non-zero.
 
@@ -145,6 +150,10 @@ pub struct Report {
     pub servo: Option<ServoReplay>,
     /// Why (b) did not run.
     pub servo_skipped: Option<String>,
+    /// (c) the firmware's energy monitor over the recording, if it ran.
+    pub monitor: Option<crate::monitor_report::MonitorReplay>,
+    /// Why (c) did not run.
+    pub monitor_skipped: Option<String>,
 }
 
 /// The firmware's board facts, rebuilt from the recorded handshake.
@@ -401,6 +410,11 @@ pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
         Ok(s) => (Some(s), None),
         Err(e) => (None, Some(format!("{e:#}"))),
     };
+    let (monitor, monitor_skipped) =
+        match crate::monitor_report::monitor_recording(rec, &board_of(&rec.header.device)) {
+            Ok(m) => (Some(m), None),
+            Err(e) => (None, Some(format!("{e:#}"))),
+        };
     Ok(Report {
         samples: rec.rows.len(),
         missing: rec.missing(),
@@ -408,6 +422,8 @@ pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
         plant_skipped,
         servo,
         servo_skipped,
+        monitor,
+        monitor_skipped,
     })
 }
 
@@ -455,6 +471,15 @@ fn render(file: &Path, r: &Report) -> String {
         }
         (None, Some(why)) => {
             let _ = writeln!(s, "(b) servo replay skipped: {why}");
+        }
+        (None, None) => {}
+    }
+    match (&r.monitor, &r.monitor_skipped) {
+        (Some(m), _) => {
+            let _ = writeln!(s, "{}", crate::monitor_report::render(m));
+        }
+        (None, Some(why)) => {
+            let _ = writeln!(s, "(c) energy monitor skipped: {why}");
         }
         (None, None) => {}
     }

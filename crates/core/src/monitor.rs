@@ -1,0 +1,342 @@
+//! The dissipation check of the paper in integer form: the energy monitor that the firmware runs
+//! every servo tick and `hostctl replay` runs over a recording.
+//!
+//! Units: `n` is the effective count ⌊ξ⌋ (encoder counts at Δ_eff = 2^shift·Δ, relative to the
+//! wall); energies `e8` are in units of K·Δ_eff²/8, i.e. eight times the dimensionless energy of
+//! [`crate::energy`] (units K·Δ_eff²).
+//!
+//! The integer energy is the storage function H_T (35) at a turning point (ξ̇ = 0, so H_T equals
+//! its potential part H_e (34), which needs no mass) with the unknown quantization error ρ at
+//! the middle of the count, ξ = n + ½:
+//!
+//! ```text
+//! energy_e8(n) = 8·H_T(ξ = n + ½, ξ̇ = 0) = 8·H_e(n + ½) = 8·(½(n + ½)² + ⅛) = (2n + 1)² + 1
+//! ```
+//!
+//! exactly, for every `i32` n (property-tested against [`crate::energy::storage_energy`]).
+//! On the count cell [n, n + 1) H_e is linear in ρ (H_e(n + ρ) = ½n² + (n + ½)ρ), so `e8` is
+//! also the mean of 8·H_e over the cell and lies between its values at the cell's ends,
+//! 4n² and 4(n + 1)².
+//!
+//! Invariants: no allocation, no floating point, no panics; every operation saturates or is
+//! exact (`energy_e8` < 2^64 for every `i32`). The monitor's per-tick work is a compare, a
+//! subtraction and a branch; scoring a turning point (rare) compares two |2n + 1| values, which
+//! orders their energies exactly since e8 = |2n + 1|² + 1 is strictly increasing in |2n + 1|.
+
+/// Bit returned by [`EnergyMonitor::update`] when the growth score reached its trip level
+/// (the same bit as `stiffwall_proto::fault::ENERGY_GROWTH`).
+pub const GROWTH: u32 = 1 << 0;
+/// Bit returned by [`EnergyMonitor::update`] when the energy is above the limit on this tick
+/// (the same bit as `stiffwall_proto::fault::ENERGY_LIMIT`).
+pub const LIMIT: u32 = 1 << 1;
+
+/// `e8(n) = (2n+1)² + 1`: the storage function (35) at effective count n with ξ̇ = 0 and the
+/// unknown quantization error ρ at its midpoint, 8·H_e(n + ½) = 8·(½(n+½)² + ⅛), in units of
+/// K·Δ_eff²/8. Exact for every `i32` n.
+#[inline]
+#[must_use]
+pub fn energy_e8(n: i32) -> u64 {
+    // (2^32 − 1)² + 1 < 2^64: no overflow.
+    let m = u64::from(odd_abs(n));
+    m * m + 1
+}
+
+/// [`energy_e8`] saturated to `u32` (32-bit multiply only; for telemetry).
+#[inline]
+#[must_use]
+pub fn energy_e8_u32(n: i32) -> u32 {
+    let m = odd_abs(n);
+    m.checked_mul(m).map_or(u32::MAX, |p| p.saturating_add(1))
+}
+
+/// |2n+1| as `u32`, exact for every `i32` n (≤ 2^32 − 1): 2·(n or !n) + 1, three instructions.
+#[inline]
+#[must_use]
+pub fn odd_abs(n: i32) -> u32 {
+    ((n ^ (n >> 31)) as u32).wrapping_mul(2).wrapping_add(1)
+}
+
+/// The energy limit `e8_limit` (units K·Δ_eff²/8) as the largest allowed |2n+1|:
+/// ⌊√(e8_limit − 1)⌋ (saturated to `u32`), so that for every n
+/// `odd_abs(n) > limit_m(e8_limit)` ⟺ `energy_e8(n) > e8_limit`: the per-tick limit check
+/// needs no multiply. `limit_m(0)` = 0 (every count is over a zero limit).
+#[must_use]
+pub fn limit_m(e8_limit: u64) -> u32 {
+    u32::try_from(e8_limit.saturating_sub(1).isqrt()).unwrap_or(u32::MAX)
+}
+
+/// The energy monitor (see `docs/model-notes-firmware.md`): tracks turning points of the
+/// effective count (where ξ̇ = 0, so H_T (35) equals its potential part and needs no mass),
+/// compares each peak with the previous peak on the same side, and keeps a growth score
+/// (+1 peak energy grew, −1 shrank, clamped to ±trip). Score ≥ trip → [`GROWTH`]; energy above
+/// the limit on any tick → [`LIMIT`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EnergyMonitor {
+    primed: bool,
+    prev_n: i32,
+    dir: i8,
+    peak: i32,
+    /// Last scored peak count per side (0: a maximum, after rising; 1: a minimum).
+    last: [i32; 2],
+    have: [bool; 2],
+    score: i32,
+}
+
+impl EnergyMonitor {
+    /// Forgets the history (after a release, an excitation, clearing faults).
+    pub fn reset(&mut self) {
+        *self = Self::default();
+    }
+
+    /// Current growth score.
+    #[must_use]
+    pub fn score(&self) -> i32 {
+        self.score
+    }
+
+    /// The count and energy (`e8`) of the turning point scored last, if any.
+    #[must_use]
+    pub fn last_peak(&self) -> Option<(i32, u64)> {
+        // The peak just scored was on the side of the direction before the reversal, the
+        // opposite of the current one.
+        let side = usize::from(self.dir > 0);
+        match (self.have.get(side), self.last.get(side)) {
+            (Some(true), Some(&n)) => Some((n, energy_e8(n))),
+            _ => None,
+        }
+    }
+
+    /// One tick at effective count `n`. `trip`: the growth score that trips; `limit_m`: the
+    /// largest |2n+1| whose energy e8 is within the limit ([`limit_m`]). Returns (the bits
+    /// [`GROWTH`] and [`LIMIT`], turning point seen).
+    #[inline]
+    pub fn update(&mut self, n: i32, trip: i32, limit_m: u32) -> (u32, bool) {
+        let mut faults = 0;
+        if odd_abs(n) > limit_m {
+            faults |= LIMIT;
+        }
+        if !self.primed {
+            self.primed = true;
+            self.prev_n = n;
+            self.peak = n;
+            return (faults, false);
+        }
+        let dn = n.saturating_sub(self.prev_n);
+        self.prev_n = n;
+        if dn == 0 {
+            return (faults, false);
+        }
+        let s: i8 = if dn > 0 { 1 } else { -1 };
+        if self.dir == 0 || s == self.dir {
+            self.peak = n;
+            self.dir = s;
+            return (faults, false);
+        }
+        (faults | self.turn(n, s, trip), true)
+    }
+
+    /// A reversal at count `n` (new direction `s`): scores the peak just passed.
+    #[inline(never)]
+    fn turn(&mut self, n: i32, s: i8, trip: i32) -> u32 {
+        let mut faults = 0;
+        let side = usize::from(self.dir < 0);
+        // e8 = m² + 1 is strictly increasing in m = |2n+1|: comparing m compares the energies.
+        let m = odd_abs(self.peak);
+        if let (Some(&had), Some(&last)) = (self.have.get(side), self.last.get(side)) {
+            if had {
+                let m_last = odd_abs(last);
+                if m > m_last {
+                    self.score = self.score.saturating_add(1).min(trip);
+                } else if m < m_last {
+                    self.score = self.score.saturating_sub(1).max(-trip);
+                }
+                if self.score >= trip {
+                    faults |= GROWTH;
+                }
+            }
+        }
+        if let Some(l) = self.last.get_mut(side) {
+            *l = self.peak;
+        }
+        if let Some(h) = self.have.get_mut(side) {
+            *h = true;
+        }
+        self.peak = n;
+        self.dir = s;
+        faults
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::energy::{spring_energy, storage_energy};
+    use proptest::prelude::*;
+
+    #[test]
+    fn odd_abs_and_energy_e8() {
+        for n in [
+            0,
+            1,
+            -1,
+            2,
+            -2,
+            1000,
+            -1001,
+            i32::MAX,
+            i32::MIN,
+            i32::MIN + 1,
+        ] {
+            let want = (2 * i64::from(n) + 1).unsigned_abs();
+            assert_eq!(u64::from(odd_abs(n)), want, "n = {n}");
+            assert_eq!(energy_e8(n), want * want + 1);
+            assert_eq!(
+                u64::from(energy_e8_u32(n)),
+                (want * want + 1).min(u64::from(u32::MAX))
+            );
+        }
+    }
+
+    /// The relation of the module header, checked against core's f64 storage function (35).
+    /// Below |n| = 2^24 every f64 operation in `storage_energy` is exact ((n + ½)² needs
+    /// < 50 bits), so the identity is checked with `==`; above, to f64 rounding (2^-50).
+    fn check_tied_to_h_t(n: i32, mu: f64) -> Result<(), TestCaseError> {
+        let xi = f64::from(n) + 0.5; // exact: 33 bits
+        let h_t = storage_energy(mu, xi, 0.0);
+        let e8 = energy_e8(n);
+        if n.unsigned_abs() < 1 << 24 {
+            prop_assert_eq!(e8 as f64, 8.0 * h_t, "n = {}", n);
+            // The exact integer: (2n+1)² + 1 = 8·(½(n+½)² + ⅛) with every term an integer.
+            prop_assert_eq!(8.0 * h_t - 1.0, (2.0 * f64::from(n) + 1.0).powi(2));
+        } else {
+            let rel = ((e8 as f64) - 8.0 * h_t).abs() / (8.0 * h_t);
+            prop_assert!(rel <= f64::EPSILON, "n = {} rel = {}", n, rel);
+        }
+        // Between the cell's end values of 8·H_e (H_e is linear on the cell).
+        let (a, b) = (
+            8.0 * spring_energy(f64::from(n)),
+            8.0 * spring_energy(f64::from(n) + 1.0),
+        );
+        let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+        prop_assert!(
+            e8 as f64 >= lo && e8 as f64 <= hi,
+            "n = {}: {} ∉ [{}, {}]",
+            n,
+            e8,
+            lo,
+            hi
+        );
+        // The telemetry value is the same number, saturated.
+        prop_assert_eq!(u64::from(energy_e8_u32(n)), e8.min(u64::from(u32::MAX)));
+        Ok(())
+    }
+
+    #[test]
+    fn energy_e8_is_8_h_t_at_the_edges() {
+        for n in [
+            i32::MIN,
+            i32::MIN + 1,
+            -(1 << 24),
+            -1,
+            0,
+            1,
+            (1 << 24) - 1,
+            i32::MAX,
+        ] {
+            check_tied_to_h_t(n, 0.0).unwrap();
+            check_tied_to_h_t(n, 100.0).unwrap();
+        }
+    }
+
+    proptest! {
+        /// energy_e8(n) = 8·H_T(n + ½, 0) (35) for every i32 count, any mass μ.
+        #[test]
+        fn energy_e8_is_8_h_t_at_the_count_midpoint(n in any::<i32>(), mu in 0.0f64..1e6) {
+            check_tied_to_h_t(n, mu)?;
+        }
+
+        #[test]
+        fn energy_e8_is_8_h_t_near_the_wall(n in -100_000i32..100_000) {
+            check_tied_to_h_t(n, 1.0)?;
+        }
+
+        /// The limit check without a multiply is the energy comparison it stands for.
+        #[test]
+        fn limit_m_is_the_energy_comparison(n in any::<i32>(), near in -3000i32..3000, limit in any::<u64>(), small in 0u64..100_000) {
+            for l in [limit, small, 0, 1, 2, u64::MAX, energy_e8(n), energy_e8(n) - 1] {
+                for n in [n, near] {
+                    prop_assert_eq!(odd_abs(n) > limit_m(l), energy_e8(n) > l, "n = {}, limit = {}", n, l);
+                }
+            }
+        }
+    }
+
+    /// `limit_m` is ⌊√(x − 1)⌋ exactly (what the firmware's hand-written isqrt computed).
+    #[test]
+    fn limit_m_is_the_integer_square_root() {
+        for x in [
+            0u64,
+            1,
+            2,
+            3,
+            4,
+            15,
+            16,
+            17,
+            1 << 40,
+            (1 << 62) + 12345,
+            u64::MAX,
+        ] {
+            let r = u64::from(limit_m(x.saturating_add(1)));
+            assert!(u128::from(r) * u128::from(r) <= u128::from(x));
+            assert!(u128::from(r + 1) * u128::from(r + 1) > u128::from(x));
+        }
+    }
+
+    #[test]
+    fn energy_monitor_scores_growing_peaks() {
+        let mut m = EnergyMonitor::default();
+        let mut tripped = None;
+        // Oscillation with growing amplitude 3, 4, 5, ... counts.
+        let mut t = 0;
+        'outer: for a in 3i32..20 {
+            for n in (-a..=a).chain((-a..a).rev()) {
+                let (f, _) = m.update(n, 4, u32::MAX);
+                t += 1;
+                if f & GROWTH != 0 {
+                    tripped = Some((a, t));
+                    break 'outer;
+                }
+            }
+        }
+        let (a, _) = tripped.expect("tripped");
+        assert!(a <= 6, "tripped at amplitude {a}");
+        // The peak that tripped is on the growing envelope.
+        let (peak_n, peak_e8) = m.last_peak().expect("a scored peak");
+        assert!(peak_n.abs() >= 5, "{peak_n}");
+        assert_eq!(peak_e8, energy_e8(peak_n));
+        // A steady cycle never trips.
+        let mut m = EnergyMonitor::default();
+        for _ in 0..1000 {
+            for n in [-1, 0, 1, 0] {
+                assert_eq!(m.update(n, 4, u32::MAX).0, 0);
+            }
+        }
+    }
+
+    #[test]
+    fn shrinking_peaks_never_trip_and_the_limit_is_per_tick() {
+        let mut m = EnergyMonitor::default();
+        for a in (3i32..40).rev() {
+            for n in (-a..=a).chain((-a..a).rev()) {
+                let (f, _) = m.update(n, 2, limit_m(energy_e8(39)));
+                assert_eq!(f & GROWTH, 0);
+                assert_eq!(f & LIMIT, 0, "e8({n}) within the limit of e8(39)");
+            }
+        }
+        assert_eq!(m.score(), -2);
+        assert_eq!(m.update(40, 2, limit_m(energy_e8(39))).0, LIMIT);
+        assert_eq!(m.update(-41, 2, limit_m(energy_e8(39))).0 & LIMIT, LIMIT);
+    }
+}

@@ -1,0 +1,219 @@
+//! The channels between the servo (interrupt) and the main loop: lock-free SPSC queues for
+//! telemetry, commands and events, and the atomics both sides read ([`Shared`]).
+//!
+//! Units: `seq` is the servo's sample number (every sample produced, sent or dropped); ticks are
+//! servo ticks; queue lengths are entries (a queue of length L holds L − 1).
+//!
+//! Invariants: the servo is the single producer of telemetry and events and the single consumer
+//! of commands ([`ServoPort`]); the main loop is the other end ([`HostPort`]). Neither end
+//! blocks or allocates; a full queue refuses the item (the servo counts dropped samples in
+//! [`Shared::dropped`]). This module imports nothing else of the crate.
+
+use core::sync::atomic::{AtomicBool, AtomicU32};
+// heapless 0.8's SPSC queue: its capacity is a const generic, so enqueue/dequeue have no
+// division by a runtime capacity (0.9's has one, a panic path; see the workspace Cargo.toml).
+use heapless::Vec;
+use heapless08::spsc::{Consumer, Producer, Queue};
+use stiffwall_proto::{ExciteProfile, ExperimentKind, Sample, ServoConfig, TABLE_CHUNK};
+
+/// Telemetry queue length (capacity − 1 samples in flight).
+pub const TELEMETRY_QUEUE: usize = 256;
+/// Command queue length.
+pub const COMMAND_QUEUE: usize = 4;
+/// Event queue length.
+pub const EVENT_QUEUE: usize = 8;
+
+/// A telemetry sample with its sample number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct TelemetryItem {
+    /// Sample number (counts every sample produced, sent or dropped).
+    pub seq: u32,
+    /// The sample.
+    pub sample: Sample,
+}
+
+/// Commands from the main loop to the servo.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ServoCmd {
+    /// Apply a validated configuration.
+    Config(ServoConfig),
+    /// Telemetry every `decimation` ticks; 0 stops.
+    Stream {
+        /// Ticks per sample, 0 = off.
+        decimation: u16,
+    },
+    /// Start a release test.
+    Release {
+        /// Deflection, effective counts from the wall.
+        deflection: i32,
+        /// Ticks after release.
+        ticks: u32,
+    },
+    /// Start an excitation.
+    Excite {
+        /// Profile.
+        profile: ExciteProfile,
+        /// Ticks.
+        ticks: u32,
+    },
+    /// Store table values.
+    TableChunk {
+        /// First index.
+        offset: u16,
+        /// Values (codes).
+        values: Vec<i16, TABLE_CHUNK>,
+    },
+    /// Clear latched faults.
+    ClearFaults,
+    /// Abort the running experiment.
+    Stop,
+}
+
+/// Events from the servo to the main loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ServoEvent {
+    /// An experiment ended.
+    ExperimentDone {
+        /// Which.
+        kind: ExperimentKind,
+        /// Ran its full length.
+        completed: bool,
+        /// Latched faults at the end.
+        faults: u32,
+        /// Sample number the next telemetry sample will get (all the experiment's samples
+        /// have smaller numbers): the main loop reports the end after sending them.
+        next_seq: u32,
+    },
+}
+
+/// State shared between servo and main loop through atomics.
+#[derive(Debug, Default)]
+pub struct Shared {
+    /// Latched fault bits.
+    pub faults: AtomicU32,
+    /// Tick of the first latched fault.
+    pub first_fault_tick: AtomicU32,
+    /// Samples dropped because the telemetry queue was full (cumulative).
+    pub dropped: AtomicU32,
+    /// Heartbeat counter, incremented by the main loop on each host heartbeat.
+    pub heartbeat: AtomicU32,
+    /// An experiment is running.
+    pub experiment: AtomicBool,
+    /// Last servo tick seen.
+    pub tick: AtomicU32,
+}
+
+impl Shared {
+    /// All zero.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            faults: AtomicU32::new(0),
+            first_fault_tick: AtomicU32::new(0),
+            dropped: AtomicU32::new(0),
+            heartbeat: AtomicU32::new(0),
+            experiment: AtomicBool::new(false),
+            tick: AtomicU32::new(0),
+        }
+    }
+}
+
+/// The queues and shared state between the servo (interrupt) and the main loop. Allocate it
+/// statically (e.g. `static_cell`) on a board, or on the stack in tests, then [`Channels::split`].
+pub struct Channels {
+    telemetry: Queue<TelemetryItem, TELEMETRY_QUEUE>,
+    commands: Queue<ServoCmd, COMMAND_QUEUE>,
+    events: Queue<ServoEvent, EVENT_QUEUE>,
+    shared: Shared,
+}
+
+impl core::fmt::Debug for Channels {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Channels")
+            .field("shared", &self.shared)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Default for Channels {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Channels {
+    /// Empty queues.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            telemetry: Queue::new(),
+            commands: Queue::new(),
+            events: Queue::new(),
+            shared: Shared::new(),
+        }
+    }
+
+    /// The servo's end and the main loop's end.
+    pub fn split(&mut self) -> (ServoPort<'_>, HostPort<'_>) {
+        let Channels {
+            telemetry,
+            commands,
+            events,
+            shared,
+        } = self;
+        let shared: &Shared = shared;
+        let (tp, tc) = telemetry.split();
+        let (cp, cc) = commands.split();
+        let (ep, ec) = events.split();
+        (
+            ServoPort {
+                telemetry: tp,
+                commands: cc,
+                events: ep,
+                shared,
+            },
+            HostPort {
+                telemetry: tc,
+                commands: cp,
+                events: ec,
+                shared,
+            },
+        )
+    }
+}
+
+/// The servo's end of [`Channels`].
+pub struct ServoPort<'a> {
+    pub(crate) telemetry: Producer<'a, TelemetryItem, TELEMETRY_QUEUE>,
+    pub(crate) commands: Consumer<'a, ServoCmd, COMMAND_QUEUE>,
+    pub(crate) events: Producer<'a, ServoEvent, EVENT_QUEUE>,
+    pub(crate) shared: &'a Shared,
+}
+
+/// The main loop's end of [`Channels`].
+pub struct HostPort<'a> {
+    /// Telemetry samples from the servo.
+    pub telemetry: Consumer<'a, TelemetryItem, TELEMETRY_QUEUE>,
+    /// Commands to the servo.
+    pub commands: Producer<'a, ServoCmd, COMMAND_QUEUE>,
+    /// Events from the servo.
+    pub events: Consumer<'a, ServoEvent, EVENT_QUEUE>,
+    /// Shared atomics.
+    pub shared: &'a Shared,
+}
+
+impl core::fmt::Debug for ServoPort<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ServoPort")
+            .field("shared", self.shared)
+            .finish_non_exhaustive()
+    }
+}
+
+impl core::fmt::Debug for HostPort<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("HostPort")
+            .field("shared", self.shared)
+            .finish_non_exhaustive()
+    }
+}

@@ -1,0 +1,227 @@
+//! The experiments the servo runs instead of the wall: the release test's hold → release state
+//! machine (paper Fig. 8) and the excitation profiles (steps, linear chirp, uploaded table) as
+//! generators of one output code per tick.
+//!
+//! Units: counts are effective counts n (Δ_eff = 2^shift·Δ) relative to the wall; codes are
+//! output codes; times are servo ticks; `rate_hz` is the servo rate.
+//!
+//! Invariants: every step is bounded work without allocation or panics (table reads are
+//! checked, counters saturate, divisions are by values ≥ 1 or checked). This module imports
+//! nothing else of the crate (the servo calls it; it never calls back).
+
+use stiffwall_proto::{ExciteProfile, ExperimentKind};
+
+/// What the force stage does this tick (a one-byte mirror of [`Experiment`] for the hot path).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Mode {
+    /// The wall (no experiment).
+    Wall,
+    /// The wall, in the released phase of a release test.
+    Released,
+    /// Holding or exciting.
+    Other,
+}
+
+/// The running experiment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Experiment {
+    None,
+    Hold(Hold),
+    Released { remaining: u32 },
+    Excite(Excitation),
+}
+
+impl Experiment {
+    /// The force stage's mode for this experiment.
+    pub(crate) fn mode(&self) -> Mode {
+        match self {
+            Experiment::None => Mode::Wall,
+            Experiment::Released { .. } => Mode::Released,
+            _ => Mode::Other,
+        }
+    }
+
+    /// Which experiment this is (None for the wall).
+    pub(crate) fn kind(&self) -> Option<ExperimentKind> {
+        match self {
+            Experiment::None => None,
+            Experiment::Hold(_) | Experiment::Released { .. } => Some(ExperimentKind::Release),
+            Experiment::Excite(_) => Some(ExperimentKind::Excite),
+        }
+    }
+}
+
+/// The release test's holding phase: a stiff, damped spring holds the device at `target` until
+/// it has been still for a settling time (or for at most 2 s), then it is released for `ticks`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Hold {
+    /// Hold position, effective counts from the wall.
+    pub(crate) target: i32,
+    /// Ticks to run after the release (≥ 1).
+    ticks: u32,
+    held: u32,
+    still: u32,
+}
+
+impl Hold {
+    /// Hold at `target`, then run `ticks` (at least 1) after the release.
+    pub(crate) fn new(target: i32, ticks: u32) -> Self {
+        Self {
+            target,
+            ticks: ticks.max(1),
+            held: 0,
+            still: 0,
+        }
+    }
+
+    /// One tick after the output at count `n` (moved `dn` since the last tick): `Some(ticks)`
+    /// when the device is to be released now, for `ticks` ticks.
+    pub(crate) fn advance(&mut self, n: i32, dn: i32, rate_hz: u32) -> Option<u32> {
+        let rate = rate_hz.max(1);
+        self.held = self.held.saturating_add(1);
+        if dn == 0 && n.saturating_sub(self.target).abs() <= 1 {
+            self.still = self.still.saturating_add(1);
+        } else {
+            self.still = 0;
+        }
+        let settle = (rate / 10).max(20);
+        ((self.still >= settle && self.held >= settle) || self.held >= rate.saturating_mul(2))
+            .then_some(self.ticks)
+    }
+}
+
+/// An excitation: one code per tick from its profile, for `total` ticks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Excitation {
+    profile: ExciteProfile,
+    total: u32,
+    t: u32,
+    /// Chirp phase, rad, in [0, 2π].
+    phase: f32,
+    /// Table position and ticks spent on it.
+    idx: u32,
+    cnt: u32,
+}
+
+impl Excitation {
+    /// `profile` for `ticks` ticks (at least 1).
+    pub(crate) fn new(profile: ExciteProfile, ticks: u32) -> Self {
+        Self {
+            profile,
+            total: ticks.max(1),
+            t: 0,
+            phase: 0.0,
+            idx: 0,
+            cnt: 0,
+        }
+    }
+
+    /// This tick's code (a generator: advances the chirp phase and the table position).
+    /// `table`: the uploaded values; `rate_hz`: the servo rate.
+    pub(crate) fn next_code(&mut self, table: &[i16], rate_hz: u32) -> i32 {
+        match self.profile {
+            ExciteProfile::Steps {
+                low,
+                high,
+                half_period_ticks,
+            } => {
+                let hp = half_period_ticks.max(1);
+                if self.t.checked_div(hp).unwrap_or(0) & 1 == 0 {
+                    high
+                } else {
+                    low
+                }
+            }
+            ExciteProfile::Chirp {
+                amplitude,
+                f0_hz,
+                f1_hz,
+            } => {
+                let frac = if self.total > 0 {
+                    self.t as f32 / self.total as f32
+                } else {
+                    0.0
+                };
+                let f = f0_hz + (f1_hz - f0_hz) * frac;
+                let v = amplitude as f32 * libm::sinf(self.phase);
+                self.phase += core::f32::consts::TAU * f / rate_hz.max(1) as f32;
+                if self.phase > core::f32::consts::TAU {
+                    self.phase -= core::f32::consts::TAU;
+                }
+                libm::roundf(v) as i32
+            }
+            ExciteProfile::Table { len, hold_ticks } => {
+                let v = table.get(self.idx as usize).copied().unwrap_or(0);
+                self.cnt = self.cnt.saturating_add(1);
+                if self.cnt >= u32::from(hold_ticks.max(1)) {
+                    self.cnt = 0;
+                    self.idx = self.idx.saturating_add(1);
+                    if self.idx >= u32::from(len) {
+                        self.idx = 0;
+                    }
+                }
+                i32::from(v)
+            }
+        }
+    }
+
+    /// One tick after the output; true when the excitation has run its length.
+    pub(crate) fn advance(&mut self) -> bool {
+        self.t = self.t.saturating_add(1);
+        self.t >= self.total
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hold_releases_after_settling_or_two_seconds() {
+        // Still at the target: released after the settling time (100 ticks at 1 kHz).
+        let mut h = Hold::new(5, 300);
+        let first = (1..=1000).find(|_| h.advance(5, 0, 1000).is_some());
+        assert_eq!(first, Some(100));
+        // Never still: released after 2 s.
+        let mut h = Hold::new(5, 0);
+        let first = (1..=5000u32).find(|i| h.advance(5 + (*i as i32 & 7), 1, 1000).is_some());
+        assert_eq!(first, Some(2000));
+        assert_eq!(Hold::new(0, 0).ticks, 1);
+    }
+
+    #[test]
+    fn steps_and_table_generators() {
+        let mut x = Excitation::new(
+            ExciteProfile::Steps {
+                low: -3,
+                high: 5,
+                half_period_ticks: 2,
+            },
+            6,
+        );
+        let codes: [i32; 6] = core::array::from_fn(|_| {
+            let c = x.next_code(&[], 1000);
+            x.advance();
+            c
+        });
+        assert_eq!(codes, [5, 5, -3, -3, 5, 5]);
+        let mut x = Excitation::new(
+            ExciteProfile::Table {
+                len: 3,
+                hold_ticks: 2,
+            },
+            8,
+        );
+        let mut done = [false; 8];
+        let codes: [i32; 8] = core::array::from_fn(|i| {
+            let c = x.next_code(&[1, 2, 3, 9], 1000);
+            done[i] = x.advance();
+            c
+        });
+        assert_eq!(codes, [1, 1, 2, 2, 3, 3, 1, 1]);
+        assert_eq!(
+            done,
+            [false, false, false, false, false, false, false, true]
+        );
+    }
+}
