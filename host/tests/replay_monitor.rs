@@ -78,7 +78,9 @@ fn replay_finds_the_growth_of_a_region_c_release_where_the_device_latched_it() {
         .iter()
         .filter(|e| e["fault"] == "ENERGY_GROWTH")
         .collect();
-    let first = growth.first().unwrap_or_else(|| panic!("no growth event: {m}"));
+    let first = growth
+        .first()
+        .unwrap_or_else(|| panic!("no growth event: {m}"));
     assert_eq!(first["tick"], latch.sample.tick, "{m}");
     assert_eq!(first["seq"], latch.seq, "{m}");
     assert_eq!(first["device_latched_here"], true, "{m}");
@@ -92,12 +94,17 @@ fn replay_finds_the_growth_of_a_region_c_release_where_the_device_latched_it() {
         "peak e8 {peak_e8} not among the recorded energies"
     );
     // No event before the release's growth, none in the hold phase.
-    assert!(events.iter().all(|e| e["tick"].as_u64() >= Some(u64::from(latch.sample.tick))));
+    assert!(events
+        .iter()
+        .all(|e| e["tick"].as_u64() >= Some(u64::from(latch.sample.tick))));
     // The text report names the event and its tick.
     let (ok, text, _) = hostctl(&["replay", f.to_str().unwrap()]);
     assert!(ok);
     assert!(
-        text.contains(&format!("tick {} (seq {}): ENERGY_GROWTH", latch.sample.tick, latch.seq)),
+        text.contains(&format!(
+            "tick {} (seq {}): ENERGY_GROWTH",
+            latch.sample.tick, latch.seq
+        )),
         "{text}"
     );
 }
@@ -119,12 +126,22 @@ fn replay_monitor_is_quiet_on_a_region_a_release_and_skips_decimated_recordings(
     ]);
     assert!(ok, "{out}\n{err}");
     let rec = recording::read(&f).unwrap();
-    assert!(rec.rows.iter().all(|r| r.sample.flags & flags::SAFE_MODE == 0));
+    assert!(rec
+        .rows
+        .iter()
+        .all(|r| r.sample.flags & flags::SAFE_MODE == 0));
     let (ok, json, err) = hostctl(&["replay", f.to_str().unwrap(), "--json"]);
     assert!(ok, "{json}\n{err}");
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
-    assert_eq!(v["monitor"]["events"].as_array().map(Vec::len), Some(0), "{json}");
-    assert!(v["monitor"]["turning_points"].as_u64().unwrap() > 0, "{json}");
+    assert_eq!(
+        v["monitor"]["events"].as_array().map(Vec::len),
+        Some(0),
+        "{json}"
+    );
+    assert!(
+        v["monitor"]["turning_points"].as_u64().unwrap() > 0,
+        "{json}"
+    );
 
     let g = tmp("decimated.csv");
     let (ok, _, err) = hostctl(&[

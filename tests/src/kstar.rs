@@ -20,15 +20,17 @@
 //!   (motor side + link + hand);
 //! - with cogging, every trial is repeated with the wall a quarter cogging period further on.
 //!
-//! On a one-sided wall the plant may leave the wall (count < −1, moving away): the trial ends
-//! there and settles when the plant leaves no faster than a passive wall could send it back
-//! (the impact speed; for a release from count d, the speed of kinetic energy ½K((d + 1)Δ)²).
+//! On a one-sided wall that nothing brings the plant back to (no hand spring), the plant may
+//! leave the wall (count < −1, moving away): the trial ends there and settles when the plant
+//! leaves no faster than a passive wall could send it back (the impact speed; for a release from
+//! count d, the speed of kinetic energy ½K((d + 1)Δ)²). With a hand spring the plant comes back
+//! and the trial is judged like any other.
 //!
 //! A trial runs for 120 natural periods 2π√(m/K) (at least 2000, at most 40000 ticks) and
 //! **settles** when over its last third the count stays within one count (max − min ≤ 1: at
 //! rest, or toggling between two neighbouring counts) — so a persistent oscillation above one
 //! count ("buzz") at any frequency fails, and so does growth (also stopped early when |n|
-//! exceeds 10·(d_max + 2) + 100 counts). K* is found by scanning K upwards by ×1.25 from a
+//! exceeds 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration counts). K* is found by scanning K upwards by ×1.25 from a
 //! settling K until a trial fails, then bisecting (geometric) to a relative width of 0.5 %:
 //! K* is the top of the stable interval that contains the start, the largest K below the
 //! first failure.
@@ -90,6 +92,9 @@ pub struct Rig {
     pub delay_ticks: u32,
     /// One-sided wall (occupies n ≥ 0).
     pub one_sided: bool,
+    /// One-sided wall and nothing brings the plant back once it left (no hand spring): a
+    /// trial ends when the plant leaves the wall, judged by its speed.
+    pub free_exit: bool,
     /// Clamp of the commanded force, N (N·m).
     pub force_limit_n: f64,
     /// Maximum impact velocity v_max, m/s (rad/s).
@@ -197,7 +202,11 @@ impl Trial {
         let s = f64::from(self.side);
         match self.kind {
             TrialKind::Impact { velocity_m_per_s } => {
-                let x = if self.side > 0 { wall_x } else { wall_x - 1e-9 * d };
+                let x = if self.side > 0 {
+                    wall_x
+                } else {
+                    wall_x - 1e-9 * d
+                };
                 (x, s * velocity_m_per_s)
             }
             TrialKind::Release { counts } => (wall_x + s * (counts as f64 + 0.5) * d, 0.0),
@@ -253,7 +262,9 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
     // whose kinetic energy is the spring energy ½K((d + 1)Δ)² of a release from count d.
     let passive = match trial.kind {
         TrialKind::Impact { velocity_m_per_s } => velocity_m_per_s,
-        TrialKind::Release { counts } => (k / rig.moving_mass_kg).sqrt() * (counts as f64 + 1.0) * d,
+        TrialKind::Release { counts } => {
+            (k / rig.moving_mass_kg).sqrt() * (counts as f64 + 1.0) * d
+        }
     };
     let mut touched = false;
     let ticks = rig.trial_ticks(k);
@@ -264,14 +275,16 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
     for _ in 0..ticks {
         let n = plant.encoder_count() - trial.wall;
         counts.push(n);
-        if n.abs() > bound {
+        // Outside a one-sided wall no force acts: only the penetration can run away.
+        let excursion = if rig.one_sided { n } else { n.abs() };
+        if excursion > bound {
             return TrialRun {
                 counts,
                 ran_away: true,
                 exit: None,
             };
         }
-        if rig.one_sided {
+        if rig.free_exit {
             touched |= n >= 0;
             if touched && n < -1 && plant.velocity_m_per_s() < 0.0 {
                 // Left the wall, moving away with no force on it: judged by its speed.
@@ -299,7 +312,11 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
 }
 
 /// The first failing trial at `k`, if any.
-pub fn first_failure<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64) -> Option<(Trial, TrialRun)> {
+pub fn first_failure<P: SampledPlant + Clone>(
+    proto: &P,
+    rig: &Rig,
+    k: f64,
+) -> Option<(Trial, TrialRun)> {
     rig.trials(k).into_iter().find_map(|t| {
         let r = run_trial(proto, rig, k, t);
         (!r.settled()).then_some((t, r))
