@@ -77,6 +77,8 @@ struct RawDevice {
     viscous_ns_per_m: Option<f64>,
     coulomb_n: Option<f64>,
     resolution_m: Option<f64>,
+    /// Rotary device (issue 10): Δ = 2π/counts_per_rev rad.
+    counts_per_rev: Option<u32>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -99,18 +101,26 @@ struct RawEffects {
     one_sided_wall: bool,
     amplifier: RawAmp,
     hand: RawHand,
+    stiction: Option<crate::rich::scene::RawStiction>,
+    cogging: Option<crate::rich::scene::RawCogging>,
+    transmission: Option<crate::rich::scene::RawTransmission>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, tag = "kind", rename_all = "snake_case")]
 enum RawAmp {
-    None,
+    None {
+        force_limit_n: Option<f64>,
+        deadband_n: Option<f64>,
+    },
     /// Pure delay of eq. (5): T_A = 2δ_A/ω_A.
     Delay {
         omega: Option<f64>,
         zeta: Option<f64>,
         cutoff_hz: Option<f64>,
         damping: Option<f64>,
+        force_limit_n: Option<f64>,
+        deadband_n: Option<f64>,
     },
     /// Second-order low-pass filter.
     SecondOrder {
@@ -118,6 +128,8 @@ enum RawAmp {
         zeta: Option<f64>,
         cutoff_hz: Option<f64>,
         damping: Option<f64>,
+        force_limit_n: Option<f64>,
+        deadband_n: Option<f64>,
     },
 }
 
@@ -163,6 +175,9 @@ enum RawSolver {
     Dopri { rtol: f64, atol: f64 },
 }
 
+/// (K, T, Δ) of a physical scene: N/m, s, m.
+type Scale = (f64, f64, f64);
+
 /// Which solver runs a scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Solver {
@@ -193,6 +208,8 @@ pub struct Scene {
     pub solver: Solver,
     /// Delay-line history.
     pub history: History,
+    /// The physical plant and controller (physical scenes only; issue 10 effects).
+    pub rich: Option<crate::rich::scene::RichScene>,
 }
 
 /// One output row, at a sample instant.
@@ -220,17 +237,43 @@ impl Scene {
     /// Parses and validates a TOML scene.
     pub fn from_toml(text: &str) -> Result<Self, SceneError> {
         let raw: RawScene = toml::from_str(text).map_err(|e| SceneError(e.to_string()))?;
-        Self::resolve(raw)
+        let e = &raw.effects;
+        let (RawAmp::None {
+            force_limit_n,
+            deadband_n,
+        }
+        | RawAmp::Delay {
+            force_limit_n,
+            deadband_n,
+            ..
+        }
+        | RawAmp::SecondOrder {
+            force_limit_n,
+            deadband_n,
+            ..
+        }) = e.amplifier;
+        let keys = crate::rich::scene::RichKeys {
+            counts_per_rev: raw.device.counts_per_rev,
+            stiction: e.stiction,
+            cogging: e.cogging,
+            transmission: e.transmission,
+            force_limit_n,
+            deadband_n,
+        };
+        let (mut scene, scale) = Self::resolve(raw)?;
+        scene.rich = crate::rich::scene::attach(&scene, scale, keys)?;
+        Ok(scene)
     }
 
-    fn resolve(raw: RawScene) -> Result<Self, SceneError> {
+    fn resolve(raw: RawScene) -> Result<(Self, Option<Scale>), SceneError> {
         let d = &raw.device;
         let c = &raw.controller;
         let dimless = d.mu.is_some() || d.beta.is_some() || d.sigma.is_some();
         let physical = d.mass_kg.is_some()
             || d.viscous_ns_per_m.is_some()
             || d.coulomb_n.is_some()
-            || d.resolution_m.is_some();
+            || d.resolution_m.is_some()
+            || d.counts_per_rev.is_some();
         if dimless == physical {
             return Err(SceneError(
                 "device: give either mu, beta, sigma (dimensionless) or mass_kg, viscous_ns_per_m, \
@@ -312,8 +355,15 @@ impl Scene {
             )?;
             let delta = check(
                 "device.resolution_m",
-                d.resolution_m
-                    .map_or_else(|| missing("device.resolution_m", "m, > 0"), Ok)?,
+                match (d.resolution_m, d.counts_per_rev) {
+                    (Some(_), Some(_)) => {
+                        return Err(SceneError(
+                            "device: give resolution_m or counts_per_rev, not both".into(),
+                        ))
+                    }
+                    (None, Some(n)) => crate::rich::scene::rotary_resolution(n)?,
+                    (r, None) => r.map_or_else(|| missing("device.resolution_m", "m, > 0"), Ok)?,
+                },
                 0.0,
                 true,
                 1.0,
@@ -379,12 +429,13 @@ impl Scene {
             }
         };
         match raw.effects.amplifier {
-            RawAmp::None => {}
+            RawAmp::None { .. } => {}
             RawAmp::Delay {
                 omega,
                 zeta,
                 cutoff_hz,
                 damping,
+                ..
             } => {
                 let (w, z) = amp_params(omega, zeta, cutoff_hz, damping, "effects.amplifier")?;
                 if !e.delay {
@@ -399,6 +450,7 @@ impl Scene {
                 zeta,
                 cutoff_hz,
                 damping,
+                ..
             } => {
                 let (w, z) = amp_params(omega, zeta, cutoff_hz, damping, "effects.amplifier")?;
                 amp = Some(AmpFilter { omega: w, zeta: z });
@@ -536,26 +588,33 @@ impl Scene {
             delay: e.delay,
             one_sided: e.one_sided_wall,
         };
-        Ok(Self {
-            params: Params {
-                mu,
-                beta,
-                sigma,
-                tau_d,
+        Ok((
+            Self {
+                params: Params {
+                    mu,
+                    beta,
+                    sigma,
+                    tau_d,
+                },
+                effects,
+                zoh: e.zoh,
+                amp,
+                hand,
+                init,
+                periods: r.periods,
+                solver,
+                history: r.history,
+                rich: None,
             },
-            effects,
-            zoh: e.zoh,
-            amp,
-            hand,
-            init,
-            periods: r.periods,
-            solver,
-            history: r.history,
-        })
+            scale,
+        ))
     }
 
     /// Simulates the scene, calling `out` at τ = 0 and at every sample instant.
     pub fn simulate(&self, out: &mut dyn FnMut(&Row)) -> Result<(), SceneError> {
+        if let Some(rich) = self.rich.as_ref().filter(|r| r.needs_rich_loop()) {
+            return crate::rich::scene::simulate(self, rich, out);
+        }
         match self.solver {
             Solver::Exact => {
                 dispatch::<_, true>(
