@@ -10,6 +10,7 @@
 //! integrator kept as a cross-check.
 
 pub mod kstar;
+pub mod family;
 pub mod supervise;
 
 use std::collections::VecDeque;
