@@ -173,8 +173,7 @@ impl PlantCase {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let (model, controller) =
             PlantModel::from_scene_toml(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut proto =
-            RichPlant::new(&model).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut proto = RichPlant::new(&model).map_err(|e| format!("{}: {e}", path.display()))?;
         proto.set_tolerance_period(controller.period_s);
         let d = model.resolution_m;
         // With cogging, the wall is also tried a quarter cogging period further on.
@@ -231,7 +230,13 @@ impl PlantCase {
             self.counts_per_rev(),
             full_scale_n(&self.model),
         );
-        let cfg = supervise::config(&b, k, c.period_s, delay_ticks(c).min(255) as u8, c.one_sided);
+        let cfg = supervise::config(
+            &b,
+            k,
+            c.period_s,
+            delay_ticks(c).min(255) as u8,
+            c.one_sided,
+        );
         supervise::run(
             self.proto.clone(),
             b,

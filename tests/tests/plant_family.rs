@@ -29,8 +29,13 @@ fn every_plant_file_loads_and_starts_with_a_comment_header() {
             f.display()
         );
         let case = PlantCase::load(f).unwrap_or_else(|e| panic!("{e}"));
-        assert!(case.model.has_new_effects() || case.model.hand.is_some() || case.model.amplifier.is_some(),
-            "{}: a plant beyond the paper's model", case.name);
+        assert!(
+            case.model.has_new_effects()
+                || case.model.hand.is_some()
+                || case.model.amplifier.is_some(),
+            "{}: a plant beyond the paper's model",
+            case.name
+        );
         // The plant is runnable: a short impact moves it.
         let mut p = case.proto.clone();
         p.set_state(0.0, case.rig.v_max);
@@ -53,9 +58,15 @@ fn the_family_covers_each_effect_alone_and_in_combination() {
             ("hand", m.hand.is_some()),
         ]
     };
-    for (i, name) in ["stiction", "cogging", "transmission", "amplifier filter", "hand"]
-        .iter()
-        .enumerate()
+    for (i, name) in [
+        "stiction",
+        "cogging",
+        "transmission",
+        "amplifier filter",
+        "hand",
+    ]
+    .iter()
+    .enumerate()
     {
         let alone = cases.iter().any(|c| {
             let e = effects(c);
@@ -69,11 +80,26 @@ fn the_family_covers_each_effect_alone_and_in_combination() {
             .any(|c| effects(c).iter().filter(|x| x.1).count() >= 4),
         "a plant with at least four effects together"
     );
-    assert!(cases.iter().any(|c| c.model.counts_per_rev.is_some()), "rotary");
-    assert!(cases.iter().any(|c| c.model.counts_per_rev.is_none()), "linear");
-    assert!(cases.iter().any(|c| c.controller.period_s <= 0.5e-3), "fast servo");
-    assert!(cases.iter().any(|c| c.controller.period_s >= 2e-3), "slow servo");
-    assert!(cases.iter().any(|c| c.controller.one_sided), "one-sided wall");
+    assert!(
+        cases.iter().any(|c| c.model.counts_per_rev.is_some()),
+        "rotary"
+    );
+    assert!(
+        cases.iter().any(|c| c.model.counts_per_rev.is_none()),
+        "linear"
+    );
+    assert!(
+        cases.iter().any(|c| c.controller.period_s <= 0.5e-3),
+        "fast servo"
+    );
+    assert!(
+        cases.iter().any(|c| c.controller.period_s >= 2e-3),
+        "slow servo"
+    );
+    assert!(
+        cases.iter().any(|c| c.controller.one_sided),
+        "one-sided wall"
+    );
     assert!(cases.iter().any(|c| c.rig.delay_ticks > 0), "extra delay");
     for c in &cases {
         let m = &c.model;
@@ -87,17 +113,25 @@ fn the_family_covers_each_effect_alone_and_in_combination() {
         }
         if let Some(t) = m.transmission {
             let m2 = t.link_mass_kg + m.hand.map_or(0.0, |h| h.mass_kg);
-            let f = (t.stiffness_n_per_m * (1.0 / m.mass_kg + 1.0 / m2)).sqrt()
-                / std::f64::consts::TAU;
+            let f =
+                (t.stiffness_n_per_m * (1.0 / m.mass_kg + 1.0 / m2)).sqrt() / std::f64::consts::TAU;
             let zeta = t.damping_ns_per_m
                 / (2.0 * (t.stiffness_n_per_m * m.mass_kg * m2 / (m.mass_kg + m2)).sqrt());
             assert!((25.0..=300.0).contains(&f), "{}: resonance {f} Hz", c.name);
             assert!(zeta <= 0.1, "{}: lightly damped, zeta {zeta}", c.name);
         }
         if let Some(f) = m.amplifier.and_then(|a| a.cutoff_hz) {
-            assert!((300.0..=3000.0).contains(&f), "{}: amplifier {f} Hz", c.name);
+            assert!(
+                (300.0..=3000.0).contains(&f),
+                "{}: amplifier {f} Hz",
+                c.name
+            );
         }
-        assert!(m.force_limit_n().is_some(), "{}: states its amplifier's range", c.name);
+        assert!(
+            m.force_limit_n().is_some(),
+            "{}: states its amplifier's range",
+            c.name
+        );
     }
 }
 
@@ -119,11 +153,15 @@ fn k_star_of_a_rigid_rich_plant_equals_that_of_the_exact_paper_plant() {
     };
     let exact =
         stiffwall_sim::PhysicalPlant::new(p.mass, p.viscous, p.coulomb, p.resolution).unwrap();
-    let rich = RichPlant::new(&PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution).unwrap())
-        .unwrap();
+    let rich =
+        RichPlant::new(&PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution).unwrap())
+            .unwrap();
     let a = kstar::k_star(&exact, &rig, 0.5, 1e3).unwrap();
     let b = kstar::k_star(&rich, &rig, 0.5, 1e3).unwrap();
-    eprintln!("maxon-re35 K*: exact plant {:.5}, rich plant {:.5}", a.k_star, b.k_star);
+    eprintln!(
+        "maxon-re35 K*: exact plant {:.5}, rich plant {:.5}",
+        a.k_star, b.k_star
+    );
     assert!((a.k_star / b.k_star - 1.0).abs() < 0.006, "{a:?} vs {b:?}");
 }
 
@@ -140,7 +178,7 @@ fn k_star_is_not_below_the_papers_guaranteed_limit() {
             resolution_m: p.resolution,
             delay_ticks: 0,
             one_sided: false,
-        free_exit: false,
+            free_exit: false,
             force_limit_n: 1e6,
             v_max: v,
             moving_mass_kg: p.mass,
@@ -150,7 +188,11 @@ fn k_star_is_not_below_the_papers_guaranteed_limit() {
             stiffwall_sim::PhysicalPlant::new(p.mass, p.viscous, p.coulomb, p.resolution).unwrap();
         let k = kstar::k_star(&plant, &rig, guaranteed * 0.5, 1e9).unwrap();
         eprintln!("{name}: guaranteed {guaranteed:.4}, K* {:.4}", k.k_star);
-        assert!(k.k_star >= guaranteed * 0.995, "{name}: K* {} < guaranteed {guaranteed}", k.k_star);
+        assert!(
+            k.k_star >= guaranteed * 0.995,
+            "{name}: K* {} < guaranteed {guaranteed}",
+            k.k_star
+        );
     }
 }
 
@@ -161,10 +203,18 @@ fn the_settling_verdict_fails_buzz_and_growth_and_passes_a_one_count_toggle() {
         ..TrialRun::default()
     };
     let toggle: Vec<i64> = (0..300).map(|i| [0, -1][i % 2]).collect();
-    assert!(run(toggle).settled(), "toggling between two counts stays within one count");
+    assert!(
+        run(toggle).settled(),
+        "toggling between two counts stays within one count"
+    );
     let buzz: Vec<i64> = (0..300).map(|i| [1, -1, -2, 0][i % 4]).collect();
-    assert!(!run(buzz).settled(), "a persistent 3-count oscillation is buzz");
-    let grow: Vec<i64> = (0..300).map(|i| if i % 2 == 0 { i / 10 } else { -(i / 10) }).collect();
+    assert!(
+        !run(buzz).settled(),
+        "a persistent 3-count oscillation is buzz"
+    );
+    let grow: Vec<i64> = (0..300)
+        .map(|i| if i % 2 == 0 { i / 10 } else { -(i / 10) })
+        .collect();
     assert!(!run(grow).settled());
     let mut stop: Vec<i64> = (0..100).map(|i| 50 - i / 2).collect();
     stop.extend([0; 200]);
@@ -191,8 +241,8 @@ fn the_settling_verdict_fails_buzz_and_growth_and_passes_a_one_count_toggle() {
 fn an_unstable_stiffness_fails_and_a_stable_one_settles() {
     // μ = 100, β = 0.1, σ = 0.2 at K = 1000 N/m, T = 1 ms, Δ = 10 µm.
     let (k, t, d) = (1000.0, 1e-3, 1e-5);
-    let plant = stiffwall_sim::PhysicalPlant::new(100.0 * k * t * t, 0.1 * k * t, 0.2 * k * d, d)
-        .unwrap();
+    let plant =
+        stiffwall_sim::PhysicalPlant::new(100.0 * k * t * t, 0.1 * k * t, 0.2 * k * d, d).unwrap();
     let rig = Rig {
         period_s: t,
         resolution_m: d,
@@ -221,5 +271,12 @@ fn an_unstable_stiffness_fails_and_a_stable_one_settles() {
             },
         },
     );
-    assert!(imp.counts.iter().all(|&n| n < 0), "a negative impact stays below the wall");
+    // v_max = 5 counts per period: the first periods go almost 5 counts deeper each (friction
+    // and the spring slow it a little), below the wall.
+    let c = &imp.counts;
+    assert!(
+        c[0] == -1 && c[1] < c[0] && c[2] < c[1] && c[2] <= -8,
+        "{:?}",
+        &c[..3]
+    );
 }

@@ -96,10 +96,16 @@ fn effects(case: &PlantCase) -> String {
     let m = &case.model;
     let mut e = Vec::new();
     if let Some(s) = m.stiction {
-        e.push(format!("stiction {:.2}×", s.static_n / m.coulomb_n.max(1e-300)));
+        e.push(format!(
+            "stiction {:.2}×",
+            s.static_n / m.coulomb_n.max(1e-300)
+        ));
     }
     if let Some(c) = m.cogging {
-        e.push(format!("cogging {:.0} %", 100.0 * c.amplitude_n / m.coulomb_n.max(1e-300)));
+        e.push(format!(
+            "cogging {:.0} %",
+            100.0 * c.amplitude_n / m.coulomb_n.max(1e-300)
+        ));
     }
     if let Some(t) = m.transmission {
         let m1 = m.mass_kg;
@@ -138,7 +144,10 @@ fn render(rows: &[Row], quick: bool) -> String {
         s,
         "| plant | effects | K* | first failure above K* | K set | K/K* | tune s | m id / true | b id / true | c id / true (static) | mismatch findings | v_max impact at 1.5 K*: ticks to trip (+/−) | other unstable trials at 1.5 K* | all safe |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
     for r in rows {
         let m = &r.case.model;
         let true_m = family::moving_mass_kg(m);
@@ -248,7 +257,11 @@ A stiffness K is **stable** when every trial settles:\n\n\
 A trial runs 120 natural periods 2π√(m/K) (2000–40000 ticks) and **settles** when, over its last\n\
 third, the count stays within one count (at rest, or toggling between two neighbouring counts): a\n\
 persistent oscillation above one count (buzz) at any frequency fails, and so does growth (also cut\n\
-short when |n| exceeds 10·(d_max + 2) + 100 counts). K is scanned upwards by ×1.25 from\n\
+short when |n| exceeds 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration). On\n\
+a one-sided wall without a hand spring nothing brings the plant back once it left the wall\n\
+(count < −1, moving away): the trial ends there and settles when the plant leaves no faster than a\n\
+passive wall returns it (the impact speed; after a release from count d, the speed of kinetic\n\
+energy ½K((d + 1)Δ)²). K is scanned upwards by ×1.25 from\n\
 σ = c/(KΔ) = 4 until a trial fails, then bisected to 0.5 %: K* is the largest K below the first\n\
 failure. The trial that failed just above K* is listed.\n\n\
 ## The supervisor at 1.5 K* (tests/src/supervise.rs, tests/tests/supervisor_plants.rs)\n\n\
