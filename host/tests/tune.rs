@@ -24,6 +24,7 @@ fn connect(p: PhysicalParams) -> Client {
         counts_per_rev,
         fast: true,
         initial_position: 0.0,
+        scene: None,
     })
     .unwrap();
     Client::connect(port, Some(Box::new(vd))).unwrap()

@@ -2,7 +2,8 @@
 //!
 //! (a) **Plant replay.** The recorded force codes are applied, each held for one servo period
 //! T = 1/`config.servo_rate_hz` (ZOH), to the exact simulated plant
-//! (`stiffwall_sim::PhysicalPlant`, m, b, c from `--mass/--viscous/--coulomb`, a `--device`
+//! (`stiffwall_sim::rich::RichPlant`: a `--plant` scene file's plant, or m, b, c from
+//! `--mass/--viscous/--coulomb`, a `--device`
 //! preset, or the recording's virtual-device preset; Δ from the recorded `DeviceInfo`). Each
 //! run of consecutive samples starts inside its first recorded count n₀ (raw counts), at
 //! x₀ = (n₀ + f)·Δ with f the best of [`START_GRID`] positions in [0, 1) and v₀ the better of
@@ -40,7 +41,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use stiffwall_firmware::{BoardInfo, Channels, HeldCode, SampledCount, Servo};
 use stiffwall_proto::{flags, ServoConfig};
-use stiffwall_sim::PhysicalPlant;
+use stiffwall_sim::rich::{PlantModel, RichPlant};
 
 /// Arguments of `hostctl replay`.
 #[derive(Debug, clap::Args)]
@@ -52,8 +53,12 @@ pub struct Args {
     pub file: PathBuf,
     /// Plant preset for (a) (see `hostctl analyze --list-devices`); default: the recording's
     /// virtual-device preset, if any.
-    #[arg(long = "device", value_name = "NAME")]
+    #[arg(long = "device", value_name = "NAME", conflicts_with = "plant")]
     pub device: Option<String>,
+    /// Plant for (a) from a scene file (as `--plant` of the device commands: stiction,
+    /// cogging, transmission, amplifier limit...); default: the recording's `--plant` file.
+    #[arg(long = "plant", value_name = "FILE.toml")]
+    pub plant: Option<PathBuf>,
     /// Inertia m [kg or kg·m²], > 0 (overrides the preset).
     #[arg(long, allow_negative_numbers = true)]
     pub mass: Option<f64>,
@@ -257,13 +262,45 @@ pub fn replay_servo(rec: &Recording) -> Result<ServoReplay> {
     Ok(r)
 }
 
-/// Plant parameters for (a): preset (given or recorded), then explicit overrides.
-fn plant_params(args: &Args, rec: &Recording) -> Result<(f64, f64, f64, String)> {
-    let preset = args
-        .device
-        .clone()
-        .or_else(|| rec.header.virtual_plant.clone());
+/// Plant for (a): a plant file (given or recorded) or a preset (given or recorded), then
+/// explicit overrides of m, b, c. The resolution is the recording's.
+fn plant_params(args: &Args, rec: &Recording) -> Result<(PlantModel, String)> {
+    let delta = f64::from(rec.header.device.resolution);
+    let recorded = rec.header.virtual_plant.clone();
+    let file = args.plant.clone().or_else(|| {
+        if args.device.is_some() {
+            return None;
+        }
+        recorded
+            .as_deref()
+            .and_then(|p| p.strip_prefix("plant:"))
+            .map(PathBuf::from)
+    });
+    let preset = match &file {
+        Some(_) => None,
+        None => args.device.clone().or(recorded),
+    };
     let (mut m, mut b, mut c, mut src) = (None, None, None, Vec::new());
+    let mut model = None;
+    if let Some(path) = &file {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
+        let (pm, _) = PlantModel::from_scene_toml(&text)
+            .map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
+        m = Some(pm.mass_kg);
+        b = Some(pm.viscous_ns_per_m);
+        c = Some(pm.coulomb_n);
+        model = Some(pm);
+        src.push(format!(
+            "plant file {}{}",
+            path.display(),
+            if args.plant.is_none() {
+                " (from the recording)"
+            } else {
+                ""
+            }
+        ));
+    }
     if let Some(name) = &preset {
         let d = stiffwall_core::devices::find(name).ok_or_else(|| {
             anyhow!(
@@ -305,13 +342,35 @@ fn plant_params(args: &Args, rec: &Recording) -> Result<(f64, f64, f64, String)>
         src.push("--coulomb".into());
     }
     match (m, b, c) {
-        (Some(m), Some(b), Some(c)) => Ok((m, b, c, src.join(" + "))),
+        (Some(m), Some(b), Some(c)) => {
+            let base = model.unwrap_or(
+                PlantModel::rigid(m, b, c, delta).map_err(|e| anyhow!("plant replay: {e}"))?,
+            );
+            let pm = PlantModel {
+                mass_kg: m,
+                viscous_ns_per_m: b,
+                coulomb_n: c,
+                resolution_m: delta,
+                ..base
+            };
+            pm.validate().map_err(|e| anyhow!("plant replay: {e}"))?;
+            Ok((pm, src.join(" + ")))
+        }
         _ => bail!("plant replay needs m, b and c: give --device NAME or all of --mass, --viscous and --coulomb"),
     }
 }
 
 /// Replay (a): the recorded forces through the exact simulated plant.
 pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantReplay> {
+    let delta = f64::from(rec.header.device.resolution);
+    let model = PlantModel::rigid(m, b, c, delta).map_err(|e| anyhow!("plant replay: {e}"))?;
+    replay_model(rec, &model)
+}
+
+/// Replay (a) through any plant model (a plant file's): the recorded force codes are the
+/// commands, the model's amplifier (limit, dead band, filter) acts on them.
+pub fn replay_model(rec: &Recording, model: &PlantModel) -> Result<PlantReplay> {
+    let (m, b, c) = (model.mass_kg, model.viscous_ns_per_m, model.coulomb_n);
     if rec.header.decimation != 1 {
         bail!(
             "plant replay needs the force of every servo tick (decimation 1); this recording has decimation {}",
@@ -323,7 +382,11 @@ pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantRepl
     let fpc = f64::from(d.force_per_code);
     let period = 1.0 / f64::from(rec.header.config.servo_rate_hz.max(1));
     let wall = i64::from(rec.header.config.wall_position);
-    let mut plant = PhysicalPlant::new(m, b, c, delta).map_err(|e| anyhow!("plant replay: {e}"))?;
+    let model = PlantModel {
+        resolution_m: delta,
+        ..*model
+    };
+    let mut plant = RichPlant::new(&model).map_err(|e| anyhow!("plant replay: {e}"))?;
     let t0 = rec.rows.first().map_or(0, |r| r.seq);
     let mut trace = Vec::with_capacity(rec.rows.len());
     let (mut sum2, mut max, mut n, mut runs) = (0.0f64, 0i64, 0usize, 0usize);
@@ -391,6 +454,7 @@ pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
     let (plant, plant_skipped) = match plant_params(args, rec) {
         Err(e)
             if args.device.is_some()
+                || args.plant.is_some()
                 || args.mass.is_some()
                 || args.viscous.is_some()
                 || args.coulomb.is_some() =>
@@ -398,7 +462,7 @@ pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
             return Err(e)
         }
         Err(e) => (None, Some(format!("{e:#}"))),
-        Ok((m, b, c, src)) => match replay_plant(rec, m, b, c) {
+        Ok((model, src)) => match replay_model(rec, &model) {
             Ok(mut p) => {
                 p.source = src;
                 (Some(p), None)
