@@ -238,7 +238,7 @@ impl PlantCase {
             c.one_sided,
         );
         supervise::run(
-            self.proto.clone(),
+            self.proto,
             b,
             &cfg,
             c.period_s,

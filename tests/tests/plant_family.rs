@@ -37,7 +37,7 @@ fn every_plant_file_loads_and_starts_with_a_comment_header() {
             case.name
         );
         // The plant is runnable: a short impact moves it.
-        let mut p = case.proto.clone();
+        let mut p = case.proto;
         p.set_state(0.0, case.rig.v_max);
         p.advance(0.0, case.controller.period_s);
         assert!(p.encoder_count() >= 1, "{}: moves at v_max", case.name);
