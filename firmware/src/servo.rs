@@ -36,6 +36,7 @@ use stiffwall_proto::{fault, flags, ExperimentKind, Sample, ServoConfig, MAX_TAB
 // The monitor's bits are the protocol's fault bits, so the servo latches them unchanged.
 const _: () =
     assert!(monitor::GROWTH == fault::ENERGY_GROWTH && monitor::LIMIT == fault::ENERGY_LIMIT);
+const _: () = assert!(monitor::BUZZ == fault::BUZZ);
 
 const RING: usize = 32;
 const RING_MASK: u32 = RING as u32 - 1;
@@ -304,6 +305,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 new_faults |= f;
                 if turn {
                     fl |= flags::TURN;
+                    new_faults |= self.monitor.buzz_turn(now, self.g.buzz_window_ticks);
                 }
             }
         }

@@ -382,6 +382,8 @@ pub mod fault {
     pub const HEARTBEAT: u32 = 1 << 3;
     /// Encoder count jumped more than `encoder_jump_counts` in one tick.
     pub const ENCODER_JUMP: u32 = 1 << 4;
+    /// The energy monitor saw a persistent oscillation of more than one count ("buzz").
+    pub const BUZZ: u32 = 1 << 5;
 }
 
 /// A sequence of telemetry samples.
