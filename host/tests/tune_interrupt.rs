@@ -18,6 +18,7 @@ fn connect() -> Client {
         counts_per_rev: (std::f64::consts::TAU / p.resolution).round() as u32,
         fast: true,
         initial_position: 0.0,
+        scene: None,
     })
     .unwrap();
     Client::connect(port, Some(Box::new(vd))).unwrap()
