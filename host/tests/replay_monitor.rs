@@ -111,14 +111,15 @@ fn replay_finds_the_growth_of_a_region_c_release_where_the_device_latched_it() {
 #[test]
 fn replay_monitor_is_quiet_on_a_region_a_release_and_skips_decimated_recordings() {
     let f = tmp("region-a.csv");
-    // K = 2 N·m/rad (the preset's own): region E/A side, the release settles.
+    // K = 0.8 N·m/rad: below the guaranteed limit of the maxon-re35 rig (0.88 by (12) at
+    // 5 ticks/period, README), so the release settles.
     let (ok, out, err) = hostctl(&[
         "record",
         f.to_str().unwrap(),
         "--seconds",
         "2",
         "--stiffness",
-        "2",
+        "0.8",
         "--release",
         "10",
         "--fast",
