@@ -7,6 +7,7 @@
 //! The default run records 3 s per mode; `cargo test -p stiffwall-host --test link_flood --
 //! --ignored` runs the 10 s versions of the acceptance test.
 
+use serialport::SerialPort as _;
 use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
