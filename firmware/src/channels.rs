@@ -49,6 +49,15 @@ pub enum ServoCmd {
         /// Ticks after release.
         ticks: u32,
     },
+    /// Start an impact test.
+    Impact {
+        /// Start, effective counts from the wall (|·| ≤ 2²⁰).
+        start: i32,
+        /// Launch velocity toward the wall, thousandths of a count per tick.
+        velocity_milli: i32,
+        /// Ticks after contact.
+        ticks: u32,
+    },
     /// Start an excitation.
     Excite {
         /// Profile.

@@ -387,6 +387,8 @@ pub struct Gains<N: Numeric> {
     pub energy_limit_m: u32,
     /// Growth score that trips the energy monitor.
     pub growth_trip: i32,
+    /// Longest buzz window, ticks ([`stiffwall_core::monitor::buzz_window_ticks`]).
+    pub buzz_window_ticks: u32,
     /// Heartbeat timeout, ticks; 0 = off.
     pub heartbeat_ticks: u32,
     /// Safe mode outputs damping (else zero).
@@ -474,6 +476,7 @@ impl<N: Numeric> Gains<N> {
             energy_limit_e8: e8_limit,
             energy_limit_m: limit_m,
             growth_trip: i32::from(cfg.energy_growth_cycles.max(1)),
+            buzz_window_ticks: stiffwall_core::monitor::buzz_window_ticks(cfg.servo_rate_hz),
             heartbeat_ticks: u32::try_from(hb).unwrap_or(u32::MAX),
             safe_damping: cfg.safe_mode == stiffwall_proto::SafeMode::Damping,
             rate_hz: cfg.servo_rate_hz,

@@ -46,6 +46,8 @@ pub const REPLY_BUDGET: u8 = 2;
 pub const MAX_EXPERIMENT_TICKS: u32 = 10_000_000;
 /// Largest release deflection, effective ticks.
 pub const MAX_DEFLECTION: i32 = 1 << 20;
+/// Largest impact launch velocity, thousandths of an effective count per tick.
+pub const MAX_LAUNCH_MILLITICKS: i32 = 1_000_000;
 
 /// Counters for diagnostics.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -515,6 +517,52 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
                 }) {
                     self.port.shared.experiment.store(true, Ordering::Relaxed);
                     ack(Request::Release)
+                } else {
+                    busy("servo queue full")
+                }
+            }
+            HostMsg::Impact {
+                start_ticks,
+                velocity_milliticks,
+                ticks,
+            } => {
+                if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
+                    return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
+                }
+                if start_ticks == 0 || start_ticks.unsigned_abs() > MAX_DEFLECTION.unsigned_abs() {
+                    return invalid(
+                        ConfigField::Argument,
+                        -f64::from(MAX_DEFLECTION),
+                        f64::from(MAX_DEFLECTION),
+                    );
+                }
+                // Toward the wall: the velocity's sign is opposite to the start's.
+                let toward = -start_ticks.signum() * velocity_milliticks;
+                if !(1..=MAX_LAUNCH_MILLITICKS).contains(&toward) {
+                    let m = f64::from(MAX_LAUNCH_MILLITICKS);
+                    return if start_ticks < 0 {
+                        invalid(ConfigField::Argument, 1.0, m)
+                    } else {
+                        invalid(ConfigField::Argument, -m, -1.0)
+                    };
+                }
+                if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
+                    return busy("faults latched");
+                }
+                if self.config.stiffness <= 0.0 {
+                    return invalid(
+                        ConfigField::Stiffness,
+                        f64::from(f32::MIN_POSITIVE),
+                        f64::from(self.board.max_stiffness(self.config.coarsen_shift)),
+                    );
+                }
+                if self.send_servo(ServoCmd::Impact {
+                    start: start_ticks,
+                    velocity_milli: velocity_milliticks,
+                    ticks,
+                }) {
+                    self.port.shared.experiment.store(true, Ordering::Relaxed);
+                    ack(Request::Impact)
                 } else {
                     busy("servo queue full")
                 }

@@ -1,5 +1,6 @@
 //! The experiments the servo runs instead of the wall: the release test's hold → release state
-//! machine (paper Fig. 8) and the excitation profiles (steps, linear chirp, uploaded table) as
+//! machine (paper Fig. 8), the impact test's hold → launch → contact state machine, and the
+//! excitation profiles (steps, linear chirp, uploaded table) as
 //! generators of one output code per tick.
 //!
 //! Units: counts are effective counts n (Δ_eff = 2^shift·Δ) relative to the wall; codes are
@@ -27,7 +28,11 @@ pub(crate) enum Mode {
 pub(crate) enum Experiment {
     None,
     Hold(Hold),
-    Released { remaining: u32 },
+    Launch(Launch),
+    Released {
+        remaining: u32,
+        kind: ExperimentKind,
+    },
     Excite(Excitation),
 }
 
@@ -45,7 +50,9 @@ impl Experiment {
     pub(crate) fn kind(&self) -> Option<ExperimentKind> {
         match self {
             Experiment::None => None,
-            Experiment::Hold(_) | Experiment::Released { .. } => Some(ExperimentKind::Release),
+            Experiment::Hold(_) => Some(ExperimentKind::Release),
+            Experiment::Launch(_) => Some(ExperimentKind::Impact),
+            Experiment::Released { kind, .. } => Some(*kind),
             Experiment::Excite(_) => Some(ExperimentKind::Excite),
         }
     }
@@ -89,6 +96,55 @@ impl Hold {
         let settle = (rate / 10).max(20);
         ((self.still >= settle && self.held >= settle) || self.held >= rate.saturating_mul(2))
             .then_some(self.ticks)
+    }
+}
+
+/// The impact test's launch: the release test's hold at `start` until still (or 2 s), then the
+/// hold target moves toward the wall at `velocity_milli` thousandths of a count per tick; at
+/// contact (count ≥ 0 moving up, < 0 moving down), or 4 s after the launch began, the device
+/// is released into the wall for `ticks`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Launch {
+    hold: Hold,
+    /// Hold target, thousandths of an effective count from the wall.
+    target_milli: i32,
+    velocity_milli: i32,
+    launched: bool,
+    t: u32,
+}
+
+impl Launch {
+    /// Launch from `start` at `velocity_milli` (its sign toward the wall), then run `ticks`
+    /// (at least 1) after contact. `start` is bounded by the caller (|start| ≤ 2²⁰).
+    pub(crate) fn new(start: i32, velocity_milli: i32, ticks: u32) -> Self {
+        Self {
+            hold: Hold::new(start, ticks),
+            target_milli: start.saturating_mul(1000),
+            velocity_milli,
+            launched: false,
+            t: 0,
+        }
+    }
+
+    /// The hold target this tick, effective counts (rounded toward −∞).
+    pub(crate) fn target(&self) -> i32 {
+        self.target_milli.div_euclid(1000)
+    }
+
+    /// One tick after the output at count `n` (moved `dn`): `Some(ticks)` at contact.
+    pub(crate) fn advance(&mut self, n: i32, dn: i32, rate_hz: u32) -> Option<u32> {
+        if !self.launched {
+            self.launched = self.hold.advance(n, dn, rate_hz).is_some();
+            return None;
+        }
+        self.t = self.t.saturating_add(1);
+        self.target_milli = self.target_milli.saturating_add(self.velocity_milli);
+        let contact = if self.velocity_milli > 0 {
+            n >= 0
+        } else {
+            n < 0
+        };
+        (contact || self.t >= rate_hz.max(1).saturating_mul(4)).then_some(self.hold.ticks)
     }
 }
 
@@ -233,6 +289,34 @@ mod tests {
             let released_at = (1..=400).find(|_| h.advance(n, 0, 1000).is_some());
             proptest::prop_assert_eq!(released_at.is_some(), exact_still);
         }
+    }
+
+    #[test]
+    fn launch_holds_then_moves_the_target_and_releases_at_contact() {
+        // Still at the start: launched after the settling time (100 ticks at 1 kHz).
+        let mut l = Launch::new(-10, 2500, 300);
+        for _ in 0..100 {
+            assert_eq!(l.advance(-10, 0, 1000), None);
+        }
+        assert_eq!(l.target(), -10);
+        // The target moves 2.5 counts per tick toward the wall.
+        assert_eq!(l.advance(-10, 0, 1000), None);
+        assert_eq!(l.target(), -8); // −10 + 2.5 = −7.5 → −8
+        assert_eq!(l.advance(-9, 1, 1000), None);
+        assert_eq!(l.target(), -5);
+        // Contact: the count reaches 0 from below.
+        assert_eq!(l.advance(0, 2, 1000), Some(300));
+        // From above: contact when the count drops below 0.
+        let mut l = Launch::new(7, -1000, 5);
+        for _ in 0..100 {
+            l.advance(7, 0, 1000);
+        }
+        assert_eq!(l.advance(0, -1, 1000), None);
+        assert_eq!(l.advance(-1, -1, 1000), Some(5));
+        // Never reaching the wall: released 4 s after the launch.
+        let mut l = Launch::new(-10, 1, 5);
+        let first = (1..=10_000).find(|_| l.advance(-10, 0, 1000).is_some());
+        assert_eq!(first, Some(100 + 4000));
     }
 
     #[test]

@@ -41,12 +41,6 @@ impl ForceOutput for HeldCode {
     }
 }
 
-/// A monotonic servo tick counter (wraps at 2^32).
-pub trait TickSource {
-    /// The current tick.
-    fn now(&self) -> u32;
-}
-
 /// A byte-oriented, non-blocking link to the host (UART, USB CDC, in-memory pipe).
 pub trait ByteLink {
     /// The next received byte, if any.

@@ -71,7 +71,8 @@
 //!   `store_mut()`.
 //! - Traits ([`hal`]): [`Encoder`]`::count(&mut self) -> u32` (raw hardware counter; only
 //!   `BoardInfo::encoder_bits` bits used, 16/32-bit wrap unwrapped here),
-//!   [`ForceOutput`]`::write(&mut self, code: i32)`, [`TickSource`]`::now(&self) -> u32`,
+//!   [`ForceOutput`]`::write(&mut self, code: i32)` (the board's timer calls the tick; no
+//!   tick-source trait is needed),
 //!   [`ByteLink`]`::{read(&mut self) -> Option<u8>, write(&mut self, u8) -> bool}`,
 //!   [`ConfigStorage`]`::{slot_len, read(slot, buf), write(slot, data)}` (two slots; the
 //!   two-slot CRC record logic is [`ConfigStore`]; [`MemStorage`] is an in-memory one).
@@ -113,7 +114,6 @@ pub use config::{validate, BoardInfo, ConfigError, Gains};
 pub use device::Device;
 pub use hal::{
     ByteLink, ConfigStorage, Encoder, ForceOutput, HeldCode, NoStorage, SampledCount, StorageError,
-    TickSource,
 };
 pub use numeric::{Fx32, Fx64, Numeric, F32};
 pub use servo::Servo;

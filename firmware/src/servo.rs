@@ -26,7 +26,7 @@
 
 use crate::channels::{ServoCmd, ServoEvent, ServoPort, TelemetryItem};
 use crate::config::{BoardInfo, Gains, Shift, VEL_WINDOW};
-use crate::experiment::{Excitation, Experiment, Hold, Mode};
+use crate::experiment::{Excitation, Experiment, Hold, Launch, Mode};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric};
 use core::sync::atomic::Ordering;
@@ -36,6 +36,7 @@ use stiffwall_proto::{fault, flags, ExperimentKind, Sample, ServoConfig, MAX_TAB
 // The monitor's bits are the protocol's fault bits, so the servo latches them unchanged.
 const _: () =
     assert!(monitor::GROWTH == fault::ENERGY_GROWTH && monitor::LIMIT == fault::ENERGY_LIMIT);
+const _: () = assert!(monitor::BUZZ == fault::BUZZ);
 
 const RING: usize = 32;
 const RING_MASK: u32 = RING as u32 - 1;
@@ -304,6 +305,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 new_faults |= f;
                 if turn {
                     fl |= flags::TURN;
+                    new_faults |= self.monitor.buzz_turn(now, self.g.buzz_window_ticks);
                 }
             }
         }
@@ -416,6 +418,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 let e = n.saturating_sub(h.target);
                 (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
             }
+            Experiment::Launch(l) => {
+                let e = n.saturating_sub(l.target());
+                (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
+            }
             Experiment::Excite(x) => (
                 x.next_code(&self.table, self.g.rate_hz),
                 flags::EXCITE | flags::WALL_OFF,
@@ -437,15 +443,27 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let mut done = false;
         match &mut self.exp {
             Experiment::None => {}
-            Experiment::Hold(h) => release = h.advance(n, dn, self.g.rate_hz),
-            Experiment::Released { remaining } => {
+            Experiment::Hold(h) => {
+                release = h
+                    .advance(n, dn, self.g.rate_hz)
+                    .map(|t| (t, ExperimentKind::Release));
+            }
+            Experiment::Launch(l) => {
+                release = l
+                    .advance(n, dn, self.g.rate_hz)
+                    .map(|t| (t, ExperimentKind::Impact));
+            }
+            Experiment::Released { remaining, .. } => {
                 *remaining = remaining.saturating_sub(1);
                 done = *remaining == 0;
             }
             Experiment::Excite(x) => done = x.advance(),
         }
-        if let Some(ticks) = release {
-            self.set_exp(Experiment::Released { remaining: ticks });
+        if let Some((ticks, kind)) = release {
+            self.set_exp(Experiment::Released {
+                remaining: ticks,
+                kind,
+            });
             self.monitor.reset();
         }
         if done {
@@ -513,6 +531,23 @@ impl<'a, N: Numeric> Servo<'a, N> {
                     self.start_experiment(now);
                 } else {
                     self.refuse_experiment(ExperimentKind::Release);
+                }
+            }
+            ServoCmd::Impact {
+                start,
+                velocity_milli,
+                ticks,
+            } => {
+                if self.faults == 0 {
+                    self.end_experiment(false);
+                    self.set_exp(Experiment::Launch(Launch::new(
+                        start,
+                        velocity_milli,
+                        ticks,
+                    )));
+                    self.start_experiment(now);
+                } else {
+                    self.refuse_experiment(ExperimentKind::Impact);
                 }
             }
             ServoCmd::Excite { profile, ticks } => {

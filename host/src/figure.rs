@@ -3,7 +3,9 @@
 //! Units: sizes in pixels. Invariants: the format is chosen by the file's extension, `.svg` or
 //! `.png` in any case (`.SVG`, `.Png`); any other name is refused before anything is drawn,
 //! with an error naming the path and the allowed extensions. The file is presented (written)
-//! exactly once, after the whole figure is drawn.
+//! exactly once, after the whole figure is drawn. [`prepare`] checks the name and that the
+//! file can be written before a long run starts (an existing file is left unchanged, a file
+//! created by the check is removed).
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -26,6 +28,15 @@ pub enum FigureError {
     Extension {
         /// The refused path.
         path: PathBuf,
+    },
+    /// The file cannot be created or written.
+    #[error("cannot write the figure file '{}': {source}", .path.display())]
+    Unwritable {
+        /// The refused path.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
     },
     /// Drawing or writing the file failed.
     #[error("writing the figure {}: {source}", .path.display())]
@@ -62,6 +73,40 @@ pub fn format_of(path: &Path) -> Result<Format, FigureError> {
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// Checks that `path` (any output file) can be written, leaving the file system as it was:
+/// an existing file is opened for appending and left unchanged, a missing one is created and
+/// removed again.
+///
+/// # Errors
+/// The error of opening or creating the file (missing directory, no permission, a directory).
+pub fn check_writable(path: &Path) -> std::io::Result<()> {
+    if path.exists() {
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map(drop)
+    } else {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)?;
+        std::fs::remove_file(path)
+    }
+}
+
+/// [`format_of`] and [`check_writable`]: call before a long computation.
+///
+/// # Errors
+/// [`FigureError::Extension`] or [`FigureError::Unwritable`], naming the path.
+pub fn prepare(path: &Path) -> Result<Format, FigureError> {
+    let format = format_of(path)?;
+    check_writable(path).map_err(|source| FigureError::Unwritable {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(format)
 }
 
 /// Draws `figure` at `size_px` (width, height) into `path`, SVG or PNG by extension.
@@ -167,6 +212,30 @@ mod tests {
         let e = write(&dir.join("broken.svg"), (10, 10), &Broken).unwrap_err();
         assert!(e.to_string().contains("broken.svg"), "{e}");
         assert!(e.to_string().contains("no data to draw"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn prepare_refuses_unwritable_paths_and_leaves_no_trace() {
+        let dir = std::env::temp_dir().join(format!("stiffwall-prepare-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let missing_dir = dir.join("no/such/dir/a.svg");
+        let e = prepare(&missing_dir).unwrap_err();
+        assert!(matches!(e, FigureError::Unwritable { .. }), "{e}");
+        assert!(e.to_string().contains("no/such/dir/a.svg"), "{e}");
+        let is_dir = dir.join("sub.png");
+        std::fs::create_dir_all(&is_dir).unwrap();
+        assert!(matches!(
+            prepare(&is_dir),
+            Err(FigureError::Unwritable { .. })
+        ));
+        let fresh = dir.join("fresh.svg");
+        assert_eq!(prepare(&fresh).unwrap(), Format::Svg);
+        assert!(!fresh.exists(), "the check must not leave a file behind");
+        let old = dir.join("old.png");
+        std::fs::write(&old, b"keep").unwrap();
+        prepare(&old).unwrap();
+        assert_eq!(std::fs::read(&old).unwrap(), b"keep");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -33,6 +33,8 @@ enum Command {
     Experiment(cmd::experiment::Args),
     /// Find and set the largest stable wall stiffness, with evidence.
     Tune(cmd::tune::Args),
+    /// Serve the virtual device on a pseudo-terminal (prints its path) until Ctrl-C.
+    Virtual(cmd::r#virtual::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -48,6 +50,7 @@ fn main() -> std::process::ExitCode {
         Command::Replay(a) => cmd::replay::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
         Command::Tune(a) => cmd::tune::run(a),
+        Command::Virtual(a) => cmd::r#virtual::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

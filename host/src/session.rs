@@ -257,13 +257,8 @@ pub fn header(
     decimation: u16,
     connect: Option<&ConnectArgs>,
 ) -> Header {
-    let virtual_plant = connect.and_then(|c| {
-        (c.port.is_none() && !c.qemu).then(|| {
-            c.device
-                .clone()
-                .unwrap_or_else(|| crate::device::connect::DEFAULT_VIRTUAL_DEVICE.to_string())
-        })
-    });
+    let virtual_plant =
+        connect.and_then(|c| (c.port.is_none() && !c.qemu).then(|| c.virtual_plant_name()));
     Header {
         host_time_unix_s: std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)

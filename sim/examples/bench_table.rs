@@ -6,10 +6,14 @@
 //!    sample instants against the exact solver, energy-balance residual (26);
 //! 2. exact-solver time per period for each effect set (all, each removed, none) and for each
 //!    disabled effect against the same effect enabled with a neutral parameter;
-//! 3. the paper's base scene throughput on one core and the full Fig. 6 set on all cores.
+//! 3. the paper's base scene throughput on one core and the full Fig. 6 set on all cores;
+//! 4. the issue-10 plant effects (`rich_rows`): cost of each, accuracy against references.
 //!
 //! Units: dimensionless scenes (Table I); times in ns per simulated period.
 //! Usage: `cargo run --release -p stiffwall-sim --example bench_table -- [--out FILE] [--quick]`.
+
+#[path = "bench_table/rich_rows.rs"]
+mod rich_rows;
 
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -669,6 +673,7 @@ fn main() {
     }
     writeln!(md).unwrap();
     reference_effects(&mut md, min_s);
+    rich_rows::rich_rows(&mut md, min_s);
     std::fs::write(&out, &md).expect("write report");
     print!("{md}");
     eprintln!("wrote {out} and {figure}");

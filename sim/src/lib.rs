@@ -27,6 +27,10 @@
 //! [`plant::DimensionlessPlant::step`]`(phi_a, dtau)` covers fractional delays. The lower-level
 //! [`plant::advance`] steps a [`plant::Body`] of (μ, β, σ) or (m, b, c) over one interval.
 //!
+//! # Plants beyond the paper (issue 10)
+//! [`rich`]: stiction, cogging, compliant transmission, amplifier saturation and dead band;
+//! [`rich::RichPlant`] is the stepping plant of a scene for the virtual device.
+//!
 //! # std feature
 //! [`scene`] (TOML scenes) and [`map`] (parallel (β, σ) sweeps).
 #![cfg_attr(not(feature = "std"), no_std)]
@@ -39,6 +43,7 @@ pub mod math;
 pub mod params;
 pub mod plant;
 pub mod reference;
+pub mod rich;
 
 #[cfg(feature = "std")]
 pub mod map;

@@ -5,7 +5,9 @@
 //! to `periods` periods and is classified by [`crate::classify`]. Grid points are numbered
 //! row-major (σ outer, β inner) so shards (`index % n == k`) can be merged by index.
 //!
-//! Invariant: results are deterministic and independent of thread count and sharding.
+//! Invariant: results are deterministic and independent of thread count and sharding. A spec
+//! from outside (a file) is checked with [`MapSpec::validate`] before any use: axes of
+//! 1..=[`MAX_AXIS_POINTS`] points, at most [`MAX_GRID_POINTS`] grid points, ≥ 1 period.
 
 use crate::classify::{classify, Class, Outcome, Thresholds};
 use crate::exact::{Full, History, NoDelay};
@@ -25,22 +27,53 @@ pub struct Axis {
     pub n: usize,
 }
 
+/// Largest number of points on one axis.
+pub const MAX_AXIS_POINTS: usize = 100_000;
+
+/// Largest number of (β, σ) points of one map panel.
+pub const MAX_GRID_POINTS: usize = 4_000_000;
+
+/// Largest horizon in periods.
+pub const MAX_PERIODS: u64 = 100_000_000;
+
 impl Axis {
     /// Parses `a:b:n`.
     pub fn parse(s: &str) -> Result<Self, String> {
         let parts: Vec<&str> = s.split(':').collect();
-        let bad =
-            || format!("axis {s:?}: expected lo:hi:n with finite lo <= hi and 1 <= n <= 100000");
+        let bad = || {
+            format!(
+                "axis {s:?}: expected lo:hi:n with finite lo <= hi and 1 <= n <= {MAX_AXIS_POINTS}"
+            )
+        };
         if parts.len() != 3 {
             return Err(bad());
         }
         let lo: f64 = parts[0].trim().parse().map_err(|_| bad())?;
         let hi: f64 = parts[1].trim().parse().map_err(|_| bad())?;
         let n: usize = parts[2].trim().parse().map_err(|_| bad())?;
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi && (1..=100_000).contains(&n)) {
-            return Err(bad());
+        let axis = Self { lo, hi, n };
+        axis.validate().map_err(|_| bad())?;
+        Ok(axis)
+    }
+
+    /// Checks finite `lo <= hi` and `1 <= n <=` [`MAX_AXIS_POINTS`].
+    ///
+    /// # Errors
+    /// A message naming the violated bound.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.lo.is_finite() && self.hi.is_finite() && self.lo <= self.hi) {
+            return Err(format!(
+                "lo = {}, hi = {}: need finite lo <= hi",
+                self.lo, self.hi
+            ));
         }
-        Ok(Self { lo, hi, n })
+        if !(1..=MAX_AXIS_POINTS).contains(&self.n) {
+            return Err(format!(
+                "n = {}: allowed range is [1, {MAX_AXIS_POINTS}]",
+                self.n
+            ));
+        }
+        Ok(())
     }
 
     /// The i-th value.
@@ -75,6 +108,52 @@ pub struct MapSpec {
 }
 
 impl MapSpec {
+    /// Checks every field: μ > 0, τ_D in [0, 250], finite ξ̇₀, both axes
+    /// ([`Axis::validate`], lo ≥ 0), at most [`MAX_GRID_POINTS`] points and
+    /// 1..=[`MAX_PERIODS`] periods. After this, [`Self::len`] cannot overflow.
+    ///
+    /// # Errors
+    /// A message naming the field and its allowed range.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.mu.is_finite() && self.mu > 0.0) {
+            return Err(format!("mu = {}: allowed range is > 0", self.mu));
+        }
+        if !(self.tau_d.is_finite() && (0.0..=250.0).contains(&self.tau_d)) {
+            return Err(format!("tau_d = {}: allowed range is [0, 250]", self.tau_d));
+        }
+        if !(self.xidot0.is_finite() && self.xidot0.abs() <= 1e12) {
+            return Err(format!(
+                "xidot0 = {}: allowed range is finite, |xidot0| <= 1e12",
+                self.xidot0
+            ));
+        }
+        for (name, axis) in [("beta", &self.beta), ("sigma", &self.sigma)] {
+            axis.validate().map_err(|e| format!("{name} axis: {e}"))?;
+            if axis.lo < 0.0 {
+                return Err(format!(
+                    "{name} axis: lo = {}: allowed range is >= 0",
+                    axis.lo
+                ));
+            }
+        }
+        match self.beta.n.checked_mul(self.sigma.n) {
+            Some(len) if len <= MAX_GRID_POINTS => {}
+            _ => {
+                return Err(format!(
+                    "{} x {} grid points: at most {MAX_GRID_POINTS}",
+                    self.beta.n, self.sigma.n
+                ))
+            }
+        }
+        if !(1..=MAX_PERIODS).contains(&self.periods) {
+            return Err(format!(
+                "periods = {}: allowed range is [1, {MAX_PERIODS}]",
+                self.periods
+            ));
+        }
+        Ok(())
+    }
+
     /// Number of grid points.
     #[must_use]
     pub fn len(&self) -> usize {
@@ -216,10 +295,23 @@ pub fn run(spec: &MapSpec, indices: &[usize], progress: &(dyn Fn() + Sync)) -> V
     out
 }
 
-/// Indices of shard `k` of `n` (k in 0..n): every n-th point starting at k.
+/// Indices of shard `k` of `n` (k in 0..n): every n-th point starting at k (empty for n = 0).
 #[must_use]
 pub fn shard(spec: &MapSpec, k: usize, n: usize) -> Vec<usize> {
-    (0..spec.len()).filter(|i| i % n == k).collect()
+    if n == 0 {
+        return Vec::new();
+    }
+    (k..spec.len()).step_by(n).collect()
+}
+
+/// Number of points of shard `k` of `n` in a grid of `len` points (0 for n = 0).
+#[must_use]
+pub fn shard_len(len: usize, k: usize, n: usize) -> usize {
+    if n == 0 || k >= len {
+        0
+    } else {
+        (len - k).div_ceil(n)
+    }
 }
 
 /// Analytic region of Fig. 3 (τ_D = 0) for a given ξ̇_max: 'A'..'E' (boundaries belong to the
@@ -228,4 +320,54 @@ pub fn shard(spec: &MapSpec, k: usize, n: usize) -> Vec<usize> {
 pub fn region_no_delay(beta: f64, sigma: f64, xidot_max: f64) -> char {
     stiffwall_core::regions::classify(beta, sigma, Some(xidot_max))
         .map_or('?', |r| r.label().chars().next().unwrap_or('?'))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(bn: usize, sn: usize) -> MapSpec {
+        MapSpec {
+            mu: 100.0,
+            tau_d: 0.0,
+            xidot0: 5.0,
+            beta: Axis {
+                lo: 0.0,
+                hi: 1.0,
+                n: bn,
+            },
+            sigma: Axis {
+                lo: 0.0,
+                hi: 2.0,
+                n: sn,
+            },
+            periods: 100,
+            history: History::HoldInitial,
+        }
+    }
+
+    #[test]
+    fn huge_or_empty_grids_are_refused_before_len() {
+        let e = spec(1_000_000_000, 1_000_000_000).validate().unwrap_err();
+        assert!(e.contains("beta axis") && e.contains("100000"), "{e}");
+        let e = spec(100_000, 100_000).validate().unwrap_err();
+        assert!(e.contains("at most 4000000"), "{e}");
+        assert!(spec(0, 3).validate().unwrap_err().contains("[1, 100000]"));
+        let mut s = spec(3, 3);
+        s.periods = 0;
+        assert!(s.validate().unwrap_err().contains("periods = 0"));
+        assert!(spec(34, 21).validate().is_ok());
+    }
+
+    #[test]
+    fn shard_len_counts_shard_indices() {
+        let s = spec(7, 3);
+        for n in 0..25 {
+            for k in 0..n + 2 {
+                assert_eq!(shard(&s, k, n).len(), shard_len(s.len(), k, n), "{k}/{n}");
+            }
+        }
+        let all: usize = (0..4).map(|k| shard(&s, k, 4).len()).sum();
+        assert_eq!(all, 21);
+    }
 }

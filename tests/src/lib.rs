@@ -8,6 +8,15 @@
 //! The plant sits behind the [`Plant`] trait: [`SimPlant`] is `stiffwall_sim::PhysicalPlant`
 //! (closed-form, exact stick–slip), [`EulerPlant`] an independent sub-stepped semi-implicit
 //! integrator kept as a cross-check.
+//!
+//! Plants beyond the paper's model (issue 10): [`kstar`] (the brute-force true largest stable
+//! stiffness K* of a plant, simulator only), [`family`] (the plant files of `sim/plants/`),
+//! [`supervise`] (the firmware servo driving any plant, for the supervisor at 1.5 K*); the
+//! `tune_table` binary writes docs/TUNE.md from them (`cargo xtask tune-table`).
+
+pub mod family;
+pub mod kstar;
+pub mod supervise;
 
 use std::collections::VecDeque;
 use stiffwall_firmware::{BoardInfo, ByteLink, ConfigStore, Device, Encoder, MemStorage, Servo};

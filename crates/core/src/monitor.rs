@@ -30,6 +30,74 @@ pub const GROWTH: u32 = 1 << 0;
 /// (the same bit as `stiffwall_proto::fault::ENERGY_LIMIT`).
 pub const LIMIT: u32 = 1 << 1;
 
+/// Bit returned by [`EnergyMonitor::buzz_turn`] when a persistent oscillation ("buzz") was seen
+/// (the same bit as `stiffwall_proto::fault::BUZZ`).
+pub const BUZZ: u32 = 1 << 5;
+/// Consecutive half-cycles (turning points) a buzz must last: an even number, so that the first
+/// and the last swing of the window start on the same side.
+pub const BUZZ_HALF_CYCLES: u16 = 32;
+/// Lowest oscillation frequency counted as buzz, Hz (above voluntary hand motion, < 10 Hz).
+pub const BUZZ_MIN_HZ: u32 = 15;
+/// Smallest swing between consecutive turning points that counts, effective counts: more than
+/// one count peak to peak (a toggle between two neighbouring counts, region B, does not count).
+pub const BUZZ_MIN_SWING: u32 = 2;
+
+/// The longest a buzz window of [`BUZZ_HALF_CYCLES`] may take at `rate_hz`, ticks: half-cycles
+/// of at most rate/(2·[`BUZZ_MIN_HZ`]) ticks each.
+#[must_use]
+pub fn buzz_window_ticks(rate_hz: u32) -> u32 {
+    u32::from(BUZZ_HALF_CYCLES).saturating_mul(rate_hz) / (2 * BUZZ_MIN_HZ)
+}
+
+/// The buzz detector: a persistent oscillation of more than one count that the growth score
+/// misses because its peaks do not grow (a limit cycle, e.g. a firm grip or a slow servo at a
+/// stiffness above the stable one). Fed at turning points only ([`EnergyMonitor::buzz_turn`]),
+/// so it costs nothing on the other ticks. It trips when [`BUZZ_HALF_CYCLES`] consecutive
+/// swings (peak to peak between turning points) of at least [`BUZZ_MIN_SWING`] counts fit in
+/// `window_ticks` (a frequency of at least [`BUZZ_MIN_HZ`]) and the last swing is not smaller
+/// than the first: a decaying oscillation loses at least a count over the window and does not
+/// trip; any swing below the minimum restarts the window.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BuzzDetector {
+    have_prev: bool,
+    prev_peak: i32,
+    count: u16,
+    start: u32,
+    first_swing: u32,
+}
+
+impl BuzzDetector {
+    /// A turning point at count `peak`, tick `now`: returns [`BUZZ`] or 0.
+    #[inline(never)]
+    pub fn turn(&mut self, now: u32, peak: i32, window_ticks: u32) -> u32 {
+        let swing = if self.have_prev {
+            peak.abs_diff(self.prev_peak)
+        } else {
+            0
+        };
+        self.have_prev = true;
+        self.prev_peak = peak;
+        if swing < BUZZ_MIN_SWING {
+            self.count = 0;
+            return 0;
+        }
+        if self.count == 0 {
+            self.start = now;
+            self.first_swing = swing;
+        }
+        self.count = self.count.saturating_add(1);
+        if self.count < BUZZ_HALF_CYCLES {
+            return 0;
+        }
+        self.count = 0;
+        if swing >= self.first_swing && now.wrapping_sub(self.start) <= window_ticks {
+            BUZZ
+        } else {
+            0
+        }
+    }
+}
+
 /// `e8(n) = (2n+1)² + 1`: the storage function (35) at effective count n with ξ̇ = 0 and the
 /// unknown quantization error ρ at its midpoint, 8·H_e(n + ½) = 8·(½(n+½)² + ⅛), in units of
 /// K·Δ_eff²/8. Exact for every `i32` n.
@@ -80,6 +148,7 @@ pub struct EnergyMonitor {
     last: [i32; 2],
     have: [bool; 2],
     score: i32,
+    buzz: BuzzDetector,
 }
 
 impl EnergyMonitor {
@@ -92,6 +161,19 @@ impl EnergyMonitor {
     #[must_use]
     pub fn score(&self) -> i32 {
         self.score
+    }
+
+    /// Feeds the turning point that [`Self::update`] just reported (it returned `true`) to the
+    /// buzz detector ([`BuzzDetector`]), at tick `now`; returns [`BUZZ`] or 0. Call it only on
+    /// turning points: the other ticks cost nothing.
+    #[inline]
+    pub fn buzz_turn(&mut self, now: u32, window_ticks: u32) -> u32 {
+        // The peak just scored (as in `last_peak`, without its energy).
+        let side = usize::from(self.dir > 0);
+        match (self.have.get(side), self.last.get(side)) {
+            (Some(true), Some(&n)) => self.buzz.turn(now, n, window_ticks),
+            _ => 0,
+        }
     }
 
     /// The count and energy (`e8`) of the turning point scored last, if any.
@@ -338,5 +420,73 @@ mod tests {
         assert_eq!(m.score(), -2);
         assert_eq!(m.update(40, 2, limit_m(energy_e8(39))).0, LIMIT);
         assert_eq!(m.update(-41, 2, limit_m(energy_e8(39))).0 & LIMIT, LIMIT);
+    }
+
+    /// Drives the monitor along the counts of a triangle oscillation between `lo` and `hi`
+    /// (one count per tick), feeding its turning points to the buzz detector as the servo does;
+    /// returns the tick of the first BUZZ, if any.
+    fn buzz_tick(swings: &[(i32, i32)], window_ticks: u32) -> Option<u32> {
+        let mut m = EnergyMonitor::default();
+        let mut t = 0u32;
+        let mut n = 0;
+        for &(lo, hi) in swings {
+            for target in [hi, lo] {
+                while n != target {
+                    n += (target - n).signum();
+                    t += 1;
+                    let (_, turn) = m.update(n, 64, u32::MAX);
+                    if turn && m.buzz_turn(t, window_ticks) == BUZZ {
+                        return Some(t);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn buzz_trips_on_a_persistent_oscillation_only() {
+        let w = buzz_window_ticks(1000);
+        assert_eq!(w, 32 * 1000 / 30);
+        // ±5 counts at one count per tick: 20 ticks per cycle (50 Hz), constant: trips after
+        // BUZZ_HALF_CYCLES turning points.
+        let steady = [(-5, 5); 40];
+        let t = buzz_tick(&steady, w).expect("a steady ±5-count oscillation is buzz");
+        assert!(t <= 20 * 20, "tripped at tick {t}");
+        // Decaying by one count every 8 cycles: no trip.
+        let decaying: std::vec::Vec<(i32, i32)> =
+            (0..40).map(|i| (-12 + i / 8, 12 - i / 8)).collect();
+        assert_eq!(buzz_tick(&decaying, w), None);
+        // Toggling between two neighbouring counts (region B): no trip.
+        assert_eq!(buzz_tick(&[(-1, 0); 200], w), None);
+        // Too slow to be a buzz (±300 counts at one count per tick: 0.8 Hz): no trip.
+        assert_eq!(buzz_tick(&[(-300, 300); 40], w), None);
+        // Swings of two counts are enough.
+        assert!(buzz_tick(&[(-1, 1); 40], w).is_some());
+    }
+
+    #[test]
+    fn the_buzz_detector_restarts_after_a_small_swing() {
+        let mut b = BuzzDetector::default();
+        let mut t = 0;
+        let mut fire = 0;
+        for i in 0..200 {
+            t += 10;
+            // Every 20th turning point is a sub-count wiggle: the window never completes.
+            let peak = if i % 20 == 19 {
+                4
+            } else if i % 2 == 0 {
+                5
+            } else {
+                -5
+            };
+            fire |= b.turn(t, peak, u32::MAX);
+        }
+        assert_eq!(fire, 0);
+        for _ in 0..BUZZ_HALF_CYCLES + 1 {
+            t += 10;
+            fire |= b.turn(t, if t % 20 == 0 { 5 } else { -5 }, u32::MAX);
+        }
+        assert_eq!(fire, BUZZ);
     }
 }

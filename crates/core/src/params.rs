@@ -44,6 +44,14 @@ impl ParamError {
         }
     }
 
+    /// The refused value.
+    #[must_use]
+    pub fn value(&self) -> f64 {
+        match self {
+            Self::NotFinite { value, .. } | Self::OutOfRange { value, .. } => *value,
+        }
+    }
+
     /// Allowed range of the offending parameter, in words.
     #[must_use]
     pub fn allowed(&self) -> &'static str {

@@ -41,7 +41,7 @@ pub trait Message: Serialize + DeserializeOwned {
 }
 
 impl Message for HostMsg {
-    const VARIANTS: u32 = 15;
+    const VARIANTS: u32 = 16;
 }
 
 impl Message for DeviceMsg {
@@ -571,6 +571,11 @@ mod tests {
             HostMsg::ClearFaults,
             HostMsg::Stop,
             HostMsg::Shutdown { exit_code: 3 },
+            HostMsg::Impact {
+                start_ticks: -40,
+                velocity_milliticks: 5000,
+                ticks: 3000,
+            },
         ]
     }
 
@@ -661,7 +666,15 @@ mod tests {
         // The last variant's tag is VARIANTS - 1.
         let mut buf = [0u8; 8];
         assert_eq!(
-            postcard::to_slice(&HostMsg::Shutdown { exit_code: 0 }, &mut buf).unwrap()[0] as u32,
+            postcard::to_slice(
+                &HostMsg::Impact {
+                    start_ticks: 0,
+                    velocity_milliticks: 0,
+                    ticks: 0
+                },
+                &mut buf
+            )
+            .unwrap()[0] as u32,
             HostMsg::VARIANTS - 1
         );
         let m = DeviceMsg::Error {

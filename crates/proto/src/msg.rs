@@ -92,6 +92,22 @@ pub enum HostMsg {
         /// Exit status for the emulator (0 = success).
         exit_code: u8,
     },
+    /// Impact test: hold at `start_ticks` effective ticks from the wall until still, then move
+    /// the hold target toward the wall at `velocity_milliticks` thousandths of an effective
+    /// tick per servo tick; when the count reaches the wall (count 0 coming from below, −1
+    /// coming from above) the device is released into the configured wall (one-sided or not)
+    /// and `ticks` servo ticks run, streaming every tick (samples flagged `HOLD` while launched,
+    /// `RELEASED` from contact). Answer: `Ack`, later [`DeviceMsg::ExperimentDone`] with kind
+    /// [`ExperimentKind::Impact`].
+    Impact {
+        /// Start position, effective ticks from the wall, non-zero, |·| ≤ 2²⁰.
+        start_ticks: i32,
+        /// Launch velocity, effective ticks per 1000 servo ticks, pointing at the wall (sign
+        /// opposite to `start_ticks`), 1..=10⁶ in magnitude.
+        velocity_milliticks: i32,
+        /// Servo ticks to run after contact, 1..=10⁷.
+        ticks: u32,
+    },
 }
 
 /// Messages from the device to the host.
@@ -143,6 +159,7 @@ pub enum Request {
     ClearFaults,
     Stop,
     Shutdown,
+    Impact,
 }
 
 /// Experiment kinds.
@@ -151,6 +168,7 @@ pub enum Request {
 pub enum ExperimentKind {
     Release,
     Excite,
+    Impact,
 }
 
 /// Open-loop excitation profiles (force codes, wall off).
@@ -208,7 +226,8 @@ pub enum SafeMode {
 /// Ranges are checked by the firmware (`stiffwall_firmware::config::validate`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ServoConfig {
-    /// Wall stiffness K, N/m (N·m/rad). ≥ 0, and K·Δ_eff/2 ≤ 2^20 output codes.
+    /// Wall stiffness K, N/m (N·m/rad). ≥ 0, and K·Δ_eff/2 ≤ 2^14 output codes (the
+    /// firmware's `MAX_GAIN_CODES`, which its config validation enforces).
     pub stiffness: f32,
     /// Virtual damping B, N·s/m, on the backward-difference velocity. ≥ 0.
     pub damping: f32,
@@ -363,6 +382,8 @@ pub mod fault {
     pub const HEARTBEAT: u32 = 1 << 3;
     /// Encoder count jumped more than `encoder_jump_counts` in one tick.
     pub const ENCODER_JUMP: u32 = 1 << 4;
+    /// The energy monitor saw a persistent oscillation of more than one count ("buzz").
+    pub const BUZZ: u32 = 1 << 5;
 }
 
 /// A sequence of telemetry samples.

@@ -13,6 +13,8 @@
 //!   one with the host tests).
 //! - `bench [--quick] [--no-criterion]`: the simulator's accuracy-vs-time tables
 //!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
+//! - `tune-table [--quick] [--only NAME]`: K* vs the K `hostctl tune` sets on the plants of
+//!   `sim/plants/`, and the supervisor at 1.5 K* (docs/TUNE.md).
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
@@ -23,6 +25,7 @@ mod flash;
 mod fuzz;
 mod qemu;
 mod toolchain;
+mod tune_table;
 mod unused_deps;
 
 /// Runs a command, echoing it, and fails when it fails.
@@ -141,6 +144,7 @@ fn main() -> Result<()> {
         Some("unused-deps") => unused_deps::unused_deps(),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
         Some("fuzz") => fuzz::fuzz(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], fuzz [--frames N] [--seed S]"),
+        Some("tune-table") => tune_table::tune_table(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], fuzz [--frames N] [--seed S]"),
     }
 }

@@ -30,25 +30,25 @@ pub struct Args {
     #[arg(long)]
     pub list_devices: bool,
     /// Encoder resolution Δ [m, or rad], > 0.
-    #[arg(long, allow_negative_numbers = true, conflicts_with = "counts_per_rev")]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "counts_per_rev")]
     pub resolution: Option<f64>,
     /// Rotary encoder counts per revolution (Δ = 2π/N rad); rotational devices only.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub counts_per_rev: Option<f64>,
     /// Sampling period T [s], > 0.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub period: Option<f64>,
     /// Virtual wall stiffness K [N/m, or N·m/rad], > 0.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub stiffness: Option<f64>,
     /// Extra loop delay T_D (amplifier + computation, excluding the ZOH) [s], >= 0.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub delay: Option<f64>,
     /// Maximum velocity |ẋ| the user reaches [m/s, or rad/s], >= 0.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub velocity: Option<f64>,
     /// Maximum acceleration |ẍ| [m/s², or rad/s²], >= 0 (delayed criterion (19)).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     pub acceleration: Option<f64>,
     /// Rotational device: angles, torques and inertia instead of positions, forces and mass.
     #[arg(long)]
@@ -70,7 +70,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         return Ok(emit(&list_devices())?);
     }
     if let Some(path) = &args.plot {
-        crate::figure::format_of(path)?;
+        crate::figure::prepare(path)?;
     }
     let (name, p) = resolve_params(args)?;
     let report = analyze(name, &p, args.velocity, args.acceleration)?;

@@ -41,14 +41,15 @@ pub struct ReleaseArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub deflection: i32,
     /// Servo ticks to record after the release (100–10000000).
-    #[arg(long, default_value_t = 3000)]
+    #[arg(long, default_value_t = 3000, allow_hyphen_values = true)]
     pub ticks: u32,
-    /// Wall stiffness for the test, N/m (N·m/rad); default: the device's configured K.
-    #[arg(long)]
+    /// Wall stiffness for the test, N/m (N·m/rad); default: the device's configured K
+    /// (needed when the device's wall is off, K = 0, as on a fresh virtual device).
+    #[arg(long, allow_hyphen_values = true)]
     pub stiffness: Option<f64>,
     /// Device model for the (β, σ) panel: mass, viscous and Coulomb friction (SI); default:
     /// the `--device` preset of the virtual device.
-    #[arg(long, num_args = 3, value_names = ["M", "B", "C"])]
+    #[arg(long, num_args = 3, value_names = ["M", "B", "C"], allow_hyphen_values = true)]
     pub model: Option<Vec<f64>>,
     /// Write the figure (.svg or .png).
     #[arg(long, value_name = "FILE")]
@@ -76,7 +77,7 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         bail!("--ticks must be within [100, 10000000] (got {})", a.ticks);
     }
     if let Some(p) = &a.plot {
-        figure::format_of(p)?;
+        figure::prepare(p)?;
     }
     if let Some(k) = a.stiffness {
         if !(k.is_finite() && k > 0.0) {
@@ -87,7 +88,12 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         Some(v) if v.iter().all(|x| x.is_finite() && *x >= 0.0) && v[0] > 0.0 => {
             Some((v[0], v[1], v[2]))
         }
-        Some(_) => bail!("--model M B C must be finite, M > 0, B ≥ 0, C ≥ 0"),
+        Some(v) => bail!(
+            "--model M B C must be finite, M > 0 kg, B ≥ 0 N·s/m, C ≥ 0 N (got {} {} {})",
+            v[0],
+            v[1],
+            v[2]
+        ),
         None => a
             .connect
             .virtual_spec()?
@@ -98,6 +104,15 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     let mut cfg = original;
     if let Some(k) = a.stiffness {
         cfg.stiffness = k as f32;
+    }
+    if cfg.stiffness.is_nan() || cfg.stiffness <= 0.0 {
+        bail!(
+            "the device's wall is off (K = {}): give the test's stiffness with --stiffness K \
+             (N/m or N·m/rad, > 0 and ≤ {} for this device at coarsening shift 0); a board \
+             keeps one set with `hostctl config set --stiffness K` and `hostctl config save`",
+            cfg.stiffness,
+            crate::device::client::readable(f64::from(c.info.limits.max_stiffness))
+        );
     }
     c.clear_faults().ok();
     c.set_config(&cfg)?;

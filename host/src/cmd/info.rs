@@ -30,6 +30,7 @@ pub fn fault_names(bits: u32) -> String {
         (fault::OVER_VELOCITY, "over-velocity"),
         (fault::HEARTBEAT, "heartbeat"),
         (fault::ENCODER_JUMP, "encoder-jump"),
+        (fault::BUZZ, "buzz"),
     ];
     let mut v: Vec<String> = names
         .iter()

@@ -10,3 +10,4 @@ pub mod replay;
 pub mod simulate;
 pub mod stream;
 pub mod tune;
+pub mod r#virtual;

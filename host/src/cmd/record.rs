@@ -27,14 +27,14 @@ pub struct Args {
     /// Output CSV file.
     pub file: PathBuf,
     /// Device time to record [s], > 0.
-    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     pub seconds: f64,
     /// Servo ticks per sample, 1..=65535.
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
     pub decimation: i64,
     /// Run a release test (paper Fig. 8) from this deflection [effective ticks] while
     /// recording (needs --decimation 1).
-    #[arg(long, allow_negative_numbers = true, value_name = "TICKS")]
+    #[arg(long, allow_hyphen_values = true, value_name = "TICKS")]
     pub release: Option<i32>,
     /// Exit 0 even when samples were lost (they are always noted in the file).
     #[arg(long)]
@@ -51,6 +51,11 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     // Validate what can be validated before connecting.
     Plan::new(args.decimation, Some(args.seconds), 1)?;
+    if let Some(d) = args.release {
+        if d == 0 || d.unsigned_abs() > 1 << 20 {
+            bail!("--release must be non-zero and within [-1048576, 1048576] (got {d})");
+        }
+    }
     crate::session::stop_on_ctrl_c();
     let (mut client, cfg) = args.set.connect_and_apply(&args.connect)?;
     let mut plan = Plan::new(args.decimation, Some(args.seconds), cfg.servo_rate_hz)?;

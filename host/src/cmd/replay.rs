@@ -2,7 +2,8 @@
 //!
 //! (a) **Plant replay.** The recorded force codes are applied, each held for one servo period
 //! T = 1/`config.servo_rate_hz` (ZOH), to the exact simulated plant
-//! (`stiffwall_sim::PhysicalPlant`, m, b, c from `--mass/--viscous/--coulomb`, a `--device`
+//! (`stiffwall_sim::rich::RichPlant`: a `--plant` scene file's plant, or m, b, c from
+//! `--mass/--viscous/--coulomb`, a `--device`
 //! preset, or the recording's virtual-device preset; Δ from the recorded `DeviceInfo`). Each
 //! run of consecutive samples starts inside its first recorded count n₀ (raw counts), at
 //! x₀ = (n₀ + f)·Δ with f the best of [`START_GRID`] positions in [0, 1) and v₀ the better of
@@ -43,7 +44,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use stiffwall_firmware::{BoardInfo, Channels, HeldCode, SampledCount, Servo};
 use stiffwall_proto::{flags, ServoConfig};
-use stiffwall_sim::PhysicalPlant;
+use stiffwall_sim::rich::{PlantModel, RichPlant};
 
 /// Arguments of `hostctl replay`.
 #[derive(Debug, clap::Args)]
@@ -57,6 +58,11 @@ pub struct Args {
     /// m, b, c overriding its fields.
     #[command(flatten)]
     pub plant: PlantArgs,
+    /// Plant for (a) from a scene file (as `--plant` of the device commands: stiction,
+    /// cogging, transmission, amplifier limit...), with --mass/--viscous/--coulomb overriding
+    /// its fields; default: the recording's `--plant` file, if any.
+    #[arg(long = "plant", value_name = "FILE.toml", conflicts_with = "device")]
+    pub plant_file: Option<PathBuf>,
     /// Plot of recorded vs model position and the error (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
@@ -251,8 +257,72 @@ pub fn replay_servo(rec: &Recording) -> Result<ServoReplay> {
     Ok(r)
 }
 
+/// Plant for (a): a plant file (given, or the recording's when no plant flag is given) with the
+/// flags' m, b, c overriding its fields, or else a preset (given or recorded) and the flags
+/// (checked by core through [`PlantArgs`]). The resolution is the recording's.
+fn plant_model(args: &Args, rec: &Recording) -> Result<(PlantModel, String)> {
+    let delta = f64::from(rec.header.device.resolution);
+    let recorded = rec.header.virtual_plant.as_deref();
+    let recorded_file = recorded.and_then(|p| p.strip_prefix("plant:"));
+    let file = args.plant_file.clone().map(|f| (f, false)).or_else(|| {
+        (!args.plant.any())
+            .then(|| recorded_file.map(|f| (PathBuf::from(f), true)))
+            .flatten()
+    });
+    let Some((path, from_recording)) = file else {
+        let preset = if recorded_file.is_some() {
+            None
+        } else {
+            recorded
+        };
+        let f = args.plant.friction(preset).map_err(|e| match e {
+            PlantArgsError::Incomplete => anyhow!("plant replay needs m, b and c: give --device NAME, --plant FILE or all of --mass, --viscous and --coulomb"),
+            e => e.into(),
+        })?;
+        let model = PlantModel::rigid(f.mass, f.viscous, f.coulomb, delta)
+            .map_err(|e| anyhow!("plant replay: {e}"))?;
+        return Ok((model, f.source));
+    };
+    let text =
+        std::fs::read_to_string(&path).map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
+    let (mut model, _) = PlantModel::from_scene_toml(&text)
+        .map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
+    let mut src = vec![format!(
+        "plant file {}{}",
+        path.display(),
+        if from_recording {
+            " (from the recording)"
+        } else {
+            ""
+        }
+    )];
+    let (m, b, c) = args.plant.overrides()?;
+    for (flag, v, field) in [
+        ("--mass", m, &mut model.mass_kg),
+        ("--viscous", b, &mut model.viscous_ns_per_m),
+        ("--coulomb", c, &mut model.coulomb_n),
+    ] {
+        if let Some(v) = v {
+            *field = v;
+            src.push(flag.to_string());
+        }
+    }
+    model.resolution_m = delta;
+    model.validate().map_err(|e| anyhow!("plant replay: {e}"))?;
+    Ok((model, src.join(" + ")))
+}
+
 /// Replay (a): the recorded forces through the exact simulated plant.
 pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantReplay> {
+    let delta = f64::from(rec.header.device.resolution);
+    let model = PlantModel::rigid(m, b, c, delta).map_err(|e| anyhow!("plant replay: {e}"))?;
+    replay_model(rec, &model)
+}
+
+/// Replay (a) through any plant model (a plant file's): the recorded force codes are the
+/// commands, the model's amplifier (limit, dead band, filter) acts on them.
+pub fn replay_model(rec: &Recording, model: &PlantModel) -> Result<PlantReplay> {
+    let (m, b, c) = (model.mass_kg, model.viscous_ns_per_m, model.coulomb_n);
     if rec.header.decimation != 1 {
         bail!(
             "plant replay needs the force of every servo tick (decimation 1); this recording has decimation {}",
@@ -264,7 +334,11 @@ pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantRepl
     let fpc = f64::from(d.force_per_code);
     let period = 1.0 / f64::from(rec.header.config.servo_rate_hz.max(1));
     let wall = i64::from(rec.header.config.wall_position);
-    let mut plant = PhysicalPlant::new(m, b, c, delta).map_err(|e| anyhow!("plant replay: {e}"))?;
+    let model = PlantModel {
+        resolution_m: delta,
+        ..*model
+    };
+    let mut plant = RichPlant::new(&model).map_err(|e| anyhow!("plant replay: {e}"))?;
     let t0 = rec.rows.first().map_or(0, |r| r.seq);
     let mut trace = Vec::with_capacity(rec.rows.len());
     let (mut sum2, mut max, mut n, mut runs) = (0.0f64, 0i64, 0usize, 0usize);
@@ -329,19 +403,12 @@ pub fn replay_plant(rec: &Recording, m: f64, b: f64, c: f64) -> Result<PlantRepl
 
 /// Both replays of a parsed recording; plant parameters from `args`.
 pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
-    let friction = args
-        .plant
-        .friction(rec.header.virtual_plant.as_deref())
-        .map_err(|e| match e {
-            PlantArgsError::Incomplete => anyhow!("plant replay needs m, b and c: give --device NAME or all of --mass, --viscous and --coulomb"),
-            e => e.into(),
-        });
-    let (plant, plant_skipped) = match friction {
-        Err(e) if args.plant.any() => return Err(e),
+    let (plant, plant_skipped) = match plant_model(args, rec) {
+        Err(e) if args.plant.any() || args.plant_file.is_some() => return Err(e),
         Err(e) => (None, Some(format!("{e:#}"))),
-        Ok(f) => match replay_plant(rec, f.mass, f.viscous, f.coulomb) {
+        Ok((model, source)) => match replay_model(rec, &model) {
             Ok(mut p) => {
-                p.source = f.source;
+                p.source = source;
                 (Some(p), None)
             }
             Err(e) => (None, Some(format!("{e:#}"))),

@@ -36,7 +36,19 @@ pub fn load(path: &Path) -> Result<Scene> {
     Scene::from_toml(&text).with_context(|| format!("scene {}", path.display()))
 }
 
+fn write_row(w: &mut dyn Write, r: &Row) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "{},{},{},{},{},{},{},{}",
+        r.period, r.xi, r.xidot, r.phi_a, r.h_t, r.e_d, r.e_g, r.residual
+    )
+}
+
 /// Runs `hostctl simulate`.
+///
+/// # Errors
+/// A bad flag or scene, an unwritable `--out`/`--plot` (before the run), a write error, or a
+/// diverged trajectory (reported after the rows up to the divergence are written).
 pub fn run(args: &Args) -> Result<()> {
     anyhow::ensure!(
         args.every >= 1,
@@ -44,7 +56,7 @@ pub fn run(args: &Args) -> Result<()> {
         args.every
     );
     if let Some(p) = &args.plot {
-        figure::format_of(p)?;
+        figure::prepare(p)?;
     }
     let scene = load(&args.scene)?;
     let mut w: Box<dyn Write> = match &args.out {
@@ -57,15 +69,14 @@ pub fn run(args: &Args) -> Result<()> {
     let mut rows: Vec<Row> = Vec::new();
     let keep = args.plot.is_some();
     let mut io_err = None;
+    let mut last: Option<(Row, bool)> = None;
     scene.simulate(&mut |r: &Row| {
-        if !r.period.is_multiple_of(args.every) || io_err.is_some() {
+        let written = r.period.is_multiple_of(args.every);
+        last = Some((*r, written));
+        if !written || io_err.is_some() {
             return;
         }
-        if let Err(e) = writeln!(
-            w,
-            "{},{},{},{},{},{},{},{}",
-            r.period, r.xi, r.xidot, r.phi_a, r.h_t, r.e_d, r.e_g, r.residual
-        ) {
+        if let Err(e) = write_row(&mut *w, r) {
             io_err = Some(e);
         }
         if keep {
@@ -75,9 +86,27 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(e) = io_err {
         return Err(e.into());
     }
+    // The last row is always written, whatever --every.
+    if let Some((r, false)) = last {
+        write_row(&mut *w, &r)?;
+        if keep {
+            rows.push(r);
+        }
+    }
     w.flush()?;
     if let Some(p) = &args.plot {
         figure::write(p, (900, 600), &Trajectory(&rows))?;
+    }
+    if let Some((r, _)) = last {
+        anyhow::ensure!(
+            r.period >= scene.periods,
+            "the trajectory diverged at period {} of {} (xi = {:.3e}, xidot = {:.3e}); the rows \
+             up to there are written",
+            r.period,
+            scene.periods,
+            r.xi,
+            r.xidot
+        );
     }
     Ok(())
 }

@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(long)]
     pub release_ticks: Option<u32>,
     /// Duration of the identification excitation, s (0.5–1000).
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = 3.0)]
     pub excite_seconds: f64,
     /// Find and report K, but leave the device's config as it was.
     #[arg(long)]
@@ -190,9 +190,28 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
     );
     let _ = writeln!(
         s,
-        "  set (×{:.2}, confirmed ±)      {:>12.5}  {:?}",
-        a.margin, o.k_set, o.confirmation
+        "  set (×{:.2}, verified)         {:>12.5}  {} tests: {}",
+        o.margin_used,
+        o.k_set,
+        o.verification.len(),
+        o.verification
+            .iter()
+            .map(|r| format!("{} {}", r.test.describe(), r.verdict.describe()))
+            .collect::<Vec<_>>()
+            .join("; ")
     );
+    if o.model_mismatch.is_empty() {
+        let _ = writeln!(s, "model check: the identified model fits the device");
+    } else {
+        let _ = writeln!(
+            s,
+            "model mismatch (margin ×{:.2}, longer tests at more energies):",
+            procedure::MISMATCH_MARGIN
+        );
+        for f in &o.model_mismatch {
+            let _ = writeln!(s, "  - {f}");
+        }
+    }
     let _ = writeln!(
         s,
         "operating point at the set K: μ = {:.4}, β = {:.5}, σ = {:.4}, τ_D = {:.3}",

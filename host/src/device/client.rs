@@ -17,6 +17,8 @@ use stiffwall_proto::{
 
 /// How long a request waits for its answer.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
+/// How long a request refused with a full servo queue is repeated.
+pub const QUEUE_FULL_RETRY: Duration = Duration::from_secs(2);
 /// Heartbeat period during experiments (the firmware's default timeout is 500 ms).
 pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(100);
 
@@ -36,6 +38,10 @@ pub struct GapStats {
     /// Frames that failed to decode (CRC, COBS, …), i.e. lost on the link.
     pub bad_frames: u64,
 }
+
+/// Judges the samples of a running experiment so far: true ends it early (see
+/// [`Client::release_until`]).
+pub type EnoughFn<'a> = dyn FnMut(&[Sample]) -> bool + 'a;
 
 /// Samples of one experiment with their bookkeeping.
 #[derive(Debug, Clone)]
@@ -83,7 +89,16 @@ pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
     match detail {
         ErrorDetail::None => what.to_string(),
         ErrorDetail::Field { field, min, max } => {
-            format!("{what}: {field:?} must be within [{min}, {max}]")
+            // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
+            if *min == f64::from(f32::MIN_POSITIVE) {
+                format!("{what}: {field:?} must be > 0 and ≤ {}", readable(*max))
+            } else {
+                format!(
+                    "{what}: {field:?} must be within [{}, {}]",
+                    readable(*min),
+                    readable(*max)
+                )
+            }
         }
         ErrorDetail::Version { got, expected } => {
             format!("{what}: device got version {got}, expects {expected}")
@@ -91,6 +106,26 @@ pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
         ErrorDetail::Tag(t) => format!("{what}: tag {t}"),
         ErrorDetail::Text(t) => format!("{what}: {t}"),
         ErrorDetail::Repeated { count } => format!("{what} ({count} frames in a row)"),
+    }
+}
+
+/// `x` with about 6 significant digits, in scientific notation outside [1e-3, 1e7):
+/// `85.4457`, `1.18e-38`, `1048576`.
+#[must_use]
+pub fn readable(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    if !(1e-3..1e7).contains(&a) {
+        return format!("{x:.2e}");
+    }
+    let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
     }
 }
 
@@ -266,7 +301,26 @@ impl Client {
     /// request this client encoded: they answer bad frames from elsewhere on the link (a
     /// noisy line, another writer), so the wait goes on; if no answer comes, the timeout
     /// names the last one seen.
+    ///
+    /// A full servo command queue (`Busy`, "servo queue full": the servo takes one command per
+    /// tick) is transient: the request is repeated, for at most [`QUEUE_FULL_RETRY`].
     pub fn request(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
+        let deadline = Instant::now() + QUEUE_FULL_RETRY;
+        loop {
+            let m = self.request_once(msg)?;
+            let full = matches!(&m, DeviceMsg::Error { code: ErrorCode::Busy, detail }
+                if describe_error(ErrorCode::Busy, detail).contains("queue full"));
+            if !full || Instant::now() > deadline {
+                if let DeviceMsg::Error { code, detail } = &m {
+                    bail!("{} refused: {}", short(msg), describe_error(*code, detail));
+                }
+                return Ok(m);
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    fn request_once(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
         self.send(msg)?;
         let ack = ack_kind(msg);
         let last_framing = std::cell::Cell::new(None);
@@ -292,9 +346,6 @@ impl Client {
                 ),
                 None => format!("waiting for the answer to {}", short(msg)),
             })?;
-        if let DeviceMsg::Error { code, detail } = &m {
-            bail!("{} refused: {}", short(msg), describe_error(*code, detail));
-        }
         Ok(m)
     }
 
@@ -383,6 +434,47 @@ impl Client {
         )
     }
 
+    /// Runs a release test like [`Client::release`], but sends `Stop` as soon as `enough`
+    /// returns true for the samples received so far (the caller judges the record, so the
+    /// samples after that point are only the `Stop`'s latency).
+    pub fn release_until(
+        &mut self,
+        deflection_ticks: i32,
+        ticks: u32,
+        enough: &mut EnoughFn<'_>,
+    ) -> Result<Record> {
+        self.experiment_until(
+            &HostMsg::Release {
+                deflection_ticks,
+                ticks,
+            },
+            ExperimentKind::Release,
+            ticks,
+            Some(enough),
+        )
+    }
+
+    /// Runs an impact test (see [`HostMsg::Impact`]), ending it early like
+    /// [`Client::release_until`].
+    pub fn impact_until(
+        &mut self,
+        start_ticks: i32,
+        velocity_milliticks: i32,
+        ticks: u32,
+        enough: &mut EnoughFn<'_>,
+    ) -> Result<Record> {
+        self.experiment_until(
+            &HostMsg::Impact {
+                start_ticks,
+                velocity_milliticks,
+                ticks,
+            },
+            ExperimentKind::Impact,
+            ticks,
+            Some(enough),
+        )
+    }
+
     /// Runs an open-loop excitation and collects every sample.
     pub fn excite(&mut self, profile: ExciteProfile, ticks: u32) -> Result<Record> {
         self.experiment(
@@ -393,6 +485,16 @@ impl Client {
     }
 
     fn experiment(&mut self, msg: &HostMsg, kind: ExperimentKind, ticks: u32) -> Result<Record> {
+        self.experiment_until(msg, kind, ticks, None)
+    }
+
+    fn experiment_until(
+        &mut self,
+        msg: &HostMsg,
+        kind: ExperimentKind,
+        ticks: u32,
+        mut enough: Option<&mut EnoughFn<'_>>,
+    ) -> Result<Record> {
         self.pending
             .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
         let before = self.gaps;
@@ -410,7 +512,15 @@ impl Client {
                 last_hb = Instant::now();
             }
             match self.recv(Duration::from_millis(20))? {
-                Some(DeviceMsg::Telemetry(b)) => samples.extend_from_slice(&b.samples),
+                Some(DeviceMsg::Telemetry(b)) => {
+                    samples.extend_from_slice(&b.samples);
+                    if let Some(f) = enough.as_mut() {
+                        if f(&samples) {
+                            enough = None;
+                            self.send(&HostMsg::Stop)?;
+                        }
+                    }
+                }
                 Some(DeviceMsg::ExperimentDone {
                     kind: k,
                     completed,
@@ -467,6 +577,7 @@ fn ack_kind(msg: &HostMsg) -> Option<Request> {
         HostMsg::ClearFaults => Request::ClearFaults,
         HostMsg::Stop => Request::Stop,
         HostMsg::Shutdown { .. } => Request::Shutdown,
+        HostMsg::Impact { .. } => Request::Impact,
         _ => return None,
     })
 }

@@ -1,5 +1,6 @@
-//! `--port/--baud/--device/--fast/--qemu` options shared by every device command, and the
-//! connection they describe: a real serial port, QEMU, or (default) the built-in virtual device.
+//! `--port/--baud/--device/--plant/--fast/--qemu` options shared by every device command, and
+//! the connection they describe: a real serial port, QEMU, or (default) the built-in virtual
+//! device running a preset (`--device NAME`) or a scene file's plant (`--plant FILE.toml`).
 
 use super::client::Client;
 use super::{qemu, transport, virtual_device};
@@ -20,8 +21,18 @@ pub struct ConnectArgs {
     #[arg(long, global = true, default_value_t = transport::DEFAULT_BAUD)]
     pub baud: u32,
     /// Plant of the virtual device: a preset name (see `hostctl analyze --list-devices`).
-    #[arg(long = "device", global = true, value_name = "NAME")]
+    #[arg(
+        long = "device",
+        global = true,
+        value_name = "NAME",
+        conflicts_with = "plant"
+    )]
     pub device: Option<String>,
+    /// Plant of the virtual device: a scene file (sim/plants/*.toml, sim/scenes/*.toml, physical
+    /// units); its [device] and [effects] are the plant, its [controller] the boot
+    /// configuration. Not with --device.
+    #[arg(long = "plant", global = true, value_name = "FILE.toml")]
+    pub plant: Option<PathBuf>,
     /// Run the virtual device as fast as the host reads, not in real time.
     #[arg(long, global = true)]
     pub fast: bool,
@@ -44,19 +55,37 @@ impl ConnectArgs {
         } else {
             format!(
                 "virtual device ({}{})",
-                self.device.as_deref().unwrap_or(DEFAULT_VIRTUAL_DEVICE),
+                self.virtual_plant_name(),
                 if self.fast { ", fast" } else { "" }
             )
+        }
+    }
+
+    /// The virtual device's plant as written in recordings: the preset name, or `plant:FILE`.
+    #[must_use]
+    pub fn virtual_plant_name(&self) -> String {
+        match &self.plant {
+            Some(p) => format!("plant:{}", p.display()),
+            None => self
+                .device
+                .clone()
+                .unwrap_or_else(|| DEFAULT_VIRTUAL_DEVICE.to_string()),
         }
     }
 
     /// The virtual device's specification, when the target is the virtual device.
     pub fn virtual_spec(&self) -> Result<Option<virtual_device::Spec>> {
         if self.port.is_some() || self.qemu {
-            if self.device.is_some() {
-                bail!("--device picks the virtual device's plant; it cannot be combined with --port or --qemu");
+            if self.device.is_some() || self.plant.is_some() {
+                bail!("--device and --plant pick the virtual device's plant; they cannot be combined with --port or --qemu");
             }
             return Ok(None);
+        }
+        if let Some(path) = &self.plant {
+            if self.device.is_some() {
+                bail!("--device and --plant both pick the virtual device's plant; give one");
+            }
+            return virtual_device::Spec::from_plant_file(path, self.fast).map(Some);
         }
         let name = self.device.as_deref().unwrap_or(DEFAULT_VIRTUAL_DEVICE);
         let d = stiffwall_core::devices::find(name).ok_or_else(|| {
@@ -75,11 +104,14 @@ impl ConnectArgs {
             counts_per_rev,
             fast: self.fast,
             initial_position: 0.0,
+            scene: None,
         }))
     }
 
     /// Connects and performs the handshake.
     pub fn connect(&self) -> Result<Client> {
+        // Refuses --device with --port or --qemu (instead of ignoring it).
+        let spec = self.virtual_spec()?;
         if let Some(port) = &self.port {
             let p = transport::open_port(port, self.baud)?;
             return Client::connect(p, None);
@@ -90,7 +122,7 @@ impl ConnectArgs {
             let p = transport::open_port(&q.pty, transport::DEFAULT_BAUD)?;
             return Client::connect(p, Some(Box::new(q)));
         }
-        let spec = self.virtual_spec()?.expect("virtual target");
+        let spec = spec.expect("virtual target");
         let (vd, p) = virtual_device::spawn(spec)?;
         Client::connect(p, Some(Box::new(vd)))
     }

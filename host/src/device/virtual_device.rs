@@ -1,13 +1,19 @@
 //! The built-in virtual device: the firmware core (`stiffwall-firmware`: `Device` + `Servo`)
-//! driving the exact simulated plant of `stiffwall-sim`, served on a pseudo-terminal so that
-//! hostctl reaches it through the same serial code path as a real board.
+//! driving a simulated plant of `stiffwall-sim` (`rich::RichPlant`: the exact rigid plant of a
+//! `--device` preset, or any plant a scene file describes with `--plant FILE.toml`), served on
+//! a pseudo-terminal so that hostctl reaches it through the same serial code path as a real
+//! board.
 //!
 //! Timing: the servo ticks at the configured rate against the wall clock (`paced`), or as fast
 //! as the host reads telemetry (`fast`): in fast mode the servo only runs while fewer than
 //! [`FAST_BACKLOG`] bytes wait for the host, so no telemetry sample is ever dropped.
 //! Units: SI at this API; the plant is read at each sample instant and the written code is held
-//! (ZOH) for one period, as on hardware. The amplifier is ideal; extra delay comes from the
-//! firmware's own delay line (`ServoConfig::extra_delay_ticks`).
+//! (ZOH) for one period, as on hardware. The amplifier is ideal unless the plant file gives a
+//! filter, dead band or force limit; extra delay comes from the firmware's own delay line
+//! (`ServoConfig::extra_delay_ticks`; a plant file's `controller.extra_delay_s`, plus an
+//! amplifier of kind "delay", rounded to whole ticks in the boot configuration).
+//! Output range: 16-bit codes; full scale = the plant's `amplifier.force_limit_n` when set,
+//! otherwise 32.767 × `coulomb_n` (at least 1 mN).
 
 use super::transport;
 use anyhow::{bail, Result};
@@ -23,7 +29,8 @@ use stiffwall_firmware::{
     BoardInfo, ByteLink, Channels, ConfigStore, Device, HeldCode, MemStorage, SampledCount, Servo,
 };
 use stiffwall_proto::ServoConfig;
-use stiffwall_sim::PhysicalPlant;
+use stiffwall_proto::WallMode;
+use stiffwall_sim::rich::{Controller, PlantModel, RichPlant};
 
 /// Bytes waiting for the host above which the fast virtual device pauses its servo.
 pub const FAST_BACKLOG: usize = 2048;
@@ -46,14 +53,83 @@ pub struct Spec {
     pub fast: bool,
     /// Initial position of the plant, m (rad).
     pub initial_position: f64,
+    /// The plant and controller of a scene file (`--plant`). `None`: the rigid plant of
+    /// `plant`, wall off at boot. The firmware always quantises, so `controller.quantization`
+    /// and the scene's `[initial]`/`[run]` are not used by the device.
+    pub scene: Option<ScenePlant>,
+}
+
+/// What a scene file gives the virtual device.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScenePlant {
+    /// `[device]` and `[effects]`: the plant behind the firmware core.
+    pub model: PlantModel,
+    /// `[controller]`: the boot configuration.
+    pub controller: Controller,
 }
 
 impl Spec {
+    /// The virtual device of a scene file: `[device]` and `[effects]` are the plant,
+    /// `[controller]` the boot configuration. Errors name the key and its allowed range.
+    pub fn from_plant_file(path: &std::path::Path, fast: bool) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| anyhow::anyhow!("--plant {}: {e}", path.display()))?;
+        let (model, ctl) = PlantModel::from_scene_toml(&text)
+            .map_err(|e| anyhow::anyhow!("--plant {}: {e}", path.display()))?;
+        let spec = Self {
+            plant: PhysicalParams {
+                mass: model.mass_kg,
+                viscous: model.viscous_ns_per_m,
+                coulomb: model.coulomb_n,
+                resolution: model.resolution_m,
+                period_s: ctl.period_s,
+                stiffness: ctl.stiffness_n_per_m,
+                delay_s: ctl.extra_delay_s,
+                rotational: model.counts_per_rev.is_some(),
+            },
+            counts_per_rev: model.counts_per_rev.unwrap_or(0),
+            fast,
+            initial_position: 0.0,
+            scene: Some(ScenePlant {
+                model,
+                controller: ctl,
+            }),
+        };
+        if let Err(e) = stiffwall_firmware::validate(&spec.defaults(), &spec.board()) {
+            use stiffwall_proto::ConfigField as F;
+            let ctl = spec.scene.map(|s| s.controller);
+            let t = ctl.map_or(1e-3, |c| c.period_s);
+            let (key, lo, hi, unit) = match e.field {
+                F::Stiffness => ("controller.stiffness_n_per_m", e.min, e.max, "N/m"),
+                F::ServoRateHz => ("controller.period_s", 1.0 / e.max, 1.0 / e.min, "s"),
+                F::ExtraDelayTicks => ("controller.extra_delay_s", e.min * t, e.max * t, "s"),
+                _ => ("the boot configuration", e.min, e.max, ""),
+            };
+            bail!(
+                "--plant {}: {key} is outside the virtual board's range [{lo}, {hi}] {unit} \
+                 ({:?} of the boot configuration; the output range is amplifier.force_limit_n, \
+                 or 32.767 x device.coulomb_n)",
+                path.display(),
+                e.field
+            );
+        }
+        Ok(spec)
+    }
+
+    /// The plant's output full scale, N (N·m): `amplifier.force_limit_n` when the plant sets
+    /// one, otherwise 32.767 × the Coulomb friction (at least 1 mN).
+    #[must_use]
+    pub fn full_scale(&self) -> f64 {
+        self.scene
+            .and_then(|s| s.model.force_limit_n())
+            .unwrap_or_else(|| (self.plant.coulomb * 32.767).max(1e-3))
+    }
+
     /// The board facts the firmware is built with for this plant: a 32-bit encoder counter
-    /// and a 16-bit amplifier whose full scale is 32.8 × the Coulomb friction (at least 1 mN).
+    /// and a 16-bit amplifier of [`Spec::full_scale`].
     #[must_use]
     pub fn board(&self) -> BoardInfo {
-        let full_scale = (self.plant.coulomb * 32.767).max(1e-3);
+        let full_scale = self.full_scale();
         BoardInfo {
             name: "virtual",
             resolution: self.plant.resolution as f32,
@@ -66,19 +142,45 @@ impl Spec {
         }
     }
 
-    /// Boot configuration: wall off, the spec's servo rate, force limit at full scale. In fast
+    /// Boot configuration: wall off (a plant file: its controller's stiffness, extra delay in
+    /// whole ticks and wall mode), the spec's servo rate, force limit at full scale. In fast
     /// mode the heartbeat watchdog is off: device time then runs many times faster than the
     /// host's clock, so a heartbeat timeout counted in servo ticks would trip spuriously.
     #[must_use]
     pub fn defaults(&self) -> ServoConfig {
         let b = self.board();
-        ServoConfig {
+        let base = ServoConfig {
             heartbeat_timeout_ms: if self.fast { 0 } else { 500 },
             stiffness: 0.0,
             servo_rate_hz: (1.0 / self.plant.period_s).round().clamp(100.0, 20_000.0) as u32,
             force_limit: b.force_per_code * b.max_code as f32,
             energy_limit: 1.0e3,
             ..ServoConfig::default()
+        };
+        match self.scene.map(|s| s.controller) {
+            None => base,
+            Some(c) => ServoConfig {
+                stiffness: c.stiffness_n_per_m as f32,
+                extra_delay_ticks: (c.extra_delay_s / c.period_s).round().clamp(0.0, 255.0) as u8,
+                wall: if c.one_sided {
+                    WallMode::OneSided
+                } else {
+                    WallMode::Bidirectional
+                },
+                ..base
+            },
+        }
+    }
+
+    /// The plant model the device runs: the file's, or the rigid plant of `plant`.
+    pub fn plant_model(&self) -> Result<PlantModel> {
+        match self.scene {
+            Some(s) => Ok(s.model),
+            None => {
+                let p = &self.plant;
+                PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution)
+                    .map_err(|e| anyhow::anyhow!("virtual device plant: {e}"))
+            }
         }
     }
 }
@@ -123,8 +225,7 @@ impl ByteLink for MemLink {
 
 /// Starts the virtual device; returns it and the host side of its pty, opened by path.
 pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPort>)> {
-    let p = &spec.plant;
-    let mut plant = match PhysicalPlant::new(p.mass, p.viscous, p.coulomb, p.resolution) {
+    let mut plant = match RichPlant::new(&spec.plant_model()?) {
         Ok(pl) => pl,
         Err(e) => bail!("virtual device plant: {e}"),
     };
@@ -146,7 +247,7 @@ pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPor
     ))
 }
 
-fn run(spec: &Spec, mut plant: PhysicalPlant, pty: &mut serialport::TTYPort, stop: &AtomicBool) {
+fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &AtomicBool) {
     let board = spec.board();
     let mut channels = Box::new(Channels::new());
     let (servo_port, host_port) = channels.split();

@@ -73,6 +73,8 @@ pub struct Identified {
     pub coulomb_se: f64,
     /// Number of integrated equations used.
     pub equations: usize,
+    /// RMS of the fit residual relative to the RMS of the force integrals (0 = exact fit).
+    pub residual_rel: f64,
 }
 
 impl Identified {
@@ -170,6 +172,8 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
             e * e
         })
         .sum();
+    let y2: f64 = rows.iter().map(|(_, y)| y * y).sum();
+    let residual_rel = if y2 > 0.0 { (rss / y2).sqrt() } else { 0.0 };
     let dof = (rows.len() - 3) as f64;
     let s2 = rss / dof;
     let se = |i: usize| (s2 * inv[i][i]).max(0.0).sqrt();
@@ -181,6 +185,7 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
         coulomb: p[2],
         coulomb_se: se(2),
         equations: rows.len(),
+        residual_rel,
     })
 }
 

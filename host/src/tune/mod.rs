@@ -2,6 +2,9 @@
 //! search, and the procedure that runs them on a device.
 
 pub mod ident;
+pub mod model_check;
 pub mod procedure;
 pub mod release;
 pub mod search;
+pub mod verdict;
+pub mod verify;

@@ -9,26 +9,46 @@
 //!    sampled linear boundary (Gil–Avello–Rubio), i.e. the largest K for which the sampled
 //!    system is stable with Coulomb friction counted as its describing-function damping
 //!    b + 4c/(πv) at the peak speed v. The paper's approximation (74) is reported beside it.
-//! 3. **Verify** with release tests (Fig. 8): the device is held at the deflection whose spring
-//!    energy equals the kinetic energy at v, d = v·√(m/K)/Δ, and released; the search of
-//!    [`super::search`] brackets and bisects the largest K whose release settles, never above
-//!    the firmware's force limit (K·Δ·(d + ½) ≤ force limit) or its stiffness limit.
-//! 4. **Set** K = margin × (largest settling K), confirmed by releases from both sides, and
-//!    save it (unless dry-run). On any error or Ctrl-C the previous config is restored.
+//! 3. **Check the model** ([`super::model_check`]): the fit residual, slow force ramps from rest
+//!    in both directions (breakaway against the model's), and, after the search, the frequency
+//!    of a release against √(K/m)/2π and the verified K against the expected one. What does
+//!    not fit is reported (`model_mismatch`) and makes the verification thorough: the margin is
+//!    multiplied by [`MISMATCH_MARGIN`], the verification set gains a lower energy level and
+//!    every test runs twice as long.
+//! 4. **Verify** ([`super::verify`]): the search of [`super::search`] brackets and bisects the
+//!    largest K whose full-energy release (deflection d = v·√(m/K)/Δ, spring energy = kinetic
+//!    energy at v) passes, never above the firmware's force limit (K·Δ·(d + ½) ≤ force limit)
+//!    or its stiffness limit. Then K = margin × that, and the whole verification set (releases
+//!    from both sides at several energies up to v) must pass at K, backing off in steps of
+//!    [`CONFIRM_BACKOFF`] otherwise.
+//! 5. **Set** K and save it (unless dry-run). On any error or Ctrl-C the previous config is
+//!    restored.
+//!
+//! Determinism: every step depends only on the device's counts (tests start from rest with the
+//! wall off and end at points computed from their counts), not on when the host's messages
+//! arrive, so `--fast` and real time give the same K on the virtual device.
 
 use super::ident::{self, Identified};
-use super::release::{classify, Verdict};
+use super::model_check::{self, Evidence};
+use super::release::Verdict;
 use super::search::{largest_settling_k, Found, Search};
+use super::verify::{min_settle_run, rest_position, run_test, test_set, Test, TestResult};
 use crate::device::client::Client;
 use anyhow::{bail, Context, Result};
 use stiffwall_core::params::PhysicalParams;
-use stiffwall_proto::{flags, ExciteProfile, ServoConfig};
+use stiffwall_proto::{flags, ExciteProfile, HostMsg, ServoConfig, TABLE_CHUNK};
 
 /// Default maximum velocity, in encoder ticks per servo period (ξ̇ of Table I; independent of K).
 pub const DEFAULT_XIDOT: f64 = 5.0;
 
-/// Factor applied to K when a confirmation release (from either side) does not settle.
+/// Factor applied to K when a test of the verification set fails.
 pub const CONFIRM_BACKOFF: f64 = 0.95;
+
+/// Factor applied to the margin when the model does not fit the device.
+pub const MISMATCH_MARGIN: f64 = 0.85;
+
+/// Duration of each breakaway ramp, s.
+pub const RAMP_SECONDS: f64 = 0.3;
 
 /// Set by the Ctrl-C handler; checked between experiments (the one flag of every session).
 pub use crate::session::INTERRUPTED;
@@ -54,7 +74,7 @@ impl Default for Settings {
             max_velocity: None,
             margin: 0.9,
             release_ticks: None,
-            excite_seconds: 4.0,
+            excite_seconds: 3.0,
             rel_tol: 0.02,
         }
     }
@@ -90,8 +110,17 @@ pub struct Outcome {
     pub search: Found,
     /// The stiffness set.
     pub k_set: f64,
-    /// Verdicts of the confirmation releases at `k_set` (+d, −d).
+    /// Verdicts of the verification set at `k_set` (in the order of `verification`).
     pub confirmation: Vec<Verdict>,
+    /// The verification set at `k_set`, test by test.
+    pub verification: Vec<TestResult>,
+    /// Where the identified model does not describe the device (plain language; empty when
+    /// it does).
+    pub model_mismatch: Vec<String>,
+    /// What the model checks measured.
+    pub model_evidence: Evidence,
+    /// Margin applied (the requested one, times [`MISMATCH_MARGIN`] on a mismatch).
+    pub margin_used: f64,
     /// Whether the config was saved.
     pub saved: bool,
 }
@@ -144,7 +173,7 @@ fn excite_and_identify(
     progress(&format!(
         "identifying: chirp of {amplitude} codes, 0.5–{f1} Hz, {ticks} ticks"
     ));
-    c.clear_faults().ok();
+    super::verify::clear_faults(c)?;
     let rec = c.excite(
         ExciteProfile::Chirp {
             amplitude,
@@ -187,9 +216,10 @@ fn excite_and_identify(
 }
 
 /// Step 1: identification with the wall off. A low-frequency chirp (0.5 Hz up to 4 Hz, or
-/// rate/250) keeps the velocity fit accurate; the amplitude grows from 5 % of the force limit
-/// until a fit succeeds, then the chirp is repeated at about 5·c (when the limit allows) so
-/// that the device slides most of the time and Coulomb friction acts as c·sgn(v).
+/// rate/250) keeps the velocity fit accurate; the amplitude of half-length probes grows from
+/// 5 % of the force limit until a fit succeeds, then the full chirp runs at about 5·c (when the
+/// limit allows, else at the probe's level) so that the device slides most of the time and
+/// Coulomb friction acts as c·sgn(v).
 /// Returns the fit, the amplitude used (codes) and where the device ended, in raw counts from
 /// the configured wall position.
 pub fn identify(
@@ -208,55 +238,25 @@ pub fn identify(
     for frac in [0.05, 0.1, 0.2, 0.4] {
         check_interrupt()?;
         let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
-        match excite_and_identify(c, amplitude, ticks, f1, progress) {
-            Ok((first, end)) => {
-                let wanted = ((5.0 * first.coulomb / fpc) as i32)
+        // A probe of half the length finds the level; the full chirp then gives the fit.
+        match excite_and_identify(c, amplitude, (ticks / 2).max(500), f1, progress) {
+            Ok((probe, end)) => {
+                let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
                     .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
-                if wanted > amplitude * 5 / 4 {
-                    check_interrupt()?;
-                    if let Ok((second, end2)) = excite_and_identify(c, wanted, ticks, f1, progress)
-                    {
-                        return Ok((second, wanted, end2));
-                    }
+                if wanted <= amplitude * 5 / 4 {
+                    wanted = amplitude;
                 }
-                return Ok((first, amplitude, end));
+                check_interrupt()?;
+                if let Ok((full, end2)) = excite_and_identify(c, wanted, ticks, f1, progress) {
+                    return Ok((full, wanted, end2));
+                }
+                return Ok((probe, amplitude, end));
             }
             Err(e) => last_err = Some(e),
         }
     }
     Err(last_err.unwrap_or_else(|| anyhow::anyhow!("no excitation")))
         .context("identification failed at every excitation level")
-}
-
-/// Waits until the (wall-off) device has stopped and returns its count from the wall position.
-fn rest_position(c: &mut Client) -> Result<i32> {
-    let rate = c.info.servo_rate_hz.max(1);
-    // One sample every 5 ms of device time; at rest when 40 consecutive samples agree.
-    let decimation = u16::try_from((rate / 200).max(1)).unwrap_or(u16::MAX);
-    c.stream_start(decimation)?;
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
-    let (mut last, mut same) = (i32::MIN, 0u32);
-    let result = loop {
-        if std::time::Instant::now() > deadline {
-            break Err(anyhow::anyhow!(
-                "the device did not come to rest within 20 s after the excitation"
-            ));
-        }
-        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
-            for x in &b.samples {
-                if x.count == last {
-                    same += 1;
-                } else {
-                    (last, same) = (x.count, 0);
-                }
-            }
-            if same >= 40 {
-                break Ok(last);
-            }
-        }
-    };
-    c.stream_stop()?;
-    result
 }
 
 /// Step 2: predictions for the identified device.
@@ -293,47 +293,61 @@ pub fn deflection_for(p: &PhysicalParams, k: f64, v: f64) -> i32 {
     d.round().clamp(2.0, 1e6) as i32
 }
 
-/// One release test at stiffness `k` from `deflection` ticks; returns the verdict.
-pub fn release_test(
+/// Breakaway evidence: a slow force ramp from rest (wall off, config `base` with K = 0) in each
+/// direction, up to 3·c (at most 60 % of the force limit), against the identified model on the
+/// same ramp. Fills `e.breakaway_*`.
+fn breakaway(
     c: &mut Client,
     base: &ServoConfig,
-    k: f64,
-    deflection: i32,
-    ticks: u32,
-) -> Result<Verdict> {
-    check_interrupt()?;
-    let cfg = ServoConfig {
-        stiffness: k as f32,
-        ..*base
-    };
-    // A reproducible start: wall off until the device has stopped, then clear the faults.
-    // After a test that grew (the supervisor cut the force) the device may still be coasting;
-    // a hold that begins while it moves releases it with sub-tick motion left over, which
-    // decides borderline tests, and faults cleared while it coasts can latch again.
-    c.set_config(&ServoConfig {
-        stiffness: 0.0,
-        ..*base
-    })?;
-    rest_position(c)?;
-    c.clear_faults().ok();
-    c.set_config(&cfg)?;
-    let f = c.faults()?;
-    if f.latched != 0 {
-        bail!(
-            "faults {:#x} still latched before a release test (first at tick {})",
-            f.latched,
-            f.first_tick
-        );
+    id: &Identified,
+    e: &mut Evidence,
+    progress: &dyn Fn(&str),
+) -> Result<()> {
+    let (res, t) = device_scale(c)?;
+    let rate = f64::from(c.info.servo_rate_hz);
+    let fpc = f64::from(c.info.force_per_code);
+    let limit_code = ((f64::from(base.force_limit) / fpc) as i32).clamp(1, c.info.max_code.max(1));
+    let peak = ((3.0 * id.coulomb / fpc) as i32)
+        .clamp(1, (f64::from(limit_code) * 0.6) as i32)
+        .min(i32::from(i16::MAX));
+    let ticks = (RAMP_SECONDS * rate).round().max(20.0) as usize;
+    let hold = ticks.div_ceil(stiffwall_proto::MAX_TABLE).max(1);
+    let len = ticks.div_ceil(hold);
+    for (i, sign) in [1i32, -1].into_iter().enumerate() {
+        check_interrupt()?;
+        progress(&format!("breakaway ramp to {} codes", sign * peak));
+        let table: Vec<i16> = (0..len)
+            .map(|k| (sign * (i64::from(peak) * k as i64 / len as i64) as i32) as i16)
+            .collect();
+        for (j, chunk) in table.chunks(TABLE_CHUNK).enumerate() {
+            let values = heapless::Vec::from_slice(chunk)
+                .map_err(|_| anyhow::anyhow!("table chunk too long"))?;
+            c.request(&HostMsg::TableChunk {
+                offset: u16::try_from(j * TABLE_CHUNK)?,
+                values,
+            })?;
+        }
+        c.set_config(base)?;
+        rest_position(c)?;
+        super::verify::clear_faults(c)?;
+        let rec = c.excite(
+            ExciteProfile::Table {
+                len: u16::try_from(len)?,
+                hold_ticks: u16::try_from(hold)?,
+            },
+            u32::try_from(len * hold)?,
+        )?;
+        let (counts, force): (Vec<i64>, Vec<f64>) = rec
+            .samples
+            .iter()
+            .filter(|x| x.flags & flags::EXCITE != 0)
+            .map(|x| (i64::from(x.count), f64::from(x.force_code) * fpc))
+            .unzip();
+        e.breakaway_measured[i] = model_check::breakaway_force(&counts, &force);
+        let model = model_check::model_counts(id, &force, t, res);
+        e.breakaway_model[i] = model_check::breakaway_force(&model, &force);
     }
-    let rec = c.release(deflection, ticks)?;
-    if rec.gaps.missing > 0 {
-        bail!(
-            "{} telemetry samples lost during a release test",
-            rec.gaps.missing
-        );
-    }
-    let counts = super::release::released_counts(&rec.samples, base.coarsen_shift);
-    Ok(classify(&counts, rec.faults != 0))
+    Ok(())
 }
 
 /// Runs the whole procedure. `progress` receives one-line status messages.
@@ -371,23 +385,32 @@ fn tune_inner(
     progress: &dyn Fn(&str),
 ) -> Result<Outcome> {
     let (res, t) = device_scale(c)?;
-    // Experiments run without extra damping and with the energy monitor on, whatever the
-    // user's config; the servo rate, delay and coarsening stay as configured.
+    // Experiments run with the wall off between them, without extra damping and with the
+    // energy monitor on, whatever the user's config; the servo rate, delay and coarsening stay
+    // as configured.
     let base = ServoConfig {
         damping: 0.0,
         energy_monitor: true,
+        stiffness: 0.0,
         ..*original
     };
+    super::verify::clear_faults(c)?;
+    c.set_config(&base)?;
     let (id, amplitude, _) = identify(c, &base, s, progress)?;
     let rest = rest_position(c)?;
-    // The chirp leaves the device wherever it stopped: the release tests put the wall there,
-    // so no test starts with a long, energetic approach (the user's wall position is kept
-    // in the config that is finally set).
+    // The chirp leaves the device wherever it stopped: the tests put the wall there (the
+    // user's wall position is kept in the config that is finally set).
     let base = ServoConfig {
         wall_position: base.wall_position.saturating_add(rest),
         ..base
     };
+    let mut evidence = Evidence {
+        residual_rel: id.residual_rel,
+        ..Evidence::default()
+    };
+    breakaway(c, &base, &id, &mut evidence, progress)?;
     let delta = res * f64::from(1u32 << base.coarsen_shift);
+    let rotational = c.info.counts_per_rev > 0;
     let mut p = PhysicalParams {
         mass: id.mass,
         viscous: id.viscous.max(0.0),
@@ -396,7 +419,7 @@ fn tune_inner(
         period_s: t,
         stiffness: 1.0,
         delay_s: f64::from(base.extra_delay_ticks) * t,
-        rotational: c.info.counts_per_rev > 0,
+        rotational,
     };
     let v = s.max_velocity.unwrap_or(DEFAULT_XIDOT * delta / t);
     let predicted = predict(&p, v)?;
@@ -404,15 +427,26 @@ fn tune_inner(
         "identified m={:.3e} b={:.3e} c={:.3e}; K guaranteed {:.4} expected {:.4}",
         id.mass, id.viscous, id.coulomb, predicted.guaranteed, predicted.expected
     ));
+    let units = if rotational {
+        ("N·m", "N·m/rad")
+    } else {
+        ("N", "N/m")
+    };
+    let early = model_check::findings(&id, &evidence, units);
     // Force cap: K·Δ·(d + ½) ≤ force limit with d = v√(m/K)/Δ  ⇒  √K ≤ F/(v√m) (approximately).
     let f_lim = f64::from(base.force_limit);
     let k_force = (f_lim / (v * id.mass.sqrt())).powi(2) * 0.8;
     let k_cap = k_force.min(f64::from(c.info.limits.max_stiffness));
-    let ticks_for = |k: f64| {
-        s.release_ticks.unwrap_or_else(|| {
+    let ticks_for = |k: f64, thorough: bool| {
+        let n = s.release_ticks.unwrap_or_else(|| {
             let natural = std::f64::consts::TAU * (id.mass / k).sqrt() / t;
             (60.0 * natural).clamp(1500.0, 30_000.0) as u32
-        })
+        });
+        if thorough {
+            n.saturating_mul(2)
+        } else {
+            n
+        }
     };
     let search = Search {
         k_cap,
@@ -423,28 +457,83 @@ fn tune_inner(
         .expected
         .min(k_cap)
         .max(predicted.guaranteed.min(k_cap) * 0.5);
+    let thorough_search = !early.is_empty();
+    let mut best: Option<(f64, Vec<i64>)> = None;
     let found = largest_settling_k(start, &search, |k| {
         let d = deflection_for(&p, k, v);
         progress(&format!("release test K={k:.4} from {d} ticks"));
-        release_test(c, &base, k, d, ticks_for(k))
+        let (verdict, counts) = run_test(
+            c,
+            &base,
+            k,
+            Test::Release {
+                deflection_ticks: d,
+            },
+            ticks_for(k, thorough_search),
+            min_settle_run(id.mass, k, t),
+        )?;
+        if verdict.passes() && best.as_ref().is_none_or(|(kb, _)| k > *kb) {
+            best = Some((k, counts));
+        }
+        Ok(verdict)
     })?;
-    let mut k_set = found.k_pass * s.margin;
-    let mut confirmation = Vec::new();
-    // A confirmation that fails backs off in steps of CONFIRM_BACKOFF (finer than the margin).
-    for _ in 0..6 {
+    if let Some((k, counts)) = &best {
+        evidence.release_k = Some(*k);
+        evidence.release_hz = model_check::release_frequency_hz(counts, t, 12);
+        evidence.model_hz = Some((k / id.mass).sqrt() / std::f64::consts::TAU);
+    }
+    let mut model_mismatch = model_check::findings(&id, &evidence, units);
+    // Only a search that found a failing K measured the limit (otherwise the force cap did).
+    if found.k_fail.is_some() {
+        model_mismatch.extend(model_check::prediction_finding(
+            found.k_pass,
+            predicted.expected,
+        ));
+    }
+    let thorough = !model_mismatch.is_empty();
+    for f in &model_mismatch {
+        progress(&format!("model mismatch: {f}"));
+    }
+    let margin_used = s.margin * if thorough { MISMATCH_MARGIN } else { 1.0 };
+    let mut k_set = found.k_pass * margin_used;
+    let mut verification = Vec::new();
+    // A failing test backs off in steps of CONFIRM_BACKOFF (finer than the margin).
+    let mut confirmed = false;
+    for _ in 0..8 {
         let d = deflection_for(&p, k_set, v);
-        progress(&format!("confirming K={k_set:.4} from ±{d} ticks"));
-        confirmation = vec![
-            release_test(c, &base, k_set, d, ticks_for(k_set))?,
-            release_test(c, &base, k_set, -d, ticks_for(k_set))?,
-        ];
-        if confirmation.iter().all(|v| v.settled()) {
+        progress(&format!(
+            "verifying K={k_set:.4}: releases from ±{d} ticks and below, impacts"
+        ));
+        verification.clear();
+        confirmed = true;
+        let natural_ticks = std::f64::consts::TAU * (id.mass / k_set).sqrt() / t;
+        for test in test_set(d, v * t / delta, natural_ticks, thorough, true) {
+            let (verdict, counts) = run_test(
+                c,
+                &base,
+                k_set,
+                test,
+                ticks_for(k_set, thorough),
+                min_settle_run(id.mass, k_set, t),
+            )?;
+            verification.push(TestResult {
+                test,
+                k: k_set,
+                verdict,
+                ticks_judged: counts.len(),
+            });
+            if !verdict.passes() {
+                confirmed = false;
+                break;
+            }
+        }
+        if confirmed {
             break;
         }
         k_set *= CONFIRM_BACKOFF;
     }
-    if !confirmation.iter().all(|v| v.settled()) {
-        bail!("no stiffness confirmed by releases from both sides (last tried {k_set:.4})");
+    if !confirmed {
+        bail!("no stiffness passed the verification set (last tried {k_set:.4})");
     }
     p.stiffness = k_set;
     let mut saved = false;
@@ -473,7 +562,11 @@ fn tune_inner(
         predicted,
         search: found,
         k_set,
-        confirmation,
+        confirmation: verification.iter().map(|r| r.verdict).collect(),
+        verification,
+        model_mismatch,
+        model_evidence: evidence,
+        margin_used,
         saved,
     })
 }

@@ -73,7 +73,7 @@ pub fn largest_settling_k(
         }
         let verdict = test(k)?;
         trials.push(Trial { k, verdict });
-        Ok(verdict.settled())
+        Ok(verdict.passes())
     };
     let mut k = k_start.min(s.k_cap);
     let (mut lo, mut hi);

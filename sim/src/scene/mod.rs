@@ -31,7 +31,7 @@ pub enum SceneError {
     #[error(transparent)]
     Toml(#[from] toml::de::Error),
     /// A value outside its allowed range (the name is the TOML key, e.g. `device.sigma`).
-    #[error(transparent)]
+    #[error("{} = {}: allowed range is {}", .0.name(), .0.value(), .0.allowed())]
     Param(#[from] ParamError),
     /// A key the scene's unit system requires is missing.
     #[error("{key} is missing ({allowed})")]
@@ -62,6 +62,10 @@ pub enum SceneError {
     /// The solver rejected the scene's parameters (never for a scene from [`Scene::from_toml`]).
     #[error("solver: {0}")]
     Solver(ParamError),
+    /// A plant-effect key beyond the paper (stiction, cogging, transmission, amplifier limits,
+    /// `counts_per_rev`: [`crate::rich`]) refused; the message names the key and the range.
+    #[error("{0}")]
+    Effect(String),
 }
 
 /// Which solver runs a scene.
@@ -94,6 +98,9 @@ pub struct Scene {
     pub solver: Solver,
     /// Delay-line history.
     pub history: History,
+    /// The physical plant and controller with the effects beyond the paper (physical scenes
+    /// only; [`crate::rich`]).
+    pub rich: Option<crate::rich::scene::RichScene>,
 }
 
 /// One output row, at a sample instant.
@@ -124,7 +131,20 @@ impl Scene {
     /// [`SceneError`] naming the offending key.
     pub fn from_toml(text: &str) -> Result<Self, SceneError> {
         let raw: raw::RawScene = toml::from_str(text)?;
-        Self::resolve(raw)
+        let e = &raw.effects;
+        let (force_limit_n, deadband_n) = e.amplifier.limits();
+        let keys = crate::rich::scene::RichKeys {
+            counts_per_rev: raw.device.counts_per_rev,
+            stiction: e.stiction,
+            cogging: e.cogging,
+            transmission: e.transmission,
+            force_limit_n,
+            deadband_n,
+        };
+        let (mut scene, scale) = Self::resolve(raw)?;
+        let scale = scale.map(|s| (s.stiffness, s.period_s, s.resolution));
+        scene.rich = crate::rich::scene::attach(&scene, scale, keys)?;
+        Ok(scene)
     }
 
     /// Simulates the scene, calling `out` at τ = 0 and at every sample instant.
@@ -133,6 +153,9 @@ impl Scene {
     /// [`SceneError::Solver`] when the solver rejects the parameters (only for a scene built
     /// by hand, not through [`Scene::from_toml`]).
     pub fn simulate(&self, out: &mut dyn FnMut(&Row)) -> Result<(), SceneError> {
+        if let Some(rich) = self.rich.as_ref().filter(|r| r.needs_rich_loop()) {
+            return crate::rich::scene::simulate(self, rich, out);
+        }
         match self.solver {
             Solver::Exact => {
                 dispatch::<_, true>(

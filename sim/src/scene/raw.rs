@@ -28,6 +28,8 @@ pub(super) struct RawDevice {
     pub viscous_ns_per_m: Option<f64>,
     pub coulomb_n: Option<f64>,
     pub resolution_m: Option<f64>,
+    /// Rotary device (issue 10): Δ = 2π/counts_per_rev rad.
+    pub counts_per_rev: Option<u32>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -50,18 +52,27 @@ pub(super) struct RawEffects {
     pub one_sided_wall: bool,
     pub amplifier: RawAmp,
     pub hand: RawHand,
+    pub stiction: Option<crate::rich::scene::RawStiction>,
+    pub cogging: Option<crate::rich::scene::RawCogging>,
+    pub transmission: Option<crate::rich::scene::RawTransmission>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, tag = "kind", rename_all = "snake_case")]
 pub(super) enum RawAmp {
-    None,
+    /// Ideal amplifier (optionally with a force limit and a dead band).
+    None {
+        force_limit_n: Option<f64>,
+        deadband_n: Option<f64>,
+    },
     /// Pure delay of eq. (5): T_A = 2δ_A/ω_A.
     Delay {
         omega: Option<f64>,
         zeta: Option<f64>,
         cutoff_hz: Option<f64>,
         damping: Option<f64>,
+        force_limit_n: Option<f64>,
+        deadband_n: Option<f64>,
     },
     /// Second-order low-pass filter.
     SecondOrder {
@@ -69,7 +80,31 @@ pub(super) enum RawAmp {
         zeta: Option<f64>,
         cutoff_hz: Option<f64>,
         damping: Option<f64>,
+        force_limit_n: Option<f64>,
+        deadband_n: Option<f64>,
     },
+}
+
+impl RawAmp {
+    /// The amplifier limits of issue 10 (force limit, dead band), on every kind.
+    pub fn limits(&self) -> (Option<f64>, Option<f64>) {
+        match *self {
+            Self::None {
+                force_limit_n,
+                deadband_n,
+            }
+            | Self::Delay {
+                force_limit_n,
+                deadband_n,
+                ..
+            }
+            | Self::SecondOrder {
+                force_limit_n,
+                deadband_n,
+                ..
+            } => (force_limit_n, deadband_n),
+        }
+    }
 }
 
 #[derive(Debug, Deserialize)]

@@ -41,7 +41,8 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
     let physical = d.mass_kg.is_some()
         || d.viscous_ns_per_m.is_some()
         || d.coulomb_n.is_some()
-        || d.resolution_m.is_some();
+        || d.resolution_m.is_some()
+        || d.counts_per_rev.is_some();
     if dimless == physical {
         return conflict(
             "device",
@@ -61,30 +62,16 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             );
         }
         let params = Params {
-            mu: range("device.mu", mu, 0.0, true, 1e12, "finite and in (0, 1e12]")?,
-            beta: range(
-                "device.beta",
-                beta,
-                0.0,
-                false,
-                1e6,
-                "finite and in [0, 1e6]",
-            )?,
-            sigma: range(
-                "device.sigma",
-                sigma,
-                0.0,
-                false,
-                1e6,
-                "finite and in [0, 1e6]",
-            )?,
+            mu: range("device.mu", mu, 0.0, true, 1e12, "(0, 1e12]")?,
+            beta: range("device.beta", beta, 0.0, false, 1e6, "[0, 1e6]")?,
+            sigma: range("device.sigma", sigma, 0.0, false, 1e6, "[0, 1e6]")?,
             tau_d: range(
                 "controller.tau_d",
                 c.tau_d.unwrap_or(0.0),
                 0.0,
                 false,
                 MAX_TAU_D,
-                "finite and in [0, 250] periods",
+                "[0, 250] periods",
             )?,
         };
         return Ok((params, None));
@@ -92,7 +79,13 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
     let m = need("device.mass_kg", d.mass_kg, "kg, > 0")?;
     let b = need("device.viscous_ns_per_m", d.viscous_ns_per_m, "N s/m, >= 0")?;
     let cc = need("device.coulomb_n", d.coulomb_n, "N, >= 0")?;
-    let delta = need("device.resolution_m", d.resolution_m, "m, > 0")?;
+    let delta = match (d.resolution_m, d.counts_per_rev) {
+        (Some(_), Some(_)) => {
+            return conflict("device", "give resolution_m or counts_per_rev, not both")
+        }
+        (None, Some(n)) => crate::rich::scene::rotary_resolution(n)?,
+        (r, None) => need("device.resolution_m", r, "m, > 0")?,
+    };
     let k = need(
         "controller.stiffness_n_per_m",
         c.stiffness_n_per_m,
@@ -105,47 +98,19 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             "belongs to dimensionless scenes; use controller.extra_delay_s",
         );
     }
-    let t = range(
-        "controller.period_s",
-        t,
-        0.0,
-        true,
-        10.0,
-        "finite and in (0, 10] s",
-    )?;
+    let t = range("controller.period_s", t, 0.0, true, 10.0, "(0, 10] s")?;
     let p = PhysicalParams {
-        mass: range(
-            "device.mass_kg",
-            m,
-            0.0,
-            true,
-            1e6,
-            "finite and in (0, 1e6] kg",
-        )?,
+        mass: range("device.mass_kg", m, 0.0, true, 1e6, "(0, 1e6] kg")?,
         viscous: range(
             "device.viscous_ns_per_m",
             b,
             0.0,
             false,
             1e9,
-            "finite and in [0, 1e9] N s/m",
+            "[0, 1e9] N s/m",
         )?,
-        coulomb: range(
-            "device.coulomb_n",
-            cc,
-            0.0,
-            false,
-            1e9,
-            "finite and in [0, 1e9] N",
-        )?,
-        resolution: range(
-            "device.resolution_m",
-            delta,
-            0.0,
-            true,
-            1.0,
-            "finite and in (0, 1] m",
-        )?,
+        coulomb: range("device.coulomb_n", cc, 0.0, false, 1e9, "[0, 1e9] N")?,
+        resolution: range("device.resolution_m", delta, 0.0, true, 1.0, "(0, 1] m")?,
         period_s: t,
         stiffness: range(
             "controller.stiffness_n_per_m",
@@ -153,7 +118,7 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             0.0,
             true,
             1e12,
-            "finite and in (0, 1e12] N/m",
+            "(0, 1e12] N/m",
         )?,
         delay_s: range(
             "controller.extra_delay_s",
@@ -161,12 +126,16 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
             0.0,
             false,
             MAX_TAU_D * t,
-            "finite and in [0, 250 periods] s",
+            "[0, 250 periods] s",
         )?,
-        rotational: false,
+        rotational: d.counts_per_rev.is_some(),
     };
     Ok((p.to_dimensionless()?, Some(p.scale())))
 }
+
+/// Largest amplifier bandwidth ω, rad per sampling period: the reference solvers resolve the
+/// filter, so their run time grows linearly with ω (at 1e4 a 1000-period scene takes seconds).
+const MAX_AMP_OMEGA: f64 = 1e4;
 
 /// The amplifier: a pure delay added to τ_D, or a filter for the reference solvers.
 fn amplifier(
@@ -177,18 +146,20 @@ fn amplifier(
 ) -> Result<Option<AmpFilter>, SceneError> {
     const KEY: &str = "effects.amplifier";
     let (omega, zeta, hz, damp, pure_delay) = match *amp {
-        RawAmp::None => return Ok(None),
+        RawAmp::None { .. } => return Ok(None),
         RawAmp::Delay {
             omega,
             zeta,
             cutoff_hz,
             damping,
+            ..
         } => (omega, zeta, cutoff_hz, damping, true),
         RawAmp::SecondOrder {
             omega,
             zeta,
             cutoff_hz,
             damping,
+            ..
         } => (omega, zeta, cutoff_hz, damping, false),
     };
     let (w, z) = match (omega, zeta, hz, damp, scale) {
@@ -198,17 +169,10 @@ fn amplifier(
                 w,
                 0.0,
                 true,
-                1e9,
-                "finite and in (0, 1e9] rad/period",
+                MAX_AMP_OMEGA,
+                "(0, 1e4] rad/period (the reference solvers' run time grows with omega)",
             )?,
-            range(
-                "effects.amplifier.zeta",
-                z,
-                0.0,
-                true,
-                100.0,
-                "finite and in (0, 100]",
-            )?,
+            range("effects.amplifier.zeta", z, 0.0, true, 100.0, "(0, 100]")?,
         ),
         (None, None, Some(f), Some(z), Some(s)) => (
             s.omega(
@@ -217,18 +181,12 @@ fn amplifier(
                     f,
                     0.0,
                     true,
-                    1e12,
-                    "finite and in (0, 1e12] Hz",
+                    MAX_AMP_OMEGA / s.omega(core::f64::consts::TAU),
+                    "(0, 1e4 / (2 pi T)] Hz, i.e. at most 1e4 rad per sampling period \
+                     (1.59 MHz at T = 1 ms): the reference solvers' run time grows with the cutoff",
                 )? * core::f64::consts::TAU,
             ),
-            range(
-                "effects.amplifier.damping",
-                z,
-                0.0,
-                true,
-                100.0,
-                "finite and in (0, 100]",
-            )?,
+            range("effects.amplifier.damping", z, 0.0, true, 100.0, "(0, 100]")?,
         ),
         _ => {
             return conflict(
@@ -257,30 +215,9 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                 return conflict("effects.hand", "a physical scene uses kind = \"physical\"");
             }
             Some(Hand {
-                mu: range(
-                    "effects.hand.mu",
-                    mu,
-                    0.0,
-                    false,
-                    1e12,
-                    "finite and in [0, 1e12]",
-                )?,
-                beta: range(
-                    "effects.hand.beta",
-                    beta,
-                    0.0,
-                    false,
-                    1e9,
-                    "finite and in [0, 1e9]",
-                )?,
-                kappa: range(
-                    "effects.hand.kappa",
-                    kappa,
-                    0.0,
-                    false,
-                    1e9,
-                    "finite and in [0, 1e9]",
-                )?,
+                mu: range("effects.hand.mu", mu, 0.0, false, 1e12, "[0, 1e12]")?,
+                beta: range("effects.hand.beta", beta, 0.0, false, 1e9, "[0, 1e9]")?,
+                kappa: range("effects.hand.kappa", kappa, 0.0, false, 1e9, "[0, 1e9]")?,
             })
         }
         RawHand::Physical {
@@ -301,7 +238,7 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                     0.0,
                     false,
                     1e6,
-                    "finite and in [0, 1e6] kg",
+                    "[0, 1e6] kg",
                 )?),
                 beta: s.beta(range(
                     "effects.hand.damping_ns_per_m",
@@ -309,7 +246,7 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                     0.0,
                     false,
                     1e9,
-                    "finite and in [0, 1e9] N s/m",
+                    "[0, 1e9] N s/m",
                 )?),
                 kappa: s.kappa(range(
                     "effects.hand.stiffness_n_per_m",
@@ -317,7 +254,7 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
                     0.0,
                     false,
                     1e12,
-                    "finite and in [0, 1e12] N/m",
+                    "[0, 1e12] N/m",
                 )?),
             })
         }
@@ -328,21 +265,14 @@ fn hand(hand: &RawHand, scale: Option<Scale>) -> Result<Option<Hand>, SceneError
 fn initial(i: &RawInitial, scale: Option<Scale>) -> Result<Motion, SceneError> {
     match (i.xi, i.xidot, i.position_m, i.velocity_m_per_s, scale) {
         (Some(x), Some(v), None, None, None) => Ok(Motion {
-            x: range(
-                "initial.xi",
-                x,
-                -1e12,
-                false,
-                1e12,
-                "finite and in [-1e12, 1e12] ticks",
-            )?,
+            x: range("initial.xi", x, -1e12, false, 1e12, "[-1e12, 1e12] ticks")?,
             v: range(
                 "initial.xidot",
                 v,
                 -1e12,
                 false,
                 1e12,
-                "finite and in [-1e12, 1e12] ticks/period",
+                "[-1e12, 1e12] ticks/period",
             )?,
         }),
         (None, None, Some(x), Some(v), Some(s)) => Ok(Motion {
@@ -352,7 +282,7 @@ fn initial(i: &RawInitial, scale: Option<Scale>) -> Result<Motion, SceneError> {
                 -1e6,
                 false,
                 1e6,
-                "finite and in [-1e6, 1e6] m",
+                "[-1e6, 1e6] m",
             )?),
             v: s.xidot(range(
                 "initial.velocity_m_per_s",
@@ -360,7 +290,7 @@ fn initial(i: &RawInitial, scale: Option<Scale>) -> Result<Motion, SceneError> {
                 -1e6,
                 false,
                 1e6,
-                "finite and in [-1e6, 1e6] m/s",
+                "[-1e6, 1e6] m/s",
             )?),
         }),
         (_, _, _, _, None) => conflict("initial", "a dimensionless scene gives xi and xidot"),
@@ -393,28 +323,15 @@ fn solver(r: &RawRun) -> Result<Solver, SceneError> {
             Solver::Reference(Method::Rk4 { steps_per_period })
         }
         RawSolver::Dopri { rtol, atol } => Solver::Reference(Method::Dopri {
-            rtol: range(
-                "run.solver.rtol",
-                rtol,
-                1e-15,
-                false,
-                1.0,
-                "finite and in [1e-15, 1]",
-            )?,
-            atol: range(
-                "run.solver.atol",
-                atol,
-                1e-300,
-                false,
-                1.0,
-                "finite and in [1e-300, 1]",
-            )?,
+            rtol: range("run.solver.rtol", rtol, 1e-15, false, 1.0, "[1e-15, 1]")?,
+            atol: range("run.solver.atol", atol, 1e-300, false, 1.0, "[1e-300, 1]")?,
         }),
     })
 }
 
 impl Scene {
-    pub(super) fn resolve(raw: RawScene) -> Result<Self, SceneError> {
+    /// The scene and, for a physical scene, its Table I scale.
+    pub(super) fn resolve(raw: RawScene) -> Result<(Self, Option<Scale>), SceneError> {
         let (mut params, scale) = device(&raw)?;
         let e = &raw.effects;
         let amp = amplifier(&e.amplifier, e.delay, scale, &mut params.tau_d)?;
@@ -449,22 +366,26 @@ impl Scene {
         if !e.zoh && params.tau_d > 0.0 {
             return conflict("effects.zoh", "true when a delay is simulated");
         }
-        Ok(Self {
-            params,
-            effects: Effects {
-                quantization: e.quantization,
-                coulomb: e.coulomb,
-                viscous: e.viscous,
-                delay: e.delay,
-                one_sided: e.one_sided_wall,
+        Ok((
+            Self {
+                params,
+                effects: Effects {
+                    quantization: e.quantization,
+                    coulomb: e.coulomb,
+                    viscous: e.viscous,
+                    delay: e.delay,
+                    one_sided: e.one_sided_wall,
+                },
+                zoh: e.zoh,
+                amp,
+                hand,
+                init,
+                periods: raw.run.periods,
+                solver,
+                history: raw.run.history,
+                rich: None,
             },
-            zoh: e.zoh,
-            amp,
-            hand,
-            init,
-            periods: raw.run.periods,
-            solver,
-            history: raw.run.history,
-        })
+            scale,
+        ))
     }
 }

@@ -1,0 +1,333 @@
+//! The map JSON file: format, full validation, atomic writing and shard merging.
+//!
+//! Units: dimensionless (Table I), `seconds` of wall time. Invariants: a file is written to a
+//! temporary sibling (`<name>.partial-<pid>`) and renamed into place only when complete, so a
+//! killed run never leaves a file under the requested name; every file carries
+//! `spec_crc64`, the CRC-64/XZ of its spec's compact JSON. A file read from disk is used only
+//! after [`validate`]: a valid spec (every field in range, grid size bounded before anything
+//! is allocated), the hash, `0 <= k < n`, one panel per ξ̇₀, and in each panel exactly the
+//! points of its shard, in index order, with the β, σ of their index. [`merge`] also refuses
+//! mismatched sweeps and duplicate or missing shards; its result does not depend on the order
+//! of its inputs.
+
+use anyhow::{bail, ensure, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use stiffwall_sim::exact::History;
+use stiffwall_sim::map::{self, Axis, MapPoint, MapSpec};
+
+/// Largest number of panels (ξ̇₀ values) of one map.
+pub const MAX_PANELS: usize = 64;
+
+/// Largest number of shards of one sweep.
+pub const MAX_SHARDS: usize = 100_000;
+
+/// The sweep description stored in the JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Spec {
+    /// μ.
+    pub mu: f64,
+    /// τ_D.
+    pub tau_d: f64,
+    /// Panels' ξ̇₀.
+    pub xidot0: Vec<f64>,
+    /// β axis.
+    pub beta: Axis,
+    /// σ axis.
+    pub sigma: Axis,
+    /// Horizon.
+    pub periods: u64,
+    /// Delay-line history before tau = 0.
+    #[serde(default)]
+    pub history: History,
+}
+
+impl Spec {
+    /// The single-panel spec of ξ̇₀ = `xidot0`.
+    #[must_use]
+    pub fn panel(&self, xidot0: f64) -> MapSpec {
+        MapSpec {
+            mu: self.mu,
+            tau_d: self.tau_d,
+            xidot0,
+            beta: self.beta,
+            sigma: self.sigma,
+            periods: self.periods,
+            history: self.history,
+        }
+    }
+
+    /// Checks every field (see [`MapSpec::validate`]) and 1..=[`MAX_PANELS`] panels.
+    ///
+    /// # Errors
+    /// A message naming the field and its allowed range.
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            (1..=MAX_PANELS).contains(&self.xidot0.len()),
+            "xidot0: {} values, allowed 1 to {MAX_PANELS}",
+            self.xidot0.len()
+        );
+        for &v in &self.xidot0 {
+            self.panel(v).validate().map_err(anyhow::Error::msg)?;
+        }
+        Ok(())
+    }
+
+    /// Number of (β, σ) points per panel (call after [`Self::validate`]).
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.beta.n * self.sigma.n
+    }
+
+    /// True for an empty grid (never, after validation).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// CRC-64/XZ of the spec's compact JSON, as 16 hex digits.
+    #[must_use]
+    pub fn crc64(&self) -> String {
+        let json = serde_json::to_string(self).unwrap_or_default();
+        let crc = crc::Crc::<u64>::new(&crc::CRC_64_XZ).checksum(json.as_bytes());
+        format!("{crc:016x}")
+    }
+
+    /// The first field in which `other` differs, for error messages.
+    fn first_difference(&self, other: &Self) -> &'static str {
+        if self.mu.to_bits() != other.mu.to_bits() {
+            "mu"
+        } else if self.tau_d.to_bits() != other.tau_d.to_bits() {
+            "tau_d"
+        } else if self.xidot0 != other.xidot0 {
+            "xidot0"
+        } else if self.beta != other.beta {
+            "beta"
+        } else if self.sigma != other.sigma {
+            "sigma"
+        } else if self.periods != other.periods {
+            "periods"
+        } else {
+            "history"
+        }
+    }
+}
+
+/// One panel (one ξ̇₀).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Panel {
+    /// ξ̇₀.
+    pub xidot0: f64,
+    /// Classified points, sorted by index.
+    pub points: Vec<MapPoint>,
+}
+
+/// The JSON document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MapFile {
+    /// Sweep.
+    pub spec: Spec,
+    /// [`Spec::crc64`] of `spec` (absent in files of older versions: refused by [`validate`]).
+    #[serde(default)]
+    pub spec_crc64: String,
+    /// Shard (k, n), or None when complete.
+    pub shard: Option<(usize, usize)>,
+    /// Panels.
+    pub panels: Vec<Panel>,
+    /// Wall time of the computation in seconds (sum over shards after a merge).
+    pub seconds: f64,
+}
+
+impl MapFile {
+    /// (k, n) of this file, (0, 1) for a complete map.
+    #[must_use]
+    pub fn shard_or_whole(&self) -> (usize, usize) {
+        self.shard.unwrap_or((0, 1))
+    }
+}
+
+/// Checks a map file read from `path` completely (see the module header) before any use.
+///
+/// # Errors
+/// The first problem found, naming the file, the field and what was expected.
+pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
+    let name = path.display();
+    f.spec
+        .validate()
+        .with_context(|| format!("{name}: invalid spec"))?;
+    let crc = f.spec.crc64();
+    ensure!(
+        f.spec_crc64 == crc,
+        "{name}: spec_crc64 is {:?} but the spec hashes to {crc:?}: the file was edited, is \
+         corrupt or was written by an older hostctl; re-run its shard",
+        f.spec_crc64
+    );
+    let (k, n) = f.shard_or_whole();
+    ensure!(
+        (1..=MAX_SHARDS).contains(&n) && k < n,
+        "{name}: shard [{k}, {n}]: need 0 <= k < n and 1 <= n <= {MAX_SHARDS}"
+    );
+    ensure!(
+        f.panels.len() == f.spec.xidot0.len(),
+        "{name}: {} panels, but the spec has {} xidot0 values",
+        f.panels.len(),
+        f.spec.xidot0.len()
+    );
+    ensure!(
+        f.seconds.is_finite() && f.seconds >= 0.0,
+        "{name}: seconds = {}: need a finite value >= 0",
+        f.seconds
+    );
+    let len = f.spec.len();
+    let want = map::shard_len(len, k, n);
+    for (pi, (panel, &v)) in f.panels.iter().zip(&f.spec.xidot0).enumerate() {
+        ensure!(
+            panel.xidot0.to_bits() == v.to_bits(),
+            "{name}: panel {pi} has xidot0 = {}, the spec says {v}",
+            panel.xidot0
+        );
+        ensure!(
+            panel.points.len() == want,
+            "{name}: panel {pi} has {} points; shard {k}/{n} of a {len}-point grid has {want}",
+            panel.points.len()
+        );
+        let ps = f.spec.panel(v);
+        for (j, pt) in panel.points.iter().enumerate() {
+            let index = k + j * n;
+            ensure!(
+                pt.index == index,
+                "{name}: panel {pi}, point {j}: index {}, expected {index} (shard {k}/{n})",
+                pt.index
+            );
+            let (beta, sigma) = ps.point(index);
+            ensure!(
+                pt.beta.to_bits() == beta.to_bits() && pt.sigma.to_bits() == sigma.to_bits(),
+                "{name}: panel {pi}, point {index}: beta = {}, sigma = {} contradict its index \
+                 (expected beta = {beta}, sigma = {sigma})",
+                pt.beta,
+                pt.sigma
+            );
+            ensure!(
+                pt.periods_run <= f.spec.periods,
+                "{name}: panel {pi}, point {index}: periods_run = {} exceeds the horizon {}",
+                pt.periods_run,
+                f.spec.periods
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Reads and validates a map file; a truncated file is named as such.
+///
+/// # Errors
+/// An unreadable, truncated, malformed or invalid file.
+pub fn read(path: &Path) -> Result<MapFile> {
+    let s = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let f: MapFile = serde_json::from_str(&s).map_err(|e| {
+        if e.is_eof() {
+            anyhow::anyhow!(
+                "{}: truncated (the JSON ends early: {e}); re-run its shard",
+                path.display()
+            )
+        } else {
+            anyhow::anyhow!("{}: not a map file: {e}", path.display())
+        }
+    })?;
+    validate(path, &f)?;
+    Ok(f)
+}
+
+/// The temporary sibling a file is written to before it is renamed into place.
+#[must_use]
+pub fn partial_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(format!(".partial-{}", std::process::id()));
+    path.with_file_name(name)
+}
+
+/// Writes `m` atomically: to [`partial_path`], flushed to disk, then renamed onto `path`.
+///
+/// # Errors
+/// A file error, naming the path.
+pub fn write(path: &Path, m: &MapFile) -> Result<()> {
+    let tmp = partial_path(path);
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        serde_json::to_writer_pretty(&mut f, m)?;
+        f.write_all(b"\n")?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+/// Merges validated shard files of one sweep (any order) into a complete map.
+///
+/// # Errors
+/// Mismatched sweeps or shard counts, a shard given twice, or missing shards.
+pub fn merge(files: &[(PathBuf, MapFile)]) -> Result<MapFile> {
+    let (first_path, first) = files.first().context("no input files")?;
+    let (_, n) = first.shard_or_whole();
+    let mut by_k: Vec<Option<usize>> = vec![None; n];
+    for (i, (path, f)) in files.iter().enumerate() {
+        ensure!(
+            f.spec == first.spec,
+            "{} and {} belong to different sweeps ({} differs; spec_crc64 {} vs {})",
+            first_path.display(),
+            path.display(),
+            first.spec.first_difference(&f.spec),
+            first.spec_crc64,
+            f.spec_crc64
+        );
+        let (k, nf) = f.shard_or_whole();
+        ensure!(
+            nf == n,
+            "{} is shard {k}/{nf} but {} is a shard of {n}: merge shards of one split",
+            path.display(),
+            first_path.display()
+        );
+        if let Some(j) = by_k[k] {
+            bail!(
+                "shard {k}/{n} given twice: {} and {}",
+                files[j].0.display(),
+                path.display()
+            );
+        }
+        by_k[k] = Some(i);
+    }
+    let missing: Vec<String> = by_k
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.is_none())
+        .map(|(k, _)| format!("{k}/{n}"))
+        .collect();
+    ensure!(
+        missing.is_empty(),
+        "missing shards: {} ({} of {n} given)",
+        missing.join(", "),
+        n - missing.len()
+    );
+    let ordered: Vec<&MapFile> = by_k.iter().flatten().map(|&i| &files[i].1).collect();
+    let spec = first.spec.clone();
+    let mut panels = Vec::with_capacity(spec.xidot0.len());
+    for (pi, &v) in spec.xidot0.iter().enumerate() {
+        let mut points: Vec<MapPoint> = ordered
+            .iter()
+            .flat_map(|f| f.panels[pi].points.iter().copied())
+            .collect();
+        points.sort_by_key(|p| p.index);
+        panels.push(Panel { xidot0: v, points });
+    }
+    Ok(MapFile {
+        spec_crc64: spec.crc64(),
+        spec,
+        shard: None,
+        panels,
+        seconds: ordered.iter().map(|f| f.seconds).sum(),
+    })
+}

@@ -1,0 +1,359 @@
+//! `hostctl map`: stability map over a (beta, sigma) grid (the paper's Fig. 6/7).
+//!
+//! Units: dimensionless (Table I): μ, τ_D in periods, ξ̇₀ in ticks per period, ξ₀ = 0.
+//! Each grid point runs the exact solver (all effects) for `--periods` periods and is classified
+//! as growing / persistent / non-monotonically / monotonically decaying. Several `--xidot0`
+//! values give several panels. `--shard k/n` computes every n-th point (starting at k) so a
+//! batch scheduler can split a sweep; `hostctl map merge` joins the shard files.
+//!
+//! JSON output: `{ "spec": {...}, "spec_crc64", "shard": [k, n] | null, "panels": [{ "xidot0",
+//! "points": [{ index, beta, sigma, class, periods_run, h0, h_end, tail_amplitude }] }],
+//! "seconds" }`, written atomically ([`file::write`]). A run whose `--out` already holds the
+//! complete, valid result of the same sweep and shard does nothing (resume after a pre-empted
+//! batch job); `--force` recomputes. Bounds: `--threads` in [1, [`THREADS_PER_CORE`] × cores].
+
+pub mod file;
+pub mod plot;
+
+use crate::figure;
+use crate::output::emit_json;
+use anyhow::{bail, ensure, Context, Result};
+use file::{MapFile, Panel, Spec};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use stiffwall_sim::classify::Class;
+use stiffwall_sim::exact::History;
+use stiffwall_sim::map::{self, Axis};
+
+/// Largest `--threads` per available core.
+pub const THREADS_PER_CORE: usize = 4;
+
+/// Arguments of `hostctl map`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Sub-commands (`merge`).
+    #[command(subcommand)]
+    pub cmd: Option<Sub>,
+    /// Dimensionless mass μ.
+    #[arg(long, default_value_t = 100.0, allow_hyphen_values = true)]
+    pub mu: f64,
+    /// Delay τ_D in sampling periods.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub tau_d: f64,
+    /// Initial velocities ξ̇₀ (comma separated, one panel each).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "5",
+        allow_hyphen_values = true
+    )]
+    pub xidot0: Vec<f64>,
+    /// β axis lo:hi:n.
+    #[arg(long, default_value = "0:1:34", allow_hyphen_values = true)]
+    pub beta: String,
+    /// σ axis lo:hi:n.
+    #[arg(long, default_value = "0:2:21", allow_hyphen_values = true)]
+    pub sigma: String,
+    /// Horizon in sampling periods.
+    #[arg(long, default_value_t = 50_000)]
+    pub periods: u64,
+    /// JSON output file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Image of the map (.svg or .png).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Draw the analytic region boundaries of Fig. 3/5 over the map.
+    #[arg(long)]
+    pub overlay: bool,
+    /// Compute only shard k of n (k/n, 0-based).
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Worker threads (default: all cores; at most 4 per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Recompute even when `--out` already holds this sweep's complete result.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Delay-line history before tau = 0: the spring force of the initial position, or zero.
+    #[arg(long, value_enum, default_value = "hold-initial")]
+    pub history: HistoryArg,
+}
+
+/// `--history` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum HistoryArg {
+    /// phi_A = phi_C(xi0) before the first delayed sample.
+    HoldInitial,
+    /// phi_A = 0 before the first delayed sample.
+    Zero,
+}
+
+/// `hostctl map merge`.
+#[derive(Debug, clap::Subcommand)]
+pub enum Sub {
+    /// Merge shard JSON files of one sweep into one complete map.
+    Merge {
+        /// Shard files.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Merged JSON output.
+        #[arg(long)]
+        out: PathBuf,
+        /// Image of the merged map (.svg or .png).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Draw the analytic region boundaries.
+        #[arg(long)]
+        overlay: bool,
+    },
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize)> {
+    let (k, n) = s
+        .split_once('/')
+        .with_context(|| format!("--shard {s:?}: expected k/n"))?;
+    let k: usize = k
+        .trim()
+        .parse()
+        .with_context(|| format!("--shard {s:?}: k"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .with_context(|| format!("--shard {s:?}: n"))?;
+    ensure!(
+        (1..=file::MAX_SHARDS).contains(&n) && k < n,
+        "--shard {s:?}: need 0 <= k < n and 1 <= n <= {}",
+        file::MAX_SHARDS
+    );
+    Ok((k, n))
+}
+
+fn spec_of(a: &Args) -> Result<Spec> {
+    ensure!(
+        a.mu.is_finite() && a.mu > 0.0,
+        "--mu {}: allowed range is > 0",
+        a.mu
+    );
+    ensure!(
+        a.tau_d.is_finite() && (0.0..=250.0).contains(&a.tau_d),
+        "--tau-d {}: allowed range is [0, 250]",
+        a.tau_d
+    );
+    ensure!(
+        (1..=file::MAX_PANELS).contains(&a.xidot0.len()),
+        "--xidot0: give 1 to {} values",
+        file::MAX_PANELS
+    );
+    for &v in &a.xidot0 {
+        ensure!(
+            v.is_finite() && v.abs() <= 1e12,
+            "--xidot0 {v}: allowed range is finite, |v| <= 1e12"
+        );
+    }
+    ensure!(
+        (1..=map::MAX_PERIODS).contains(&a.periods),
+        "--periods {}: allowed range is [1, 1e8]",
+        a.periods
+    );
+    let beta = Axis::parse(&a.beta).map_err(|e| anyhow::anyhow!("--beta: {e}"))?;
+    let sigma = Axis::parse(&a.sigma).map_err(|e| anyhow::anyhow!("--sigma: {e}"))?;
+    ensure!(beta.lo >= 0.0, "--beta: allowed range is >= 0");
+    ensure!(sigma.lo >= 0.0, "--sigma: allowed range is >= 0");
+    let spec = Spec {
+        mu: a.mu,
+        tau_d: a.tau_d,
+        xidot0: a.xidot0.clone(),
+        beta,
+        sigma,
+        periods: a.periods,
+        history: match a.history {
+            HistoryArg::HoldInitial => History::HoldInitial,
+            HistoryArg::Zero => History::Zero,
+        },
+    };
+    spec.validate().context("--beta x --sigma")?;
+    Ok(spec)
+}
+
+/// Largest `--threads`: [`THREADS_PER_CORE`] × the available cores.
+#[must_use]
+pub fn max_threads() -> usize {
+    THREADS_PER_CORE * std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+}
+
+fn threads_of(a: &Args) -> Result<usize> {
+    let Some(t) = a.threads else { return Ok(0) };
+    let max = max_threads();
+    ensure!(
+        (1..=max).contains(&t),
+        "--threads {t}: allowed range is [1, {max}] ({THREADS_PER_CORE} per core)"
+    );
+    Ok(t)
+}
+
+/// Computes a map (or one shard of it) with a progress bar.
+///
+/// # Errors
+/// None today (the signature leaves room for a failing solver).
+pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Result<MapFile> {
+    let (k, n) = shard.unwrap_or((0, 1));
+    let t0 = std::time::Instant::now();
+    let per_panel: Vec<Vec<usize>> = spec
+        .xidot0
+        .iter()
+        .map(|&v| map::shard(&spec.panel(v), k, n))
+        .collect();
+    let total: usize = per_panel.iter().map(Vec::len).sum();
+    let pb = if quiet {
+        ProgressBar::hidden()
+    } else {
+        let pb = ProgressBar::new(total as u64);
+        pb.set_style(
+            ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} points, {elapsed} elapsed, eta {eta}",
+            )
+            .expect("static template"),
+        );
+        pb
+    };
+    let tick = || pb.inc(1);
+    let panels = spec
+        .xidot0
+        .iter()
+        .zip(&per_panel)
+        .map(|(&v, idx)| Panel {
+            xidot0: v,
+            points: map::run(&spec.panel(v), idx, &tick),
+        })
+        .collect();
+    pb.finish_and_clear();
+    Ok(MapFile {
+        spec: spec.clone(),
+        spec_crc64: spec.crc64(),
+        shard,
+        panels,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The complete result already in `out` for this sweep and shard, if any (resume).
+fn already_done(
+    out: &std::path::Path,
+    spec: &Spec,
+    shard: Option<(usize, usize)>,
+) -> Option<MapFile> {
+    if !out.exists() {
+        return None;
+    }
+    match file::read(out) {
+        Ok(f) if f.spec == *spec && f.shard == shard => Some(f),
+        Ok(_) => {
+            eprintln!(
+                "{}: holds another sweep or shard; recomputing",
+                out.display()
+            );
+            None
+        }
+        Err(e) => {
+            eprintln!("{e:#}; recomputing");
+            None
+        }
+    }
+}
+
+fn run_merge(
+    inputs: &[PathBuf],
+    out: &std::path::Path,
+    img: Option<&PathBuf>,
+    overlay: bool,
+) -> Result<()> {
+    if let Some(img) = img {
+        figure::prepare(img)?;
+    }
+    figure::check_writable(out).with_context(|| format!("--out {}", out.display()))?;
+    let files = inputs
+        .iter()
+        .map(|p| Ok((p.clone(), file::read(p)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let merged = file::merge(&files)?;
+    file::write(out, &merged)?;
+    if let Some(img) = img {
+        plot::plot(&merged, img, overlay)?;
+    }
+    Ok(())
+}
+
+/// Runs `hostctl map`.
+///
+/// # Errors
+/// A flag out of range, an invalid or incomplete set of shard files, or a file error.
+pub fn run(args: &Args) -> Result<()> {
+    if let Some(Sub::Merge {
+        inputs,
+        out,
+        plot: img,
+        overlay,
+    }) = &args.cmd
+    {
+        return run_merge(inputs, out, img.as_ref(), *overlay);
+    }
+    let spec = spec_of(args)?;
+    let threads = threads_of(args)?;
+    let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+    if shard.is_some() && args.plot.is_some() {
+        bail!("--plot needs the complete map: plot after `hostctl map merge`");
+    }
+    if let Some(img) = &args.plot {
+        figure::prepare(img)?;
+    }
+    if let Some(out) = &args.out {
+        figure::check_writable(out).with_context(|| format!("--out {}", out.display()))?;
+    }
+    let done = match &args.out {
+        Some(out) if !args.force => already_done(out, &spec, shard),
+        _ => None,
+    };
+    let m = if let Some(m) = done {
+        eprintln!(
+            "{}: already holds this sweep's complete result; nothing to do (--force recomputes)",
+            args.out
+                .as_deref()
+                .map(std::path::Path::display)
+                .map(|d| d.to_string())
+                .unwrap_or_default()
+        );
+        m
+    } else {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let m = pool.install(|| compute(&spec, shard, args.quiet))?;
+        let counts = |p: &Panel, c: Class| p.points.iter().filter(|q| q.class == c).count();
+        for p in &m.panels {
+            eprintln!(
+                "xidot0 = {}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
+                p.xidot0,
+                p.points.len(),
+                counts(p, Class::Growing),
+                counts(p, Class::Persistent),
+                counts(p, Class::NonMonotoneDecay),
+                counts(p, Class::MonotoneDecay)
+            );
+        }
+        eprintln!("computed in {:.2} s", m.seconds);
+        match &args.out {
+            Some(out) => file::write(out, &m)?,
+            None if args.plot.is_none() => emit_json(&m)?,
+            None => {}
+        }
+        m
+    };
+    if let Some(img) = &args.plot {
+        plot::plot(&m, img, args.overlay)?;
+    }
+    Ok(())
+}

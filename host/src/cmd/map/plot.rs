@@ -1,0 +1,135 @@
+//! Figure of a map: one panel per ξ̇₀, classes as grey levels, optional analytic boundaries.
+//!
+//! Units: dimensionless (β, σ on the axes). Invariant: the image is drawn only from a complete,
+//! validated [`MapFile`]; cells are centred on the grid points.
+
+use super::file::MapFile;
+use crate::figure::{self, Figure, FigureError};
+use anyhow::Result;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+use stiffwall_core::regions;
+use stiffwall_sim::classify::Class;
+
+fn class_color(c: Class) -> RGBColor {
+    match c {
+        Class::Growing => RGBColor(40, 40, 40),
+        Class::Persistent => RGBColor(120, 120, 120),
+        Class::NonMonotoneDecay => RGBColor(200, 200, 200),
+        Class::MonotoneDecay => RGBColor(255, 255, 255),
+    }
+}
+
+/// The map (one panel per ξ̇₀) as a [`Figure`].
+struct MapFigure<'a> {
+    map: &'a MapFile,
+    cols: usize,
+    rows: usize,
+    overlay: bool,
+}
+
+impl Figure for MapFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(root, self.map, self.cols, self.rows, self.overlay)
+    }
+}
+
+/// Draws the map (one panel per ξ̇₀) to `path` (.svg or .png, any case).
+///
+/// # Errors
+/// An unsupported extension, or a drawing or file error.
+pub fn plot(m: &MapFile, path: &Path, overlay: bool) -> Result<(), FigureError> {
+    let n = m.panels.len();
+    let cols = if n >= 4 { 2 } else { n.max(1) };
+    let rows = n.div_ceil(cols);
+    let size = (cols as u32 * 480, rows as u32 * 440 + 30);
+    let fig = MapFigure {
+        map: m,
+        cols,
+        rows,
+        overlay,
+    };
+    figure::write(path, size, &fig)
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    m: &MapFile,
+    cols: usize,
+    rows: usize,
+    overlay: bool,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let s = &m.spec;
+    let (top, body) = root.split_vertically(30);
+    top.titled(
+        &format!(
+            "mu = {}, tau_D = {}, {} periods; dark: growing, medium: persistent, light: non-monotone decay, white: monotone decay",
+            s.mu, s.tau_d, s.periods
+        ),
+        ("sans-serif", 14),
+    )?;
+    let areas = body.split_evenly((rows, cols));
+    let db = if s.beta.n > 1 {
+        (s.beta.hi - s.beta.lo) / (s.beta.n - 1) as f64
+    } else {
+        0.1
+    };
+    let ds = if s.sigma.n > 1 {
+        (s.sigma.hi - s.sigma.lo) / (s.sigma.n - 1) as f64
+    } else {
+        0.1
+    };
+    let (bx0, bx1) = (s.beta.lo - db / 2.0, s.beta.hi + db / 2.0);
+    let (sy0, sy1) = (s.sigma.lo - ds / 2.0, s.sigma.hi + ds / 2.0);
+    for (panel, area) in m.panels.iter().zip(areas.iter()) {
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!("xidot0 = xidot_max = {}", panel.xidot0),
+                ("sans-serif", 16),
+            )
+            .margin(8)
+            .x_label_area_size(35)
+            .y_label_area_size(45)
+            .build_cartesian_2d(bx0..bx1, sy0..sy1)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc("beta")
+            .y_desc("sigma")
+            .draw()?;
+        chart.draw_series(panel.points.iter().map(|p| {
+            Rectangle::new(
+                [
+                    (p.beta - db / 2.0, p.sigma - ds / 2.0),
+                    (p.beta + db / 2.0, p.sigma + ds / 2.0),
+                ],
+                class_color(p.class).filled(),
+            )
+        }))?;
+        if overlay {
+            // The boundaries of Fig. 3 (tau_D = 0) or Fig. 5 / (19), with the panel's xidot0 as
+            // the velocity bound and xiddot_max ~ xidot_max / sqrt(mu) (harmonic motion).
+            let red = RED.stroke_width(2);
+            let v = panel.xidot0.abs();
+            let window = regions::Window {
+                beta_min: bx0,
+                beta_max: bx1,
+                sigma_min: sy0,
+                sigma_max: sy1,
+            };
+            let lines = regions::boundaries(s.tau_d, Some(v), Some(v / s.mu.sqrt()), &window)?;
+            for seg in lines.as_slice() {
+                chart.draw_series(LineSeries::new(vec![seg.from, seg.to], red))?;
+            }
+        }
+    }
+    Ok(())
+}

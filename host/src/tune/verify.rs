@@ -1,0 +1,389 @@
+//! Verification of a stiffness on the device: the test set, one test run, and its early end.
+//!
+//! **The verification set at stiffness K** (what a user does to a wall, up to the stated maximum
+//! velocity v_max): with d(K) = round(v_max·√(m/K)/Δ) the deflection whose spring energy
+//! ½K(dΔ)² equals the kinetic energy ½m·v_max² (at least 2 ticks),
+//! - releases (Fig. 8) on the bidirectional wall from +d and −d (full energy) and from
+//!   ±max(2, ⌈d/2⌉) (a quarter of it): each swing through the wall is an impact from one side
+//!   at a velocity up to v_max, and the release is a user letting go while pressing;
+//! - impacts ([`HostMsg::Impact`](stiffwall_proto::HostMsg::Impact): the firmware launches the
+//!   device at a velocity toward the wall and releases it at contact): on a one-sided wall from
+//!   its free side at v_max and v_max/2, and through the bidirectional wall from both sides at
+//!   v_max; the launch starts [`launch_distance`] ticks away;
+//! - when the model does not fit the device (`thorough`), also releases from ±max(2, ⌈d/4⌉)
+//!   (a sixteenth of the energy) and an impact at v_max/4, and every test runs twice as long.
+//!
+//! A K passes when every test of the set passes by [`super::verdict`]: the motion settles or
+//! stays within one count and never grows; a buzz over more than one count fails.
+//!
+//! Each test starts from a reproducible state: the wall off until the device has stopped, the
+//! wall position moved to where it stopped (so the wall's force while the hold starts is the
+//! smallest, KΔ/2), faults cleared, then the release. A test that has settled is ended early
+//! at a point computed from its counts alone ([`settled_at`]), so the verdict does not depend on
+//! how quickly the host reacts.
+
+use super::verdict::{classify, classify_impact, Verdict, Wall, EXIT_WINDOW, MIN_TAIL};
+use crate::device::client::Client;
+use anyhow::{bail, Result};
+use std::sync::atomic::Ordering;
+use stiffwall_proto::{flags, ServoConfig, WallMode};
+
+/// One test of the verification set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Test {
+    /// Hold at `deflection_ticks` effective ticks from the wall, release.
+    Release {
+        /// Signed deflection, effective ticks.
+        deflection_ticks: i32,
+    },
+    /// Launch from `start_ticks` at `velocity_milliticks` (effective ticks per 1000 servo
+    /// ticks) toward the wall, released at contact.
+    Impact {
+        /// Start, effective ticks from the wall.
+        start_ticks: i32,
+        /// Launch velocity, effective ticks per 1000 ticks, toward the wall.
+        velocity_milliticks: i32,
+        /// One-sided wall (occupying counts ≥ 0) instead of the bidirectional one.
+        one_sided: bool,
+    },
+}
+
+impl Test {
+    /// One line for the report.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        match *self {
+            Test::Release { deflection_ticks } => format!("release {deflection_ticks:+}"),
+            Test::Impact {
+                velocity_milliticks,
+                one_sided,
+                ..
+            } => format!(
+                "impact {:+.2} ticks/tick{}",
+                f64::from(velocity_milliticks) / 1000.0,
+                if one_sided { " (one-sided)" } else { "" }
+            ),
+        }
+    }
+}
+
+/// Distance, effective ticks, from which an impact at `v_ticks` ticks per servo tick is
+/// launched: enough for the hold spring to bring the device to speed (the larger of 20 ticks
+/// and one natural period `natural_ticks`, plus the spring's lag of two ticks of motion).
+#[must_use]
+pub fn launch_distance(v_ticks: f64, natural_ticks: f64) -> i32 {
+    (v_ticks.abs() * (natural_ticks.max(20.0) + 2.0))
+        .ceil()
+        .clamp(3.0, f64::from(1 << 20)) as i32
+}
+
+/// An impact test at `v_ticks` ticks per tick (sign: direction of motion), launched from the
+/// side it moves away from.
+#[must_use]
+pub fn impact(v_ticks: f64, natural_ticks: f64, one_sided: bool) -> Test {
+    let milli = ((v_ticks * 1000.0).round() as i32).clamp(-1_000_000, 1_000_000);
+    let milli = if milli == 0 { 1 } else { milli };
+    let d = launch_distance(v_ticks, natural_ticks);
+    Test::Impact {
+        start_ticks: if milli > 0 { -d } else { d },
+        velocity_milliticks: milli,
+        one_sided,
+    }
+}
+
+/// A test with its stiffness and verdict.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TestResult {
+    /// The test.
+    pub test: Test,
+    /// Stiffness tested.
+    pub k: f64,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// Ticks judged (after the release).
+    pub ticks_judged: usize,
+}
+
+/// The verification set for full-energy deflection `d`, maximum velocity `v_ticks` (ticks per
+/// servo tick) and natural period `natural_ticks` (see the module header); `impacts`: the
+/// device runs impact tests.
+#[must_use]
+pub fn test_set(
+    d: i32,
+    v_ticks: f64,
+    natural_ticks: f64,
+    thorough: bool,
+    impacts: bool,
+) -> Vec<Test> {
+    let d = d.abs().max(2);
+    let mut levels = vec![d, ((d + 1) / 2).max(2)];
+    if thorough {
+        levels.push(((d + 3) / 4).max(2));
+    }
+    levels.dedup();
+    let mut set: Vec<Test> = levels
+        .into_iter()
+        .flat_map(|l| [l, -l])
+        .map(|deflection_ticks| Test::Release { deflection_ticks })
+        .collect();
+    if impacts {
+        let v = v_ticks.abs();
+        set.push(impact(v, natural_ticks, true));
+        set.push(impact(v / 2.0, natural_ticks, true));
+        if thorough {
+            set.push(impact(v / 4.0, natural_ticks, true));
+        }
+        set.push(impact(v, natural_ticks, false));
+        set.push(impact(-v, natural_ticks, false));
+    }
+    set
+}
+
+/// The length at which a record counts as settled: the first L at which the last
+/// max(`min_run`, ⌈L/3⌉) counts of `counts[..L]` are all equal (so the tail judged by the
+/// verdict, a quarter of L, is at rest). None while that has not happened.
+#[must_use]
+pub fn settled_at(counts: &[i64], min_run: usize) -> Option<usize> {
+    let mut run = 0usize;
+    for (i, &n) in counts.iter().enumerate() {
+        run = if i > 0 && counts[i - 1] == n {
+            run + 1
+        } else {
+            1
+        };
+        let len = i + 1;
+        if run >= min_run.max(len.div_ceil(3)) {
+            return Some(len);
+        }
+    }
+    None
+}
+
+/// Waits until the device (wall off) has stopped; returns its count from the wall position.
+pub fn rest_position(c: &mut Client) -> Result<i32> {
+    let rate = c.info.servo_rate_hz.max(1);
+    // One sample every 2 ms of device time; at rest when 50 consecutive samples agree.
+    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
+    c.stream_start(decimation)?;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let (mut last, mut same) = (i32::MIN, 0u32);
+    let result = loop {
+        if std::time::Instant::now() > deadline {
+            break Err(anyhow::anyhow!(
+                "the device did not come to rest within 20 s with the wall off"
+            ));
+        }
+        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+            for x in &b.samples {
+                if x.count == last {
+                    same += 1;
+                } else {
+                    (last, same) = (x.count, 0);
+                }
+            }
+            if same >= 50 {
+                break Ok(last);
+            }
+        }
+    };
+    c.stream_stop()?;
+    result
+}
+
+/// Clears the latched faults and waits until the servo has taken the command (the device
+/// answers `GetFaults` from state the servo updates on its next tick).
+pub fn clear_faults(c: &mut Client) -> Result<()> {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(2);
+    loop {
+        c.clear_faults()?;
+        let f = c.faults()?;
+        if f.latched == 0 {
+            return Ok(());
+        }
+        if std::time::Instant::now() > deadline {
+            bail!(
+                "faults {:#x} stay latched (first at tick {})",
+                f.latched,
+                f.first_tick
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
+/// Runs one test at stiffness `k` (config `base` with that K) for at most `ticks` ticks after
+/// the release; a settled record ends after [`settled_at`] with run `min_run`. Returns the
+/// verdict and the counts judged.
+pub fn run_test(
+    c: &mut Client,
+    base: &ServoConfig,
+    k: f64,
+    test: Test,
+    ticks: u32,
+    min_run: usize,
+) -> Result<(Verdict, Vec<i64>)> {
+    if super::procedure::INTERRUPTED.load(Ordering::Relaxed) {
+        bail!("interrupted");
+    }
+    // A reproducible start (see the module header).
+    c.set_config(&ServoConfig {
+        stiffness: 0.0,
+        ..*base
+    })?;
+    let rest = rest_position(c)?;
+    let one_sided = matches!(
+        test,
+        Test::Impact {
+            one_sided: true,
+            ..
+        }
+    );
+    let cfg = ServoConfig {
+        stiffness: k as f32,
+        wall_position: base.wall_position.saturating_add(rest),
+        wall: if one_sided {
+            WallMode::OneSided
+        } else {
+            WallMode::Bidirectional
+        },
+        ..*base
+    };
+    clear_faults(c)?;
+    c.set_config(&cfg)?;
+    let shift = base.coarsen_shift;
+    let mut seen = 0usize;
+    let mut released: Vec<i64> = Vec::new();
+    let mut enough = |s: &[stiffwall_proto::Sample]| {
+        for x in &s[seen..] {
+            if x.flags & flags::RELEASED != 0 {
+                released.push(i64::from(x.count) >> shift);
+            }
+        }
+        seen = s.len();
+        settled_at(&released, min_run).is_some()
+    };
+    let rec = match test {
+        Test::Release { deflection_ticks } => {
+            c.release_until(deflection_ticks, ticks, &mut enough)?
+        }
+        Test::Impact {
+            start_ticks,
+            velocity_milliticks,
+            ..
+        } => c.impact_until(start_ticks, velocity_milliticks, ticks, &mut enough)?,
+    };
+    if rec.gaps.missing > 0 {
+        bail!(
+            "{} telemetry samples lost during a wall test",
+            rec.gaps.missing
+        );
+    }
+    let mut counts = super::release::released_counts(&rec.samples, shift);
+    // Judge only up to where the record settled (what came after is the Stop's latency).
+    let tripped = rec.faults != 0;
+    if let Some(len) = settled_at(&counts, min_run) {
+        counts.truncate(len);
+    } else if !tripped {
+        counts.truncate(ticks as usize);
+    }
+    let verdict = match test {
+        Test::Release { .. } => classify(&counts, tripped),
+        Test::Impact { one_sided, .. } => {
+            // Speed at contact: the launch's last EXIT_WINDOW ticks before the release.
+            let launch: Vec<i64> = rec
+                .samples
+                .iter()
+                .filter(|x| x.flags & flags::HOLD != 0)
+                .map(|x| i64::from(x.count) >> shift)
+                .collect();
+            let w = EXIT_WINDOW.min(launch.len().saturating_sub(1));
+            let first = counts.first().copied().unwrap_or(0);
+            let entry = if w > 0 {
+                (first - launch[launch.len() - w]) as f64 / (w as f64 + 1.0)
+            } else {
+                0.0
+            };
+            let wall = if one_sided {
+                Wall::OneSided
+            } else {
+                Wall::Bidirectional
+            };
+            classify_impact(&counts, wall, entry.abs(), tripped)
+        }
+    };
+    Ok((verdict, counts))
+}
+
+/// Minimum constant run for [`settled_at`]: three natural periods 2π√(m/K)/T, at least
+/// 2·[`MIN_TAIL`] ticks.
+#[must_use]
+pub fn min_settle_run(mass: f64, k: f64, period_s: f64) -> usize {
+    let natural = std::f64::consts::TAU * (mass / k).sqrt() / period_s;
+    ((3.0 * natural) as usize).max(2 * MIN_TAIL)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_set_has_both_sides_at_two_or_three_energies() {
+        let s = test_set(12, 5.0, 14.0, false, false);
+        assert_eq!(
+            s,
+            [12, -12, 6, -6].map(|d| Test::Release {
+                deflection_ticks: d
+            })
+        );
+        let s = test_set(12, 5.0, 14.0, true, false);
+        assert_eq!(s.len(), 6);
+        assert_eq!(
+            test_set(2, 5.0, 14.0, true, false).len(),
+            2,
+            "levels never repeat"
+        );
+        let s = test_set(12, 5.0, 14.0, false, true);
+        assert_eq!(s.len(), 8);
+        // Impacts from the free side of the one-sided wall at v and v/2, through the
+        // bidirectional wall from both sides, always launched toward the wall.
+        assert_eq!(
+            s[4],
+            Test::Impact {
+                start_ticks: -110,
+                velocity_milliticks: 5000,
+                one_sided: true
+            }
+        );
+        assert!(s[4..].iter().all(
+            |t| matches!(t, Test::Impact { start_ticks, velocity_milliticks, .. }
+            if start_ticks.signum() == -velocity_milliticks.signum())
+        ));
+        assert!(matches!(
+            s[7],
+            Test::Impact {
+                start_ticks: 110,
+                one_sided: false,
+                ..
+            }
+        ));
+        assert!(test_set(0, 5.0, 14.0, false, false).iter().all(
+            |t| matches!(t, Test::Release { deflection_ticks } if deflection_ticks.abs() == 2)
+        ));
+    }
+
+    #[test]
+    fn settled_at_cuts_where_a_third_of_the_record_is_constant() {
+        let mut c: Vec<i64> = (0..300).map(|k| (10 - k / 30) as i64).collect();
+        c.extend(std::iter::repeat_n(0, 400));
+        let len = settled_at(&c, 100).unwrap();
+        // Constant from index 300 (the last value of the ramp is 1, then zeros).
+        assert_eq!(len, 450);
+        assert!(classify(&c[..len], false).settled());
+        // Adding samples after the cut does not move it.
+        assert_eq!(settled_at(&c[..len + 37], 100), Some(len));
+        assert_eq!(settled_at(&c[..400], 100), None);
+        let toggling: Vec<i64> = (0..2000).map(|k| k % 2).collect();
+        assert_eq!(settled_at(&toggling, 100), None);
+    }
+}

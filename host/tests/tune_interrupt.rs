@@ -1,0 +1,59 @@
+//! Ctrl-C during `tune` (issue 11): interrupted in each phase — identification, the
+//! identified model, the stiffness search, the confirmation — the device is left with the
+//! config it had before, unchanged and unsaved. The interrupt is raised exactly as the Ctrl-C
+//! handler does (setting `session::INTERRUPTED`) from the progress callback when the phase
+//! starts. Its own test binary: the flag is process-wide.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use stiffwall_host::device::client::Client;
+use stiffwall_host::device::virtual_device::{spawn, Spec};
+use stiffwall_host::session::INTERRUPTED;
+use stiffwall_host::tune::procedure::{self, Settings};
+use stiffwall_proto::ServoConfig;
+
+fn connect() -> Client {
+    let p = stiffwall_core::devices::find("maxon-re35").unwrap().params;
+    let (vd, port) = spawn(Spec {
+        plant: p,
+        counts_per_rev: (std::f64::consts::TAU / p.resolution).round() as u32,
+        fast: true,
+        initial_position: 0.0,
+        scene: None,
+    })
+    .unwrap();
+    Client::connect(port, Some(Box::new(vd))).unwrap()
+}
+
+#[test]
+fn tune_interrupted_in_each_phase_restores_the_previous_config() {
+    for phase in ["identifying", "identified", "release test", "confirming"] {
+        let mut c = connect();
+        let before = ServoConfig {
+            stiffness: 0.777,
+            damping: 0.000_123,
+            wall_position: 17,
+            ..c.get_config().unwrap()
+        };
+        c.set_config(&before).unwrap();
+        INTERRUPTED.store(false, Ordering::Relaxed);
+        let seen = AtomicBool::new(false);
+        let r = procedure::tune(&mut c, &Settings::default(), false, &|m: &str| {
+            if m.starts_with(phase) {
+                seen.store(true, Ordering::Relaxed);
+                INTERRUPTED.store(true, Ordering::Relaxed);
+            }
+        });
+        INTERRUPTED.store(false, Ordering::Relaxed);
+        assert!(
+            seen.load(Ordering::Relaxed),
+            "phase {phase:?} never started"
+        );
+        let e = r.expect_err(phase);
+        assert!(format!("{e:#}").contains("interrupted"), "{phase}: {e:#}");
+        assert_eq!(
+            c.get_config().unwrap(),
+            before,
+            "{phase}: config not restored"
+        );
+    }
+}

@@ -1,0 +1,53 @@
+//! The plant beyond the paper's model (issue 10): static friction with Stribeck decay,
+//! cogging, a compliant transmission, amplifier saturation and dead band, on top of the
+//! existing hand, amplifier filter, extra delay and one-sided wall.
+//!
+//! Units: SI (m, m/s, kg, N, N·s/m, N/m, s); rotary devices (`device.counts_per_rev`) read the
+//! same keys in rad, rad/s, kg·m², N·m, N·m·s/rad, N·m/rad.
+//!
+//! Final names of the contract (PLANT_API.md):
+//! - [`PlantModel`] (validated model; [`PlantModel::force_limit_n`], [`PlantModel::is_exact`]),
+//!   [`Controller`] (stiffness_n_per_m, period_s, extra_delay_s — includes an amplifier of kind
+//!   `"delay"` —, one_sided, quantization);
+//! - [`PlantModel::from_scene_toml`]`(text) -> Result<(PlantModel, Controller), SceneError>`
+//!   (std): a physical scene, `[initial]` and `[run]` optional;
+//! - [`RichPlant::new`]`(&model) -> Result<RichPlant, ModelError>` (it validates the public
+//!   fields), `set_state(x, v)`, `advance(force_cmd_n, dt_s)`, `encoder_count()`,
+//!   `position_m()`, `velocity_m_per_s()`, plus `link_position_m()`, `actuator_force_n()`,
+//!   `is_stuck()`, `is_exact()`;
+//! - [`RichPlant::with_method`] picks the engine (exact or [`ode::OdeMethod`]).
+//!
+//! Modules: [`model`] (parameters and validation), [`friction`] (Stribeck curve, stick rule,
+//! closed-form static/dynamic switch), [`ode`] (RK4 / Dormand–Prince 5(4) with event location),
+//! [`plant`] ([`RichPlant`]), [`scene`] (std: scene keys, sampled loop of `Scene::simulate`).
+//!
+//! Exactness: a rigid plant with a static/dynamic switch (`stribeck_m_per_s = 0`), dead band
+//! and saturation is stepped in closed form; cogging, the transmission, the hand, the amplifier
+//! filter and Stribeck decay use the reference integrator (the transmission is linear between
+//! friction events, but its events would still need root finding on the closed form; the
+//! integrator locates them the same way). Invariant: no allocation in the stepping plant; the
+//! no_std build contains everything except [`scene`].
+
+pub mod friction;
+pub mod model;
+pub mod ode;
+pub mod plant;
+#[cfg(feature = "std")]
+pub mod scene;
+
+pub use model::{
+    Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission,
+};
+pub use ode::OdeMethod;
+pub use plant::RichPlant;
+
+#[cfg(feature = "std")]
+impl PlantModel {
+    /// Parses a plant file (a physical scene; `[initial]` and `[run]` optional): see
+    /// [`scene::from_scene_toml`].
+    pub fn from_scene_toml(
+        text: &str,
+    ) -> Result<(PlantModel, Controller), crate::scene::SceneError> {
+        scene::from_scene_toml(text)
+    }
+}

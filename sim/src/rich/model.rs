@@ -1,0 +1,322 @@
+//! The validated physical plant of a scene: a rigid (or two-mass) device with every optional
+//! effect of issue 10, in SI units.
+//!
+//! Units: linear devices in m, m/s, kg, N, N·s/m, N/m; rotary devices (`counts_per_rev` set)
+//! use the same fields in rad, rad/s, kg·m², N·m, N·m·s/rad, N·m/rad. Every field named `_n`
+//! is then a torque, `_m` an angle, `_kg` an inertia.
+//!
+//! Invariants (checked by [`PlantModel::validate`], which every constructor in this module
+//! calls): masses > 0, damping and friction ≥ 0, `static_n ≥ coulomb_n`, resolution > 0, every
+//! value finite; optional effects are `None` when off.
+
+/// Static friction with a Stribeck decay to the dynamic level `coulomb_n` of the plant.
+///
+/// Sliding friction magnitude at speed |v|: `c + (static_n − c)·exp(−(v/stribeck_m_per_s)²)`;
+/// with `stribeck_m_per_s = 0` it is `c` at every non-zero speed (a pure static/dynamic switch).
+/// At rest the friction holds any net force up to `static_n` (the stick rule of
+/// [`crate::rich::friction`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stiction {
+    /// Breakaway force F_s, N (N·m), ≥ `coulomb_n`.
+    pub static_n: f64,
+    /// Stribeck velocity v_s, m/s (rad/s), ≥ 0; 0 = no decay (switch).
+    pub stribeck_m_per_s: f64,
+}
+
+/// Position-periodic cogging force `F = amplitude_n · sin(2π x / period_m)` on the motor side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cogging {
+    /// Amplitude, N (N·m), ≥ 0.
+    pub amplitude_n: f64,
+    /// Spatial period, m (rad), > 0.
+    pub period_m: f64,
+}
+
+/// Compliant transmission: the encoder, actuator, friction and cogging act on the motor mass,
+/// the user (hand) on the link mass; the two are joined by a spring and a damper.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transmission {
+    /// Link-side mass m₂, kg (kg·m²), > 0.
+    pub link_mass_kg: f64,
+    /// Spring k_t, N/m (N·m/rad), > 0.
+    pub stiffness_n_per_m: f64,
+    /// Damper d_t, N·s/m (N·m·s/rad), ≥ 0.
+    pub damping_ns_per_m: f64,
+}
+
+/// The current amplifier: optional second-order low-pass filter, dead band and saturation.
+///
+/// The held command u is first shaped by the dead band (`|u| ≤ d → 0`, otherwise
+/// `u − d·sgn(u)`), then clipped to ±`force_limit_n`, then filtered
+/// (p̈ + 2ζω ṗ + ω² p = ω² u'); the filter output is clipped to ±`force_limit_n` again (an
+/// under-damped filter cannot overshoot the current limit).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Amplifier {
+    /// Filter cut-off ω/2π, Hz; `None` = ideal (no filter).
+    pub cutoff_hz: Option<f64>,
+    /// Filter damping ratio ζ (> 0; unused without a filter).
+    pub damping: f64,
+    /// Output saturation, N (N·m), > 0.
+    pub force_limit_n: Option<f64>,
+    /// Dead band, N (N·m), ≥ 0.
+    pub deadband_n: Option<f64>,
+}
+
+/// A hand: mass added to the body it holds, damping and a spring to the anchor at x = 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandSi {
+    /// Mass, kg (kg·m²), ≥ 0.
+    pub mass_kg: f64,
+    /// Damping, N·s/m, ≥ 0.
+    pub damping_ns_per_m: f64,
+    /// Stiffness to the anchor, N/m, ≥ 0.
+    pub stiffness_n_per_m: f64,
+}
+
+/// The controller of a scene (boot configuration of the virtual device).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Controller {
+    /// Wall stiffness K, N/m (N·m/rad).
+    pub stiffness_n_per_m: f64,
+    /// Sampling period T, s.
+    pub period_s: f64,
+    /// Total extra delay, s: `controller.extra_delay_s` plus an amplifier of kind `"delay"`
+    /// (2ζ/ω), as in the scene's τ_D.
+    pub extra_delay_s: f64,
+    /// One-sided wall (force only for x < 0).
+    pub one_sided: bool,
+    /// Quantised position in the spring law (eq. (8)); `false`: the ideal spring.
+    pub quantization: bool,
+}
+
+/// The validated physical plant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlantModel {
+    /// Motor-side mass m, kg (kg·m²).
+    pub mass_kg: f64,
+    /// Viscous friction b, N·s/m.
+    pub viscous_ns_per_m: f64,
+    /// Dynamic Coulomb friction c, N.
+    pub coulomb_n: f64,
+    /// Encoder resolution Δ, m (rad).
+    pub resolution_m: f64,
+    /// Counts per revolution of a rotary device (`None`: linear).
+    pub counts_per_rev: Option<u32>,
+    /// Static friction and Stribeck decay.
+    pub stiction: Option<Stiction>,
+    /// Cogging.
+    pub cogging: Option<Cogging>,
+    /// Compliant transmission.
+    pub transmission: Option<Transmission>,
+    /// Amplifier filter, dead band, saturation.
+    pub amplifier: Option<Amplifier>,
+    /// Hand (on the link side when there is a transmission).
+    pub hand: Option<HandSi>,
+}
+
+/// An invalid model value (names the field and the allowed range).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ModelError {
+    /// Field, as the scene key (e.g. `effects.stiction.static_n`).
+    pub key: &'static str,
+    /// Allowed range.
+    pub allowed: &'static str,
+}
+
+impl core::fmt::Display for ModelError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}: allowed range is {}", self.key, self.allowed)
+    }
+}
+
+fn chk(ok: bool, key: &'static str, allowed: &'static str) -> Result<(), ModelError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ModelError { key, allowed })
+    }
+}
+
+fn pos(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
+fn nonneg(v: f64) -> bool {
+    v.is_finite() && v >= 0.0
+}
+
+impl PlantModel {
+    /// The paper's plant: rigid mass, viscous and dynamic Coulomb friction, no optional effect.
+    pub fn rigid(
+        mass_kg: f64,
+        viscous_ns_per_m: f64,
+        coulomb_n: f64,
+        resolution_m: f64,
+    ) -> Result<Self, ModelError> {
+        let m = Self {
+            mass_kg,
+            viscous_ns_per_m,
+            coulomb_n,
+            resolution_m,
+            counts_per_rev: None,
+            stiction: None,
+            cogging: None,
+            transmission: None,
+            amplifier: None,
+            hand: None,
+        };
+        m.validate()?;
+        Ok(m)
+    }
+
+    /// Checks every invariant of the module header.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        chk(pos(self.mass_kg), "device.mass_kg", "(0, 1e6] kg")?;
+        chk(
+            nonneg(self.viscous_ns_per_m),
+            "device.viscous_ns_per_m",
+            "[0, 1e9] N s/m",
+        )?;
+        chk(nonneg(self.coulomb_n), "device.coulomb_n", "[0, 1e9] N")?;
+        chk(pos(self.resolution_m), "device.resolution_m", "(0, 1] m")?;
+        if let Some(s) = self.stiction {
+            chk(
+                s.static_n.is_finite() && s.static_n >= self.coulomb_n && s.static_n <= 1e9,
+                "effects.stiction.static_n",
+                "[device.coulomb_n, 1e9] N",
+            )?;
+            chk(
+                nonneg(s.stribeck_m_per_s) && s.stribeck_m_per_s <= 1e3,
+                "effects.stiction.stribeck_m_per_s",
+                "[0, 1e3] m/s",
+            )?;
+        }
+        if let Some(c) = self.cogging {
+            chk(
+                nonneg(c.amplitude_n) && c.amplitude_n <= 1e9,
+                "effects.cogging.amplitude_n",
+                "[0, 1e9] N",
+            )?;
+            chk(
+                pos(c.period_m) && c.period_m <= 1e3,
+                "effects.cogging.period_m",
+                "(0, 1e3] m",
+            )?;
+        }
+        if let Some(t) = self.transmission {
+            chk(
+                pos(t.link_mass_kg) && t.link_mass_kg <= 1e6,
+                "effects.transmission.link_mass_kg",
+                "(0, 1e6] kg",
+            )?;
+            chk(
+                pos(t.stiffness_n_per_m) && t.stiffness_n_per_m <= 1e12,
+                "effects.transmission.stiffness_n_per_m",
+                "(0, 1e12] N/m",
+            )?;
+            chk(
+                nonneg(t.damping_ns_per_m) && t.damping_ns_per_m <= 1e9,
+                "effects.transmission.damping_ns_per_m",
+                "[0, 1e9] N s/m",
+            )?;
+        }
+        if let Some(a) = self.amplifier {
+            if let Some(f) = a.cutoff_hz {
+                chk(
+                    pos(f) && f <= 1e7,
+                    "effects.amplifier.cutoff_hz",
+                    "(0, 1e7] Hz",
+                )?;
+                chk(
+                    pos(a.damping) && a.damping <= 100.0,
+                    "effects.amplifier.damping",
+                    "(0, 100]",
+                )?;
+            }
+            if let Some(l) = a.force_limit_n {
+                chk(
+                    pos(l) && l <= 1e9,
+                    "effects.amplifier.force_limit_n",
+                    "(0, 1e9] N",
+                )?;
+            }
+            if let Some(d) = a.deadband_n {
+                chk(
+                    nonneg(d) && d <= 1e9,
+                    "effects.amplifier.deadband_n",
+                    "[0, 1e9] N",
+                )?;
+            }
+        }
+        if let Some(h) = self.hand {
+            chk(nonneg(h.mass_kg), "effects.hand.mass_kg", "[0, 1e6] kg")?;
+            chk(
+                nonneg(h.damping_ns_per_m),
+                "effects.hand.damping_ns_per_m",
+                "[0, 1e9] N s/m",
+            )?;
+            chk(
+                nonneg(h.stiffness_n_per_m),
+                "effects.hand.stiffness_n_per_m",
+                "[0, 1e12] N/m",
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The amplifier's saturation, when the plant sets one (N or N·m).
+    #[must_use]
+    pub fn force_limit_n(&self) -> Option<f64> {
+        self.amplifier.and_then(|a| a.force_limit_n)
+    }
+
+    /// Breakaway friction F_s (= `coulomb_n` without stiction).
+    #[must_use]
+    pub fn static_friction_n(&self) -> f64 {
+        self.stiction.map_or(self.coulomb_n, |s| s.static_n)
+    }
+
+    /// Whether the motion is piecewise closed-form ([`crate::rich::RichPlant`] then steps it
+    /// exactly): rigid, no cogging, no hand, no amplifier filter, no Stribeck decay.
+    #[must_use]
+    pub fn is_exact(&self) -> bool {
+        self.transmission.is_none()
+            && self.cogging.is_none()
+            && self.hand.is_none()
+            && self.amplifier.and_then(|a| a.cutoff_hz).is_none()
+            && self.stiction.is_none_or(|s| s.stribeck_m_per_s == 0.0)
+    }
+
+    /// Whether any effect beyond the paper's plant (and the existing hand and filter) is on:
+    /// stiction, cogging, transmission, force limit or dead band.
+    #[must_use]
+    pub fn has_new_effects(&self) -> bool {
+        self.stiction.is_some()
+            || self.cogging.is_some()
+            || self.transmission.is_some()
+            || self
+                .amplifier
+                .is_some_and(|a| a.force_limit_n.is_some() || a.deadband_n.is_some())
+    }
+
+    /// The amplifier's static map: dead band then saturation of the held command (N).
+    #[must_use]
+    pub fn shape_command(&self, u: f64) -> f64 {
+        let u = if u.is_finite() { u } else { 0.0 };
+        let Some(a) = self.amplifier else {
+            return u;
+        };
+        let mut u = u;
+        if let Some(d) = a.deadband_n {
+            u = if u.abs() <= d {
+                0.0
+            } else {
+                u - if u > 0.0 { d } else { -d }
+            };
+        }
+        if let Some(l) = a.force_limit_n {
+            u = u.clamp(-l, l);
+        }
+        u
+    }
+}

@@ -1,0 +1,374 @@
+//! `tune_table`: the evidence table of docs/TUNE.md (issue 10, items 5 and 6), run by
+//! `cargo xtask tune-table`.
+//!
+//! For every plant file of `sim/plants/` (or those named with `--only`): the true largest
+//! stable stiffness K* ([`stiffwall_tests::kstar`]), the K set by
+//! `hostctl tune --plant FILE --fast --dry-run --json` (`tune.k_set`, its identified m, b, c,
+//! `tune.model_mismatch` when the tune reports it, wall-clock time), and the firmware
+//! supervisor at 1.5 K* after an impact at v_max ([`stiffwall_tests::supervise`]): ticks from
+//! the impact to the trip and whether the force was zeroed. Writes docs/TUNE.md.
+//!
+//! Units: as the plant files (SI; rotary N·m/rad, kg·m², N·m·s/rad, N·m).
+//! Options: `--hostctl PATH` (default: target/release/hostctl), `--out FILE`
+//! (default docs/TUNE.md), `--only NAME` (repeatable), `--quick` (skip tune: K* and the
+//! supervisor only), `--no-write`.
+
+use anyhow::{bail, Context, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use stiffwall_tests::family::{self, PlantCase, Supervised, SupervisorReport};
+use stiffwall_tests::kstar::{self, KStar, TrialKind};
+
+struct Tuned {
+    k_set: f64,
+    mass: f64,
+    viscous: f64,
+    coulomb: f64,
+    mismatch: Option<Vec<String>>,
+    seconds: f64,
+}
+
+struct Row {
+    case: PlantCase,
+    k_star: KStar,
+    k_star_seconds: f64,
+    tune: Option<Result<Tuned, String>>,
+    supervisor: SupervisorReport,
+}
+
+fn run_tune(hostctl: &Path, file: &Path) -> Result<Tuned> {
+    let t0 = Instant::now();
+    let out = std::process::Command::new(hostctl)
+        .arg("tune")
+        .arg("--plant")
+        .arg(file)
+        .args(["--fast", "--dry-run", "--json"])
+        .output()
+        .with_context(|| format!("starting {}", hostctl.display()))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        let last = err.lines().last().unwrap_or("").to_string();
+        bail!("hostctl tune failed: {last}");
+    }
+    let j: serde_json::Value =
+        serde_json::from_slice(&out.stdout).context("parsing hostctl tune --json")?;
+    let t = &j["tune"];
+    let num = |v: &serde_json::Value, what: &str| {
+        v.as_f64()
+            .with_context(|| format!("tune JSON has no number at {what}"))
+    };
+    let mismatch = t.get("model_mismatch").and_then(|m| m.as_array()).map(|a| {
+        a.iter()
+            .map(|x| {
+                x.as_str()
+                    .map_or_else(|| x.to_string(), std::string::ToString::to_string)
+            })
+            .collect()
+    });
+    Ok(Tuned {
+        k_set: num(&t["k_set"], "tune.k_set")?,
+        mass: num(&t["identified"]["mass"][0], "tune.identified.mass")?,
+        viscous: num(&t["identified"]["viscous"][0], "tune.identified.viscous")?,
+        coulomb: num(&t["identified"]["coulomb"][0], "tune.identified.coulomb")?,
+        mismatch,
+        seconds,
+    })
+}
+
+fn describe_trial(k: &KStar) -> String {
+    let side = if k.failing.side > 0 { "+" } else { "−" };
+    let wall = if k.failing.wall == 0 {
+        String::new()
+    } else {
+        format!(", wall +{} counts", k.failing.wall)
+    };
+    match k.failing.kind {
+        TrialKind::Impact { velocity_m_per_s } => {
+            format!("impact {side}{velocity_m_per_s:.3}{wall}")
+        }
+        TrialKind::Release { counts } => format!("release {side}{counts}{wall}"),
+    }
+}
+
+fn effects(case: &PlantCase) -> String {
+    let m = &case.model;
+    let mut e = Vec::new();
+    if let Some(s) = m.stiction {
+        e.push(format!(
+            "stiction {:.2}×",
+            s.static_n / m.coulomb_n.max(1e-300)
+        ));
+    }
+    if let Some(c) = m.cogging {
+        e.push(format!(
+            "cogging {:.0} %",
+            100.0 * c.amplitude_n / m.coulomb_n.max(1e-300)
+        ));
+    }
+    if let Some(t) = m.transmission {
+        let m1 = m.mass_kg;
+        let m2 = t.link_mass_kg + m.hand.map_or(0.0, |h| h.mass_kg);
+        let f = (t.stiffness_n_per_m * (1.0 / m1 + 1.0 / m2)).sqrt() / std::f64::consts::TAU;
+        e.push(format!("transmission {f:.0} Hz"));
+    }
+    if let Some(a) = m.amplifier {
+        if let Some(f) = a.cutoff_hz {
+            e.push(format!("amp {f:.0} Hz"));
+        }
+        if let Some(d) = a.deadband_n {
+            e.push(format!("dead band {d:.3}"));
+        }
+    }
+    if let Some(h) = m.hand {
+        e.push(format!("hand {:.2e}", h.mass_kg));
+    }
+    if case.rig.delay_ticks > 0 {
+        e.push(format!("delay {}T", case.rig.delay_ticks));
+    }
+    if case.rig.one_sided {
+        e.push("one-sided".into());
+    }
+    e.push(format!("T {:.2} ms", case.controller.period_s * 1e3));
+    e.join(", ")
+}
+
+fn g(v: f64) -> String {
+    format!("{v:.4}")
+}
+
+fn render(rows: &[Row], quick: bool) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| plant | effects | K* | first failure above K* | K set | K/K* | tune s | m id / true | b id / true | c id / true (static) | mismatch findings | v_max impact at 1.5 K*: ticks to trip (+/−) | other unstable trials at 1.5 K* | all safe |"
+    );
+    let _ = writeln!(
+        s,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for r in rows {
+        let m = &r.case.model;
+        let true_m = family::moving_mass_kg(m);
+        let true_b = m.viscous_ns_per_m + m.hand.map_or(0.0, |h| h.damping_ns_per_m);
+        let (k_set, ratio, secs, mi, bi, ci, mm) = match &r.tune {
+            Some(Ok(t)) => (
+                g(t.k_set),
+                format!("{:.3}", t.k_set / r.k_star.k_star),
+                format!("{:.1}", t.seconds),
+                format!("{:.3e} / {:.3e}", t.mass, true_m),
+                format!("{:.2e} / {:.2e}", t.viscous, true_b),
+                format!(
+                    "{:.3e} / {:.3e} ({:.3e})",
+                    t.coulomb,
+                    m.coulomb_n,
+                    m.static_friction_n()
+                ),
+                match &t.mismatch {
+                    None => "(not reported)".to_string(),
+                    Some(v) if v.is_empty() => "none".to_string(),
+                    Some(v) => v.join("; ").replace('|', "/"),
+                },
+            ),
+            Some(Err(e)) => (
+                format!("failed: {}", e.replace('|', "/")),
+                "—".into(),
+                "—".into(),
+                "—".into(),
+                "—".into(),
+                "—".into(),
+                "—".into(),
+            ),
+            None => (
+                if quick { "(--quick)" } else { "—" }.into(),
+                "—".into(),
+                "—".into(),
+                format!("— / {true_m:.3e}"),
+                format!("— / {true_b:.2e}"),
+                format!("— / {:.3e} ({:.3e})", m.coulomb_n, m.static_friction_n()),
+                "—".into(),
+            ),
+        };
+        let sup = &r.supervisor;
+        let trip = |s: &Supervised| match (s.unsupervised_settles, s.run.trip_tick) {
+            (true, None) => "settles".to_string(),
+            (true, Some(t)) => format!("settles (trip {t})"),
+            (false, Some(t)) if s.run.stopped() => t.to_string(),
+            (false, _) if s.left_and_released() => format!(
+                "thrown out {:+.1} % faster once, no fault, force 0 after",
+                100.0 * (s.left_faster.unwrap_or(1.0) - 1.0)
+            ),
+            (false, _) => "NOT STOPPED".to_string(),
+        };
+        let trips = sup
+            .v_max_impacts
+            .iter()
+            .map(trip)
+            .collect::<Vec<_>>()
+            .join(" / ");
+        let others = if sup.other_unstable.is_empty() {
+            "none".to_string()
+        } else {
+            let stopped = sup.other_unstable.iter().filter(|s| s.safe()).count();
+            let worst = sup
+                .other_unstable
+                .iter()
+                .filter_map(|s| s.run.trip_tick)
+                .max()
+                .map_or(String::new(), |t| format!(", latest trip {t}"));
+            format!("{stopped} of {} safe{worst}", sup.other_unstable.len())
+        };
+        let zeroed = sup.all_safe();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {k_set} | {ratio} | {secs} | {mi} | {bi} | {ci} | {mm} | {trips} | {others} | {} |",
+            r.case.name,
+            effects(&r.case),
+            g(r.k_star.k_star),
+            describe_trial(&r.k_star),
+            if zeroed { "yes" } else { "NO" },
+        );
+    }
+    s
+}
+
+fn document(table: &str, command: &str) -> String {
+    format!(
+        "# Tune on plants beyond its model\n\n\
+<!-- Generated by `{command}` (crates/xtask/src/tune_table.rs, tests/src/bin/tune_table.rs); do not edit by hand. -->\n\n\
+Each plant of `sim/plants/` (a physical scene with the effects of `stiffwall-sim`'s `rich` module) is\n\
+tuned with `hostctl tune --plant FILE --fast --dry-run --json` against the virtual device, whose\n\
+firmware core runs that plant; the K it sets is compared with the true largest stable stiffness K*\n\
+computed from the simulator alone. Units: N/m, kg, N·s/m, N for linear plants; N·m/rad, kg·m²,\n\
+N·m·s/rad, N·m for rotary ones (`counts_per_rev`).\n\n\
+## How K* is computed (tests/src/kstar.rs)\n\n\
+The sampled spring of eq. (2), F = −K·Δ·(n + ½) on the encoder count n = ⌊x/Δ⌋ of the motor side\n\
+(0 for n < 0 on a one-sided wall), clamped to the amplifier's range, delayed by the plant's extra\n\
+delay in whole periods and held over each period T (ZOH), steps the plant's `RichPlant` (amplifier\n\
+filter, dead band and saturation, stiction, cogging, transmission and hand inside). No firmware, no\n\
+identification. v_max = 5 counts per period (5Δ/T, the default maximum velocity of `hostctl tune`).\n\
+A stiffness K is **stable** when every trial settles:\n\n\
+- impacts at the wall surface moving into the wall at v_max × {{1, 0.6, 0.3, 0.1}}, from both sides\n\
+  (one side for a one-sided wall);\n\
+- releases from rest at deflections d_max × {{1, 0.6, 0.3}} and 1 count, both sides, where\n\
+  ½K(d_max·Δ)² = ½·m·v_max² with m the whole moving mass (motor side, link, hand);\n\
+- with cogging, all of them again with the wall a quarter cogging period further on.\n\n\
+A trial runs 120 natural periods 2π√(m/K) (2000–40000 ticks) and **settles** when, over its last\n\
+third, the count stays within one count (at rest, or toggling between two neighbouring counts): a\n\
+persistent oscillation above one count (buzz) at any frequency fails, and so does growth (also cut\n\
+short when |n| exceeds 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration). On\n\
+a one-sided wall without a hand spring nothing brings the plant back once it left the wall\n\
+(count < −1, moving away): the trial ends there and settles when the plant leaves no faster than a\n\
+passive wall returns it (the impact speed; after a release from count d, the speed of kinetic\n\
+energy ½K((d + 1)Δ)²). K is scanned upwards by ×1.25 from\n\
+σ = c/(KΔ) = 4 until a trial fails, then bisected to 0.5 %: K* is the largest K below the first\n\
+failure. The trial that failed just above K* is listed.\n\n\
+## The supervisor at 1.5 K* (tests/src/supervise.rs, tests/tests/supervisor_plants.rs)\n\n\
+The firmware core (`stiffwall-firmware`'s `Servo`, the virtual device's boot config: energy monitor\n\
+on, growth trip 4, force limit at full scale) with K forced to 1.5 K* drives the same plant\n\
+(software in the loop, the virtual device's board: 32-bit counter, ±32767 codes over the\n\
+amplifier's range). Runs: the impact at v_max from each side, and every other trial of the K*\n\
+criterion that does not settle without the firmware at 1.5 K*. A number is the ticks from the\n\
+impact (first contact) to the latched fault, after which every output code was 0; \"settles\"\n\
+means the run is stable without the firmware (nothing to stop). The firmware's monitors are the\n\
+turning-point energy monitor (growth score, limit) and the buzz detector added for this family\n\
+(`stiffwall_core::monitor::BuzzDetector`, fault `buzz`): 32 consecutive turning points with\n\
+swings of two counts or more, at 15 Hz or faster, the last swing not smaller than the first —\n\
+the persistent oscillation of a firmly held device or a slow servo above K*, whose peaks do not\n\
+grow. A one-sided wall without a hand spring that throws the plant out faster than it came\n\
+(once: nothing brings it back) latches no fault; the table says so, with the speed gained, and\n\
+the firmware applies no force after the plant left.\n\n## Table\n\n{table}\n"
+    )
+}
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut hostctl = root.join("target").join("release").join("hostctl");
+    let mut out = root.join("docs").join("TUNE.md");
+    let mut only: Vec<String> = Vec::new();
+    let (mut quick, mut write) = (false, true);
+    let mut i = 0;
+    while i < args.len() {
+        let value = |i: usize| {
+            args.get(i + 1)
+                .cloned()
+                .with_context(|| format!("{} needs a value", args[i]))
+        };
+        match args[i].as_str() {
+            "--hostctl" => {
+                hostctl = PathBuf::from(value(i)?);
+                i += 1;
+            }
+            "--out" => {
+                out = PathBuf::from(value(i)?);
+                i += 1;
+            }
+            "--only" => {
+                only.push(value(i)?);
+                i += 1;
+            }
+            "--quick" => quick = true,
+            "--no-write" => write = false,
+            other => bail!(
+                "unknown option {other:?}; available: --hostctl PATH, --out FILE, --only NAME, --quick, --no-write"
+            ),
+        }
+        i += 1;
+    }
+    let files = family::plant_files(&family::plants_dir()).context("listing sim/plants")?;
+    let mut rows = Vec::new();
+    for f in files {
+        let case = PlantCase::load(&f).map_err(anyhow::Error::msg)?;
+        if !only.is_empty() && !only.contains(&case.name) {
+            continue;
+        }
+        let t0 = Instant::now();
+        let k_star = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", case.name))?;
+        let k_star_seconds = t0.elapsed().as_secs_f64();
+        let tune = (!quick).then(|| run_tune(&hostctl, &f).map_err(|e| format!("{e:#}")));
+        let supervisor = case.supervisor_report(1.5 * k_star.k_star);
+        eprintln!(
+            "{}: K* = {:.5} ({} evaluations, {k_star_seconds:.1} s), tune {}, at 1.5 K*: v_max impacts trip {:?}, {} other unstable trials, all stopped: {}",
+            case.name,
+            k_star.k_star,
+            k_star.evaluations,
+            match &tune {
+                Some(Ok(t)) => format!("K = {:.5} ({:.3} K*, {:.1} s)", t.k_set, t.k_set / k_star.k_star, t.seconds),
+                Some(Err(e)) => format!("failed: {e}"),
+                None => "skipped".into(),
+            },
+            supervisor
+                .v_max_impacts
+                .iter()
+                .map(|s| s.run.trip_tick)
+                .collect::<Vec<_>>(),
+            supervisor.other_unstable.len(),
+            supervisor.all_safe(),
+        );
+        rows.push(Row {
+            case,
+            k_star,
+            k_star_seconds,
+            tune,
+            supervisor,
+        });
+    }
+    let table = render(&rows, quick);
+    print!("{table}");
+    let total: f64 = rows.iter().map(|r| r.k_star_seconds).sum();
+    eprintln!("K* searches: {total:.1} s in total");
+    if write {
+        let cmd = if quick {
+            "cargo xtask tune-table --quick"
+        } else {
+            "cargo xtask tune-table"
+        };
+        std::fs::write(&out, document(&table, cmd))
+            .with_context(|| format!("writing {}", out.display()))?;
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(())
+}

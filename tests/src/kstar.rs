@@ -1,0 +1,400 @@
+//! The brute-force **true largest stable stiffness K*** of a plant: the sampled spring of
+//! eq. (2) stepping a simulated plant, no firmware, no identification (issue 10, item 4).
+//!
+//! Units: SI (m, m/s, N, s; rotary devices rad, rad/s, N·m, s), encoder counts n = ⌊x/Δ⌋.
+//!
+//! The controller is eq. (2) exactly: at each sample instant h·T the count n is read and
+//! F = −K·Δ·(n + ½) (0 for n < 0 on a one-sided wall) is clamped to ±`force_limit_n` and
+//! applied after `delay_ticks` whole periods (the firmware's delay line: zeros before the first
+//! sample), held over the period (ZOH). The plant's amplifier, if any, filters and limits the
+//! command inside [`SampledPlant::advance`].
+//!
+//! **Criterion** (also in docs/TUNE.md). v_max = [`DEFAULT_XIDOT`] counts per period (5Δ/T,
+//! the default maximum velocity of `hostctl tune`) unless the plant states another. K is
+//! *stable* when every one of these trials settles:
+//! - impacts: the plant starts at the wall surface (x = 0, or just below it for the negative
+//!   side) moving into the wall at v ∈ v_max·{1, 0.6, 0.3, 0.1}, from both sides (one side for
+//!   a one-sided wall);
+//! - releases from rest at deflection d ∈ d_max·{1, 0.6, 0.3} and d = 1 count (the middle of
+//!   count d), both sides, where ½K(d_max·Δ)² = ½ m v_max², m the whole moving mass
+//!   (motor side + link + hand);
+//! - with cogging, every trial is repeated with the wall a quarter cogging period further on.
+//!
+//! On a one-sided wall that nothing brings the plant back to (no hand spring), the plant may
+//! leave the wall (count < −1, moving away): the trial ends there and settles when the plant
+//! leaves no faster than a passive wall could send it back (the impact speed; for a release from
+//! count d, the speed of kinetic energy ½K((d + 1)Δ)²). With a hand spring the plant comes back
+//! and the trial is judged like any other.
+//!
+//! A trial runs for 120 natural periods 2π√(m/K) (at least 2000, at most 40000 ticks) and
+//! **settles** when over its last third the count stays within one count (max − min ≤ 1: at
+//! rest, or toggling between two neighbouring counts) — so a persistent oscillation above one
+//! count ("buzz") at any frequency fails, and so does growth (also stopped early when |n|
+//! exceeds 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration counts). K* is found by scanning K upwards by ×1.25 from a
+//! settling K until a trial fails, then bisecting (geometric) to a relative width of 0.5 %:
+//! K* is the top of the stable interval that contains the start, the largest K below the
+//! first failure.
+//!
+//! Invariant: deterministic (no randomness, no threads); the verdict of a trial depends only on
+//! the plant prototype, the rig and K.
+
+/// Default maximum velocity, counts per servo period (`hostctl tune`'s `DEFAULT_XIDOT`).
+pub const DEFAULT_XIDOT: f64 = 5.0;
+/// Impact speeds, fractions of v_max.
+pub const IMPACT_FRACTIONS: [f64; 4] = [1.0, 0.6, 0.3, 0.1];
+/// Release deflections, fractions of d_max (plus a release from 1 count).
+pub const RELEASE_FRACTIONS: [f64; 3] = [1.0, 0.6, 0.3];
+/// Natural periods per trial.
+pub const TRIAL_NATURAL_PERIODS: f64 = 120.0;
+/// Fewest / most ticks per trial.
+pub const TRIAL_TICKS: (f64, f64) = (2000.0, 40_000.0);
+/// Scan factor and final relative width of the bisection.
+pub const SCAN_FACTOR: f64 = 1.25;
+/// Relative width at which the bisection stops.
+pub const REL_TOL: f64 = 0.005;
+
+/// A plant stepped by a sampled controller (SI units, encoder on the controlled side).
+pub trait SampledPlant {
+    /// Sets the whole plant at `position_m` moving at `velocity_m_per_s` (internal states at
+    /// rest relative to it, amplifier idle).
+    fn set_state(&mut self, position_m: f64, velocity_m_per_s: f64);
+    /// Holds the command `force_n` for `dt_s`.
+    fn advance(&mut self, force_n: f64, dt_s: f64);
+    /// ⌊x/Δ⌋ of the encoder side.
+    fn encoder_count(&self) -> i64;
+    /// Velocity of the encoder side, m/s (rad/s).
+    fn velocity_m_per_s(&self) -> f64;
+}
+
+impl SampledPlant for stiffwall_sim::PhysicalPlant {
+    fn set_state(&mut self, position_m: f64, velocity_m_per_s: f64) {
+        stiffwall_sim::PhysicalPlant::set_state(self, position_m, velocity_m_per_s);
+    }
+    fn advance(&mut self, force_n: f64, dt_s: f64) {
+        stiffwall_sim::PhysicalPlant::advance(self, force_n, dt_s);
+    }
+    fn encoder_count(&self) -> i64 {
+        stiffwall_sim::PhysicalPlant::encoder_count(self)
+    }
+    fn velocity_m_per_s(&self) -> f64 {
+        stiffwall_sim::PhysicalPlant::velocity_m_per_s(self)
+    }
+}
+
+/// The controller side of a plant and the trial envelope.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rig {
+    /// Servo period T, s.
+    pub period_s: f64,
+    /// Encoder resolution Δ, m (rad).
+    pub resolution_m: f64,
+    /// Extra delay of the force, whole periods.
+    pub delay_ticks: u32,
+    /// One-sided wall (occupies n ≥ 0).
+    pub one_sided: bool,
+    /// One-sided wall and nothing brings the plant back once it left (no hand spring): a
+    /// trial ends when the plant leaves the wall, judged by its speed.
+    pub free_exit: bool,
+    /// Clamp of the commanded force, N (N·m).
+    pub force_limit_n: f64,
+    /// Maximum impact velocity v_max, m/s (rad/s).
+    pub v_max: f64,
+    /// Whole moving mass (motor side + link + hand), kg (kg·m²).
+    pub moving_mass_kg: f64,
+    /// Wall offsets to try, counts (several cogging phases; `[0]` otherwise).
+    pub wall_offsets: Vec<i64>,
+}
+
+impl Rig {
+    /// Deflection whose spring energy equals the kinetic energy at v_max, counts.
+    #[must_use]
+    pub fn d_max(&self, k: f64) -> f64 {
+        self.v_max * (self.moving_mass_kg / k).sqrt() / self.resolution_m
+    }
+
+    /// Ticks of one trial at stiffness `k`.
+    #[must_use]
+    pub fn trial_ticks(&self, k: f64) -> usize {
+        let natural = std::f64::consts::TAU * (self.moving_mass_kg / k).sqrt() / self.period_s;
+        (TRIAL_NATURAL_PERIODS * natural).clamp(TRIAL_TICKS.0, TRIAL_TICKS.1) as usize
+    }
+
+    /// The spring of eq. (2) at count `n` relative to the wall, clamped, N.
+    #[must_use]
+    pub fn spring_n(&self, k: f64, n: i64) -> f64 {
+        if self.one_sided && n < 0 {
+            return 0.0;
+        }
+        (-k * self.resolution_m * (n as f64 + 0.5)).clamp(-self.force_limit_n, self.force_limit_n)
+    }
+
+    /// Every trial of the criterion at stiffness `k`.
+    #[must_use]
+    pub fn trials(&self, k: f64) -> Vec<Trial> {
+        let sides: &[i8] = if self.one_sided { &[1] } else { &[1, -1] };
+        let d_max = self.d_max(k);
+        let mut releases: Vec<i64> = RELEASE_FRACTIONS
+            .iter()
+            .map(|f| (f * d_max).round().max(1.0) as i64)
+            .chain([1])
+            .collect();
+        releases.sort_unstable();
+        releases.dedup();
+        let mut out = Vec::new();
+        for &wall in &self.wall_offsets {
+            for &side in sides {
+                for f in IMPACT_FRACTIONS {
+                    out.push(Trial {
+                        wall,
+                        side,
+                        kind: TrialKind::Impact {
+                            velocity_m_per_s: f * self.v_max,
+                        },
+                    });
+                }
+                for &d in &releases {
+                    out.push(Trial {
+                        wall,
+                        side,
+                        kind: TrialKind::Release { counts: d },
+                    });
+                }
+            }
+        }
+        out
+    }
+}
+
+/// What a trial does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TrialKind {
+    /// Arrives at the wall surface at this speed (into the wall).
+    Impact {
+        /// Speed, m/s (rad/s), > 0.
+        velocity_m_per_s: f64,
+    },
+    /// Released from rest in the middle of this count (deflection ≥ 1).
+    Release {
+        /// Deflection, counts.
+        counts: i64,
+    },
+}
+
+/// One trial: which side of the wall (+1: n ≥ 0), where the wall is, what happens.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Trial {
+    /// Wall position, counts.
+    pub wall: i64,
+    /// +1 or −1.
+    pub side: i8,
+    /// Impact or release.
+    pub kind: TrialKind,
+}
+
+impl Trial {
+    /// Initial position and velocity for resolution Δ = `resolution_m`: an impact starts at the
+    /// wall surface (just below it for the negative side), a release at rest in the middle of
+    /// its count.
+    #[must_use]
+    pub fn initial_state(&self, resolution_m: f64) -> (f64, f64) {
+        let d = resolution_m;
+        let wall_x = self.wall as f64 * d;
+        let s = f64::from(self.side);
+        match self.kind {
+            TrialKind::Impact { velocity_m_per_s } => {
+                let x = if self.side > 0 {
+                    wall_x
+                } else {
+                    wall_x - 1e-9 * d
+                };
+                (x, s * velocity_m_per_s)
+            }
+            TrialKind::Release { counts } => (wall_x + s * (counts as f64 + 0.5) * d, 0.0),
+        }
+    }
+}
+
+/// The recorded counts (relative to the wall) of one trial and its verdict.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TrialRun {
+    /// Counts relative to the wall, one per tick (shorter when stopped early).
+    pub counts: Vec<i64>,
+    /// Stopped early: |n| exceeded the runaway bound.
+    pub ran_away: bool,
+    /// One-sided wall: the plant left the wall (the run stops there) at this speed, with the
+    /// largest speed a passive wall could give it back (m/s, rad/s).
+    pub exit: Option<(f64, f64)>,
+}
+
+impl TrialRun {
+    /// Settled: not run away; on a one-sided wall that was left, left no faster than it could
+    /// passively; otherwise over the last third the count stays within one count.
+    #[must_use]
+    pub fn settled(&self) -> bool {
+        if self.ran_away || self.counts.is_empty() {
+            return false;
+        }
+        if let Some((v, passive)) = self.exit {
+            return v <= passive;
+        }
+        let tail = &self.counts[self.counts.len() * 2 / 3..];
+        let lo = tail.iter().min().copied().unwrap_or(0);
+        let hi = tail.iter().max().copied().unwrap_or(0);
+        hi - lo <= 1
+    }
+
+    /// Largest |n + ½| over the run, counts.
+    #[must_use]
+    pub fn peak(&self) -> f64 {
+        self.counts
+            .iter()
+            .fold(0.0f64, |a, &n| a.max((n as f64 + 0.5).abs()))
+    }
+}
+
+/// Runs one trial on a fresh copy of `proto` at stiffness `k`.
+pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: Trial) -> TrialRun {
+    let d = rig.resolution_m;
+    let mut plant = proto.clone();
+    let (x0, v0) = trial.initial_state(d);
+    plant.set_state(x0, v0);
+    // One-sided wall: the speed a passive wall could return — the impact speed, or the speed
+    // whose kinetic energy is the spring energy ½K((d + 1)Δ)² of a release from count d.
+    let passive = match trial.kind {
+        TrialKind::Impact { velocity_m_per_s } => velocity_m_per_s,
+        TrialKind::Release { counts } => {
+            (k / rig.moving_mass_kg).sqrt() * (counts as f64 + 1.0) * d
+        }
+    };
+    let mut touched = false;
+    let ticks = rig.trial_ticks(k);
+    let bound = (10.0 * (rig.d_max(k) + 2.0) + 100.0) as i64;
+    let delay = rig.delay_ticks as usize;
+    let mut line = std::collections::VecDeque::with_capacity(delay + 1);
+    let mut counts = Vec::with_capacity(ticks);
+    for _ in 0..ticks {
+        let n = plant.encoder_count() - trial.wall;
+        counts.push(n);
+        // Outside a one-sided wall no force acts: only the penetration can run away.
+        let excursion = if rig.one_sided { n } else { n.abs() };
+        if excursion > bound {
+            return TrialRun {
+                counts,
+                ran_away: true,
+                exit: None,
+            };
+        }
+        if rig.free_exit {
+            touched |= n >= 0;
+            if touched && n < -1 && plant.velocity_m_per_s() < 0.0 {
+                // Left the wall, moving away with no force on it: judged by its speed.
+                return TrialRun {
+                    counts,
+                    ran_away: false,
+                    exit: Some((-plant.velocity_m_per_s(), passive)),
+                };
+            }
+        }
+        // Delay line of `delay` whole periods (zeros first), as the firmware's ring.
+        line.push_back(rig.spring_n(k, n));
+        let f = if line.len() > delay {
+            line.pop_front().unwrap_or(0.0)
+        } else {
+            0.0
+        };
+        plant.advance(f, rig.period_s);
+    }
+    TrialRun {
+        counts,
+        ran_away: false,
+        exit: None,
+    }
+}
+
+/// The first failing trial at `k`, if any.
+pub fn first_failure<P: SampledPlant + Clone>(
+    proto: &P,
+    rig: &Rig,
+    k: f64,
+) -> Option<(Trial, TrialRun)> {
+    rig.trials(k).into_iter().find_map(|t| {
+        let r = run_trial(proto, rig, k, t);
+        (!r.settled()).then_some((t, r))
+    })
+}
+
+/// Result of the K* search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KStar {
+    /// Largest K found stable (all trials settle), N/m (N·m/rad).
+    pub k_star: f64,
+    /// Smallest K found unstable above it.
+    pub k_fail: f64,
+    /// The trial that failed at `k_fail`.
+    pub failing: Trial,
+    /// Stiffnesses evaluated.
+    pub evaluations: usize,
+}
+
+/// Errors of the search.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum KStarError {
+    /// Even the smallest K tried fails.
+    #[error("no stable stiffness found down to {0} N/m")]
+    NoneStable(f64),
+    /// Nothing failed up to the cap.
+    #[error("every stiffness up to {0} N/m is stable (raise the cap)")]
+    NoFailure(f64),
+}
+
+/// Scans up from `k_start` (or down until stable) by [`SCAN_FACTOR`], then bisects to
+/// [`REL_TOL`]. `k_cap` bounds the scan.
+pub fn k_star<P: SampledPlant + Clone>(
+    proto: &P,
+    rig: &Rig,
+    k_start: f64,
+    k_cap: f64,
+) -> Result<KStar, KStarError> {
+    let mut evaluations = 0;
+    let mut eval = |k: f64| {
+        evaluations += 1;
+        first_failure(proto, rig, k)
+    };
+    let mut lo = k_start;
+    let mut fail = eval(lo);
+    let mut steps = 0;
+    while fail.is_some() {
+        steps += 1;
+        if steps > 20 {
+            return Err(KStarError::NoneStable(lo));
+        }
+        lo /= SCAN_FACTOR * SCAN_FACTOR;
+        fail = eval(lo);
+    }
+    let (mut hi, mut failing) = loop {
+        let k = lo * SCAN_FACTOR;
+        if k > k_cap {
+            return Err(KStarError::NoFailure(k_cap));
+        }
+        match eval(k) {
+            Some((t, _)) => break (k, t),
+            None => lo = k,
+        }
+    };
+    while hi / lo > 1.0 + REL_TOL {
+        let mid = (lo * hi).sqrt();
+        match eval(mid) {
+            Some((t, _)) => {
+                hi = mid;
+                failing = t;
+            }
+            None => lo = mid,
+        }
+    }
+    Ok(KStar {
+        k_star: lo,
+        k_fail: hi,
+        failing,
+        evaluations,
+    })
+}

@@ -1,0 +1,100 @@
+//! `hostctl tune` on plants beyond its model (issue 10, item 5): on every plant of
+//! `sim/plants/`, the K that `tune --plant FILE --fast --dry-run` sets is safe (≤ the true
+//! largest stable K*, computed by `stiffwall_tests::kstar` from the simulator alone) and near
+//! optimal (≥ 0.7 K*).
+//!
+//! The tune runs the same code as `hostctl tune --plant FILE --fast --dry-run`: the connect
+//! options are parsed from those arguments and `tune::procedure::tune` runs on the client.
+//! Default run: the plants of [`DEFAULT_PLANTS`]; all of them with
+//! `cargo test -p stiffwall-tests --test tune_plants -- --ignored`.
+
+use clap::Parser;
+use stiffwall_host::device::connect::ConnectArgs;
+use stiffwall_host::tune::procedure::{self, Settings};
+use stiffwall_tests::family::{plant_files, plants_dir, PlantCase};
+use stiffwall_tests::kstar;
+
+/// The plants of the default run (rigid, exactly simulated or short, so that K* is quick).
+pub const DEFAULT_PLANTS: [&str; 4] = [
+    "phantom-stiction",
+    "maxon-re35-amp-3khz",
+    "phantom-light-grip",
+    "rotary-ironcore-cogging",
+];
+
+/// Lower bound of K set / K*.
+const NEAR_OPTIMAL: f64 = 0.7;
+
+#[derive(Debug, Parser)]
+struct Cli {
+    #[command(flatten)]
+    connect: ConnectArgs,
+}
+
+/// K* and the K set by tune; an error message when tune fails or K is out of [0.7 K*, K*].
+fn check(case: &PlantCase) -> Result<String, String> {
+    let ks = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
+        .map_err(|e| format!("{}: K*: {e}", case.name))?;
+    let cli = Cli::try_parse_from([
+        "hostctl".as_ref(),
+        "--plant".as_ref(),
+        case.path.as_os_str(),
+        "--fast".as_ref(),
+    ])
+    .map_err(|e| format!("{}: {e}", case.name))?;
+    let t0 = std::time::Instant::now();
+    let mut client = cli
+        .connect
+        .connect()
+        .map_err(|e| format!("{}: connect: {e:#}", case.name))?;
+    let o = procedure::tune(&mut client, &Settings::default(), true, &|_| {})
+        .map_err(|e| format!("{}: tune failed: {e:#}", case.name))?;
+    let ratio = o.k_set / ks.k_star;
+    let line = format!(
+        "{}: K* = {:.5} (first failure {:?}), K set = {:.5}, K/K* = {ratio:.3}, tune {:.1} s",
+        case.name,
+        ks.k_star,
+        ks.failing,
+        o.k_set,
+        t0.elapsed().as_secs_f64()
+    );
+    eprintln!("{line}");
+    if o.k_set > ks.k_star {
+        return Err(format!("UNSAFE {line}"));
+    }
+    if ratio < NEAR_OPTIMAL {
+        return Err(format!("below {NEAR_OPTIMAL} K*: {line}"));
+    }
+    Ok(line)
+}
+
+fn check_all(cases: &[PlantCase]) {
+    let failures: Vec<String> = cases.iter().filter_map(|c| check(c).err()).collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} plants fail:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn tune_is_safe_and_near_optimal_on_four_plants() {
+    let cases: Vec<PlantCase> = DEFAULT_PLANTS
+        .iter()
+        .map(|n| PlantCase::named(n).unwrap_or_else(|e| panic!("{e}")))
+        .collect();
+    check_all(&cases);
+}
+
+#[test]
+#[ignore = "every plant of sim/plants: minutes; run with --ignored"]
+fn tune_is_safe_and_near_optimal_on_every_plant() {
+    let cases: Vec<PlantCase> = plant_files(&plants_dir())
+        .unwrap()
+        .iter()
+        .map(|p| PlantCase::load(p).unwrap_or_else(|e| panic!("{e}")))
+        .collect();
+    check_all(&cases);
+}
