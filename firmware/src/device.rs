@@ -4,9 +4,16 @@
 //! link are protocol frames ([`stiffwall_proto::frame`]).
 //!
 //! Invariants:
-//! - Every complete frame gets exactly one reply: the answer, or `Error { code, detail }` with a
-//!   distinct code per framing failure. Bytes are read only while the reply queue has room, so
-//!   no reply is ever lost; a slow link back-pressures the reader.
+//! - Every complete well-formed frame gets exactly one reply: the answer, or `Error { code,
+//!   detail }`. Frames that fail to decode (distinct code per framing failure) are coalesced:
+//!   a run of consecutive bad frames with the same code is answered by one `Error`, whose
+//!   detail is the usual one for a single frame and `ErrorDetail::Repeated { count }` for
+//!   `count` ≥ 2 frames, so every bad frame is accounted for and a flood of them costs one
+//!   reply per run, not one per frame. Bytes are read only while the reply queue (counting the
+//!   pending run) has room, so no reply is ever lost; a slow link back-pressures the reader.
+//! - Fairness: replies and telemetry share the link. While a telemetry batch is ready, at most
+//!   [`REPLY_BUDGET`] replies are sent before it, so neither a flood of requests nor one of bad
+//!   frames starves telemetry, and replies still leave at a bounded share of the link.
 //! - A refused request (bad range, busy, store failure) changes nothing. `SetConfig` is
 //!   validated field by field ([`crate::config::validate`]) before it reaches the servo.
 //! - Telemetry batches hold consecutive samples only. The device counts lost samples from the
@@ -33,6 +40,8 @@ const REPLIES: usize = 4;
 const READ_BUDGET: usize = 512;
 /// Frames started per `poll` at most.
 const FRAME_BUDGET: usize = 4;
+/// Replies sent at most in a row while a telemetry batch is ready to go.
+pub const REPLY_BUDGET: u8 = 2;
 /// Longest experiment, ticks.
 pub const MAX_EXPERIMENT_TICKS: u32 = 10_000_000;
 /// Largest release deflection, effective ticks.
@@ -64,6 +73,10 @@ pub struct Device<'a, S: ConfigStorage> {
     tx_len: usize,
     tx_pos: usize,
     replies: Deque<DeviceMsg, REPLIES>,
+    /// The current run of bad frames: code, detail of its first frame, frames in the run.
+    rejected: Option<(ErrorCode, ErrorDetail, u32)>,
+    /// Replies sent since the last telemetry batch (saturating at [`REPLY_BUDGET`]).
+    replies_in_row: u8,
     batch: TelemetryBatch,
     batch_tick: u32,
     batch_cut: bool,
@@ -83,6 +96,18 @@ fn invalid(field: ConfigField, min: f64, max: f64) -> DeviceMsg {
     DeviceMsg::Error {
         code: ErrorCode::InvalidArgument,
         detail: ErrorDetail::Field { field, min, max },
+    }
+}
+
+/// The one reply to a run of `count` bad frames with `code` (`detail`: that of the first).
+fn rejected_reply((code, detail, count): (ErrorCode, ErrorDetail, u32)) -> DeviceMsg {
+    DeviceMsg::Error {
+        code,
+        detail: if count > 1 {
+            ErrorDetail::Repeated { count }
+        } else {
+            detail
+        },
     }
 }
 
@@ -119,6 +144,8 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             tx_len: 0,
             tx_pos: 0,
             replies: Deque::new(),
+            rejected: None,
+            replies_in_row: 0,
             batch: TelemetryBatch {
                 seq: 0,
                 dropped: 0,
@@ -158,7 +185,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
     /// An exit code the host asked the board to end its run with (`Shutdown`), once, after
     /// the acknowledgement has been queued; boards that cannot exit ignore it.
     pub fn take_shutdown(&mut self) -> Option<u8> {
-        if self.tx_pos < self.tx_len || !self.replies.is_empty() {
+        if self.tx_pos < self.tx_len || !self.replies.is_empty() || self.rejected.is_some() {
             return None; // let the Ack leave first
         }
         self.shutdown.take()
@@ -181,29 +208,36 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
 
     /// One main-loop step: read and handle frames, collect telemetry, send what the link takes.
     pub fn poll(&mut self, now: u32, link: &mut impl ByteLink) {
-        // 1. Requests (only while a reply has room).
+        // 1. Requests (only while a reply has room; the pending run of bad frames holds one).
         let mut budget = READ_BUDGET;
-        while budget > 0 && self.replies.len() < REPLIES {
+        while budget > 0 && self.replies.len() + usize::from(self.rejected.is_some()) < REPLIES {
             budget -= 1;
             let Some(b) = link.read() else { break };
-            if let Some(r) = self.decoder.feed::<HostMsg>(b) {
-                let reply = match r {
-                    Ok(msg) => {
-                        self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
-                        self.handle(msg)
+            match self.decoder.feed::<HostMsg>(b) {
+                None => {}
+                Some(Ok(msg)) => {
+                    self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
+                    // The run's reply goes first: replies keep the order of the frames.
+                    self.flush_rejected();
+                    let reply = self.handle(msg);
+                    if matches!(reply, DeviceMsg::Error { .. }) {
+                        self.stats.refused = self.stats.refused.wrapping_add(1);
                     }
-                    Err(e) => {
-                        self.stats.frames_bad = self.stats.frames_bad.wrapping_add(1);
-                        DeviceMsg::Error {
-                            code: e.code(),
-                            detail: e.detail(),
+                    let _ = self.replies.push_back(reply);
+                }
+                Some(Err(e)) => {
+                    self.stats.frames_bad = self.stats.frames_bad.wrapping_add(1);
+                    self.stats.refused = self.stats.refused.wrapping_add(1);
+                    match &mut self.rejected {
+                        Some((code, _, count)) if *code == e.code() && *count < u32::MAX => {
+                            *count += 1;
+                        }
+                        _ => {
+                            self.flush_rejected();
+                            self.rejected = Some((e.code(), e.detail(), 1));
                         }
                     }
-                };
-                if matches!(reply, DeviceMsg::Error { .. }) {
-                    self.stats.refused = self.stats.refused.wrapping_add(1);
                 }
-                let _ = self.replies.push_back(reply);
             }
         }
         // 2. Telemetry into the batch.
@@ -221,7 +255,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         {
             if seq_reached(self.next_seq, next_seq)
                 && self.batch.samples.is_empty()
-                && !self.replies.is_full()
+                && self.replies.len() + usize::from(self.rejected.is_some()) < REPLIES
             {
                 let _ = self.replies.push_back(DeviceMsg::ExperimentDone {
                     kind,
@@ -251,6 +285,13 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         }
     }
 
+    /// Queues the reply to the pending run of bad frames, if any (the caller keeps a slot free).
+    fn flush_rejected(&mut self) {
+        if let Some(r) = self.rejected.take() {
+            let _ = self.replies.push_back(rejected_reply(r));
+        }
+    }
+
     /// Moves samples from the servo queue into the batch (consecutive numbers only).
     fn collect(&mut self, now: u32) {
         while self.batch.samples.len() < TELEMETRY_BATCH && !self.batch_cut {
@@ -277,14 +318,25 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
     /// Encodes the next frame into `tx`; `false` if there is nothing to send.
     fn next_frame(&mut self, now: u32) -> bool {
         let flush_ticks = (self.config.servo_rate_hz / 100).max(1);
-        let msg = if let Some(r) = self.replies.pop_front() {
-            r
-        } else if !self.batch.samples.is_empty()
+        let telemetry_ready = !self.batch.samples.is_empty()
             && (self.batch.samples.len() >= TELEMETRY_BATCH
                 || self.batch_cut
                 || now.wrapping_sub(self.batch_tick) >= flush_ticks
-                || self.pending_event.is_some())
-        {
+                || self.pending_event.is_some());
+        let reply_turn = !(telemetry_ready && self.replies_in_row >= REPLY_BUDGET);
+        let reply = if reply_turn {
+            // Older replies first, then the run of bad frames (newer than every queued reply).
+            self.replies
+                .pop_front()
+                .or_else(|| self.rejected.take().map(rejected_reply))
+        } else {
+            None
+        };
+        let msg = if let Some(r) = reply {
+            self.replies_in_row = self.replies_in_row.saturating_add(1).min(REPLY_BUDGET);
+            r
+        } else if telemetry_ready {
+            self.replies_in_row = 0;
             self.batch_cut = false;
             let b = core::mem::replace(
                 &mut self.batch,
@@ -719,5 +771,130 @@ mod tests {
         }
         assert_eq!(got.len(), 20);
         assert!(got.iter().all(|m| matches!(m, DeviceMsg::Faults(_))));
+    }
+
+    /// Replies to the bad frames of a flood: (frames they stand for, reply frames).
+    fn bad_frames_answered(frames: &[DeviceMsg]) -> (u64, usize) {
+        let mut n = 0;
+        let mut replies = 0;
+        for m in frames {
+            if let DeviceMsg::Error { code, detail } = m {
+                assert_eq!(*code, ErrorCode::Cobs, "{m:?}");
+                replies += 1;
+                n += match detail {
+                    ErrorDetail::Repeated { count } => {
+                        assert!(*count >= 2, "{m:?}");
+                        u64::from(*count)
+                    }
+                    ErrorDetail::None => 1,
+                    other => panic!("unexpected detail {other:?}"),
+                };
+            }
+        }
+        (n, replies)
+    }
+
+    /// Issue 11, item 1: `01 00` (an empty-payload frame) written at 40 bytes per servo tick
+    /// (40 KB/s at 1 kHz) while streaming one sample per tick over a link taking 200 bytes per
+    /// tick. Every telemetry sample gets out (no gap, nothing dropped on the device) and every
+    /// bad frame is answered (the counts of the coalesced error replies add up).
+    #[test]
+    fn flood_of_bad_frames_does_not_starve_telemetry() {
+        let mut ch = Channels::new();
+        let (sp, hp) = ch.split();
+        let b = BoardInfo::default();
+        let mut dev = Device::new(
+            b,
+            ConfigStore::new(MemStorage::default()),
+            hp,
+            ServoConfig::default(),
+        );
+        let mut servo: Servo<'_> = Servo::new(b, dev.config(), sp);
+        let mut link = Link::default();
+        link.send(&HostMsg::StreamStart { decimation: 1 });
+        let flood_ticks = 3000u32;
+        let per_tick = 20usize;
+        let mut frames = Vec::new();
+        for t in 0..flood_ticks + 200 {
+            if t < flood_ticks {
+                for _ in 0..per_tick {
+                    link.rx.extend([0x01, 0x00]);
+                }
+            }
+            link.tx_room = Some(200);
+            dev.poll(t, &mut link);
+            servo.tick(t, &mut SampledCount(0), &mut HeldCode(0));
+            frames.extend(link.frames());
+        }
+        assert!(link.rx.is_empty(), "the device kept up with the flood");
+        let sent = u64::from(flood_ticks) * per_tick as u64;
+        let (answered, replies) = bad_frames_answered(&frames);
+        assert_eq!(answered, sent, "every bad frame accounted for");
+        assert_eq!(u64::from(dev.stats().frames_bad), sent);
+        // Coalesced: at most one reply per poll for the 20 bad frames each tick brings.
+        assert!(
+            replies <= flood_ticks as usize,
+            "coalesced: {replies} replies"
+        );
+        assert_eq!(dev.dropped(), 0, "no sample dropped on the device");
+        let mut next = None;
+        let mut samples = 0u32;
+        for m in &frames {
+            if let DeviceMsg::Telemetry(tb) = m {
+                assert_eq!(tb.dropped, 0);
+                if let Some(n) = next {
+                    assert_eq!(tb.seq, n, "consecutive batches");
+                }
+                next = Some(tb.seq + tb.samples.len() as u32);
+                samples += tb.samples.len() as u32;
+            }
+        }
+        // Streaming starts within the first ticks; all but the last batch's worth are out.
+        assert!(
+            samples + 2 * TELEMETRY_BATCH as u32 + 5 >= flood_ticks + 200,
+            "{samples} samples of {}",
+            flood_ticks + 200
+        );
+    }
+
+    /// A flood of well-formed requests (each answered) still leaves telemetry its share: with
+    /// [`REPLY_BUDGET`] replies per batch, no sample is dropped while the link has room.
+    #[test]
+    fn flood_of_requests_shares_the_link_with_telemetry() {
+        let mut ch = Channels::new();
+        let (sp, hp) = ch.split();
+        let b = BoardInfo::default();
+        let mut dev = Device::new(
+            b,
+            ConfigStore::new(MemStorage::default()),
+            hp,
+            ServoConfig::default(),
+        );
+        let mut servo: Servo<'_> = Servo::new(b, dev.config(), sp);
+        let mut link = Link::default();
+        link.send(&HostMsg::StreamStart { decimation: 1 });
+        let mut acks = 0;
+        let mut samples = 0u32;
+        for t in 0..3000u32 {
+            for _ in 0..4 {
+                link.send(&HostMsg::Heartbeat);
+            }
+            link.tx_room = Some(400);
+            dev.poll(t, &mut link);
+            servo.tick(t, &mut SampledCount(0), &mut HeldCode(0));
+            for m in link.frames() {
+                match m {
+                    DeviceMsg::Ack(Request::Heartbeat) => acks += 1,
+                    DeviceMsg::Telemetry(tb) => samples += tb.samples.len() as u32,
+                    _ => {}
+                }
+            }
+        }
+        assert_eq!(dev.dropped(), 0, "no sample dropped on the device");
+        assert!(
+            samples + 2 * TELEMETRY_BATCH as u32 + 5 >= 3000,
+            "{samples}"
+        );
+        assert!(acks > 3000, "replies still flow: {acks}");
     }
 }

@@ -86,7 +86,9 @@ impl Hold {
     pub(crate) fn advance(&mut self, n: i32, dn: i32, rate_hz: u32) -> Option<u32> {
         let rate = rate_hz.max(1);
         self.held = self.held.saturating_add(1);
-        if dn == 0 && n.saturating_sub(self.target).abs() <= 1 {
+        // `abs_diff`: exact for every pair of i32 (a saturating difference's `abs` overflows at
+        // i32::MIN, and in release builds the hold would then never settle).
+        if dn == 0 && n.abs_diff(self.target) <= 1 {
             self.still = self.still.saturating_add(1);
         } else {
             self.still = 0;
@@ -231,6 +233,7 @@ impl Excitation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::strategy::Just;
 
     #[test]
     fn hold_releases_after_settling_or_two_seconds() {
@@ -243,6 +246,49 @@ mod tests {
         let first = (1..=5000u32).find(|i| h.advance(5 + (*i as i32 & 7), 1, 1000).is_some());
         assert_eq!(first, Some(2000));
         assert_eq!(Hold::new(0, 0).ticks, 1);
+    }
+
+    /// The settled check at the ends of the count range: a hold at i32::MIN (the repro
+    /// `wall_position = i32::MAX`, count 0, deflection 1 gives n = i32::MIN) settles when still
+    /// there, and a device 2³¹ counts or more away from its target never counts as still.
+    #[test]
+    fn hold_settles_at_the_ends_of_the_count_range() {
+        for target in [i32::MIN, i32::MIN + 1, i32::MAX, i32::MAX - 1, 0] {
+            let mut h = Hold::new(target, 10);
+            let first = (1..=1000).find(|_| h.advance(target, 0, 1000).is_some());
+            assert_eq!(first, Some(100), "still at {target}");
+        }
+        for (n, target) in [
+            (i32::MIN, i32::MAX),
+            (i32::MAX, i32::MIN),
+            (i32::MIN, 0),
+            (0, i32::MIN),
+        ] {
+            let mut h = Hold::new(target, 10);
+            let first = (1..=5000).find(|_| h.advance(n, 0, 1000).is_some());
+            assert_eq!(
+                first,
+                Some(2000),
+                "n {n} target {target}: only the 2 s limit releases"
+            );
+        }
+    }
+
+    proptest::proptest! {
+        /// Still counts exactly when |n − target| ≤ 1 in exact (i64) arithmetic, for any pair.
+        #[test]
+        fn hold_still_matches_exact_distance(
+            n in proptest::prop_oneof![proptest::num::i32::ANY, Just(i32::MIN), Just(i32::MAX)],
+            off in -3i64..=3,
+            far in proptest::bool::ANY,
+        ) {
+            let target_wide = if far { i64::from(n) ^ (1 << 31) } else { i64::from(n) + off };
+            let target = target_wide.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+            let exact_still = (i64::from(n) - i64::from(target)).abs() <= 1;
+            let mut h = Hold::new(target, 1);
+            let released_at = (1..=400).find(|_| h.advance(n, 0, 1000).is_some());
+            proptest::prop_assert_eq!(released_at.is_some(), exact_still);
+        }
     }
 
     #[test]

@@ -212,6 +212,17 @@ pub fn pump(
             take = take.min(n.saturating_sub(covered) as usize);
         }
         if take == 0 {
+            // The batch lies past the plan's end: samples missing before it inside the plan
+            // are a trailing gap, counted above and written here (an empty batch at the
+            // plan's end), so the file accounts for every planned sample.
+            if let (Some(expect), true) = (next, missing > 0) {
+                let end_seq = expect.wrapping_add(missing as u32);
+                st.wall_s = start.elapsed().as_secs_f64();
+                if let Err(e) = sink(end_seq, &[], missing, dev, &st) {
+                    let _ = client.stream_stop();
+                    return Err(e);
+                }
+            }
             break End::Complete;
         }
         let samples = &batch.samples[..take];

@@ -8,6 +8,14 @@
 //! (→ [`FrameError::Cobs`]), CRC (→ [`FrameError::Crc`]), version byte
 //! (→ [`FrameError::VersionMismatch`]), message tag (→ [`FrameError::UnknownTag`]), body
 //! (→ [`FrameError::Deserialize`], also for trailing bytes). It never panics.
+//!
+//! Strictness: every message has exactly one encoding. Varints must be canonical (no
+//! over-long forms such as `84 00` for 4) and fit their type (a fifth tag byte above `0x0f`
+//! overflows a u32): the tag is checked by [`FrameError::UnknownTag`]'s varint reader and the
+//! whole body by re-encoding the decoded message and comparing it byte for byte, so anything
+//! non-canonical is [`FrameError::Deserialize`]. A frame ends at its first 0x00: the streaming
+//! [`FrameDecoder`] starts the next frame with the byte after it, and [`decode_frame`] (which
+//! takes exactly one frame) refuses a 0x00 anywhere but at the end ([`FrameError::Cobs`]).
 
 use crate::msg::{DeviceMsg, ErrorCode, ErrorDetail, HostMsg};
 use crate::PROTOCOL_VERSION;
@@ -132,13 +140,18 @@ pub fn encode<'a, M: Serialize>(msg: &M, out: &'a mut [u8]) -> Result<&'a [u8], 
     Ok(&out[..=n])
 }
 
-/// Reads a postcard varint u32 from the start of `b`.
+/// Reads a canonical postcard varint u32 from the start of `b`: `None` when it is cut short,
+/// longer than 5 bytes, over-long (a final byte of 0 after the first), or overflows u32 (a
+/// fifth byte above `0x0f`).
 fn peek_varint(b: &[u8]) -> Option<u32> {
     let mut v: u32 = 0;
     for (i, &byte) in b.iter().take(5).enumerate() {
+        if i == 4 && byte > 0x0f {
+            return None;
+        }
         v |= u32::from(byte & 0x7f).checked_shl(7 * i as u32)?;
         if byte & 0x80 == 0 {
-            return Some(v);
+            return (i == 0 || byte != 0).then_some(v);
         }
     }
     None
@@ -166,8 +179,14 @@ pub fn decode_payload<M: Message>(payload: &[u8]) -> Result<M, FrameError> {
     if tag >= M::VARIANTS {
         return Err(FrameError::UnknownTag(tag));
     }
-    match postcard::take_from_bytes::<M>(body) {
-        Ok((m, [])) => Ok(m),
+    let m = match postcard::take_from_bytes::<M>(body) {
+        Ok((m, [])) => m,
+        _ => return Err(FrameError::Deserialize),
+    };
+    // Canonical encoding only: the message must encode back to exactly these bytes.
+    let mut again = [0u8; MAX_PAYLOAD];
+    match postcard::to_slice(&m, &mut again) {
+        Ok(b) if *b == *body => Ok(m),
         _ => Err(FrameError::Deserialize),
     }
 }
@@ -186,6 +205,10 @@ pub fn decode_frame<M: Message>(frame: &mut [u8]) -> Result<M, FrameError> {
     };
     if frame.len() >= MAX_FRAME {
         return Err(FrameError::Oversize);
+    }
+    if frame.contains(&0) {
+        // Bytes after a delimiter: this is more than one frame.
+        return Err(FrameError::Cobs);
     }
     let n = cobs::decode_in_place(frame).map_err(|_| FrameError::Cobs)?;
     let payload = frame.get(..n).ok_or(FrameError::Cobs)?;
@@ -301,6 +324,97 @@ mod tests {
         }
         assert_eq!(got.as_ref(), Some(m));
         n
+    }
+
+    fn decode_bytes(bytes: &[u8]) -> Result<HostMsg, FrameError> {
+        let mut v = bytes.to_vec();
+        let whole = decode_frame::<HostMsg>(&mut v);
+        // The streaming decoder agrees on a single frame.
+        let mut d = FrameDecoder::new();
+        let mut streamed = None;
+        for &b in bytes {
+            streamed = d.feed::<HostMsg>(b).or(streamed);
+        }
+        assert_eq!(streamed, Some(whole.clone()), "{bytes:02x?}");
+        whole
+    }
+
+    /// Issue 11, item 6: an over-long varint tag (`84 00` for 4) is not LoadDefaults.
+    #[test]
+    fn overlong_varint_tag_is_refused() {
+        let frame = [0x03, 0x01, 0x84, 0x05, 0x6a, 0xee, 0x6c, 0xa1, 0x00];
+        // The CRC is right (zlib.crc32(b'\x01\x84\x00')): only the encoding is wrong.
+        assert_eq!(
+            CRC32.checksum(&[0x01, 0x84, 0x00]).to_le_bytes(),
+            [0x6a, 0xee, 0x6c, 0xa1]
+        );
+        assert_eq!(decode_bytes(&frame), Err(FrameError::Deserialize));
+        // The canonical form of the same message decodes.
+        let mut out = [0u8; 32];
+        let good = encode(&HostMsg::LoadDefaults, &mut out).unwrap().to_vec();
+        assert_eq!(decode_bytes(&good), Ok(HostMsg::LoadDefaults));
+    }
+
+    /// Issue 11, item 6: a fifth varint byte above 0x0f overflows u32 and is a decode error,
+    /// not `UnknownTag(4294967295)`.
+    #[test]
+    fn varint_overflow_in_fifth_byte_is_a_decode_error() {
+        let frame = [
+            0x0b, 0x01, 0xff, 0xff, 0xff, 0xff, 0x7f, 0x49, 0x16, 0xf9, 0x83, 0x00,
+        ];
+        assert_eq!(decode_bytes(&frame), Err(FrameError::Deserialize));
+        // The largest u32 (fifth byte 0x0f) is a valid varint, hence an unknown tag.
+        let mut out = [0u8; 32];
+        let f = encode(&u32::MAX, &mut out).unwrap().to_vec();
+        assert_eq!(decode_bytes(&f), Err(FrameError::UnknownTag(u32::MAX)));
+    }
+
+    /// Over-long varints inside a body (not only in the tag) are refused too.
+    #[test]
+    fn overlong_varint_in_a_field_is_refused() {
+        // StreamStart (tag 5) with decimation 1 written as `81 00`.
+        let payload_body = [0x01u8, 0x05, 0x81, 0x00];
+        let mut payload = payload_body.to_vec();
+        payload.extend(CRC32.checksum(&payload_body).to_le_bytes());
+        assert_eq!(
+            decode_payload::<HostMsg>(&payload),
+            Err(FrameError::Deserialize)
+        );
+        let canonical_body = [0x01u8, 0x05, 0x01];
+        let mut payload = canonical_body.to_vec();
+        payload.extend(CRC32.checksum(&canonical_body).to_le_bytes());
+        assert_eq!(
+            decode_payload::<HostMsg>(&payload),
+            Ok(HostMsg::StreamStart { decimation: 1 })
+        );
+    }
+
+    /// Bytes after a frame's delimiter: `decode_frame` (exactly one frame) refuses them; the
+    /// streaming decoder starts the next frame with them.
+    #[test]
+    fn bytes_after_a_delimiter_start_the_next_frame() {
+        let mut out = [0u8; 32];
+        let hb = encode(&HostMsg::Heartbeat, &mut out).unwrap().to_vec();
+        let mut two = hb.clone();
+        two.extend_from_slice(&[0x05, 0x01, 0x02]); // a trailing partial frame
+        assert_eq!(
+            decode_frame::<HostMsg>(&mut two.clone()),
+            Err(FrameError::Cobs)
+        );
+        let mut with_junk = hb[..hb.len() - 1].to_vec();
+        with_junk.extend_from_slice(&[0x00, 0x03, 0x01]);
+        assert_eq!(
+            decode_frame::<HostMsg>(&mut with_junk),
+            Err(FrameError::Cobs)
+        );
+        let mut d = FrameDecoder::new();
+        let mut got = std::vec::Vec::new();
+        for &b in hb.iter().chain(&hb) {
+            if let Some(r) = d.feed::<HostMsg>(b) {
+                got.push(r);
+            }
+        }
+        assert_eq!(got, [Ok(HostMsg::Heartbeat), Ok(HostMsg::Heartbeat)]);
     }
 
     #[test]

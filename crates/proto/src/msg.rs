@@ -521,4 +521,11 @@ pub enum ErrorDetail {
     Tag(u32),
     /// Short text.
     Text(String<NAME_LEN>),
+    /// `count` (≥ 2) consecutive bad frames with the same error code, answered by this one
+    /// reply (the device coalesces framing errors so that a flood of bad frames cannot crowd
+    /// telemetry off the link). Appended last: the tags of the variants above are unchanged.
+    Repeated {
+        /// Bad frames this reply stands for.
+        count: u32,
+    },
 }

@@ -9,6 +9,8 @@
 //! - `flash BOARD --features dac|pwm[,defmt]`: builds a real board's image and flashes it with
 //!   probe-rs (the board's runner; docs/toolchain.md).
 //! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
+//! - `fuzz [--frames N] [--seed S]`: the fuzz campaign with a chosen budget (CI runs a short
+//!   one with the host tests).
 //! - `bench [--quick] [--no-criterion]`: the simulator's accuracy-vs-time tables
 //!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
 //! - `tune-table [--quick] [--only NAME]`: K* vs the K `hostctl tune` sets on the plants of
@@ -20,6 +22,7 @@ mod bench;
 mod bench_firmware;
 mod firmware;
 mod flash;
+mod fuzz;
 mod qemu;
 mod toolchain;
 mod tune_table;
@@ -140,7 +143,8 @@ fn main() -> Result<()> {
         Some("flash") => flash::flash(&args[1..]),
         Some("unused-deps") => unused_deps::unused_deps(),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
+        Some("fuzz") => fuzz::fuzz(&args[1..]),
         Some("tune-table") => tune_table::tune_table(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME]"),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], fuzz [--frames N] [--seed S]"),
     }
 }

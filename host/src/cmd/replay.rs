@@ -36,7 +36,7 @@ use crate::figure::{self, Figure};
 use crate::output::emit_report;
 use crate::plant_args::{PlantArgs, PlantArgsError};
 use crate::recording::{self, Recording};
-use anyhow::{anyhow, bail, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
@@ -565,6 +565,28 @@ where
     Ok(())
 }
 
+/// Samples missing after the last row of a recording's text: the sum of the `# gap: N samples
+/// missing …` notes that no data row follows (a recording that lost its last samples ends with
+/// such a note; gaps between rows are counted from the rows' `seq`).
+#[must_use]
+pub fn trailing_gap(text: &str) -> u64 {
+    let mut trailing = 0u64;
+    for line in text.lines() {
+        let line = line.trim();
+        if let Some(rest) = line.strip_prefix("# gap:") {
+            let n = rest
+                .split_whitespace()
+                .next()
+                .and_then(|w| w.parse::<u64>().ok())
+                .unwrap_or(0);
+            trailing = trailing.saturating_add(n);
+        } else if !line.is_empty() && !line.starts_with('#') && !line.starts_with("seq") {
+            trailing = 0; // a data row: the notes before it are gaps between rows
+        }
+    }
+    trailing
+}
+
 /// Runs `hostctl replay`.
 pub fn run(args: &Args) -> Result<()> {
     if let Some(path) = &args.plot {
@@ -574,7 +596,11 @@ pub fn run(args: &Args) -> Result<()> {
     if rec.rows.is_empty() {
         bail!("{}: the recording holds no samples", args.file.display());
     }
-    let report = replay(args, &rec)?;
+    let mut report = replay(args, &rec)?;
+    // Samples lost at the end of a recording have no row after them: only their gap note.
+    let text = std::fs::read_to_string(&args.file)
+        .with_context(|| format!("reading {}", args.file.display()))?;
+    report.missing += trailing_gap(&text);
     if let (Some(path), Some(p)) = (&args.plot, &report.plant) {
         figure::write(path, (1000, 650), &PlantFigure(p))?;
     } else if args.plot.is_some() {
@@ -626,6 +652,49 @@ mod tests {
                 max_table: 1024,
             },
         }
+    }
+
+    /// Issue 11, item 7: a recording that lost its last samples ends with a gap note and no
+    /// row after it; replay counts those samples with the gaps between rows.
+    #[test]
+    fn trailing_gap_is_reported() {
+        let header = Header {
+            host_time_unix_s: 0.0,
+            target: "test".into(),
+            virtual_plant: None,
+            decimation: 1,
+            device: info(32),
+            config: ServoConfig::default(),
+        };
+        let sample = |t: u32| Sample {
+            tick: t,
+            count: 0,
+            force_code: 0,
+            flags: 0,
+            energy: 0,
+        };
+        let mut out = Vec::new();
+        let mut w = crate::recording::Writer::new(&mut out, &header).unwrap();
+        w.batch(0, &[sample(0), sample(1)], 0).unwrap();
+        w.batch(5, &[sample(5)], 0).unwrap(); // 3 missing between rows
+        w.batch(10, &[], 4).unwrap(); // 4 missing at the end, as session::pump writes them
+        w.note("end: test").unwrap();
+        w.finish().unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(
+            text.contains("# gap: 4 samples missing before seq 10"),
+            "{text}"
+        );
+        let rec = crate::recording::parse(&text).unwrap();
+        assert_eq!(rec.missing(), 3);
+        assert_eq!(trailing_gap(&text), 4);
+        assert_eq!(rec.missing() + trailing_gap(&text), 7);
+        // Without a trailing note nothing is added.
+        let cut = text.replace(
+            "# gap: 4 samples missing before seq 10 (device-dropped 4, link-lost 0)\n",
+            "",
+        );
+        assert_eq!(trailing_gap(&cut), 0, "{cut}");
     }
 
     /// A "device" run on the host: the firmware servo fed a trajectory that crosses the

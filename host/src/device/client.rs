@@ -105,6 +105,7 @@ pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
         }
         ErrorDetail::Tag(t) => format!("{what}: tag {t}"),
         ErrorDetail::Text(t) => format!("{what}: {t}"),
+        ErrorDetail::Repeated { count } => format!("{what} ({count} frames in a row)"),
     }
 }
 
@@ -152,8 +153,10 @@ impl Client {
             c.send(&HostMsg::Hello {
                 protocol_version: PROTOCOL_VERSION,
             })?;
-            match c.wait(ANSWER_TIMEOUT, |m| {
-                matches!(m, DeviceMsg::HelloReply(_) | DeviceMsg::Error { .. })
+            match c.wait(ANSWER_TIMEOUT, |m| match m {
+                DeviceMsg::HelloReply(_) => true,
+                DeviceMsg::Error { code, .. } => !is_framing(*code),
+                _ => false,
             }) {
                 Ok(DeviceMsg::HelloReply(info)) => {
                     if info.protocol_version != PROTOCOL_VERSION {
@@ -278,7 +281,12 @@ impl Client {
             let left = deadline.saturating_duration_since(Instant::now());
             match self.recv(left)? {
                 Some(m) if want(&m) => break Ok(m),
-                Some(m) => kept.push_back(m),
+                // On time even while other messages keep arriving.
+                Some(m) if Instant::now() < deadline => kept.push_back(m),
+                Some(m) => {
+                    kept.push_back(m);
+                    break Err(anyhow!("no answer within {} ms", timeout.as_millis()));
+                }
                 None => break Err(anyhow!("no answer within {} ms", timeout.as_millis())),
             }
         };
@@ -288,6 +296,12 @@ impl Client {
     }
 
     /// Sends a request and waits for its answer; a device `Error` becomes an error.
+    ///
+    /// Framing errors (CRC, COBS, oversize, unknown tag, malformed body) do not answer a
+    /// request this client encoded: they answer bad frames from elsewhere on the link (a
+    /// noisy line, another writer), so the wait goes on; if no answer comes, the timeout
+    /// names the last one seen.
+    ///
     /// A full servo command queue (`Busy`, "servo queue full": the servo takes one command per
     /// tick) is transient: the request is repeated, for at most [`QUEUE_FULL_RETRY`].
     pub fn request(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
@@ -309,8 +323,13 @@ impl Client {
     fn request_once(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
         self.send(msg)?;
         let ack = ack_kind(msg);
+        let last_framing = std::cell::Cell::new(None);
         let m = self
             .wait(ANSWER_TIMEOUT, |m| match m {
+                DeviceMsg::Error { code, detail } if is_framing(*code) => {
+                    last_framing.set(Some(describe_error(*code, detail)));
+                    false
+                }
                 DeviceMsg::Error { .. } => true,
                 DeviceMsg::Ack(r) => Some(*r) == ack,
                 DeviceMsg::Config(_) => {
@@ -320,7 +339,13 @@ impl Client {
                 DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
                 _ => false,
             })
-            .with_context(|| format!("waiting for the answer to {}", short(msg)))?;
+            .with_context(|| match last_framing.take() {
+                Some(e) => format!(
+                    "waiting for the answer to {} (the device reported bad frames: {e})",
+                    short(msg)
+                ),
+                None => format!("waiting for the answer to {}", short(msg)),
+            })?;
         Ok(m)
     }
 
@@ -382,15 +407,17 @@ impl Client {
         Ok(())
     }
 
-    /// Next telemetry batch, or None after `timeout`.
+    /// Next telemetry batch, or None after `timeout` (on time whatever else arrives).
     pub fn next_batch(&mut self, timeout: Duration) -> Result<Option<TelemetryBatch>> {
         let deadline = Instant::now() + timeout;
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
             match self.recv(left)? {
                 Some(DeviceMsg::Telemetry(b)) => return Ok(Some(b)),
-                Some(_) => {}
-                None => return Ok(None),
+                // Other messages (errors of a flood of bad frames, stray replies) never hold
+                // the caller past its deadline: its watchdogs and heartbeats must run.
+                Some(_) if Instant::now() < deadline => {}
+                Some(_) | None => return Ok(None),
             }
         }
     }
@@ -523,6 +550,18 @@ impl Client {
             }
         }
     }
+}
+
+/// Error codes a device gives to frames that did not decode (not to a refused request).
+fn is_framing(code: ErrorCode) -> bool {
+    matches!(
+        code,
+        ErrorCode::Oversize
+            | ErrorCode::Crc
+            | ErrorCode::Cobs
+            | ErrorCode::UnknownTag
+            | ErrorCode::Deserialize
+    )
 }
 
 fn ack_kind(msg: &HostMsg) -> Option<Request> {

@@ -34,6 +34,10 @@ use stiffwall_sim::rich::{Controller, PlantModel, RichPlant};
 
 /// Bytes waiting for the host above which the fast virtual device pauses its servo.
 pub const FAST_BACKLOG: usize = 2048;
+/// Bytes from the host held at most before the firmware reads them; beyond this the virtual
+/// device stops reading its pty, so a writer faster than the firmware is back-pressured by
+/// the kernel (as a UART's FIFO would) instead of growing memory.
+pub const RX_LIMIT: usize = 64 * 1024;
 /// Output codes of the virtual amplifier (16-bit bipolar).
 pub const MAX_CODE: i32 = 32_767;
 
@@ -266,8 +270,14 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
         (1u64 << board.encoder_bits) - 1
     };
     while !stop.load(Ordering::Relaxed) {
-        // Host → device.
-        match pty.read(&mut buf) {
+        // Host → device, while the receive buffer has room.
+        let room = RX_LIMIT.saturating_sub(link.rx.len()).min(buf.len());
+        let got = if room == 0 {
+            Ok(0)
+        } else {
+            pty.read(&mut buf[..room])
+        };
+        match got {
             Ok(n) => link.rx.extend(&buf[..n]),
             Err(e)
                 if matches!(
@@ -318,7 +328,7 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
                 Err(_) => break,
             }
         }
-        if due == 0 && link.rx.is_empty() && link.tx.is_empty() && !spec.fast {
+        if due == 0 && (link.rx.is_empty() || room == 0) && link.tx.is_empty() && !spec.fast {
             std::thread::sleep(Duration::from_micros(200));
         }
     }
