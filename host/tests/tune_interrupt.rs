@@ -26,7 +26,15 @@ fn connect() -> Client {
 
 #[test]
 fn tune_interrupted_in_each_phase_restores_the_previous_config() {
-    for phase in ["identifying", "identified", "release test", "confirming"] {
+    // The phases of `procedure::tune` by their progress messages ("verifying" is the
+    // verification set at the K to be set, formerly "confirming").
+    for phase in [
+        "identifying",
+        "breakaway ramp",
+        "identified",
+        "release test",
+        "verifying",
+    ] {
         let mut c = connect();
         let before = ServoConfig {
             stiffness: 0.777,

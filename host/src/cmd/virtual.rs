@@ -19,7 +19,7 @@ use std::time::Duration;
     after_help = "Examples:\n  hostctl virtual --device phantom-1.0\n  hostctl virtual --fast &   # then: hostctl info --port /dev/pts/N"
 )]
 pub struct Args {
-    /// The virtual device's plant (`--device NAME`) and pacing (`--fast`).
+    /// The virtual device's plant (`--device NAME` or `--plant FILE.toml`) and pacing (`--fast`).
     #[command(flatten)]
     pub connect: ConnectArgs,
 }
