@@ -33,6 +33,8 @@ enum Command {
     Experiment(cmd::experiment::Args),
     /// Find and set the largest stable wall stiffness, with evidence.
     Tune(cmd::tune::Args),
+    /// Live view of the device in the browser (traces, (beta, sigma) plane, release, tune).
+    Ui(cmd::ui::Args),
     /// Serve the virtual device on a pseudo-terminal (prints its path) until Ctrl-C.
     Virtual(cmd::r#virtual::Args),
 }
@@ -50,6 +52,7 @@ fn main() -> std::process::ExitCode {
         Command::Replay(a) => cmd::replay::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
         Command::Tune(a) => cmd::tune::run(a),
+        Command::Ui(a) => cmd::ui::run(a),
         Command::Virtual(a) => cmd::r#virtual::run(a),
     };
     match result {

@@ -16,7 +16,7 @@ use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use stiffwall_core::params::PhysicalParams;
-use stiffwall_proto::{flags, Sample};
+use stiffwall_proto::{flags, Sample, ServoConfig};
 
 /// Arguments of `hostctl experiment`.
 #[derive(Debug, clap::Args)]
@@ -66,7 +66,12 @@ pub fn run(a: &Args) -> Result<()> {
     }
 }
 
-fn release(a: &ReleaseArgs) -> Result<()> {
+/// Checks the numbers of a release test (`--deflection`, `--ticks`, `--stiffness`) before any
+/// device is touched; shared with `hostctl ui`.
+///
+/// # Errors
+/// The first argument out of range, named with its range.
+pub fn check_release(a: &ReleaseArgs) -> Result<()> {
     if a.deflection == 0 || a.deflection.unsigned_abs() > 1 << 20 {
         bail!(
             "--deflection must be non-zero and within [-1048576, 1048576] (got {})",
@@ -76,13 +81,44 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     if !(100..=10_000_000).contains(&a.ticks) {
         bail!("--ticks must be within [100, 10000000] (got {})", a.ticks);
     }
-    if let Some(p) = &a.plot {
-        figure::prepare(p)?;
-    }
     if let Some(k) = a.stiffness {
         if !(k.is_finite() && k > 0.0) {
             bail!("--stiffness must be finite and > 0 (got {k})");
         }
+    }
+    Ok(())
+}
+
+/// The configuration a release test runs with: `original` with the test's stiffness, refused
+/// when the wall would be off; shared with `hostctl ui`.
+///
+/// # Errors
+/// K is 0 (or NaN) and no `--stiffness` was given.
+pub fn release_config(
+    original: &ServoConfig,
+    stiffness: Option<f64>,
+    max_stiffness: f32,
+) -> Result<ServoConfig> {
+    let mut cfg = *original;
+    if let Some(k) = stiffness {
+        cfg.stiffness = k as f32;
+    }
+    if cfg.stiffness.is_nan() || cfg.stiffness <= 0.0 {
+        bail!(
+            "the device's wall is off (K = {}): give the test's stiffness with --stiffness K \
+             (N/m or N·m/rad, > 0 and ≤ {} for this device at coarsening shift 0); a board \
+             keeps one set with `hostctl config set --stiffness K` and `hostctl config save`",
+            cfg.stiffness,
+            crate::device::client::readable(f64::from(max_stiffness))
+        );
+    }
+    Ok(cfg)
+}
+
+fn release(a: &ReleaseArgs) -> Result<()> {
+    check_release(a)?;
+    if let Some(p) = &a.plot {
+        figure::prepare(p)?;
     }
     let model = match &a.model {
         Some(v) if v.iter().all(|x| x.is_finite() && *x >= 0.0) && v[0] > 0.0 => {
@@ -101,19 +137,7 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     };
     let mut c = a.connect.connect()?;
     let original = c.get_config()?;
-    let mut cfg = original;
-    if let Some(k) = a.stiffness {
-        cfg.stiffness = k as f32;
-    }
-    if cfg.stiffness.is_nan() || cfg.stiffness <= 0.0 {
-        bail!(
-            "the device's wall is off (K = {}): give the test's stiffness with --stiffness K \
-             (N/m or N·m/rad, > 0 and ≤ {} for this device at coarsening shift 0); a board \
-             keeps one set with `hostctl config set --stiffness K` and `hostctl config save`",
-            cfg.stiffness,
-            crate::device::client::readable(f64::from(c.info.limits.max_stiffness))
-        );
-    }
+    let cfg = release_config(&original, a.stiffness, c.info.limits.max_stiffness)?;
     c.clear_faults().ok();
     c.set_config(&cfg)?;
     let rec = c.release(a.deflection, a.ticks);

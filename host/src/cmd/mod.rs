@@ -10,4 +10,5 @@ pub mod replay;
 pub mod simulate;
 pub mod stream;
 pub mod tune;
+pub mod ui;
 pub mod r#virtual;

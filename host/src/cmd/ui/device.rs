@@ -1,0 +1,688 @@
+//! The device thread of `hostctl ui`: the one owner of the [`Client`]. It streams telemetry at
+//! one sample per servo tick, passes every sample to the recorder (when one runs) and to the
+//! pages (in ~30 ms binary frames, see [`super::wire`]), and runs the pages' commands between
+//! reads with the same functions as the command-line tools: `config set`'s
+//! [`Overrides::set_on`], `experiment release`'s checks and verdict, `tune`'s
+//! [`procedure::tune`], and `record`'s [`Writer`] and header.
+//!
+//! Units: device integers in telemetry (ticks, raw counts, output codes, energy in K·Δ_eff²/8);
+//! SI for the model and K. Invariants: the recorder sees every batch the device sends, in
+//! order, with every gap noted (device-dropped vs link-lost) exactly as `hostctl record`
+//! writes it; requests made while streaming queue the telemetry that arrives meanwhile (the
+//! client keeps it), so commands never lose samples. A release test runs inside the stream
+//! (the firmware streams every tick during experiments), so its trace is live and a recording
+//! made meanwhile stays lossless. `tune` needs the link for itself: it is refused while
+//! recording, and the stream pauses while it runs. A slow page loses display frames only
+//! (counted and shown), never recorded samples.
+
+use super::plane::{self, Model};
+use super::record::{finish_recording, record_batch, record_path, Recorder};
+use super::wire::{self, Command, Reply};
+use crate::cmd::experiment::{check_release, release_config};
+use crate::cmd::tune as tune_cmd;
+use crate::device::client::{Client, HEARTBEAT_PERIOD};
+use crate::device::connect::ConnectArgs;
+use crate::recording::Writer;
+use crate::session::{self, Stats};
+use crate::tune::procedure;
+use crate::tune::release::{classify, released_counts};
+use anyhow::{bail, Context, Result};
+use axum::extract::ws::Message;
+use serde_json::{json, Value};
+use std::io::BufWriter;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc, Mutex};
+use std::time::{Duration, Instant};
+use stiffwall_proto::{flags, DeviceMsg, ExperimentKind, HostMsg, Sample, ServoConfig};
+use tokio::sync::broadcast;
+
+/// Period of the binary telemetry frames sent to the pages.
+pub const FRAME_PERIOD: Duration = Duration::from_millis(33);
+/// Period of the status messages.
+pub const STATUS_PERIOD: Duration = Duration::from_millis(250);
+/// Period of fault polls (`GetFaults`) while the device reports safe mode.
+pub const FAULT_POLL: Duration = Duration::from_millis(500);
+/// Recordings are flushed at least this often (as `hostctl record`).
+pub const FLUSH_PERIOD: Duration = Duration::from_millis(100);
+
+/// What the pages see on connecting, kept current by the device thread.
+#[derive(Debug, Default)]
+pub struct Snapshot {
+    /// The `hello` message.
+    pub hello: Value,
+    /// The latest `config`, `plane`, `status`, `faults`, `release` and `tune` messages.
+    pub latest: Vec<(&'static str, Value)>,
+}
+
+impl Snapshot {
+    fn set(&mut self, kind: &'static str, v: Value) {
+        match self.latest.iter_mut().find(|(k, _)| *k == kind) {
+            Some(slot) => slot.1 = v,
+            None => self.latest.push((kind, v)),
+        }
+    }
+}
+
+/// State shared between the device thread and the server.
+#[derive(Debug)]
+pub struct Shared {
+    /// The messages of a newly opened page.
+    pub snapshot: Mutex<Snapshot>,
+    /// Every message to every page.
+    pub tx: broadcast::Sender<Message>,
+    /// Set to end the device thread (server shutdown).
+    pub stop: AtomicBool,
+}
+
+impl Shared {
+    /// New shared state with room for `capacity` queued messages per page.
+    #[must_use]
+    pub fn new(capacity: usize) -> Self {
+        Self {
+            snapshot: Mutex::new(Snapshot::default()),
+            tx: broadcast::channel(capacity).0,
+            stop: AtomicBool::new(false),
+        }
+    }
+
+    /// Sends `v` to every page and keeps it as the latest of its `type`.
+    pub fn publish(&self, kind: &'static str, v: Value) {
+        let text = v.to_string();
+        if let Ok(mut s) = self.snapshot.lock() {
+            s.set(kind, v);
+        }
+        let _ = self.tx.send(Message::Text(text.into()));
+    }
+
+    /// Sends `v` to every page without keeping it.
+    pub fn event(&self, v: &Value) {
+        let _ = self.tx.send(Message::Text(v.to_string().into()));
+    }
+}
+
+/// A command with the channel its answer goes to.
+#[derive(Debug)]
+pub struct Request {
+    /// The command.
+    pub cmd: Command,
+    /// Where the answer goes.
+    pub reply: tokio::sync::oneshot::Sender<Reply>,
+}
+
+/// Fixed facts of the run.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// How the device was reached (for recordings' headers and the page).
+    pub connect: ConnectArgs,
+    /// The model of the (β, σ) plane, if known.
+    pub model: Option<Model>,
+    /// Directory recordings from the page are written to.
+    pub record_dir: PathBuf,
+    /// Pace the stream (sleep between reads) because the virtual device runs `--fast`.
+    pub pace: bool,
+}
+
+struct Release {
+    original: ServoConfig,
+    test: ServoConfig,
+    deflection: i32,
+    samples: Vec<Sample>,
+    start: Instant,
+    limit: Duration,
+    last_hb: Instant,
+    reply: Option<tokio::sync::oneshot::Sender<Reply>>,
+}
+
+/// The thread's state.
+struct Dev {
+    client: Client,
+    setup: Setup,
+    shared: Arc<Shared>,
+    cfg: ServoConfig,
+    xidot: f64,
+    streaming: bool,
+    frame: Vec<u8>,
+    chunks: u32,
+    last_frame: Instant,
+    last_status: Instant,
+    last_fault_poll: Instant,
+    last_sample: Option<Sample>,
+    safe_mode: bool,
+    faults: u32,
+    rate: (Instant, u64, f64),
+    rec: Option<Recorder>,
+    release: Option<Release>,
+}
+
+/// Runs the device thread until `shared.stop` or Ctrl-C; finishes a recording cleanly.
+///
+/// # Errors
+/// The device could not be read from the start (later link failures are reported to the
+/// pages and end the thread).
+pub fn run(
+    client: Client,
+    setup: Setup,
+    shared: Arc<Shared>,
+    rx: mpsc::Receiver<Request>,
+) -> Result<()> {
+    let mut client = client;
+    let cfg = client.get_config()?;
+    let mut d = Dev {
+        client,
+        setup,
+        shared,
+        cfg,
+        xidot: procedure::DEFAULT_XIDOT,
+        streaming: false,
+        frame: Vec::new(),
+        chunks: 0,
+        last_frame: Instant::now(),
+        last_status: Instant::now(),
+        last_fault_poll: Instant::now(),
+        last_sample: None,
+        safe_mode: false,
+        faults: 0,
+        rate: (Instant::now(), 0, 0.0),
+        rec: None,
+        release: None,
+    };
+    d.hello();
+    d.publish_config();
+    d.poll_faults();
+    d.start_stream()?;
+    let result = d.main_loop(&rx);
+    if let Some(r) = d.rec.take() {
+        let how = match &result {
+            Ok(()) => "hostctl ui stopped".to_string(),
+            Err(e) => format!("DISCONNECTED: {e:#}"),
+        };
+        let _ = finish_recording(r, &how);
+    }
+    if let Err(e) = &result {
+        d.shared.publish(
+            "device",
+            json!({"type": "device", "error": format!("{e:#}")}),
+        );
+    }
+    let _ = d.client.stream_stop();
+    result
+}
+
+impl Dev {
+    fn main_loop(&mut self, rx: &mpsc::Receiver<Request>) -> Result<()> {
+        loop {
+            if self.shared.stop.load(Ordering::Relaxed) || session::interrupted() {
+                return Ok(());
+            }
+            while let Ok(req) = rx.try_recv() {
+                self.command(req.cmd, req.reply);
+            }
+            match self.client.recv(Duration::from_millis(5))? {
+                Some(DeviceMsg::Telemetry(b)) => self.batch(b.seq, b.dropped, &b.samples)?,
+                Some(DeviceMsg::ExperimentDone {
+                    kind: ExperimentKind::Release,
+                    completed,
+                    faults,
+                }) => self.release_done(completed, faults),
+                Some(_) | None => {}
+            }
+            self.tick()?;
+            if self.setup.pace && self.release.is_none() {
+                // The --fast virtual device runs as fast as it is read: pace it to about
+                // 24 samples per ms so the pages see a moving trace and the CPU stays free.
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+    }
+
+    fn hello(&self) {
+        let i = &self.client.info;
+        let rotational = i.counts_per_rev > 0;
+        let hello = json!({
+            "type": "hello",
+            "target": self.setup.connect.describe(),
+            "device": i,
+            "units": if rotational {
+                json!({"k": "N·m/rad", "force": "N·m", "b": "N·m·s/rad", "m": "kg·m²", "c": "N·m"})
+            } else {
+                json!({"k": "N/m", "force": "N", "b": "N·s/m", "m": "kg", "c": "N"})
+            },
+            "record_dir": self.setup.record_dir.display().to_string(),
+            "flags": {"safe_mode": flags::SAFE_MODE, "hold": flags::HOLD, "released": flags::RELEASED,
+                      "excite": flags::EXCITE, "clamped": flags::CLAMPED, "wall_off": flags::WALL_OFF,
+                      "turn": flags::TURN},
+        });
+        if let Ok(mut s) = self.shared.snapshot.lock() {
+            s.hello = hello.clone();
+        }
+        self.shared.event(&hello);
+    }
+
+    fn publish_config(&self) {
+        self.shared.publish(
+            "config",
+            json!({"type": "config", "config": self.cfg,
+                   "text": crate::cmd::config::render(&self.cfg)}),
+        );
+        self.shared.publish(
+            "plane",
+            plane::plane(
+                self.setup.model.as_ref(),
+                &self.client.info,
+                &self.cfg,
+                self.xidot,
+            ),
+        );
+    }
+
+    fn start_stream(&mut self) -> Result<()> {
+        self.client.stream_start(1).context("starting telemetry")?;
+        self.streaming = true;
+        Ok(())
+    }
+
+    /// One telemetry batch: recorder, release test, page frame.
+    fn batch(&mut self, seq: u32, dropped: u32, samples: &[Sample]) -> Result<()> {
+        if let Some(r) = &mut self.rec {
+            if let Err(e) = record_batch(r, seq, dropped, samples, self.client.gaps.bad_frames) {
+                let r = self.rec.take().expect("recorder");
+                let path = r.path.clone();
+                let _ = finish_recording(r, &format!("FAILED: {e:#}"));
+                self.shared.event(&json!({"type": "log", "level": "error",
+                    "message": format!("recording {} stopped: {e:#}", path.display())}));
+            }
+        }
+        if let Some(rel) = &mut self.release {
+            rel.samples.extend(
+                samples
+                    .iter()
+                    .filter(|s| s.flags & (flags::HOLD | flags::RELEASED) != 0),
+            );
+        }
+        if let Some(last) = samples.last() {
+            self.last_sample = Some(*last);
+            let safe = last.flags & flags::SAFE_MODE != 0;
+            if safe != self.safe_mode {
+                self.safe_mode = safe;
+                self.poll_faults();
+            }
+        }
+        wire::push_chunk(&mut self.frame, seq, samples);
+        self.chunks += 1;
+        Ok(())
+    }
+
+    /// Periodic work: page frames, status, fault polls, heartbeats, release time-out.
+    fn tick(&mut self) -> Result<()> {
+        if self.last_frame.elapsed() >= FRAME_PERIOD {
+            self.last_frame = Instant::now();
+            if self.chunks > 0 {
+                let msg = wire::frame(self.chunks, &self.frame);
+                let _ = self.shared.tx.send(Message::Binary(msg.into()));
+                self.frame.clear();
+                self.chunks = 0;
+            }
+        }
+        if let Some(r) = &mut self.rec {
+            if r.last_flush.elapsed() >= FLUSH_PERIOD {
+                r.w.flush()?;
+                r.last_flush = Instant::now();
+            }
+        }
+        if self.safe_mode && self.last_fault_poll.elapsed() >= FAULT_POLL {
+            self.poll_faults();
+        }
+        if let Some(rel) = &mut self.release {
+            if rel.last_hb.elapsed() >= HEARTBEAT_PERIOD {
+                self.client.send(&HostMsg::Heartbeat)?;
+                rel.last_hb = Instant::now();
+            }
+            if rel.start.elapsed() > rel.limit {
+                let _ = self.client.send(&HostMsg::Stop);
+                let rel = self.release.take().expect("release");
+                let msg = format!(
+                    "the release test did not finish within {} s",
+                    rel.limit.as_secs()
+                );
+                let _ = self.client.set_config(&rel.original);
+                self.shared.publish(
+                    "release",
+                    json!({"type": "release", "state": "error", "error": msg}),
+                );
+                if let Some(tx) = rel.reply {
+                    let _ = tx.send(Err(msg));
+                }
+            }
+        }
+        if self.last_status.elapsed() >= STATUS_PERIOD {
+            self.status();
+        }
+        Ok(())
+    }
+
+    fn status(&mut self) {
+        let now = Instant::now();
+        let g = self.client.gaps;
+        let dt = now.duration_since(self.rate.0).as_secs_f64();
+        if dt >= 0.5 {
+            self.rate = (now, g.received, (g.received - self.rate.1) as f64 / dt);
+        }
+        self.last_status = now;
+        let rec = self.rec.as_ref().map(|r| {
+            json!({"file": r.path.display().to_string(), "rows": r.w.rows(),
+                   "missing": r.stats.missing, "seconds": r.start.elapsed().as_secs_f64()})
+        });
+        let busy = if self.release.is_some() {
+            Some("release")
+        } else {
+            None
+        };
+        self.shared.publish(
+            "status",
+            json!({
+                "type": "status",
+                "received": g.received,
+                "missing": g.missing,
+                "device_dropped": g.dropped_on_device,
+                "bad_frames": g.bad_frames,
+                "samples_per_s": self.rate.2,
+                "last": self.last_sample,
+                "recording": rec,
+                "busy": busy,
+                "streaming": self.streaming,
+            }),
+        );
+    }
+
+    fn poll_faults(&mut self) {
+        self.last_fault_poll = Instant::now();
+        match self.client.faults() {
+            Ok(f) => {
+                self.faults = f.latched;
+                self.safe_mode = f.safe_mode;
+                self.shared.publish(
+                    "faults",
+                    json!({"type": "faults", "latched": f.latched, "safe_mode": f.safe_mode,
+                           "first_tick": f.first_tick, "names": wire::fault_names(f.latched)}),
+                );
+            }
+            Err(e) => self.shared.event(&json!({"type": "log", "level": "error",
+                "message": format!("reading faults: {e:#}")})),
+        }
+    }
+
+    /// Runs one command and answers it (a release test answers when it ends).
+    fn command(&mut self, cmd: Command, reply: tokio::sync::oneshot::Sender<Reply>) {
+        let r = match cmd {
+            Command::Config { set } => self.config(&set),
+            Command::ClearFaults => self.clear_faults(),
+            Command::Velocity { xidot } => self.velocity(xidot),
+            Command::RecordStart { file } => self.record_start(&file),
+            Command::RecordStop => self.record_stop(),
+            Command::Tune { args } => self.tune(&args),
+            Command::Release { args } => match self.release_start(&args) {
+                Ok(()) => {
+                    if let Some(rel) = &mut self.release {
+                        rel.reply = Some(reply);
+                    }
+                    return;
+                }
+                Err(e) => Err(format!("{e:#}")),
+            },
+        };
+        let _ = reply.send(r);
+    }
+
+    fn busy_check(&self, what: &str) -> Result<()> {
+        if self.release.is_some() {
+            bail!("{what}: a release test is running; wait for its verdict");
+        }
+        Ok(())
+    }
+
+    fn config(&mut self, set: &serde_json::Map<String, Value>) -> Reply {
+        let mut run = || -> Result<Value> {
+            self.busy_check("config set")?;
+            let argv = wire::argv("config set", set)?;
+            let o = wire::ConfigCli::parse_argv(&argv)?;
+            if o.is_empty() {
+                bail!("config set: give at least one field to change (see `hostctl config set --help`)");
+            }
+            let cfg = o.set_on(&mut self.client).context("config set")?;
+            Ok(json!(cfg))
+        };
+        let out = run();
+        if let Ok(v) = &out {
+            if let Ok(cfg) = serde_json::from_value::<ServoConfig>(v.clone()) {
+                self.config_changed(cfg);
+            }
+        }
+        out.map_err(|e| format!("{e:#}"))
+    }
+
+    fn config_changed(&mut self, cfg: ServoConfig) {
+        self.cfg = cfg;
+        if let Some(r) = &mut self.rec {
+            let _ = r.w.note(&format!(
+                "config changed from the page at seq {}: {}",
+                r.stats.last_seq.map_or(0, |s| s.wrapping_add(1)),
+                serde_json::to_string(&cfg).unwrap_or_default()
+            ));
+        }
+        self.publish_config();
+    }
+
+    fn clear_faults(&mut self) -> Reply {
+        let r = self.client.clear_faults().map_err(|e| format!("{e:#}"));
+        self.poll_faults();
+        r.map(|()| json!({"latched": self.faults}))
+    }
+
+    fn velocity(&mut self, xidot: f64) -> Reply {
+        if !(xidot.is_finite() && xidot > 0.0 && xidot <= 1e6) {
+            return Err(format!(
+                "velocity must be a finite number within (0, 1e6] ticks per period (got {xidot})"
+            ));
+        }
+        self.xidot = xidot;
+        self.publish_config();
+        Ok(json!({"xidot": xidot}))
+    }
+
+    fn record_start(&mut self, file: &str) -> Reply {
+        let mut run = || -> Result<Value> {
+            if let Some(r) = &self.rec {
+                bail!("already recording to {}", r.path.display());
+            }
+            let path = record_path(&self.setup.record_dir, file)?;
+            let h = session::header(&self.client, self.cfg, 1, Some(&self.setup.connect));
+            let f = std::fs::File::create(&path)
+                .with_context(|| format!("creating {}", path.display()))?;
+            let w = Writer::new(BufWriter::new(f), &h)?;
+            self.rec = Some(Recorder {
+                path: path.clone(),
+                w,
+                stats: Stats::default(),
+                last_dropped: None,
+                start: Instant::now(),
+                last_flush: Instant::now(),
+            });
+            Ok(json!({"file": path.display().to_string()}))
+        };
+        let r = run().map_err(|e| format!("{e:#}"));
+        self.status();
+        r
+    }
+
+    fn record_stop(&mut self) -> Reply {
+        let Some(r) = self.rec.take() else {
+            return Err("not recording".into());
+        };
+        let out = finish_recording(r, "stopped from the page").map_err(|e| format!("{e:#}"));
+        self.status();
+        out
+    }
+
+    fn release_start(&mut self, args: &serde_json::Map<String, Value>) -> Result<()> {
+        self.busy_check("release")?;
+        let argv = wire::argv("release", args)?;
+        let a = wire::ReleaseCli::parse_argv(&argv)?;
+        check_release(&a)?;
+        let original = self.client.get_config()?;
+        let test = release_config(
+            &original,
+            a.stiffness,
+            self.client.info.limits.max_stiffness,
+        )?;
+        // As `experiment release`: faults cleared, the test's K set, the original restored.
+        self.client.clear_faults().ok();
+        self.client.set_config(&test)?;
+        let rate = f64::from(test.servo_rate_hz.max(1));
+        if let Err(e) = self.client.request(&HostMsg::Release {
+            deflection_ticks: a.deflection,
+            ticks: a.ticks,
+        }) {
+            let _ = self.client.set_config(&original);
+            return Err(e);
+        }
+        self.poll_faults();
+        self.shared.publish(
+            "release",
+            json!({"type": "release", "state": "running", "deflection": a.deflection,
+                   "ticks": a.ticks, "stiffness": test.stiffness}),
+        );
+        self.release = Some(Release {
+            original,
+            test,
+            deflection: a.deflection,
+            samples: Vec::with_capacity(a.ticks as usize + 1024),
+            start: Instant::now(),
+            limit: Duration::from_secs_f64(f64::from(a.ticks) / rate * 20.0 + 10.0),
+            last_hb: Instant::now(),
+            reply: None,
+        });
+        Ok(())
+    }
+
+    fn release_done(&mut self, completed: bool, faults: u32) {
+        let Some(mut rel) = self.release.take() else {
+            return;
+        };
+        // The experiment's stiffness is not kept.
+        let restored = self.client.set_config(&rel.original);
+        let rel_samples: Vec<Sample> = rel
+            .samples
+            .iter()
+            .copied()
+            .filter(|s| s.flags & flags::RELEASED != 0)
+            .collect();
+        let counts = released_counts(&rel_samples, rel.test.coarsen_shift);
+        let verdict = classify(&counts, faults != 0);
+        let first = rel.samples.first().map_or(0, |s| s.tick);
+        let v = json!({
+            "type": "release",
+            "state": "done",
+            "verdict": verdict,
+            "describe": verdict.describe(),
+            "passes": verdict.passes(),
+            "deflection": rel.deflection,
+            "stiffness": rel.test.stiffness,
+            "completed": completed,
+            "faults": faults,
+            "fault_names": wire::fault_names(faults),
+            "counts": counts,
+            "first_tick": first,
+            "rate_hz": rel.test.servo_rate_hz,
+        });
+        self.shared.publish("release", v.clone());
+        if faults != 0 {
+            self.poll_faults();
+        }
+        let reply = match restored {
+            Ok(()) => Ok(v),
+            Err(e) => Err(format!(
+                "the test ran ({}), but restoring the configuration failed: {e:#}",
+                verdict.describe()
+            )),
+        };
+        if let Some(tx) = rel.reply.take() {
+            let _ = tx.send(reply);
+        }
+    }
+
+    fn tune(&mut self, args: &serde_json::Map<String, Value>) -> Reply {
+        let mut run = || -> Result<Value> {
+            self.busy_check("tune")?;
+            if let Some(r) = &self.rec {
+                bail!(
+                    "tune: stop the recording to {} first (tune's experiments take the telemetry stream)",
+                    r.path.display()
+                );
+            }
+            let argv = wire::argv("tune", args)?;
+            let a = wire::TuneCli::parse_argv(&argv)?;
+            let s = tune_cmd::settings(&a)?;
+            // Flush what the page has, then give the link to tune.
+            self.client.stream_stop()?;
+            self.streaming = false;
+            self.status();
+            let shared = Arc::clone(&self.shared);
+            let progress = move |m: &str| {
+                shared.publish(
+                    "tune",
+                    json!({"type": "tune", "state": "running", "message": m}),
+                );
+            };
+            progress("starting");
+            let outcome = procedure::tune(&mut self.client, &s, a.dry_run, &progress);
+            let restart = self.start_stream();
+            let cfg = self.client.get_config();
+            let o = outcome.context("tune failed; the previous config was restored")?;
+            restart?;
+            if let Ok(cfg) = cfg {
+                self.cfg = cfg;
+            }
+            self.setup.model = Some(Model {
+                mass: o.params.mass,
+                viscous: o.params.viscous,
+                coulomb: o.params.coulomb,
+                source: "identified by tune",
+            });
+            let v = json!({
+                "type": "tune",
+                "state": "done",
+                "guaranteed": o.predicted.guaranteed,
+                "expected": o.predicted.expected,
+                "verified": o.search.k_pass,
+                "set": o.k_set,
+                "saved": o.saved,
+                "trials": o.search.trials,
+                "verification": o.verification,
+                "model_mismatch": o.model_mismatch,
+                "identified": o.identified,
+            });
+            self.shared.publish("tune", v.clone());
+            Ok(v)
+        };
+        let r = run();
+        if let Err(e) = &r {
+            self.shared.publish(
+                "tune",
+                json!({"type": "tune", "state": "error", "error": format!("{e:#}")}),
+            );
+            if !self.streaming {
+                if let Err(e2) = self.start_stream() {
+                    self.shared.event(&json!({"type": "log", "level": "error",
+                        "message": format!("restarting telemetry: {e2:#}")}));
+                }
+            }
+        }
+        if let Ok(cfg) = self.client.get_config() {
+            self.cfg = cfg;
+        }
+        self.publish_config();
+        self.poll_faults();
+        r.map_err(|e| format!("{e:#}"))
+    }
+}

@@ -1,0 +1,252 @@
+//! The HTTP side of `hostctl ui` (axum on tokio): the page and its assets (embedded in the
+//! binary from `host/ui/`), the WebSocket at `/ws`, `POST /api/cmd` (the same commands as
+//! over the WebSocket) and `POST /api/map` (a `hostctl map` JSON to view).
+//!
+//! Invariants: every request passes [`super::security::Guard`] first (Host, Origin, and the
+//! token for everything but the two static assets), so a refused request never reaches a
+//! handler, and a refused WebSocket is never upgraded. The page allows only its own origin
+//! (Content-Security-Policy `default-src 'self'`): it loads nothing from elsewhere and works
+//! offline. A page that reads too slowly loses display frames (it is told how many), never
+//! the device's samples.
+
+use super::device::{Request, Shared};
+use super::plane;
+use super::security::{token_from_query, Guard, TOKEN_HEADER};
+use super::wire::{Envelope, Reply};
+use axum::body::Bytes;
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::{DefaultBodyLimit, Request as HttpRequest, State};
+use axum::http::{header, HeaderValue, StatusCode};
+use axum::middleware::{self, Next};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use axum::Router;
+use serde_json::{json, Value};
+use std::sync::{mpsc, Arc, Mutex};
+use tokio::sync::broadcast::error::RecvError;
+
+/// The page, its script and its style, embedded at build time.
+pub const INDEX_HTML: &str = include_str!("../../../ui/index.html");
+/// The page's script.
+pub const APP_JS: &str = include_str!("../../../ui/app.js");
+/// The page's style.
+pub const STYLE_CSS: &str = include_str!("../../../ui/style.css");
+
+/// Largest map JSON accepted by `POST /api/map`.
+pub const MAX_MAP_BYTES: usize = 256 << 20;
+
+/// What the handlers share.
+#[derive(Debug, Clone)]
+pub struct App {
+    /// The request checks.
+    pub guard: Arc<Guard>,
+    /// State from the device thread.
+    pub shared: Arc<Shared>,
+    /// Commands to the device thread.
+    pub commands: Arc<Mutex<mpsc::Sender<Request>>>,
+}
+
+/// The router of one run.
+pub fn router(app: App) -> Router {
+    Router::new()
+        .route("/", get(index))
+        .route("/app.js", get(app_js))
+        .route("/style.css", get(style_css))
+        .route("/ws", get(ws))
+        .route("/api/cmd", post(api_cmd))
+        .route(
+            "/api/map",
+            post(api_map).layer(DefaultBodyLimit::max(MAX_MAP_BYTES)),
+        )
+        .layer(middleware::from_fn_with_state(app.clone(), guard))
+        .with_state(app)
+}
+
+fn forbidden(why: &str) -> Response {
+    (
+        StatusCode::FORBIDDEN,
+        [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
+        format!("403 Forbidden: {why}\n"),
+    )
+        .into_response()
+}
+
+async fn guard(State(app): State<App>, req: HttpRequest, next: Next) -> Response {
+    let h = req.headers();
+    let text = |name: header::HeaderName| h.get(name).and_then(|v| v.to_str().ok());
+    let host = text(header::HOST);
+    let origin = text(header::ORIGIN);
+    let public = matches!(req.uri().path(), "/app.js" | "/style.css");
+    let token = h
+        .get(TOKEN_HEADER)
+        .and_then(|v| v.to_str().ok())
+        .or_else(|| token_from_query(req.uri().query()));
+    let verdict = if public {
+        app.guard.check_site(host, origin)
+    } else {
+        app.guard.check(host, origin, token)
+    };
+    match verdict {
+        Ok(()) => {
+            let mut resp = next.run(req).await;
+            let hs = resp.headers_mut();
+            hs.insert(
+                header::CONTENT_SECURITY_POLICY,
+                HeaderValue::from_static(
+                    "default-src 'self'; connect-src 'self'; img-src 'self' data:; frame-ancestors 'none'",
+                ),
+            );
+            hs.insert(header::X_FRAME_OPTIONS, HeaderValue::from_static("DENY"));
+            hs.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+            hs.insert(
+                header::REFERRER_POLICY,
+                HeaderValue::from_static("no-referrer"),
+            );
+            resp
+        }
+        Err(e) => forbidden(&e.to_string()),
+    }
+}
+
+async fn index() -> impl IntoResponse {
+    (
+        [(header::CONTENT_TYPE, "text/html; charset=utf-8")],
+        INDEX_HTML,
+    )
+}
+
+async fn app_js() -> impl IntoResponse {
+    (
+        [(header::CONTENT_TYPE, "text/javascript; charset=utf-8")],
+        APP_JS,
+    )
+}
+
+async fn style_css() -> impl IntoResponse {
+    (
+        [(header::CONTENT_TYPE, "text/css; charset=utf-8")],
+        STYLE_CSS,
+    )
+}
+
+/// Sends a command to the device thread and waits for its answer.
+async fn submit(app: &App, env: Envelope) -> Reply {
+    let (tx, rx) = tokio::sync::oneshot::channel();
+    let sent = app
+        .commands
+        .lock()
+        .map_err(|_| "the device thread stopped".to_string())?
+        .send(Request {
+            cmd: env.cmd,
+            reply: tx,
+        });
+    if sent.is_err() {
+        return Err("the device thread stopped".into());
+    }
+    rx.await
+        .unwrap_or_else(|_| Err("the device thread stopped".into()))
+}
+
+fn reply_json(id: &Value, r: Reply) -> Value {
+    match r {
+        Ok(v) => json!({"type": "reply", "id": id, "ok": true, "result": v}),
+        Err(e) => json!({"type": "reply", "id": id, "ok": false, "error": e}),
+    }
+}
+
+async fn api_cmd(State(app): State<App>, body: Bytes) -> Response {
+    match serde_json::from_slice::<Envelope>(&body) {
+        Ok(env) => {
+            let id = env.id.clone();
+            let r = submit(&app, env).await;
+            let status = if r.is_ok() {
+                StatusCode::OK
+            } else {
+                StatusCode::UNPROCESSABLE_ENTITY
+            };
+            (status, axum::Json(reply_json(&id, r))).into_response()
+        }
+        Err(e) => (
+            StatusCode::BAD_REQUEST,
+            axum::Json(reply_json(&Value::Null, Err(format!("bad command: {e}")))),
+        )
+            .into_response(),
+    }
+}
+
+async fn api_map(body: Bytes) -> Response {
+    let text = String::from_utf8_lossy(&body);
+    match plane::map_view(&text) {
+        Ok(v) => axum::Json(v).into_response(),
+        Err(e) => (
+            StatusCode::UNPROCESSABLE_ENTITY,
+            axum::Json(json!({"type": "map", "error": format!("{e:#}")})),
+        )
+            .into_response(),
+    }
+}
+
+async fn ws(State(app): State<App>, up: WebSocketUpgrade) -> Response {
+    up.on_upgrade(move |socket| session(app, socket))
+}
+
+async fn session(app: App, mut socket: WebSocket) {
+    // Subscribe first: nothing published after the snapshot is missed.
+    let mut rx = app.shared.tx.subscribe();
+    let first: Vec<String> = match app.shared.snapshot.lock() {
+        Ok(s) => std::iter::once(s.hello.to_string())
+            .chain(s.latest.iter().map(|(_, v)| v.to_string()))
+            .collect(),
+        Err(_) => Vec::new(),
+    };
+    for text in first {
+        if socket.send(Message::Text(text.into())).await.is_err() {
+            return;
+        }
+    }
+    let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Value>();
+    let mut check = tokio::time::interval(std::time::Duration::from_millis(200));
+    loop {
+        tokio::select! {
+            _ = check.tick() => if app.shared.stop.load(std::sync::atomic::Ordering::Relaxed) {
+                let _ = socket.send(Message::Close(None)).await;
+                return;
+            },
+            m = rx.recv() => match m {
+                Ok(msg) => if socket.send(msg).await.is_err() { return },
+                Err(RecvError::Lagged(n)) => {
+                    let v = json!({"type": "lagged", "frames": n});
+                    if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
+                }
+                Err(RecvError::Closed) => {
+                    let _ = socket.send(Message::Close(None)).await;
+                    return;
+                }
+            },
+            r = reply_rx.recv() => if let Some(v) = r {
+                if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
+            },
+            m = socket.recv() => match m {
+                Some(Ok(Message::Text(t))) => {
+                    match serde_json::from_str::<Envelope>(t.as_str()) {
+                        Ok(env) => {
+                            let app = app.clone();
+                            let tx = reply_tx.clone();
+                            tokio::spawn(async move {
+                                let id = env.id.clone();
+                                let r = submit(&app, env).await;
+                                let _ = tx.send(reply_json(&id, r));
+                            });
+                        }
+                        Err(e) => {
+                            let v = reply_json(&Value::Null, Err(format!("bad command: {e}")));
+                            if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
+                        }
+                    }
+                }
+                Some(Ok(Message::Close(_)) | Err(_)) | None => return,
+                Some(Ok(_)) => {}
+            },
+        }
+    }
+}
