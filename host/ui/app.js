@@ -1,0 +1,495 @@
+// hostctl ui: the page's script (embedded in the hostctl binary; no libraries, no network
+// access beyond its own server). Plots are drawn on canvases by hand: min/max per pixel
+// column over every sample kept, which a general plotting library would not do for us, and
+// nothing has to be fetched or pinned.
+//
+// Data: telemetry arrives as binary frames (see host/src/cmd/ui/wire.rs) and is kept in a
+// ring of typed arrays; JSON messages carry config, plane, status, faults, release and tune.
+'use strict';
+
+const TOKEN = new URLSearchParams(location.search).get('token') || '';
+const RING = 1 << 20; // samples kept (about 200 s at 5 kHz)
+const ring = {
+  seq: new Float64Array(RING), count: new Int32Array(RING), force: new Int32Array(RING),
+  flags: new Uint16Array(RING), energy: new Uint32Array(RING), n: 0, // total pushed
+};
+const st = {
+  hello: null, config: null, plane: null, status: null, faults: null,
+  paused: false, windowS: 2, viewEnd: null, nextId: 1, pending: new Map(),
+  received: 0, lastSeq: -1, seqBase: null, frames: 0, fpsT: performance.now(), fps: 0,
+  lagged: 0, ws: null,
+};
+const $ = (id) => document.getElementById(id);
+
+// ---------- connection ----------
+function connect() {
+  const ws = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(TOKEN)}`);
+  ws.binaryType = 'arraybuffer';
+  st.ws = ws;
+  ws.onopen = () => { setConn(true); };
+  ws.onclose = () => { setConn(false); setTimeout(connect, 1000); };
+  ws.onmessage = (ev) => {
+    if (typeof ev.data === 'string') onJson(JSON.parse(ev.data));
+    else onFrame(ev.data);
+  };
+}
+function setConn(ok) {
+  const c = $('conn');
+  c.textContent = ok ? 'live' : 'offline';
+  c.className = 'pill ' + (ok ? 'ok' : 'bad');
+}
+function send(cmd) {
+  return new Promise((resolve) => {
+    const id = st.nextId++;
+    st.pending.set(id, resolve);
+    if (!st.ws || st.ws.readyState !== 1) {
+      st.pending.delete(id);
+      resolve({ ok: false, error: 'not connected' });
+      return;
+    }
+    st.ws.send(JSON.stringify(Object.assign({ id }, cmd)));
+  });
+}
+
+function onFrame(buf) {
+  const dv = new DataView(buf);
+  if (dv.getUint32(0, true) !== 0x31545753) return;
+  const chunks = dv.getUint32(4, true);
+  let o = 8;
+  for (let c = 0; c < chunks; c++) {
+    const seq0 = dv.getUint32(o, true); const n = dv.getUint32(o + 4, true); o += 8;
+    for (let i = 0; i < n; i++, o += 18) {
+      let seq = seq0 + i;
+      // Unwrap the 32-bit sample number.
+      if (st.seqBase === null) st.seqBase = 0;
+      let s = st.seqBase + seq;
+      if (st.lastSeq >= 0 && s < st.lastSeq - 2147483648) { st.seqBase += 4294967296; s += 4294967296; }
+      const k = ring.n % RING;
+      ring.seq[k] = s;
+      ring.count[k] = dv.getInt32(o + 4, true);
+      ring.force[k] = dv.getInt32(o + 8, true);
+      ring.flags[k] = dv.getUint16(o + 12, true);
+      ring.energy[k] = dv.getUint32(o + 14, true);
+      ring.n++;
+      st.lastSeq = s;
+    }
+    st.received += n;
+  }
+  const sc = $('sample-count');
+  sc.textContent = st.received.toLocaleString('en');
+  sc.dataset.count = String(st.received);
+}
+
+function onJson(m) {
+  switch (m.type) {
+    case 'hello': onHello(m); break;
+    case 'config': onConfig(m); break;
+    case 'plane': st.plane = m; drawPlane(); break;
+    case 'status': onStatus(m); break;
+    case 'faults': onFaults(m); break;
+    case 'release': onRelease(m); break;
+    case 'tune': onTune(m); break;
+    case 'reply': {
+      const r = st.pending.get(m.id);
+      if (r) { st.pending.delete(m.id); r(m); }
+      break;
+    }
+    case 'lagged': st.lagged += m.frames; break;
+    case 'log': showLog(m.message); break;
+    case 'device': if (m.error) showLog('device: ' + m.error); break;
+    default: break;
+  }
+}
+
+function showLog(text) {
+  const l = $('log');
+  l.hidden = false;
+  l.textContent = text;
+}
+
+function rate() { return st.config ? st.config.config.servo_rate_hz : (st.hello ? st.hello.device.servo_rate_hz : 1000); }
+
+function onHello(m) {
+  st.hello = m;
+  $('target').textContent = m.target + ' — ' + m.device.firmware_name + ' ' + m.device.firmware_version;
+  document.querySelectorAll('.unit[data-unit]').forEach((e) => { e.textContent = m.units[e.dataset.unit] || ''; });
+}
+function onConfig(m) {
+  st.config = m;
+  $('cfg-text').textContent = m.text;
+  const c = m.config;
+  const set = (id, v) => { const e = $(id); if (document.activeElement !== e) e.placeholder = String(v); };
+  set('cfg-stiffness', c.stiffness); set('cfg-damping', c.damping); set('cfg-force-limit', c.force_limit);
+  set('cfg-max-velocity', c.max_velocity); set('cfg-energy-limit', c.energy_limit);
+  $('ring-seconds').textContent = (RING / rate()).toFixed(0);
+}
+function onStatus(m) {
+  st.status = m;
+  $('sample-rate').textContent = Math.round(m.samples_per_s).toLocaleString('en');
+  $('gaps').textContent = String(m.missing) + (st.lagged ? ` (display lagged ${st.lagged} frames)` : '');
+  const r = m.recording;
+  const rs = $('rec-status');
+  if (r) {
+    rs.className = 'msg small';
+    rs.textContent = `recording ${r.file}: ${r.rows.toLocaleString('en')} rows, ${r.missing} missing, ${r.seconds.toFixed(1)} s`;
+    rs.dataset.rows = String(r.rows);
+  }
+}
+function onFaults(m) {
+  st.faults = m;
+  const tripped = m.latched !== 0 || m.safe_mode;
+  const b = $('fault-banner');
+  b.hidden = !tripped;
+  const names = m.names.length ? m.names.join(', ') : 'safe mode';
+  $('fault-text').textContent = `${names} (bits 0x${m.latched.toString(16)}) at tick ${m.first_tick}; the device is in safe mode until the faults are cleared.`;
+  const fs = $('fault-state');
+  fs.textContent = tripped ? names : 'none';
+  fs.dataset.latched = String(m.latched);
+}
+
+// ---------- traces ----------
+const LANES = [
+  { key: 'count', label: 'position [counts]', color: '#1f5fbf' },
+  { key: 'force', label: 'force', color: '#c2410c' },
+  { key: 'energy', label: 'storage energy H_T/(KΔ²)', color: '#6b21a8' },
+  { key: 'flags', label: 'flags / faults', color: '#374151' },
+];
+const FLAG_BITS = [[0, 'safe mode', '#c62828'], [1, 'hold', '#8a6d00'], [2, 'released', '#1f7a3a'], [3, 'excite', '#0e7490'], [4, 'clamped', '#b45309'], [5, 'wall off', '#6b7280']];
+
+function fmt(v) {
+  const a = Math.abs(v);
+  if (v === 0) return '0';
+  if (a >= 1e5 || a < 1e-3) return v.toExponential(2);
+  return Number(v.toPrecision(4)).toString();
+}
+
+function drawTraces() {
+  const cv = $('traces');
+  const dpr = window.devicePixelRatio || 1;
+  const W = Math.round(cv.clientWidth * dpr); const H = Math.round(cv.clientHeight * dpr);
+  if (cv.width !== W || cv.height !== H) { cv.width = W; cv.height = H; }
+  const g = cv.getContext('2d');
+  g.setTransform(dpr, 0, 0, dpr, 0, 0);
+  const w = cv.clientWidth; const h = cv.clientHeight;
+  g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
+  const left = 70; const right = 8; const pw = Math.max(10, Math.floor(w - left - right));
+  const r = rate();
+  const span = Math.max(2, Math.round(st.windowS * r)); // samples in the window
+  const latest = st.lastSeq;
+  if (!st.paused || st.viewEnd === null) st.viewEnd = latest;
+  const end = st.viewEnd + 1; const start = end - span;
+  // Min/max per pixel column in one pass over the kept samples inside the window.
+  const cols = pw;
+  const mins = LANES.map(() => new Float64Array(cols).fill(Infinity));
+  const maxs = LANES.map(() => new Float64Array(cols).fill(-Infinity));
+  const orFlags = new Uint16Array(cols);
+  const have = Math.min(ring.n, RING);
+  // Binary search the first kept sample with seq >= start.
+  let lo = ring.n - have; let hi = ring.n;
+  while (lo < hi) { const mid = (lo + hi) >> 1; if (ring.seq[mid % RING] < start) lo = mid + 1; else hi = mid; }
+  const fpc = st.hello ? st.hello.device.force_per_code : 1;
+  let used = 0;
+  for (let j = lo; j < ring.n; j++) {
+    const k = j % RING; const s = ring.seq[k];
+    if (s >= end) break;
+    const c = Math.floor((s - start) * cols / span);
+    const vals = [ring.count[k], ring.force[k] * fpc, ring.energy[k] / 8];
+    for (let L = 0; L < 3; L++) {
+      const v = vals[L];
+      if (v < mins[L][c]) mins[L][c] = v;
+      if (v > maxs[L][c]) maxs[L][c] = v;
+    }
+    orFlags[c] |= ring.flags[k];
+    mins[3][c] = 0; maxs[3][c] = 0;
+    used++;
+  }
+  cv.dataset.lastSeq = String(latest);
+  cv.dataset.columns = String(cols);
+  cv.dataset.used = String(used);
+  const lh = (h - 24) / LANES.length;
+  g.font = '12px DejaVu Sans, sans-serif';
+  for (let L = 0; L < LANES.length; L++) {
+    const y0 = 4 + L * lh; const y1 = y0 + lh - 8;
+    g.strokeStyle = '#d0d4da'; g.strokeRect(left, y0, pw, y1 - y0);
+    g.fillStyle = '#333'; g.fillText(LANES[L].label + (L === 1 && st.hello ? ` [${st.hello.units.force}]` : ''), left + 4, y0 + 12);
+    if (L === 3) {
+      const bh = (y1 - y0 - 16) / FLAG_BITS.length;
+      FLAG_BITS.forEach(([bit, name, color], i) => {
+        const yy = y0 + 16 + i * bh;
+        g.fillStyle = '#666'; g.fillText(name, 4, yy + bh * 0.8);
+        g.fillStyle = color;
+        for (let c = 0; c < cols; c++) if (maxs[3][c] === 0 && (orFlags[c] >> bit) & 1) g.fillRect(left + c, yy + 1, 1, bh - 2);
+      });
+      continue;
+    }
+    let vmin = Infinity; let vmax = -Infinity;
+    for (let c = 0; c < cols; c++) { if (mins[L][c] < vmin) vmin = mins[L][c]; if (maxs[L][c] > vmax) vmax = maxs[L][c]; }
+    if (!(vmin <= vmax)) continue;
+    if (vmax - vmin < 1e-12) { vmax += 1; vmin -= 1; }
+    const pad = (vmax - vmin) * 0.08; vmin -= pad; vmax += pad;
+    const Y = (v) => y1 - (v - vmin) / (vmax - vmin) * (y1 - y0 - 16);
+    g.fillStyle = '#555';
+    g.fillText(fmt(vmax), 4, y0 + 20); g.fillText(fmt(vmin), 4, y1);
+    g.strokeStyle = LANES[L].color; g.lineWidth = 1;
+    g.beginPath();
+    let prev = null;
+    for (let c = 0; c < cols; c++) {
+      if (mins[L][c] === Infinity) { prev = null; continue; }
+      const x = left + c + 0.5;
+      const ya = Y(maxs[L][c]); const yb = Y(mins[L][c]);
+      if (prev !== null) { g.moveTo(x - 1, prev); g.lineTo(x, (ya + yb) / 2); }
+      g.moveTo(x, ya); g.lineTo(x, yb + 0.5);
+      prev = (ya + yb) / 2;
+    }
+    g.stroke();
+  }
+  // Time axis: seconds before the newest sample shown.
+  g.fillStyle = '#555';
+  for (let i = 0; i <= 4; i++) {
+    const x = left + pw * i / 4;
+    g.fillText(`${(-(st.windowS) * (1 - i / 4)).toPrecision(3)} s`, Math.min(x, w - 50), h - 6);
+  }
+  $('trace-info').textContent = `${st.paused ? 'paused' : 'live'} · ${st.windowS} s window · ${used.toLocaleString('en')} samples in ${cols} columns`;
+}
+
+// ---------- (β, σ) plane ----------
+const REGION_COLORS = { A: '#78c878', B: '#8caaeb', C: '#eb7878', D: '#f5be78', E: '#c8eb96', F1: '#78c878', F2: '#aadcd2' };
+function drawPlane() {
+  const cv = $('plane'); const g = cv.getContext('2d');
+  const w = cv.width; const h = cv.height;
+  g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
+  const p = st.plane;
+  const note = $('plane-note'); const op = $('op-point');
+  if (!p) return;
+  if (!p.point) {
+    note.textContent = p.note || '';
+    op.textContent = 'no operating point';
+    delete cv.dataset.beta; delete cv.dataset.sigma;
+    return;
+  }
+  note.textContent = p.model ? `model: m = ${fmt(p.model.mass)}, b = ${fmt(p.model.viscous)}, c = ${fmt(p.model.coulomb)} (${p.model.source}); μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}` : '';
+  const [bmax, smax] = p.window;
+  const L = 48; const B = 36; const T = 10; const R = 10;
+  const X = (b) => L + b / bmax * (w - L - R);
+  const Y = (s) => h - B - s / smax * (h - B - T);
+  for (const poly of p.polygons) {
+    g.fillStyle = REGION_COLORS[poly.region] || '#ddd';
+    g.globalAlpha = 0.6;
+    g.beginPath();
+    poly.points.forEach(([b, s], i) => (i ? g.lineTo(X(b), Y(s)) : g.moveTo(X(b), Y(s))));
+    g.closePath(); g.fill();
+    g.globalAlpha = 1;
+    // Label at the polygon's centroid of vertices.
+    let cb = 0; let cs = 0; poly.points.forEach(([b, s]) => { cb += b; cs += s; });
+    g.fillStyle = '#222'; g.font = 'bold 13px DejaVu Sans, sans-serif';
+    g.fillText(poly.region, X(cb / poly.points.length) - 6, Y(cs / poly.points.length) + 4);
+  }
+  g.strokeStyle = '#333'; g.strokeRect(L, T, w - L - R, h - B - T);
+  g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
+  g.fillText('β = b/(KT)', w / 2 - 30, h - 6);
+  g.save(); g.translate(12, h / 2 + 30); g.rotate(-Math.PI / 2); g.fillText('σ = c/(KΔ)', 0, 0); g.restore();
+  for (let i = 0; i <= 4; i++) {
+    g.fillText(fmt(bmax * i / 4), X(bmax * i / 4) - 8, h - B + 14);
+    g.fillText(fmt(smax * i / 4), 4, Y(smax * i / 4) + 4);
+  }
+  if (p.critical) {
+    g.strokeStyle = '#000'; g.lineWidth = 2; g.beginPath();
+    g.moveTo(X(p.critical[0][0]), Y(p.critical[0][1])); g.lineTo(X(p.critical[1][0]), Y(p.critical[1][1]));
+    g.stroke(); g.lineWidth = 1;
+  }
+  const { beta, sigma, k } = p.point;
+  // Path of the point as K grows: a ray to the origin (Fig. 4).
+  const far = Math.min(bmax / Math.max(beta, 1e-300), smax / Math.max(sigma, 1e-300));
+  g.strokeStyle = '#5a28a0'; g.setLineDash([5, 4]); g.beginPath();
+  g.moveTo(X(0), Y(0)); g.lineTo(X(beta * far), Y(sigma * far)); g.stroke(); g.setLineDash([]);
+  for (const lim of p.limits) {
+    if (lim.beta > bmax || lim.sigma > smax) continue;
+    const x = X(lim.beta); const y = Y(lim.sigma);
+    g.strokeStyle = '#000'; g.beginPath(); g.moveTo(x - 5, y - 5); g.lineTo(x + 5, y + 5); g.moveTo(x + 5, y - 5); g.lineTo(x - 5, y + 5); g.stroke();
+    g.fillStyle = '#000'; g.fillText(`${lim.label} = ${fmt(lim.k)}`, x + 7, y + 4);
+  }
+  const px = X(Math.min(beta, bmax)); const py = Y(Math.min(sigma, smax));
+  g.fillStyle = '#000'; g.beginPath(); g.arc(px, py, 6, 0, 2 * Math.PI); g.fill();
+  g.fillText(`K = ${fmt(k)}`, px + 9, py - 8);
+  cv.dataset.beta = String(beta); cv.dataset.sigma = String(sigma);
+  cv.dataset.px = px.toFixed(1); cv.dataset.py = py.toFixed(1); cv.dataset.k = String(k);
+  cv.dataset.region = p.region;
+  op.textContent = `K = ${fmt(k)} ${st.hello ? st.hello.units.k : ''}: β = ${fmt(beta)}, σ = ${fmt(sigma)} — region ${p.region}: ${p.region_meaning}; critical line at ξ̇ = ${fmt(p.xidot)}`;
+}
+
+// ---------- release ----------
+function onRelease(m) {
+  const v = $('rel-verdict');
+  if (m.state === 'running') {
+    v.dataset.state = 'running';
+    v.textContent = `running: release from ${m.deflection} ticks at K = ${fmt(m.stiffness)}…`;
+    return;
+  }
+  if (m.state === 'error') { v.dataset.state = 'fail'; v.textContent = m.error; return; }
+  v.dataset.state = m.passes ? 'pass' : 'fail';
+  v.dataset.verdict = JSON.stringify(m.verdict);
+  v.textContent = `verdict: ${m.describe} (K = ${fmt(m.stiffness)}, from ${m.deflection} ticks${m.faults ? ', faults: ' + m.fault_names.join(', ') : ''})`;
+  drawRelease(m);
+}
+function drawRelease(m) {
+  const cv = $('rel-trace'); const g = cv.getContext('2d');
+  const w = cv.width; const h = cv.height;
+  g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
+  const c = m.counts; if (!c.length) return;
+  let lo = -2; let hi = 2; for (const x of c) { if (x < lo) lo = x; if (x > hi) hi = x; }
+  lo -= 0.5; hi += 1.5;
+  const L = 40; const X = (i) => L + i / c.length * (w - L - 6); const Y = (v) => h - 18 - (v - lo) / (hi - lo) * (h - 28);
+  g.strokeStyle = '#999'; g.setLineDash([6, 4]);
+  for (const lv of [-1, 1]) { g.beginPath(); g.moveTo(L, Y(lv)); g.lineTo(w - 6, Y(lv)); g.stroke(); }
+  g.setLineDash([]);
+  g.strokeStyle = '#1f5fbf'; g.beginPath();
+  c.forEach((x, i) => (i ? g.lineTo(X(i), Y(x)) : g.moveTo(X(i), Y(x))));
+  g.stroke();
+  g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
+  g.fillText(fmt(hi), 2, 14); g.fillText(fmt(lo), 2, h - 18);
+  g.fillText(`x [ticks] over ${(c.length / m.rate_hz).toFixed(2)} s after the release`, L + 4, h - 4);
+}
+
+// ---------- tune ----------
+function onTune(m) {
+  const log = $('tune-log');
+  if (m.state === 'running') {
+    const li = document.createElement('li'); li.textContent = m.message; log.appendChild(li);
+    log.scrollTop = log.scrollHeight;
+    return;
+  }
+  if (m.state === 'error') {
+    const li = document.createElement('li'); li.textContent = 'failed: ' + m.error; li.className = 'err'; log.appendChild(li);
+    return;
+  }
+  const u = st.hello ? st.hello.units.k : '';
+  $('tune-result').hidden = false;
+  $('tune-guaranteed').textContent = `${fmt(m.guaranteed)} ${u}`;
+  $('tune-expected').textContent = `${fmt(m.expected)} ${u}`;
+  $('tune-verified').textContent = `${fmt(m.verified)} ${u} (${m.trials.length} release tests)`;
+  $('tune-set').textContent = `${fmt(m.set)} ${u} ${m.saved ? '(set and saved)' : '(dry run: not set)'}`;
+  for (const t of m.trials) {
+    const li = document.createElement('li');
+    li.textContent = `release at K = ${fmt(t.k)}: ${typeof t.verdict === 'string' ? t.verdict : JSON.stringify(t.verdict)}`;
+    log.appendChild(li);
+  }
+}
+
+// ---------- map viewer ----------
+const CLASS_COLORS = { growing: '#282828', persistent: '#787878', non_monotone_decay: '#c8c8c8', monotone_decay: '#ffffff' };
+async function openMap(file) {
+  const msg = $('map-msg');
+  msg.className = 'msg small'; msg.textContent = `reading ${file.name}…`;
+  const text = await file.text();
+  const r = await fetch(`/api/map?token=${encodeURIComponent(TOKEN)}`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: text });
+  const m = await r.json();
+  if (!r.ok) { msg.className = 'msg small err'; msg.textContent = m.error; return; }
+  msg.className = 'msg small ok';
+  msg.textContent = `${file.name}: μ = ${m.mu}, τ_D = ${m.tau_d}, ${m.periods} periods, ${m.panels.length} panel(s). Dark: growing, grey: persistent, light: non-monotone decay, white: monotone decay; red: analytic boundaries.`;
+  drawMap(m);
+}
+function drawMap(m) {
+  const cv = $('map-canvas'); cv.hidden = false;
+  const n = m.panels.length; const cols = Math.min(n, 3); const rows = Math.ceil(n / cols);
+  const pw = 330; const ph = 300;
+  cv.width = cols * pw; cv.height = rows * ph;
+  const g = cv.getContext('2d'); g.fillStyle = '#fff'; g.fillRect(0, 0, cv.width, cv.height);
+  const [b0, b1, s0, s1] = m.window; const [db, ds] = m.cell;
+  m.panels.forEach((p, i) => {
+    const ox = (i % cols) * pw; const oy = Math.floor(i / cols) * ph;
+    const L = ox + 40; const T = oy + 20; const W = pw - 50; const H = ph - 50;
+    const X = (b) => L + (b - b0) / (b1 - b0) * W; const Y = (s) => T + H - (s - s0) / (s1 - s0) * H;
+    for (const [b, s, c] of p.points) {
+      g.fillStyle = CLASS_COLORS[c] || '#f0f';
+      g.fillRect(X(b - db / 2), Y(s + ds / 2), Math.ceil(X(b + db / 2) - X(b - db / 2)) + 0.5, Math.ceil(Y(s - ds / 2) - Y(s + ds / 2)) + 0.5);
+    }
+    g.save(); g.beginPath(); g.rect(L, T, W, H); g.clip();
+    g.strokeStyle = '#e00'; g.lineWidth = 2;
+    for (const [[xa, ya], [xb, yb]] of p.lines) { g.beginPath(); g.moveTo(X(xa), Y(ya)); g.lineTo(X(xb), Y(yb)); g.stroke(); }
+    g.restore();
+    g.strokeStyle = '#333'; g.lineWidth = 1; g.strokeRect(L, T, W, H);
+    g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
+    g.fillText(`ξ̇0 = ${p.xidot0}`, L + 4, oy + 14);
+    g.fillText(fmt(b0), L - 4, T + H + 14); g.fillText(fmt(b1), L + W - 20, T + H + 14); g.fillText('β', L + W / 2, T + H + 26);
+    g.fillText(fmt(s1), ox + 2, T + 10); g.fillText(fmt(s0), ox + 2, T + H); g.fillText('σ', ox + 2, T + H / 2);
+  });
+  cv.dataset.panels = String(n);
+}
+
+// ---------- controls ----------
+function flash(el, ok, text) { el.className = 'msg ' + (ok ? 'ok' : 'err'); el.textContent = text; }
+
+$('cfg-form').addEventListener('submit', async (e) => {
+  e.preventDefault();
+  const set = {};
+  for (const el of $('cfg-form').querySelectorAll('input, select')) {
+    const v = el.value.trim();
+    if (v !== '') set[el.name] = v;
+  }
+  const r = await send({ cmd: 'config', set });
+  flash($('cfg-msg'), r.ok, r.ok ? 'applied' : r.error);
+  if (r.ok) for (const el of $('cfg-form').querySelectorAll('input')) el.value = '';
+});
+$('clear-faults').onclick = $('banner-clear').onclick = async () => {
+  const r = await send({ cmd: 'clear_faults' });
+  if (!r.ok) showLog(r.error);
+};
+$('rel-run').onclick = async () => {
+  const args = { deflection: $('rel-deflection').value.trim(), ticks: $('rel-ticks').value.trim() };
+  const k = $('rel-stiffness').value.trim(); if (k !== '') args.stiffness = k;
+  const v = $('rel-verdict'); v.dataset.state = 'running'; v.textContent = 'starting…';
+  const r = await send({ cmd: 'release', args });
+  if (!r.ok) { v.dataset.state = 'fail'; v.textContent = r.error; }
+};
+$('tune-run').onclick = async () => {
+  const args = { margin: $('tune-margin').value.trim(), 'dry-run': $('tune-dry-run').checked };
+  const mv = $('tune-max-velocity').value.trim(); if (mv !== '') args['max-velocity'] = mv;
+  $('tune-log').textContent = ''; $('tune-result').hidden = true;
+  const r = await send({ cmd: 'tune', args });
+  if (!r.ok && !/tune failed/.test(r.error)) onTune({ state: 'error', error: r.error });
+};
+$('rec-start').onclick = async () => {
+  const r = await send({ cmd: 'record_start', file: $('rec-file').value.trim() });
+  flash($('rec-status'), r.ok, r.ok ? `recording to ${r.result.file}` : r.error);
+};
+$('rec-stop').onclick = async () => {
+  const r = await send({ cmd: 'record_stop' });
+  flash($('rec-status'), r.ok, r.ok ? `${r.result.file}: ${r.result.rows} rows; ${r.result.stats.missing} missing` : r.error);
+  if (r.ok) $('rec-status').dataset.rows = String(r.result.rows);
+};
+$('xidot-apply').onclick = async () => {
+  const r = await send({ cmd: 'velocity', xidot: Number($('xidot').value) });
+  if (!r.ok) $('plane-note').textContent = r.error;
+};
+$('map-file').addEventListener('change', (e) => { if (e.target.files[0]) openMap(e.target.files[0]); });
+$('pause').onclick = () => {
+  st.paused = !st.paused;
+  $('pause').textContent = st.paused ? 'Resume' : 'Pause';
+};
+$('window').onchange = (e) => { st.windowS = Number(e.target.value); };
+function zoom(f) {
+  st.windowS = Math.min(200, Math.max(0.005, st.windowS * f));
+}
+$('zoom-in').onclick = () => zoom(0.5);
+$('zoom-out').onclick = () => zoom(2);
+$('traces').addEventListener('wheel', (e) => { e.preventDefault(); zoom(e.deltaY > 0 ? 1.25 : 0.8); }, { passive: false });
+let drag = null;
+$('traces').addEventListener('mousedown', (e) => { if (st.paused) drag = { x: e.clientX, end: st.viewEnd }; });
+window.addEventListener('mouseup', () => { drag = null; });
+window.addEventListener('mousemove', (e) => {
+  if (!drag) return;
+  const cv = $('traces'); const span = st.windowS * rate();
+  st.viewEnd = Math.min(st.lastSeq, drag.end - (e.clientX - drag.x) * span / (cv.clientWidth - 78));
+});
+
+function frame(t) {
+  drawTraces();
+  st.frames++;
+  if (t - st.fpsT >= 1000) {
+    st.fps = st.frames * 1000 / (t - st.fpsT); st.frames = 0; st.fpsT = t;
+    $('fps').textContent = st.fps.toFixed(0); $('fps').dataset.fps = st.fps.toFixed(1);
+  }
+  requestAnimationFrame(frame);
+}
+connect();
+requestAnimationFrame(frame);

@@ -446,6 +446,8 @@ impl Dev {
             self.busy_check("config set")?;
             let argv = wire::argv("config set", set)?;
             let o = wire::ConfigCli::parse_argv(&argv)?;
+            // As `hostctl config set`: bad numbers are refused before the device is asked.
+            o.apply(&ServoConfig::default())?;
             if o.is_empty() {
                 bail!("config set: give at least one field to change (see `hostctl config set --help`)");
             }
