@@ -420,6 +420,7 @@ impl Dev {
             Command::Velocity { xidot } => self.velocity(xidot),
             Command::RecordStart { file } => self.record_start(&file),
             Command::RecordStop => self.record_stop(),
+            Command::Get => self.get(),
             Command::Tune { args } => self.tune(&args),
             Command::Release { args } => match self.release_start(&args) {
                 Ok(()) => {
@@ -473,6 +474,13 @@ impl Dev {
             ));
         }
         self.publish_config();
+    }
+
+    fn get(&mut self) -> Reply {
+        let cfg = self.client.get_config().map_err(|e| format!("{e:#}"))?;
+        let f = self.client.faults().map_err(|e| format!("{e:#}"))?;
+        Ok(json!({"config": cfg, "faults": f, "gaps": self.client.gaps,
+                  "release_running": self.release.is_some(), "recording": self.rec.is_some()}))
     }
 
     fn clear_faults(&mut self) -> Reply {

@@ -5,7 +5,7 @@
 //!   `{"cmd": "release", "args": {"deflection": 20, "ticks": 3000, "stiffness": 1}}`,
 //!   `{"cmd": "tune", "args": {"margin": 0.9, "dry-run": true}}`, `{"cmd": "clear_faults"}`,
 //!   `{"cmd": "record_start", "file": "run.csv"}`, `{"cmd": "record_stop"}`,
-//!   `{"cmd": "velocity", "xidot": 5}`. The keys of `set` and `args` are the command-line
+//!   `{"cmd": "velocity", "xidot": 5}`, `{"cmd": "get"}`. The keys of `set` and `args` are the command-line
 //!   flags of `hostctl config set`, `experiment release` and `tune`; they are turned into an
 //!   argument list and parsed by the same clap definitions, then checked by the same
 //!   functions, so the page gets the same messages as the terminal.
@@ -69,6 +69,8 @@ pub enum Command {
     },
     /// Stop recording.
     RecordStop,
+    /// The active configuration, latched faults and counters (changes nothing).
+    Get,
 }
 
 /// A command with its request id, as sent by the page.

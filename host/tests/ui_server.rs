@@ -1,0 +1,255 @@
+//! `hostctl ui` over raw HTTP against the real binary on the fast virtual device: the security
+//! rules (token, Origin, Host, WebSocket upgrade), the printed URL, the commands' messages
+//! (compared with the terminal's own), a release test, and a recording made through the server
+//! (read back with the strict reader of `hostctl replay`).
+
+mod ui_support;
+
+use std::process::Command;
+use stiffwall_host::recording;
+use ui_support::Server;
+
+const WS_HEADERS: &str = "Connection: Upgrade\r\nUpgrade: websocket\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==";
+
+#[test]
+fn prints_a_loopback_url_with_a_fresh_token() {
+    let a = Server::start(&[]);
+    let b = Server::start(&[]);
+    assert!(a.url.starts_with("http://127.0.0.1:"), "{}", a.url);
+    assert_eq!(a.token.len(), 32);
+    assert!(a.token.chars().all(|c| c.is_ascii_hexdigit()));
+    assert_ne!(a.token, b.token, "each run has its own token");
+}
+
+#[test]
+fn requests_without_the_token_are_refused() {
+    let s = Server::start(&[]);
+    let h = s.host();
+    // The page itself, with and without the token.
+    let (code, body) = s.raw(&format!("GET / HTTP/1.1\r\nHost: {h}"), "");
+    assert_eq!(code, 403, "{body}");
+    assert!(body.contains("token"), "{body}");
+    let (code, _) = s.raw(&format!("GET /?token=0123 HTTP/1.1\r\nHost: {h}"), "");
+    assert_eq!(code, 403);
+    let (code, body) = s.raw(
+        &format!("GET /?token={} HTTP/1.1\r\nHost: {h}", s.token),
+        "",
+    );
+    assert_eq!(code, 200, "{body}");
+    assert!(body.contains("<canvas id=\"traces\""));
+    assert!(body.contains("default-src 'self'"), "CSP header: {body}");
+    // A state-changing request without (or with a wrong) token changes nothing.
+    let set = r#"{"cmd":"config","set":{"stiffness":3}}"#;
+    let (code, _) = s.raw(&format!("POST /api/cmd HTTP/1.1\r\nHost: {h}"), set);
+    assert_eq!(code, 403);
+    let wrong: String = s.token.chars().rev().collect();
+    let (code, _) = s.raw(
+        &format!("POST /api/cmd HTTP/1.1\r\nHost: {h}\r\nX-Stiffwall-Token: {wrong}"),
+        set,
+    );
+    assert_eq!(code, 403);
+    let (code, _) = s.raw(&format!("POST /api/map HTTP/1.1\r\nHost: {h}"), "{}");
+    assert_eq!(code, 403);
+    let (code, v) = s.cmd(r#"{"cmd":"get"}"#);
+    assert_eq!(code, 200, "{v}");
+    assert_eq!(v["result"]["config"]["stiffness"], 0.0, "K unchanged: {v}");
+    // The static assets need no token but still the right Host.
+    let (code, _) = s.raw(&format!("GET /app.js HTTP/1.1\r\nHost: {h}"), "");
+    assert_eq!(code, 200);
+    let (code, _) = s.raw("GET /app.js HTTP/1.1\r\nHost: rebind.example:80", "");
+    assert_eq!(code, 403);
+}
+
+#[test]
+fn foreign_origin_and_wrong_host_are_refused() {
+    let s = Server::start(&[]);
+    let h = s.host();
+    let t = &s.token;
+    let set = r#"{"cmd":"config","set":{"stiffness":3}}"#;
+    for origin in ["http://evil.example", "https://127.0.0.1", "null"] {
+        let (code, body) = s.raw(
+            &format!("POST /api/cmd?token={t} HTTP/1.1\r\nHost: {h}\r\nOrigin: {origin}"),
+            set,
+        );
+        assert_eq!(code, 403, "{origin}: {body}");
+        assert!(body.contains("Origin"), "{body}");
+    }
+    // DNS rebinding: a foreign name that resolves here still sends its own name as Host.
+    for host in ["evil.example", "evil.example:80", "127.0.0.1:1"] {
+        let (code, body) = s.raw(&format!("GET /?token={t} HTTP/1.1\r\nHost: {host}"), "");
+        assert_eq!(code, 403, "{host}: {body}");
+        assert!(body.contains("Host"), "{body}");
+    }
+    let (code, _) = s.raw(&format!("GET /?token={t} HTTP/1.1"), "");
+    assert_eq!(code, 403, "no Host at all");
+    // The page's own origin, and localhost for a loopback bind, are accepted.
+    let port = s.addr.port();
+    for (host, origin) in [
+        (h.clone(), format!("http://{h}")),
+        (
+            format!("localhost:{port}"),
+            format!("http://localhost:{port}"),
+        ),
+    ] {
+        let (code, body) = s.raw(
+            &format!("POST /api/cmd?token={t} HTTP/1.1\r\nHost: {host}\r\nOrigin: {origin}"),
+            set,
+        );
+        assert_eq!(code, 200, "{host} {origin}: {body}");
+    }
+    let (_, v) = s.cmd(r#"{"cmd":"get"}"#);
+    assert_eq!(v["result"]["config"]["stiffness"], 3.0, "{v}");
+}
+
+#[test]
+fn websocket_upgrade_needs_token_and_own_origin() {
+    let s = Server::start(&[]);
+    let h = s.host();
+    let t = &s.token;
+    let (code, body) = s.raw(
+        &format!("GET /ws HTTP/1.1\r\nHost: {h}\r\n{WS_HEADERS}"),
+        "",
+    );
+    assert_eq!(code, 403, "no token: {body}");
+    let (code, _) = s.raw(
+        &format!("GET /ws?token=abc HTTP/1.1\r\nHost: {h}\r\n{WS_HEADERS}"),
+        "",
+    );
+    assert_eq!(code, 403, "wrong token");
+    let (code, body) = s.raw(
+        &format!(
+            "GET /ws?token={t} HTTP/1.1\r\nHost: {h}\r\nOrigin: http://evil.example\r\n{WS_HEADERS}"
+        ),
+        "",
+    );
+    assert_eq!(code, 403, "foreign origin: {body}");
+    let (code, _) = s.raw(
+        &format!("GET /ws?token={t} HTTP/1.1\r\nHost: evil.example\r\n{WS_HEADERS}"),
+        "",
+    );
+    assert_eq!(code, 403, "wrong Host");
+    let (code, body) = s.raw(
+        &format!("GET /ws?token={t} HTTP/1.1\r\nHost: {h}\r\nOrigin: http://{h}\r\n{WS_HEADERS}"),
+        "",
+    );
+    assert_eq!(code, 101, "the page's own upgrade: {body}");
+}
+
+/// The message of `hostctl config set ARGS` on the terminal (first line, without `error: `).
+fn terminal_message(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_hostctl"))
+        .args(["config", "set"])
+        .args(args)
+        .output()
+        .expect("run hostctl config set");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    err.lines()
+        .next()
+        .unwrap_or("")
+        .trim_start_matches("error: ")
+        .to_string()
+}
+
+#[test]
+fn config_messages_match_the_terminal() {
+    let s = Server::start(&[]);
+    for (json, args) in [
+        (r#"{"stiffness": -1}"#, vec!["--stiffness", "-1"]),
+        (
+            r#"{"energy-growth-cycles": 65}"#,
+            vec!["--energy-growth-cycles", "65"],
+        ),
+        (r#"{"force-limit": 0}"#, vec!["--force-limit", "0"]),
+    ] {
+        let (code, v) = s.cmd(&format!(r#"{{"id": 4, "cmd": "config", "set": {json}}}"#));
+        assert_eq!(code, 422, "{v}");
+        assert_eq!(v["id"], 4);
+        assert_eq!(
+            v["error"].as_str().unwrap(),
+            terminal_message(&args),
+            "{json}"
+        );
+    }
+    let (code, v) = s.cmd(r#"{"cmd": "config", "set": {"wall": "sideways"}}"#);
+    assert_eq!(code, 422);
+    assert!(
+        v["error"]
+            .as_str()
+            .unwrap()
+            .contains("invalid value 'sideways' for '--wall"),
+        "{v}"
+    );
+    let (code, v) = s.cmd(r#"{"cmd": "release", "args": {"deflection": 0}}"#);
+    assert_eq!(code, 422);
+    assert_eq!(
+        v["error"],
+        "--deflection must be non-zero and within [-1048576, 1048576] (got 0)"
+    );
+    // The fresh virtual device's wall is off: the release names the flag, as on the terminal.
+    let (_, v) = s.cmd(r#"{"cmd": "release", "args": {"deflection": 20}}"#);
+    assert!(
+        v["error"]
+            .as_str()
+            .unwrap()
+            .contains("the device's wall is off"),
+        "{v}"
+    );
+    let (code, v) = s.cmd(r#"{"cmd": "record_start", "file": "../escape.csv"}"#);
+    assert_eq!(code, 422);
+    assert!(
+        v["error"].as_str().unwrap().contains("plain file name"),
+        "{v}"
+    );
+    let (code, v) = s.cmd(r#"{"cmd": "format_disk"}"#);
+    assert_eq!(code, 400, "{v}");
+}
+
+#[test]
+fn release_test_and_lossless_recording_through_the_server() {
+    let dir = std::env::temp_dir().join(format!("stiffwall-ui-rec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let s = Server::start(&["--record-dir", dir.to_str().unwrap()]);
+    let (code, v) = s.cmd(r#"{"cmd": "record_start", "file": "ui.csv"}"#);
+    assert_eq!(code, 200, "{v}");
+    // K = 0.8 is below the rig's guaranteed limit (0.88, see replay_monitor): the release
+    // from 20 ticks settles (`hostctl experiment release --stiffness 0.8` says the same).
+    let (code, v) = s.cmd(r#"{"cmd": "config", "set": {"stiffness": 0.8}}"#);
+    assert_eq!(code, 200, "{v}");
+    let (code, v) = s.cmd(r#"{"cmd": "release", "args": {"deflection": 20, "ticks": 2000}}"#);
+    assert_eq!(code, 200, "{v}");
+    let r = &v["result"];
+    assert_eq!(r["passes"], true, "{v}");
+    assert!((r["stiffness"].as_f64().unwrap() - 0.8).abs() < 1e-6);
+    let counts = r["counts"].as_array().unwrap();
+    assert!(counts.len() >= 1900, "{} released samples", counts.len());
+    // Released from about 20 ticks (the hold may settle a tick off).
+    assert!(
+        (counts[0].as_i64().unwrap() - 20).abs() <= 2,
+        "{}",
+        counts[0]
+    );
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let (code, v) = s.cmd(r#"{"cmd": "record_stop"}"#);
+    assert_eq!(code, 200, "{v}");
+    let rows = v["result"]["rows"].as_u64().unwrap();
+    assert_eq!(v["result"]["stats"]["missing"], 0, "{v}");
+    let rec = recording::read(&dir.join("ui.csv")).expect("a valid recording");
+    assert_eq!(rec.missing(), 0);
+    assert_eq!(rec.rows.len() as u64, rows);
+    assert!(rows > 2000, "{rows} rows");
+    // Sample numbers are consecutive and the release is in the file.
+    assert!(rec.rows.windows(2).all(|w| w[1].seq == w[0].seq + 1));
+    let released = rec
+        .rows
+        .iter()
+        .filter(|r| r.sample.flags & stiffwall_proto::flags::RELEASED != 0)
+        .count();
+    assert!(released >= 2000, "{released} released rows");
+    let text = std::fs::read_to_string(dir.join("ui.csv")).unwrap();
+    assert!(
+        text.contains("# config changed from the page"),
+        "config note"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
