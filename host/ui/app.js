@@ -264,7 +264,7 @@ function drawPlane() {
   if (!p.point) {
     note.textContent = p.note || '';
     op.textContent = 'no operating point';
-    delete cv.dataset.beta; delete cv.dataset.sigma;
+    for (const k of ['beta', 'sigma', 'k', 'px', 'py', 'region']) delete cv.dataset[k];
     return;
   }
   note.textContent = p.model ? `model: m = ${fmt(p.model.mass)}, b = ${fmt(p.model.viscous)}, c = ${fmt(p.model.coulomb)} (${p.model.source}); μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}` : '';

@@ -79,11 +79,24 @@ pub fn plane(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot:
     let tau = r.tau_d;
     let b_star = regions::beta_star(tau);
     let s_star = regions::sigma_star(tau, r.xiddot).unwrap_or(0.5);
+    // The window shows the point at half the stiffness limit as well as the current one, so
+    // that it does not rescale with K (β, σ ∝ 1/K would otherwise keep the point in place on
+    // the screen) while K stays above half the limit.
+    let k0 = p.stiffness;
+    let k_lim = r
+        .k_max_at_velocity
+        .filter(|k| k.is_finite() && *k > 0.0)
+        .unwrap_or(r.k_max_passive);
+    let reach = if k_lim.is_finite() && k_lim > 0.0 {
+        (2.0 * k0 / k_lim).max(1.0)
+    } else {
+        1.0
+    };
     let window = Window {
         beta_min: 0.0,
-        beta_max: (1.5 * b_star).max(1.2 * r.beta).max(1.0),
+        beta_max: (1.5 * b_star).max(1.2 * r.beta * reach).max(1.0),
         sigma_min: 0.0,
-        sigma_max: (1.25 * r.sigma).max(s_star + 0.6).max(2.0),
+        sigma_max: (1.25 * r.sigma * reach).max(s_star + 0.6).max(2.0),
     };
     let polygons: Vec<Value> = REGIONS
         .iter()
@@ -97,7 +110,6 @@ pub fn plane(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot:
         .ok()
         .and_then(|b| b.get(Boundary::Critical))
         .map(|s| json!([s.from, s.to]));
-    let k0 = p.stiffness;
     let limits: Vec<Value> = [
         (r.k_max_at_velocity, "K_max (12)"),
         (r.k_max_delayed.filter(|_| tau > 0.0), "K_max (19)"),
@@ -251,6 +263,8 @@ mod tests {
         assert!((s2 - 1.304).abs() < 0.01, "sigma {s2}");
         assert!(!a["polygons"].as_array().unwrap().is_empty());
         assert!(a["critical"].is_array());
+        // Above half the limit the window does not follow K: the point moves on the screen.
+        assert_eq!(a["window"], b["window"]);
     }
 
     #[test]

@@ -1,0 +1,323 @@
+//! `hostctl ui` in a real browser: Debian's `chromium` driven through `chromedriver` (WebDriver,
+//! with the `fantoccini` client). Starts `hostctl ui` on the fast virtual device, loads the
+//! printed URL and checks what a person would see: the sample counter and the trace advance; a
+//! release test run from the page shows its verdict; changing K moves the operating point in
+//! the (β, σ) plane; K far above the limit trips the supervisor and the fault banner appears;
+//! a `hostctl map` JSON opens in the map viewer.
+//!
+//! Opt-in (`#[ignore]`, like the QEMU scenarios): `cargo xtask ci` installs chromium and
+//! chromium-driver and runs it; `cargo xtask ui-screenshots` runs it with
+//! `STIFFWALL_UI_SCREENSHOTS=docs/figures`, which writes `ui-*.png` there.
+//! `STIFFWALL_CHROMEDRIVER` and `STIFFWALL_CHROMIUM` override the programs' paths.
+
+mod ui_support;
+
+use fantoccini::{Client, ClientBuilder, Locator};
+use serde_json::json;
+use std::net::TcpListener;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use ui_support::Server;
+
+struct Driver(Child);
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn program(env: &str, default: &str) -> String {
+    std::env::var(env).unwrap_or_else(|_| default.to_string())
+}
+
+/// Starts chromedriver on a free loopback port; returns it and its URL.
+fn start_driver() -> (Driver, String) {
+    let port = TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port();
+    let exe = program("STIFFWALL_CHROMEDRIVER", "chromedriver");
+    let child = Command::new(&exe)
+        .arg(format!("--port={port}"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap_or_else(|e| {
+            panic!("starting {exe}: {e} (install Debian's chromium and chromium-driver, e.g. with `cargo xtask ci`)")
+        });
+    let d = Driver(child);
+    let t0 = Instant::now();
+    while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "chromedriver did not start"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    (d, format!("http://127.0.0.1:{port}"))
+}
+
+async fn browser(driver_url: &str) -> Client {
+    let mut caps = serde_json::Map::new();
+    caps.insert(
+        "goog:chromeOptions".into(),
+        json!({
+            "binary": program("STIFFWALL_CHROMIUM", "/usr/bin/chromium"),
+            "args": ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                     "--window-size=1600,1300", "--hide-scrollbars", "--force-device-scale-factor=1"],
+        }),
+    );
+    ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
+        .capabilities(caps)
+        .connect(driver_url)
+        .await
+        .expect("a WebDriver session in chromium")
+}
+
+async fn attr(c: &Client, id: &str, name: &str) -> Option<String> {
+    c.find(Locator::Id(id)).await.ok()?.attr(name).await.ok()?
+}
+
+async fn number(c: &Client, id: &str, name: &str) -> Option<f64> {
+    attr(c, id, name).await?.parse().ok()
+}
+
+/// Polls `check` until it gives `Some`, failing with `what` after `limit`.
+async fn wait<T, F, Fut>(what: &str, limit: Duration, mut check: F) -> T
+where
+    F: FnMut() -> Fut,
+    Fut: std::future::Future<Output = Option<T>>,
+{
+    let t0 = Instant::now();
+    loop {
+        if let Some(v) = check().await {
+            return v;
+        }
+        assert!(t0.elapsed() < limit, "timed out waiting for {what}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+async fn set_stiffness(c: &Client, k: &str) {
+    let input = c.find(Locator::Id("cfg-stiffness")).await.unwrap();
+    input.clear().await.unwrap();
+    input.send_keys(k).await.unwrap();
+    c.find(Locator::Id("cfg-apply"))
+        .await
+        .unwrap()
+        .click()
+        .await
+        .unwrap();
+    let want: f64 = k.parse().unwrap();
+    wait(
+        &format!("K = {k} in the plane"),
+        Duration::from_secs(20),
+        || async {
+            let got = number(c, "plane", "data-k").await;
+            if want == 0.0 {
+                // The wall is off: the plane has no operating point.
+                return got.is_none().then_some(());
+            }
+            ((got? - want).abs() < 1e-6 * want).then_some(())
+        },
+    )
+    .await;
+}
+
+async fn shot(c: &Client, name: &str) {
+    if let Some(dir) = std::env::var_os("STIFFWALL_UI_SCREENSHOTS") {
+        let png = c.screenshot().await.expect("screenshot");
+        let path = PathBuf::from(dir).join(name);
+        std::fs::write(&path, png).expect("write the screenshot");
+        eprintln!("wrote {}", path.display());
+    }
+}
+
+#[test]
+#[ignore = "needs Debian's chromium and chromium-driver: run `cargo xtask ci` or `cargo xtask ui-screenshots`"]
+fn the_page_in_chromium() {
+    let server = Server::start(&[]);
+    let (_driver, driver_url) = start_driver();
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    rt.block_on(async {
+        let c = browser(&driver_url).await;
+        c.goto(&server.url).await.expect("load the page");
+        let long = Duration::from_secs(30);
+
+        // Live: the sample counter and the trace advance.
+        let n1 = wait("samples", long, || async {
+            number(&c, "sample-count", "data-count")
+                .await
+                .filter(|n| *n > 0.0)
+        })
+        .await;
+        let seq1 = number(&c, "traces", "data-last-seq").await.unwrap();
+        tokio::time::sleep(Duration::from_millis(600)).await;
+        let n2 = number(&c, "sample-count", "data-count").await.unwrap();
+        let seq2 = number(&c, "traces", "data-last-seq").await.unwrap();
+        assert!(n2 > n1, "sample counter {n1} -> {n2}");
+        assert!(seq2 > seq1, "trace end {seq1} -> {seq2}");
+        assert!(number(&c, "traces", "data-used").await.unwrap() > 0.0);
+        let fps = wait("a frame rate", long, || async {
+            number(&c, "fps", "data-fps").await.filter(|f| *f > 0.0)
+        })
+        .await;
+        eprintln!("display: {fps} frames per second");
+        assert!(fps >= 15.0, "the trace redraws at {fps} fps");
+
+        // The fresh virtual device's wall is off: no operating point until K is set.
+        assert!(attr(&c, "plane", "data-beta").await.is_none());
+        set_stiffness(&c, "0.8").await;
+        let (b1, s1) = (
+            number(&c, "plane", "data-beta").await.unwrap(),
+            number(&c, "plane", "data-sigma").await.unwrap(),
+        );
+        let (x1, y1) = (
+            number(&c, "plane", "data-px").await.unwrap(),
+            number(&c, "plane", "data-py").await.unwrap(),
+        );
+
+        // A release test from the page (K = 0.8 < the guaranteed 0.88: it settles).
+        c.find(Locator::Id("rel-run"))
+            .await
+            .unwrap()
+            .click()
+            .await
+            .unwrap();
+        let state = wait("the release verdict", long, || async {
+            attr(&c, "rel-verdict", "data-state")
+                .await
+                .filter(|s| s == "pass" || s == "fail")
+        })
+        .await;
+        let text = c
+            .find(Locator::Id("rel-verdict"))
+            .await
+            .unwrap()
+            .text()
+            .await
+            .unwrap();
+        assert_eq!(state, "pass", "{text}");
+        assert!(text.contains("verdict: settles"), "{text}");
+        c.find(Locator::Id("pause"))
+            .await
+            .unwrap()
+            .click()
+            .await
+            .unwrap();
+        shot(&c, "ui-overview.png").await;
+        c.find(Locator::Id("pause"))
+            .await
+            .unwrap()
+            .click()
+            .await
+            .unwrap();
+
+        // Doubling K halves β and σ (Fig. 4): the point moves towards the origin.
+        set_stiffness(&c, "1.6").await;
+        let (b2, s2) = (
+            number(&c, "plane", "data-beta").await.unwrap(),
+            number(&c, "plane", "data-sigma").await.unwrap(),
+        );
+        let (x2, y2) = (
+            number(&c, "plane", "data-px").await.unwrap(),
+            number(&c, "plane", "data-py").await.unwrap(),
+        );
+        assert!((b2 / b1 - 0.5).abs() < 1e-6, "beta {b1} -> {b2}");
+        assert!((s2 / s1 - 0.5).abs() < 1e-6, "sigma {s1} -> {s2}");
+        assert!(
+            y2 > y1 + 10.0,
+            "the point moves down on the canvas: {y1} -> {y2}"
+        );
+        assert!(x2 <= x1, "and not to the right: {x1} -> {x2}");
+        assert!(!c
+            .find(Locator::Id("fault-banner"))
+            .await
+            .unwrap()
+            .is_displayed()
+            .await
+            .unwrap());
+
+        // K far above the limit (25× the guaranteed one): the supervisor trips.
+        set_stiffness(&c, "20").await;
+        let banner = c.find(Locator::Id("fault-banner")).await.unwrap();
+        wait("the fault banner", long, || async {
+            banner.is_displayed().await.ok().filter(|d| *d)
+        })
+        .await;
+        let text = banner.text().await.unwrap();
+        assert!(text.contains("SUPERVISOR TRIPPED"), "{text}");
+        assert!(text.contains("energy growth"), "{text}");
+        shot(&c, "ui-fault.png").await;
+
+        // Wall off (the device may still be swinging), clear: the banner goes.
+        set_stiffness(&c, "0").await;
+        c.find(Locator::Id("banner-clear"))
+            .await
+            .unwrap()
+            .click()
+            .await
+            .unwrap();
+        wait("the banner to go", long, || async {
+            banner.is_displayed().await.ok().filter(|d| !*d)
+        })
+        .await;
+
+        // The map viewer: a small `hostctl map` JSON with the analytic overlay.
+        let dir = std::env::temp_dir().join(format!("stiffwall-ui-map-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let map = dir.join("map.json");
+        let ok = Command::new(env!("CARGO_BIN_EXE_hostctl"))
+            .args([
+                "map",
+                "--beta",
+                "0:1:24",
+                "--sigma",
+                "0:2:16",
+                "--periods",
+                "5000",
+            ])
+            .args(["--xidot0", "2,5", "--out"])
+            .arg(&map)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .expect("run hostctl map")
+            .success();
+        assert!(ok, "hostctl map");
+        c.find(Locator::Id("map-file"))
+            .await
+            .unwrap()
+            .send_keys(map.to_str().unwrap())
+            .await
+            .unwrap();
+        let panels = wait("the map", long, || async {
+            number(&c, "map-canvas", "data-panels").await
+        })
+        .await;
+        assert_eq!(panels, 2.0);
+        let canvas = c.find(Locator::Id("map-canvas")).await.unwrap();
+        c.execute(
+            "document.getElementById('map-canvas').scrollIntoView()",
+            vec![],
+        )
+        .await
+        .unwrap();
+        if let Some(d) = std::env::var_os("STIFFWALL_UI_SCREENSHOTS") {
+            let png = c
+                .find(Locator::Css("section.map"))
+                .await
+                .unwrap()
+                .screenshot()
+                .await
+                .unwrap();
+            std::fs::write(PathBuf::from(d).join("ui-map.png"), png).unwrap();
+        }
+        assert!(canvas.is_displayed().await.unwrap());
+        let _ = std::fs::remove_dir_all(&dir);
+        c.close().await.unwrap();
+    });
+}
