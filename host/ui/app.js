@@ -118,7 +118,7 @@ function onConfig(m) {
   st.config = m;
   $('cfg-text').textContent = m.text;
   const c = m.config;
-  const set = (id, v) => { const e = $(id); if (document.activeElement !== e) e.placeholder = String(v); };
+  const set = (id, v) => { const e = $(id); if (document.activeElement !== e) e.placeholder = fmt(v); };
   set('cfg-stiffness', c.stiffness); set('cfg-damping', c.damping); set('cfg-force-limit', c.force_limit);
   set('cfg-max-velocity', c.max_velocity); set('cfg-energy-limit', c.energy_limit);
   $('ring-seconds').textContent = (RING / rate()).toFixed(0);
@@ -188,7 +188,7 @@ function drawTraces() {
   let lo = ring.n - have; let hi = ring.n;
   while (lo < hi) { const mid = (lo + hi) >> 1; if (ring.seq[mid % RING] < start) lo = mid + 1; else hi = mid; }
   const fpc = st.hello ? st.hello.device.force_per_code : 1;
-  let used = 0;
+  let used = 0; let released = 0;
   for (let j = lo; j < ring.n; j++) {
     const k = j % RING; const s = ring.seq[k];
     if (s >= end) break;
@@ -200,12 +200,15 @@ function drawTraces() {
       if (v > maxs[L][c]) maxs[L][c] = v;
     }
     orFlags[c] |= ring.flags[k];
+    if (ring.flags[k] & 4) released++;
     mins[3][c] = 0; maxs[3][c] = 0;
     used++;
   }
   cv.dataset.lastSeq = String(latest);
   cv.dataset.columns = String(cols);
   cv.dataset.used = String(used);
+  cv.dataset.released = String(released);
+  cv.dataset.firstSeq = String(used ? ring.seq[lo % RING] : -1);
   const lh = (h - 24) / LANES.length;
   g.font = '12px DejaVu Sans, sans-serif';
   for (let L = 0; L < LANES.length; L++) {
@@ -269,7 +272,7 @@ function drawPlane() {
   }
   note.textContent = p.model ? `model: m = ${fmt(p.model.mass)}, b = ${fmt(p.model.viscous)}, c = ${fmt(p.model.coulomb)} (${p.model.source}); μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}` : '';
   const [bmax, smax] = p.window;
-  const L = 48; const B = 36; const T = 10; const R = 10;
+  const L = 60; const B = 36; const T = 10; const R = 10;
   const X = (b) => L + b / bmax * (w - L - R);
   const Y = (s) => h - B - s / smax * (h - B - T);
   for (const poly of p.polygons) {
@@ -287,10 +290,10 @@ function drawPlane() {
   g.strokeStyle = '#333'; g.strokeRect(L, T, w - L - R, h - B - T);
   g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
   g.fillText('β = b/(KT)', w / 2 - 30, h - 6);
-  g.save(); g.translate(12, h / 2 + 30); g.rotate(-Math.PI / 2); g.fillText('σ = c/(KΔ)', 0, 0); g.restore();
+  g.save(); g.translate(11, h / 2 + 30); g.rotate(-Math.PI / 2); g.fillText('σ = c/(KΔ)', 0, 0); g.restore();
   for (let i = 0; i <= 4; i++) {
     g.fillText(fmt(bmax * i / 4), X(bmax * i / 4) - 8, h - B + 14);
-    g.fillText(fmt(smax * i / 4), 4, Y(smax * i / 4) + 4);
+    g.fillText(fmt(smax * i / 4), 16, Y(smax * i / 4) + 4);
   }
   if (p.critical) {
     g.strokeStyle = '#000'; g.lineWidth = 2; g.beginPath();
@@ -332,7 +335,9 @@ function onRelease(m) {
   drawRelease(m);
 }
 function drawRelease(m) {
-  const cv = $('rel-trace'); const g = cv.getContext('2d');
+  const cv = $('rel-trace');
+  if (cv.width !== cv.clientWidth && cv.clientWidth > 0) cv.width = cv.clientWidth;
+  const g = cv.getContext('2d');
   const w = cv.width; const h = cv.height;
   g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
   const c = m.counts; if (!c.length) return;
@@ -397,7 +402,7 @@ function drawMap(m) {
   const [b0, b1, s0, s1] = m.window; const [db, ds] = m.cell;
   m.panels.forEach((p, i) => {
     const ox = (i % cols) * pw; const oy = Math.floor(i / cols) * ph;
-    const L = ox + 40; const T = oy + 20; const W = pw - 50; const H = ph - 50;
+    const L = ox + 56; const T = oy + 20; const W = pw - 70; const H = ph - 50;
     const X = (b) => L + (b - b0) / (b1 - b0) * W; const Y = (s) => T + H - (s - s0) / (s1 - s0) * H;
     for (const [b, s, c] of p.points) {
       g.fillStyle = CLASS_COLORS[c] || '#f0f';
@@ -410,8 +415,8 @@ function drawMap(m) {
     g.strokeStyle = '#333'; g.lineWidth = 1; g.strokeRect(L, T, W, H);
     g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
     g.fillText(`ξ̇0 = ${p.xidot0}`, L + 4, oy + 14);
-    g.fillText(fmt(b0), L - 4, T + H + 14); g.fillText(fmt(b1), L + W - 20, T + H + 14); g.fillText('β', L + W / 2, T + H + 26);
-    g.fillText(fmt(s1), ox + 2, T + 10); g.fillText(fmt(s0), ox + 2, T + H); g.fillText('σ', ox + 2, T + H / 2);
+    g.fillText(fmt(b0), L - 4, T + H + 14); g.fillText(fmt(b1), L + W - 36, T + H + 14); g.fillText('β', L + W / 2, T + H + 26);
+    g.fillText(fmt(s1), ox + 2, T + 10); g.fillText(fmt(s0), ox + 2, T + H); g.fillText('σ', ox + 40, T + H / 2);
   });
   cv.dataset.panels = String(n);
 }

@@ -1,7 +1,7 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
 //! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
-//!   host tests, no_std checks for the Cortex-M target, firmware cross-builds with the size
+//!   host tests, the real-browser test of `hostctl ui`, no_std checks for the Cortex-M target, firmware cross-builds with the size
 //!   report, QEMU scenarios.
 //! - `unused-deps`: every declared dependency of the root workspace is used (also in `ci`).
 //! - `firmware [--update-size-report]`: builds every board image.
@@ -15,6 +15,8 @@
 //!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
 //! - `tune-table [--quick] [--only NAME]`: K* vs the K `hostctl tune` sets on the plants of
 //!   `sim/plants/`, and the supervisor at 1.5 K* (docs/TUNE.md).
+//! - `ui-screenshots`: the real-browser test of `hostctl ui`, writing `docs/figures/ui-*.png`
+//!   (installs Debian's chromium and chromium-driver if missing, as `ci` does).
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
@@ -26,6 +28,7 @@ mod fuzz;
 mod qemu;
 mod toolchain;
 mod tune_table;
+mod ui;
 mod unused_deps;
 
 /// Runs a command, echoing it, and fails when it fails.
@@ -122,6 +125,8 @@ fn ci() -> Result<()> {
     firmware::firmware(&[])?;
     step("host tests (unit, SIL, end to end against the virtual device)");
     run(cargo().args(["test", "--workspace"]))?;
+    step("hostctl ui in a real browser (chromium + chromedriver)");
+    ui::browser_test(None)?;
     step("QEMU scenarios");
     qemu::qemu(&[])?;
     step("servo instruction budget under QEMU -icount");
@@ -145,6 +150,7 @@ fn main() -> Result<()> {
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
         Some("fuzz") => fuzz::fuzz(&args[1..]),
         Some("tune-table") => tune_table::tune_table(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], fuzz [--frames N] [--seed S]"),
+        Some("ui-screenshots") => ui::screenshots(),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S]"),
     }
 }

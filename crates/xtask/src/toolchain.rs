@@ -6,6 +6,8 @@
 //! 2. Debian's `rustc-web`/`cargo-web`/`rust-web-src` building `core` from source
 //!    (`-Z build-std=core`), linked by `arm-none-eabi-ld`.
 //!
+//! Debian's `chromium` and `chromium-driver` drive the real-browser test of `hostctl ui`.
+//!
 //! Missing Debian packages are installed with `apt-get` when running as root on Debian;
 //! elsewhere the error names the one command the user needs.
 
@@ -215,6 +217,22 @@ pub fn ensure_qemu() -> Result<()> {
     }
     if !which("qemu-system-arm") {
         bail!("qemu-system-arm still not on PATH after installing it");
+    }
+    Ok(())
+}
+
+/// Makes sure Debian's `chromium` and `chromium-driver` are installed (the real-browser test
+/// of `hostctl ui` and its screenshots), with [`apt_install`]: nothing is removed.
+pub fn ensure_chromium() -> Result<()> {
+    if which("chromium") && which("chromedriver") {
+        return Ok(());
+    }
+    apt_install(
+        &["chromium", "chromium-driver"],
+        "Chromium and ChromeDriver (the browser test of hostctl ui)",
+    )?;
+    if !(which("chromium") && which("chromedriver")) {
+        bail!("chromium or chromedriver still not on PATH after installing them");
     }
     Ok(())
 }

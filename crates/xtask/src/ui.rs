@@ -1,0 +1,48 @@
+//! The real-browser test of `hostctl ui` (host/tests/ui_browser.rs, `#[ignore]`d in plain
+//! `cargo test` because it needs Debian's chromium and chromium-driver, which this installs)
+//! and the screenshots it writes to docs/figures/ui-*.png.
+
+use crate::{cargo, firmware, run, toolchain};
+use anyhow::Result;
+use std::path::Path;
+
+/// Runs the browser test; with `screenshots`, it writes its PNGs into that directory.
+pub fn browser_test(screenshots: Option<&Path>) -> Result<()> {
+    toolchain::ensure_chromium()?;
+    let mut c = cargo();
+    c.args([
+        "test",
+        "-p",
+        "stiffwall-host",
+        "--test",
+        "ui_browser",
+        "--",
+        "--ignored",
+    ]);
+    if let Some(dir) = screenshots {
+        c.env("STIFFWALL_UI_SCREENSHOTS", dir);
+    }
+    run(&mut c)
+}
+
+/// `cargo xtask ui-screenshots`: docs/figures/ui-overview.png, ui-fault.png, ui-map.png.
+pub fn screenshots() -> Result<()> {
+    let dir = firmware::root().join("docs/figures");
+    std::fs::create_dir_all(&dir)?;
+    const NAMES: [&str; 3] = ["ui-overview.png", "ui-fault.png", "ui-map.png"];
+    // Old pictures never pass for new ones.
+    for name in NAMES {
+        let _ = std::fs::remove_file(dir.join(name));
+    }
+    browser_test(Some(&dir))?;
+    for name in NAMES {
+        let p = dir.join(name);
+        anyhow::ensure!(
+            p.is_file(),
+            "the browser test did not write {}",
+            p.display()
+        );
+        eprintln!("xtask: wrote {}", p.display());
+    }
+    Ok(())
+}
