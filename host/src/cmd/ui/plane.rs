@@ -65,7 +65,7 @@ pub fn plane(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot:
             "no device model: give --model M B C, or run tune to identify m, b, c"});
     };
     let p = params(model, info, cfg);
-    if !(p.stiffness > 0.0) {
+    if p.stiffness.is_nan() || p.stiffness <= 0.0 {
         return json!({"type": "plane", "point": null, "model": model, "note":
             format!("the wall is off (K = {}): set a stiffness to see the operating point", cfg.stiffness)});
     }
