@@ -304,6 +304,44 @@ fn the_page_in_chromium() {
         .await;
 
         step("cleared");
+
+        // Tune from the page (dry run): its progress, then guaranteed / expected / verified / set.
+        c.find(Locator::Id("tune-run"))
+            .await
+            .unwrap()
+            .click()
+            .await
+            .unwrap();
+        let result = c.find(Locator::Id("tune-result")).await.unwrap();
+        wait("the tune result", Duration::from_secs(120), || async {
+            result.is_displayed().await.ok().filter(|d| *d)
+        })
+        .await;
+        let log = c
+            .find(Locator::Id("tune-log"))
+            .await
+            .unwrap()
+            .text()
+            .await
+            .unwrap();
+        assert!(log.contains("identifying"), "{log}");
+        assert!(log.contains("release test K="), "{log}");
+        let set = c
+            .find(Locator::Id("tune-set"))
+            .await
+            .unwrap()
+            .text()
+            .await
+            .unwrap();
+        assert!(set.contains("dry run"), "{set}");
+        for id in ["tune-guaranteed", "tune-expected", "tune-verified"] {
+            let t = c.find(Locator::Id(id)).await.unwrap().text().await.unwrap();
+            assert!(
+                t.chars().next().is_some_and(|ch| ch.is_ascii_digit()),
+                "{id}: {t}"
+            );
+        }
+        step("tuned");
         // The map viewer: a small `hostctl map` JSON with the analytic overlay.
         let dir = std::env::temp_dir().join(format!("stiffwall-ui-map-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

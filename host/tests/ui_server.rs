@@ -253,3 +253,35 @@ fn release_test_and_lossless_recording_through_the_server() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn tune_from_the_server_reports_and_keeps_the_stream() {
+    let s = Server::start(&[]);
+    let (code, v) = s.cmd(r#"{"cmd": "tune", "args": {"dry-run": true, "margin": 0.9}}"#);
+    assert_eq!(code, 200, "{v}");
+    let r = &v["result"];
+    let f = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} in {v}"));
+    // The order tune's method guarantees: the set K is the verified one times the margin (or
+    // backed off from it), and the guaranteed (worst-case) limit is the lowest prediction.
+    assert!(f("set") <= 0.9 * f("verified") * (1.0 + 1e-9), "{v}");
+    assert!(f("set") > 0.0);
+    assert!(f("guaranteed") <= f("expected"), "{v}");
+    assert!(!r["trials"].as_array().unwrap().is_empty());
+    assert_eq!(r["saved"], false);
+    // Dry run: the device keeps its configuration; telemetry streams again afterwards.
+    let (_, g1) = s.cmd(r#"{"cmd": "get"}"#);
+    assert_eq!(g1["result"]["config"]["stiffness"], 0.0, "{g1}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (_, g2) = s.cmd(r#"{"cmd": "get"}"#);
+    let n = |g: &serde_json::Value| g["result"]["gaps"]["received"].as_u64().unwrap();
+    assert!(
+        n(&g2) > n(&g1),
+        "telemetry resumed: {} -> {}",
+        n(&g1),
+        n(&g2)
+    );
+    // Tune's own checks and messages.
+    let (code, v) = s.cmd(r#"{"cmd": "tune", "args": {"margin": 1.5}}"#);
+    assert_eq!(code, 422);
+    assert_eq!(v["error"], "--margin must be in (0, 1] (got 1.5)");
+}

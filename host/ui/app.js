@@ -17,7 +17,7 @@ const st = {
   hello: null, config: null, plane: null, status: null, faults: null,
   paused: false, windowS: 2, viewEnd: null, nextId: 1, pending: new Map(),
   received: 0, lastSeq: -1, seqBase: null, frames: 0, fpsT: performance.now(), fps: 0,
-  lagged: 0, ws: null,
+  lagged: 0, ws: null, dirty: true,
 };
 const $ = (id) => document.getElementById(id);
 
@@ -75,6 +75,7 @@ function onFrame(buf) {
     }
     st.received += n;
   }
+  if (chunks > 0 && !st.paused) st.dirty = true;
   const sc = $('sample-count');
   sc.textContent = st.received.toLocaleString('en');
   sc.dataset.count = String(st.received);
@@ -116,6 +117,7 @@ function onHello(m) {
 }
 function onConfig(m) {
   st.config = m;
+  st.dirty = true;
   $('cfg-text').textContent = m.text;
   const c = m.config;
   const set = (id, v) => { const e = $(id); if (document.activeElement !== e) e.placeholder = fmt(v); };
@@ -469,11 +471,13 @@ $('xidot-apply').onclick = async () => {
 $('map-file').addEventListener('change', (e) => { if (e.target.files[0]) openMap(e.target.files[0]); });
 $('pause').onclick = () => {
   st.paused = !st.paused;
+  st.dirty = true;
   $('pause').textContent = st.paused ? 'Resume' : 'Pause';
 };
-$('window').onchange = (e) => { st.windowS = Number(e.target.value); };
+$('window').onchange = (e) => { st.windowS = Number(e.target.value); st.dirty = true; };
 function zoom(f) {
   st.windowS = Math.min(200, Math.max(0.005, st.windowS * f));
+  st.dirty = true;
 }
 $('zoom-in').onclick = () => zoom(0.5);
 $('zoom-out').onclick = () => zoom(2);
@@ -485,16 +489,23 @@ window.addEventListener('mousemove', (e) => {
   if (!drag) return;
   const cv = $('traces'); const span = st.windowS * rate();
   st.viewEnd = Math.min(st.lastSeq, drag.end - (e.clientX - drag.x) * span / (cv.clientWidth - 78));
+  st.dirty = true;
 });
 
+// Redraw when something changed (new samples while live, or the view), at most once per
+// display frame: at 5 kHz that is one redraw per telemetry frame (~30 per second).
 function frame(t) {
-  drawTraces();
-  st.frames++;
+  if (st.dirty) {
+    st.dirty = false;
+    drawTraces();
+    st.frames++;
+  }
   if (t - st.fpsT >= 1000) {
     st.fps = st.frames * 1000 / (t - st.fpsT); st.frames = 0; st.fpsT = t;
     $('fps').textContent = st.fps.toFixed(0); $('fps').dataset.fps = st.fps.toFixed(1);
   }
   requestAnimationFrame(frame);
 }
+window.addEventListener('resize', () => { st.dirty = true; });
 connect();
 requestAnimationFrame(frame);
