@@ -8,6 +8,10 @@
 //! and the map overlay, computed with the same code as the figures), [`record`] (recording
 //! from the page in `hostctl record`'s format).
 //!
+//! Unlike the other commands, this one imports its siblings' argument definitions and checks
+//! (config set, experiment release, tune, map files): it is a front end over them, so that the
+//! page behaves exactly as the terminal (docs/ARCHITECTURE.md).
+//!
 //! Units: as in the other device commands (SI on the command line and on the page, device
 //! integers in telemetry). Invariants: the device is reached exactly as by every device
 //! command ([`ConnectArgs`]); configuration flags given here are applied before serving, with
