@@ -493,7 +493,7 @@ window.addEventListener('mousemove', (e) => {
 });
 
 // Redraw when something changed (new samples while live, or the view), at most once per
-// display frame: at 5 kHz that is one redraw per telemetry frame (~30 per second).
+// display frame: at 5 kHz that is one redraw per telemetry frame (40 per second).
 function frame(t) {
   if (st.dirty) {
     st.dirty = false;

@@ -1,6 +1,6 @@
 //! The device thread of `hostctl ui`: the one owner of the [`Client`]. It streams telemetry at
 //! one sample per servo tick, passes every sample to the recorder (when one runs) and to the
-//! pages (in ~30 ms binary frames, see [`super::wire`]), and runs the pages' commands between
+//! pages (in 25 ms binary frames, see [`super::wire`]), and runs the pages' commands between
 //! reads with the same functions as the command-line tools: `config set`'s
 //! [`Overrides::set_on`], `experiment release`'s checks and verdict, `tune`'s
 //! [`procedure::tune`], and `record`'s [`Writer`] and header.
@@ -38,7 +38,7 @@ use stiffwall_proto::{flags, DeviceMsg, ExperimentKind, HostMsg, Sample, ServoCo
 use tokio::sync::broadcast;
 
 /// Period of the binary telemetry frames sent to the pages.
-pub const FRAME_PERIOD: Duration = Duration::from_millis(33);
+pub const FRAME_PERIOD: Duration = Duration::from_millis(25);
 /// Period of the status messages.
 pub const STATUS_PERIOD: Duration = Duration::from_millis(250);
 /// Period of fault polls (`GetFaults`) while the device reports safe mode.
