@@ -295,11 +295,13 @@ pub fn deflection_for(p: &PhysicalParams, k: f64, v: f64) -> i32 {
 
 /// Breakaway evidence: a slow force ramp from rest (wall off, config `base` with K = 0) in each
 /// direction, up to 3·c (at most 60 % of the force limit), against the identified model on the
-/// same ramp. Fills `e.breakaway_*`.
+/// same ramp. `rest` is where the chirp left the device, in counts of the chirp's frame (the
+/// wall was moved there). Fills `e.breakaway_*`.
 fn breakaway(
     c: &mut Client,
     base: &ServoConfig,
     id: &Identified,
+    rest: i32,
     e: &mut Evidence,
     progress: &dyn Fn(&str),
 ) -> Result<()> {
@@ -344,7 +346,15 @@ fn breakaway(
             .map(|x| (i64::from(x.count), f64::from(x.force_code) * fpc))
             .unzip();
         e.breakaway_measured[i] = model_check::breakaway_force(&counts, &force);
-        let model = model_check::model_counts(id, &force, t, res);
+        // The spring force (if one was identified) at the ramp's start, in the chirp's frame
+        // (counts there were relative to the wall before it moved by `rest`).
+        let preload = match (id.spring, counts.first()) {
+            (Some(sp), Some(&n0)) => {
+                -(sp.stiffness * ((n0 + i64::from(rest)) as f64 + 0.5) * res + sp.offset)
+            }
+            _ => 0.0,
+        };
+        let model = model_check::model_counts(id, &force, preload, t, res);
         e.breakaway_model[i] = model_check::breakaway_force(&model, &force);
     }
     Ok(())
@@ -408,7 +418,7 @@ fn tune_inner(
         residual_rel: id.residual_rel,
         ..Evidence::default()
     };
-    breakaway(c, &base, &id, &mut evidence, progress)?;
+    breakaway(c, &base, &id, rest, &mut evidence, progress)?;
     let delta = res * f64::from(1u32 << base.coarsen_shift);
     let rotational = c.info.counts_per_rev > 0;
     let mut p = PhysicalParams {
