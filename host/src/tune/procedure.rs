@@ -17,8 +17,10 @@
 //!    every test runs twice as long.
 //! 4. **Verify** ([`super::verify`]): the search of [`super::search`] brackets and bisects the
 //!    largest K whose full-energy release (deflection d = v·√(m/K)/Δ, spring energy = kinetic
-//!    energy at v) passes, never above the firmware's force limit (K·Δ·(d + ½) ≤ force limit)
-//!    or its stiffness limit. Then K = margin × that, and the whole verification set (releases
+//!    energy at v) passes, never above the firmware's stiffness limit. Where the wall's peak
+//!    force v·√(mK) exceeds the force limit (the firmware saturates it), a search step also
+//!    runs impacts at v from both sides, since a saturated release no longer stores the
+//!    impact's energy. Then K = margin × that, and the whole verification set (releases
 //!    from both sides at several energies up to v) must pass at K, backing off in steps of
 //!    [`CONFIRM_BACKOFF`] otherwise.
 //! 5. **Set** K and save it (unless dry-run). On any error or Ctrl-C the previous config is
@@ -443,10 +445,14 @@ fn tune_inner(
         ("N", "N/m")
     };
     let early = model_check::findings(&id, &evidence, units);
-    // Force cap: K·Δ·(d + ½) ≤ force limit with d = v√(m/K)/Δ  ⇒  √K ≤ F/(v√m) (approximately).
+    // Force regime: above k_force the wall's peak force at v, K·Δ·(d + ½) with
+    // d = v√(m/K)/Δ, i.e. about v√(mK), exceeds the force limit and the firmware saturates it.
+    // A full-energy release then no longer stores the impact's energy, so above k_force each
+    // search step also runs what saturates first in use: an impact at v from each side.
     let f_lim = f64::from(base.force_limit);
-    let k_force = (f_lim / (v * id.mass.sqrt())).powi(2) * 0.8;
-    let k_cap = k_force.min(f64::from(c.info.limits.max_stiffness));
+    let k_force = (f_lim / (v * id.mass.sqrt())).powi(2);
+    let k_cap = f64::from(c.info.limits.max_stiffness);
+    let one_sided_wall = original.wall == stiffwall_proto::WallMode::OneSided;
     let ticks_for = |k: f64, thorough: bool| {
         let n = s.release_ticks.unwrap_or_else(|| {
             let natural = std::f64::consts::TAU * (id.mass / k).sqrt() / t;
@@ -482,7 +488,33 @@ fn tune_inner(
             ticks_for(k, thorough_search),
             min_settle_run(id.mass, k, t),
         )?;
-        if verdict.passes() && best.as_ref().is_none_or(|(kb, _)| k > *kb) {
+        if !verdict.passes() {
+            return Ok(verdict);
+        }
+        if k > k_force {
+            let natural_ticks = std::f64::consts::TAU * (id.mass / k).sqrt() / t;
+            let dirs: &[f64] = if one_sided_wall { &[1.0] } else { &[1.0, -1.0] };
+            for &dir in dirs {
+                let test =
+                    super::verify::impact(dir * v * t / delta, natural_ticks, one_sided_wall);
+                progress(&format!(
+                    "{} test K={k:.4} (force saturates)",
+                    test.describe()
+                ));
+                let (impact, _) = run_test(
+                    c,
+                    &base,
+                    k,
+                    test,
+                    ticks_for(k, thorough_search),
+                    min_settle_run(id.mass, k, t),
+                )?;
+                if !impact.passes() {
+                    return Ok(impact);
+                }
+            }
+        }
+        if best.as_ref().is_none_or(|(kb, _)| k > *kb) {
             best = Some((k, counts));
         }
         Ok(verdict)
@@ -517,7 +549,14 @@ fn tune_inner(
         verification.clear();
         confirmed = true;
         let natural_ticks = std::f64::consts::TAU * (id.mass / k_set).sqrt() / t;
-        for test in test_set(d, v * t / delta, natural_ticks, thorough, true) {
+        for test in test_set(
+            d,
+            v * t / delta,
+            natural_ticks,
+            thorough,
+            true,
+            one_sided_wall,
+        ) {
             let (verdict, counts) = run_test(
                 c,
                 &base,
@@ -533,6 +572,11 @@ fn tune_inner(
                 ticks_judged: counts.len(),
             });
             if !verdict.passes() {
+                progress(&format!(
+                    "verification at K={k_set:.4}: {} {}; backing off ×{CONFIRM_BACKOFF}",
+                    test.describe(),
+                    verdict.describe()
+                ));
                 confirmed = false;
                 break;
             }
