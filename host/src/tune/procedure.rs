@@ -474,6 +474,8 @@ fn tune_inner(
         .min(k_cap)
         .max(predicted.guaranteed.min(k_cap) * 0.5);
     let thorough_search = !early.is_empty();
+    // The smallest K at which an impact's launch failed (see `Verdict::NotLaunched`).
+    let mut not_launched: Option<f64> = None;
     let mut best: Option<(f64, Vec<i64>)> = None;
     let found = largest_settling_k(start, &search, |k| {
         let d = deflection_for(&p, k, v);
@@ -509,7 +511,9 @@ fn tune_inner(
                     ticks_for(k, thorough_search),
                     min_settle_run(id.mass, k, t),
                 )?;
-                if !impact.passes() {
+                if impact == Verdict::NotLaunched {
+                    not_launched.get_or_insert(k);
+                } else if !impact.passes() {
                     return Ok(impact);
                 }
             }
@@ -571,6 +575,12 @@ fn tune_inner(
                 verdict,
                 ticks_judged: counts.len(),
             });
+            if verdict == Verdict::NotLaunched {
+                // Judged by the releases of the set, which reach the same energy from both
+                // sides; reported below.
+                not_launched.get_or_insert(k_set);
+                continue;
+            }
             if !verdict.passes() {
                 progress(&format!(
                     "verification at K={k_set:.4}: {} {}; backing off ×{CONFIRM_BACKOFF}",
@@ -588,6 +598,18 @@ fn tune_inner(
     }
     if !confirmed {
         bail!("no stiffness passed the verification set (last tried {k_set:.4})");
+    }
+    if let Some(k) = not_launched {
+        let mu = id.mass / (k * t * t);
+        let finding = format!(
+            "at K = {k:.4} the firmware's impact launch (a hold with damping β = {}) could not \
+             bring the device to the wall at the requested speed: μ = m/(KT²) = {mu:.3} is too small for it (the \
+             device is light for this servo period); those impacts were judged by the \
+             releases of the same energy from both sides",
+            stiffwall_firmware::config::HOLD_BETA
+        );
+        progress(&format!("model mismatch: {finding}"));
+        model_mismatch.push(finding);
     }
     p.stiffness = k_set;
     let mut saved = false;

@@ -17,7 +17,13 @@
 //!   (a sixteenth of the energy) and an impact at v_max/4, and every test runs twice as long.
 //!
 //! A K passes when every test of the set passes by [`super::verdict`]: the motion settles or
-//! stays within one count and never grows; a buzz over more than one count fails.
+//! stays within one count and never grows; a buzz over more than one count fails. An impact
+//! whose launch did not deliver the device to the wall at the requested speed (never reached
+//! it, or moved more than [`LAUNCH_SPEED_TOLERANCE`] × faster in any tick of its last
+//! [`EXIT_WINDOW`] before contact: the firmware's damped hold
+//! cannot move a device whose μ = m/(KT²) is small) says nothing about the wall
+//! ([`Verdict::NotLaunched`]); it is judged by the releases of the set, which reach the same
+//! energy from both sides, and reported.
 //!
 //! Each test starts from a reproducible state: the wall off until the device has stopped, the
 //! wall position moved to where it stopped (so the wall's force while the hold starts is the
@@ -30,6 +36,10 @@ use crate::device::client::Client;
 use anyhow::{bail, Result};
 use std::sync::atomic::Ordering;
 use stiffwall_proto::{flags, ServoConfig, WallMode};
+
+/// An impact that reaches the wall faster than this × the requested speed (+ one tick per
+/// tick) was not launched as asked ([`Verdict::NotLaunched`]).
+pub const LAUNCH_SPEED_TOLERANCE: f64 = 2.0;
 
 /// One test of the verification set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -295,7 +305,13 @@ pub fn run_test(
     }
     let verdict = match test {
         Test::Release { .. } => classify(&counts, tripped),
-        Test::Impact { one_sided, .. } => {
+        // The launch never reached contact: nothing was recorded with the wall on.
+        Test::Impact { .. } if counts.is_empty() => Verdict::NotLaunched,
+        Test::Impact {
+            one_sided,
+            velocity_milliticks,
+            ..
+        } => {
             // Speed at contact: the launch's last EXIT_WINDOW ticks before the release.
             let launch: Vec<i64> = rec
                 .samples
@@ -315,7 +331,23 @@ pub fn run_test(
             } else {
                 Wall::Bidirectional
             };
-            classify_impact(&counts, wall, entry.abs(), tripped)
+            // The fastest step of the launch's last window into contact: a hold that
+            // oscillates (a limit cycle near the Nyquist rate averages to no speed at all)
+            // shows here.
+            let tail = &launch[launch.len().saturating_sub(EXIT_WINDOW + 1)..];
+            let fastest = tail
+                .iter()
+                .chain(std::iter::once(&first))
+                .collect::<Vec<_>>()
+                .windows(2)
+                .map(|p| (p[1] - p[0]).unsigned_abs() as f64)
+                .fold(entry.abs(), f64::max);
+            let requested = f64::from(velocity_milliticks).abs() / 1000.0;
+            if fastest > LAUNCH_SPEED_TOLERANCE * requested + 1.0 {
+                Verdict::NotLaunched
+            } else {
+                classify_impact(&counts, wall, entry.abs(), tripped)
+            }
         }
     };
     Ok((verdict, counts))
