@@ -602,10 +602,11 @@ fn tune_inner(
     if let Some(k) = not_launched {
         let mu = id.mass / (k * t * t);
         let finding = format!(
-            "at K = {k:.4} the firmware's impact launch (a hold with damping β = {}) could not \
-             bring the device to the wall at the requested speed: μ = m/(KT²) = {mu:.3} is too small for it (the \
-             device is light for this servo period); those impacts were judged by the \
-             releases of the same energy from both sides",
+            "at K = {k:.4} the firmware's impact launch (a hold with damping β = {}) did not \
+             bring the device to the wall at the requested speed (μ = m/(KT²) = {mu:.3}; the \
+             hold oscillates when μ is small, e.g. a light device on a slow servo), and the \
+             impact failed; those impacts were judged by the releases of the same energy \
+             from both sides",
             stiffwall_firmware::config::HOLD_BETA
         );
         progress(&format!("model mismatch: {finding}"));
