@@ -309,15 +309,15 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
                 "{name}: panel {pi} has {field} = {got}, the spec says {want}"
             );
         }
+        ensure!(
+            panel.points.len() == want,
+            "{name}: panel {pi} has {} points; shard {k}/{n} of a {len}-point grid has {want}",
+            panel.points.len()
+        );
         let ns = &f.cost.ns_per_period[pi];
         ensure!(
             ns.len() == panel.points.len() && ns.iter().all(|c| c.is_finite() && *c >= 0.0),
             "{name}: cost.ns_per_period[{pi}]: need one finite value >= 0 per point ({})",
-            panel.points.len()
-        );
-        ensure!(
-            panel.points.len() == want,
-            "{name}: panel {pi} has {} points; shard {k}/{n} of a {len}-point grid has {want}",
             panel.points.len()
         );
         for (j, pt) in panel.points.iter().enumerate() {
