@@ -17,9 +17,12 @@
 //!   `sim/plants/`, and the supervisor at 1.5 K* (docs/TUNE.md).
 //! - `cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node cluster
 //!   (installs slurm-wlm and munge; opt-in, not in `ci`; docs/cluster.md).
+//! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
+//!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
+mod atlas;
 mod bench;
 mod bench_firmware;
 mod cluster;
@@ -149,6 +152,7 @@ fn main() -> Result<()> {
         Some("fuzz") => fuzz::fuzz(&args[1..]),
         Some("tune-table") => tune_table::tune_table(&args[1..]),
         Some("cluster-test") => cluster::cluster_test(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], fuzz [--frames N] [--seed S], cluster-test"),
+        Some("atlas") => atlas::atlas(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], fuzz [--frames N] [--seed S], cluster-test, atlas"),
     }
 }

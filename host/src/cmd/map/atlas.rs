@@ -18,7 +18,7 @@
 //! A line's agreement is the fraction of the panel's grid points on which its prediction
 //! equals the simulation. Invariant: the atlas is computed only from a complete, validated map.
 
-use super::file::{self, MapFile};
+use super::file::{self, Cost, MapFile};
 use anyhow::{ensure, Context, Result};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -201,6 +201,10 @@ pub struct AtlasPanel {
     pub points: usize,
     /// Simulated growing points.
     pub growing: usize,
+    /// Periods simulated, summed over the points (growing points stop early).
+    pub periods_total: u64,
+    /// Measured wall time per simulated period, over the panel (ns).
+    pub ns_per_period_mean: f64,
     /// One entry per [`Line::ALL`].
     pub agreement: Vec<Agreement>,
 }
@@ -237,7 +241,11 @@ pub fn compute(m: &MapFile) -> Result<Atlas> {
         "the atlas needs a complete map: merge the shards first (hostctl map merge)"
     );
     let mut panels = Vec::with_capacity(m.panels.len());
-    for p in &m.panels {
+    for (pi, p) in m.panels.iter().enumerate() {
+        let cost = Cost::of(
+            std::slice::from_ref(p),
+            vec![m.cost.ns_per_period.get(pi).cloned().unwrap_or_default()],
+        );
         let slice = Slice {
             mu: p.mu,
             tau_d: p.tau_d,
@@ -281,6 +289,8 @@ pub fn compute(m: &MapFile) -> Result<Atlas> {
             xidot0: p.xidot0,
             points: p.points.len(),
             growing,
+            periods_total: cost.periods_total,
+            ns_per_period_mean: cost.ns_per_period_mean,
             agreement,
         });
     }
@@ -320,11 +330,11 @@ pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
     for l in Line::ALL {
         let _ = write!(s, " {} |", l.label());
     }
-    s.push_str("\n|---:|---:|---:|---:|---:|");
+    s.push_str(" periods run / point | ns / period |\n|---:|---:|---:|---:|---:|");
     for _ in Line::ALL {
         s.push_str("---:|");
     }
-    s.push('\n');
+    s.push_str("---:|---:|\n");
     for p in &a.panels {
         let _ = write!(
             s,
@@ -334,7 +344,12 @@ pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
         for l in Line::ALL {
             let _ = write!(s, " {} |", pct(p.fraction(l)));
         }
-        s.push('\n');
+        let _ = writeln!(
+            s,
+            " {:.0} | {:.1} |",
+            p.periods_total as f64 / p.points.max(1) as f64,
+            p.ns_per_period_mean
+        );
     }
     s.push_str("| **mean** | | | | |");
     for l in Line::ALL {
@@ -342,7 +357,29 @@ pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
         let mean = (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
         let _ = write!(s, " **{}** |", pct(mean));
     }
-    s.push('\n');
+    let points: usize = a.panels.iter().map(|p| p.points).sum();
+    let periods: u64 = a.panels.iter().map(|p| p.periods_total).sum();
+    let core_ns: f64 = a
+        .panels
+        .iter()
+        .map(|p| p.periods_total as f64 * p.ns_per_period_mean)
+        .sum();
+    let ns = if periods > 0 {
+        core_ns / periods as f64
+    } else {
+        0.0
+    };
+    let _ = writeln!(
+        s,
+        " {:.0} | {ns:.1} |",
+        periods as f64 / points.max(1) as f64
+    );
+    let _ = writeln!(
+        s,
+        "\nCost of this map: {points} points, {periods} simulated periods, {:.1} core-seconds \
+         ({ns:.1} ns per period on the machine that computed it).",
+        core_ns * 1e-9
+    );
     s
 }
 
@@ -355,11 +392,11 @@ pub fn run(a: &Args) -> Result<()> {
         f @ ("png" | "svg") => f.to_owned(),
         other => anyhow::bail!("--format {other}: allowed values are png, svg"),
     };
-    for p in a.out.iter().chain(&a.markdown) {
-        crate::figure::check_writable(p).with_context(|| format!("{}", p.display()))?;
-    }
     if let Some(d) = &a.plots {
         std::fs::create_dir_all(d).with_context(|| format!("--plots {}", d.display()))?;
+    }
+    for p in a.out.iter().chain(&a.markdown) {
+        crate::figure::check_writable(p).with_context(|| format!("{}", p.display()))?;
     }
     let m = file::read(&a.input)?;
     let atlas = compute(&m)?;
@@ -398,7 +435,7 @@ pub fn run(a: &Args) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cmd::map::file::{Cost, Panel, Spec, Values};
+    use crate::cmd::map::file::{Panel, Spec, Values};
     use stiffwall_sim::exact::History;
     use stiffwall_sim::map::{Axis, MapPoint};
 
@@ -511,6 +548,7 @@ mod tests {
             md.contains("| 100.0000 | 0 | 1 | 16 | 4 | 100.0 % |"),
             "{md}"
         );
+        assert_eq!(compute(&m).unwrap().panels[0].periods_total, 160);
     }
 
     #[test]
