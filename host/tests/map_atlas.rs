@@ -124,6 +124,23 @@ fn slice_axes_shard_merge_to_the_single_process_map_with_costs() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("mu differs"), "{err}");
+    // An edited cost total is refused.
+    let mut v = json(&shards[0]);
+    v["cost"]["periods_total"] = 1.into();
+    let edited = d.join("edited.json");
+    std::fs::write(&edited, serde_json::to_string(&v).unwrap()).unwrap();
+    let mut set = shards.clone();
+    set[0] = edited;
+    let o = hostctl()
+        .args(["map", "merge"])
+        .args(&set)
+        .arg("--out")
+        .arg(d.join("bad.json"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("cost.periods_total = 1"), "{err}");
 }
 
 #[test]

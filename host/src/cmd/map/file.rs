@@ -343,6 +343,13 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
             );
         }
     }
+    let recount = Cost::of(&f.panels, f.cost.ns_per_period.clone());
+    ensure!(
+        f.cost.periods_total == recount.periods_total,
+        "{name}: cost.periods_total = {}, but the points ran {} periods",
+        f.cost.periods_total,
+        recount.periods_total
+    );
     Ok(())
 }
 
