@@ -296,10 +296,12 @@ pub fn cluster_test(args: &[String]) -> Result<()> {
     for k in 0..SHARDS {
         let s = json(&sweep.join(format!("shard-{k}-of-{SHARDS}.json")))?;
         eprintln!(
-            "xtask: shard {k}/{SHARDS}: {} points in {:.2} s ({:.1} ns/period)",
+            "xtask: shard {k}/{SHARDS}: {} points, {} periods in {:.2} s ({:.1} ns/period thread wall time, {:.2} s CPU)",
             s["panels"][0]["points"].as_array().map_or(0, Vec::len),
+            s["cost"]["periods_total"],
             s["seconds"].as_f64().unwrap_or(f64::NAN),
-            s["cost"]["ns_per_period_mean"].as_f64().unwrap_or(f64::NAN)
+            s["cost"]["ns_per_period_mean"].as_f64().unwrap_or(f64::NAN),
+            s["cost"]["cpu_seconds"].as_f64().unwrap_or(f64::NAN)
         );
     }
     drop(cluster);

@@ -227,6 +227,10 @@ pub struct Atlas {
     pub map_spec_crc64: String,
     /// Horizon of the map in periods.
     pub periods: u64,
+    /// CPU time of the map's computation in seconds (summed over its shards), if measured.
+    pub cpu_seconds: Option<f64>,
+    /// `cpu_seconds` per simulated period, in nanoseconds.
+    pub cpu_ns_per_period: Option<f64>,
     /// Panels, in the map's order.
     pub panels: Vec<AtlasPanel>,
 }
@@ -297,6 +301,8 @@ pub fn compute(m: &MapFile) -> Result<Atlas> {
     Ok(Atlas {
         map_spec_crc64: m.spec_crc64.clone(),
         periods: m.spec.periods,
+        cpu_seconds: m.cost.cpu_seconds,
+        cpu_ns_per_period: m.cost.cpu_ns_per_period,
         panels,
     })
 }
@@ -376,9 +382,17 @@ pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
     );
     let _ = writeln!(
         s,
-        "\nCost of this map: {points} points, {periods} simulated periods, {:.1} core-seconds \
-         ({ns:.1} ns per period on the machine that computed it).",
-        core_ns * 1e-9
+        "\nCost of this map: {points} points, {periods} simulated periods ({:.1} % of the \
+         horizon on average: decaying and growing points stop early), {:.1} s of worker-thread \
+         wall time ({ns:.1} ns per period; the column above){}.",
+        100.0 * periods as f64 / (points.max(1) as f64 * a.periods as f64),
+        core_ns * 1e-9,
+        match (a.cpu_seconds, a.cpu_ns_per_period) {
+            (Some(c), Some(n)) => format!(
+                ", {c:.1} s of CPU time as the operating system counts it ({n:.1} ns per period)"
+            ),
+            _ => String::new(),
+        }
     );
     s
 }

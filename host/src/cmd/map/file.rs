@@ -207,22 +207,32 @@ pub struct MapFile {
     pub seconds: f64,
 }
 
-/// Measured cost of a map: per point, wall time per simulated period.
+/// Measured cost of a map: per point, wall time per simulated period; for the whole run, the
+/// CPU time the operating system charged (which, unlike wall time, does not grow when the
+/// machine is oversubscribed).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Cost {
     /// Sum of `periods_run` over all points.
     pub periods_total: u64,
-    /// Sum over points of `periods_run × ns_per_period`, in core-seconds (each point runs on
-    /// one thread).
+    /// Sum over points of `periods_run × ns_per_period`, in seconds of worker-thread wall time
+    /// (each point runs on one thread; this is core time when every thread has a core).
     pub core_seconds: f64,
     /// `core_seconds / periods_total` in nanoseconds (0 for no periods).
     pub ns_per_period_mean: f64,
+    /// User + system CPU time of the process during the computation, in seconds (Linux
+    /// `/proc/self/stat`, 10 ms resolution; summed over shards by a merge); `None` where it
+    /// could not be read.
+    #[serde(default)]
+    pub cpu_seconds: Option<f64>,
+    /// `cpu_seconds / periods_total` in nanoseconds: the figure for sizing a sweep.
+    #[serde(default)]
+    pub cpu_ns_per_period: Option<f64>,
     /// Per panel (in panel order), the ns per period of each point (in point order).
     pub ns_per_period: Vec<Vec<f64>>,
 }
 
 impl Cost {
-    /// The cost of `panels` with per-point `ns_per_period` (same shape).
+    /// The cost of `panels` with per-point `ns_per_period` (same shape), without CPU time.
     #[must_use]
     pub fn of(panels: &[Panel], ns_per_period: Vec<Vec<f64>>) -> Self {
         let mut periods_total = 0u64;
@@ -241,9 +251,34 @@ impl Cost {
             } else {
                 core_ns / periods_total as f64
             },
+            cpu_seconds: None,
+            cpu_ns_per_period: None,
             ns_per_period,
         }
     }
+
+    /// Sets the measured CPU time (and the CPU ns per period derived from it).
+    #[must_use]
+    pub fn with_cpu_seconds(mut self, cpu_seconds: Option<f64>) -> Self {
+        self.cpu_seconds = cpu_seconds;
+        self.cpu_ns_per_period = cpu_seconds
+            .filter(|_| self.periods_total > 0)
+            .map(|s| s * 1e9 / self.periods_total as f64);
+        self
+    }
+}
+
+/// CPU time (user + system) of this process so far in seconds, from Linux `/proc/self/stat`
+/// (clock ticks of 1/100 s, the fixed `USER_HZ` of Linux's user interface); `None` elsewhere.
+#[must_use]
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which may hold spaces) start at field 3 (state).
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: u64 = f.get(11)?.parse().ok()?;
+    let stime: u64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) as f64 / 100.0)
 }
 
 impl MapFile {
@@ -350,6 +385,12 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
         f.cost.periods_total,
         recount.periods_total
     );
+    if let Some(c) = f.cost.cpu_seconds {
+        ensure!(
+            c.is_finite() && c >= 0.0,
+            "{name}: cost.cpu_seconds = {c}: need a finite value >= 0"
+        );
+    }
     Ok(())
 }
 
@@ -471,11 +512,12 @@ pub fn merge(files: &[(PathBuf, MapFile)]) -> Result<MapFile> {
         });
         ns.push(c);
     }
+    let cpu: Option<Vec<f64>> = ordered.iter().map(|f| f.cost.cpu_seconds).collect();
     Ok(MapFile {
         spec_crc64: spec.crc64(),
         spec,
         shard: None,
-        cost: Cost::of(&panels, ns),
+        cost: Cost::of(&panels, ns).with_cpu_seconds(cpu.map(|c| c.iter().sum())),
         panels,
         seconds: ordered.iter().map(|f| f.seconds).sum(),
     })

@@ -12,7 +12,7 @@
 //! JSON output: `{ "spec": {...}, "spec_crc64", "shard": [k, n] | null, "panels": [{ "mu",
 //! "tau_d", "xidot0", "points": [{ index, beta, sigma, class, periods_run, h0, h_end,
 //! tail_amplitude }] }], "cost": { periods_total, core_seconds, ns_per_period_mean,
-//! ns_per_period: [[per point] per panel] }, "seconds" }`, written atomically ([`file::write`]). A run whose `--out` already holds the
+//! cpu_seconds, cpu_ns_per_period, ns_per_period: [[per point] per panel] }, "seconds" }`, written atomically ([`file::write`]). A run whose `--out` already holds the
 //! complete, valid result of the same sweep and shard does nothing (resume after a pre-empted
 //! batch job); `--force` recomputes. Bounds: `--threads` in [1, [`THREADS_PER_CORE`] × cores].
 
@@ -213,6 +213,7 @@ fn threads_of(a: &Args) -> Result<usize> {
 pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Result<MapFile> {
     let (k, n) = shard.unwrap_or((0, 1));
     let t0 = std::time::Instant::now();
+    let cpu0 = file::process_cpu_seconds();
     let specs = spec.panels();
     let per_panel: Vec<Vec<usize>> = specs.iter().map(|ps| map::shard(ps, k, n)).collect();
     let total: usize = per_panel.iter().map(Vec::len).sum();
@@ -248,7 +249,10 @@ pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Resul
         spec: spec.clone(),
         spec_crc64: spec.crc64(),
         shard,
-        cost: Cost::of(&panels, ns),
+        cost: Cost::of(&panels, ns).with_cpu_seconds(
+            cpu0.zip(file::process_cpu_seconds())
+                .map(|(a, b)| (b - a).max(0.0)),
+        ),
         panels,
         seconds: t0.elapsed().as_secs_f64(),
     })
@@ -364,8 +368,17 @@ pub fn run(args: &Args) -> Result<()> {
             );
         }
         eprintln!(
-            "computed in {:.2} s: {} periods, {:.1} ns/period, {:.3} core-seconds",
-            m.seconds, m.cost.periods_total, m.cost.ns_per_period_mean, m.cost.core_seconds
+            "computed in {:.2} s: {} periods, {:.1} ns/period (thread wall time), {} CPU",
+            m.seconds,
+            m.cost.periods_total,
+            m.cost.ns_per_period_mean,
+            m.cost.cpu_seconds.map_or_else(
+                || "unknown".to_owned(),
+                |c| format!(
+                    "{c:.2} s = {:.1} ns/period",
+                    m.cost.cpu_ns_per_period.unwrap_or(f64::NAN)
+                )
+            )
         );
         match &args.out {
             Some(out) => file::write(out, &m)?,
