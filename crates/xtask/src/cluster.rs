@@ -7,7 +7,8 @@
 //! and pid files in one temporary directory and on free TCP ports, so the machine's own
 //! configuration (/etc/slurm, /etc/munge) is neither read nor changed; submit
 //! `docs/cluster/submit.sh` (the array of `map-array.sbatch` tasks, `--shard
-//! $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`, and the `afterok` merge job); wait; and check
+//! $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`, and the `afterok` merge job); wait; submit
+//! the array again (must be a no-op) and an array numbered 1..n (must be refused); and check
 //! that the merged map equals the single-process map point for point. The daemons are stopped
 //! (`scontrol shutdown`, `munged --stop`, then only the recorded pids) however the run ends.
 //!
@@ -200,6 +201,88 @@ fn queue(c: &Cluster, jobs: &str) -> String {
     output(c.slurm("squeue").args(["-h", "-j", jobs, "-o", "%i %T %r"])).unwrap_or_default()
 }
 
+/// Waits until `jobs` (comma-separated ids) have left the queue; returns the seconds waited.
+fn wait_for(c: &Cluster, jobs: &str) -> Result<f64> {
+    let t0 = Instant::now();
+    let mut last = String::new();
+    loop {
+        let q = queue(c, jobs);
+        if q != last {
+            let pending = q.lines().count();
+            eprintln!(
+                "xtask: {:5.1} s: {pending} job(s) queued or running",
+                t0.elapsed().as_secs_f64()
+            );
+            last = q.clone();
+        }
+        if q.is_empty() {
+            return Ok(t0.elapsed().as_secs_f64());
+        }
+        if q.contains("DependencyNeverSatisfied") {
+            bail!(
+                "a shard failed, so the merge can never run:\n{q}\nlogs in {}",
+                c.dir.display()
+            );
+        }
+        if t0.elapsed() > JOBS_TIMEOUT {
+            bail!("jobs still queued after {} s:\n{q}", JOBS_TIMEOUT.as_secs());
+        }
+        std::thread::sleep(Duration::from_millis(500));
+    }
+}
+
+/// The scripts' behaviour on a second submission: the whole array again is a no-op (complete
+/// shards are kept byte for byte), and an array not numbered 0..n-1 is refused by every task.
+fn resubmissions(c: &Cluster, dir: &Path, sweep: &Path, hostctl: &Path) -> Result<()> {
+    let script = firmware::root().join("docs/cluster/map-array.sbatch");
+    let shard_files: Vec<PathBuf> = (0..SHARDS)
+        .map(|k| sweep.join(format!("shard-{k}-of-{SHARDS}.json")))
+        .collect();
+    let before: Vec<Vec<u8>> = shard_files
+        .iter()
+        .map(std::fs::read)
+        .collect::<std::io::Result<_>>()?;
+    let submit = |array: &str, shards: Option<usize>| -> Result<String> {
+        let mut cmd = c.slurm("sbatch");
+        cmd.args(["--parsable", &format!("--array={array}")])
+            .arg(&script)
+            .current_dir(dir)
+            .env("HOSTCTL", hostctl)
+            .env("SWEEP_DIR", sweep)
+            .env("MAP_ARGS", MAP_ARGS)
+            .env_remove("SHARDS");
+        if let Some(n) = shards {
+            cmd.env("SHARDS", n.to_string());
+        }
+        Ok(output(&mut cmd)?.split(';').next().unwrap_or("").to_owned())
+    };
+    let again = submit(&format!("0-{}", SHARDS - 1), Some(SHARDS))?;
+    let s = wait_for(c, &again)?;
+    let after: Vec<Vec<u8>> = shard_files
+        .iter()
+        .map(std::fs::read)
+        .collect::<std::io::Result<_>>()?;
+    ensure!(
+        before == after,
+        "re-running the array changed a complete shard file"
+    );
+    let log = std::fs::read_to_string(dir.join(format!("stiffwall-map-{again}_0.out")))?;
+    ensure!(log.contains("nothing to do"), "re-run log of task 0: {log}");
+    eprintln!("xtask: re-submitted array {again}: all {SHARDS} complete shards kept as they were, in {s:.1} s");
+    let wrong = submit(&format!("1-{SHARDS}"), None)?;
+    wait_for(c, &wrong)?;
+    let log = std::fs::read_to_string(dir.join(format!("stiffwall-map-{wrong}_1.out")))?;
+    ensure!(
+        log.contains(&format!("the array must be 0-{}", SHARDS - 1)),
+        "an array 1-{SHARDS} was not refused: {log}"
+    );
+    eprintln!(
+        "xtask: array 1-{SHARDS} refused by its tasks: {}",
+        log.trim()
+    );
+    Ok(())
+}
+
 fn json(p: &Path) -> Result<serde_json::Value> {
     let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
     serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))
@@ -257,34 +340,7 @@ pub fn cluster_test(args: &[String]) -> Result<()> {
         .split_once(' ')
         .with_context(|| format!("submit.sh printed {ids:?}, expected two job ids"))?;
     eprintln!("xtask: submitted array job {array} ({SHARDS} tasks) and merge job {merge} (afterok:{array})");
-    let jobs = format!("{array},{merge}");
-    let t_jobs = Instant::now();
-    let mut last = String::new();
-    loop {
-        let q = queue(&cluster, &jobs);
-        if q != last {
-            let pending = q.lines().count();
-            eprintln!(
-                "xtask: {:5.1} s: {pending} job(s) queued or running",
-                t_jobs.elapsed().as_secs_f64()
-            );
-            last = q.clone();
-        }
-        if q.is_empty() {
-            break;
-        }
-        if q.contains("DependencyNeverSatisfied") {
-            bail!(
-                "a shard failed, so the merge can never run:\n{q}\nlogs in {}",
-                dir.display()
-            );
-        }
-        if t_jobs.elapsed() > JOBS_TIMEOUT {
-            bail!("jobs still queued after {} s:\n{q}", JOBS_TIMEOUT.as_secs());
-        }
-        std::thread::sleep(Duration::from_millis(500));
-    }
-    let jobs_s = t_jobs.elapsed().as_secs_f64();
+    let jobs_s = wait_for(&cluster, &format!("{array},{merge}"))?;
     let merged_path = sweep.join("map.json");
     ensure!(
         merged_path.exists(),
@@ -304,6 +360,7 @@ pub fn cluster_test(args: &[String]) -> Result<()> {
             s["cost"]["cpu_seconds"].as_f64().unwrap_or(f64::NAN)
         );
     }
+    resubmissions(&cluster, &dir, &sweep, &hostctl)?;
     drop(cluster);
 
     let single_path = dir.join("single.json");
