@@ -5,7 +5,8 @@
 //! to `periods` periods and is classified by [`crate::classify`]. Grid points are numbered
 //! row-major (σ outer, β inner) so shards (`index % n == k`) can be merged by index.
 //!
-//! Invariant: results are deterministic and independent of thread count and sharding. A spec
+//! Invariant: results are deterministic and independent of thread count and sharding (the
+//! measured cost of [`run_with_cost`], ns of wall time per period, is not a result and varies). A spec
 //! from outside (a file) is checked with [`MapSpec::validate`] before any use: axes of
 //! 1..=[`MAX_AXIS_POINTS`] points, at most [`MAX_GRID_POINTS`] grid points, ≥ 1 period.
 

@@ -311,9 +311,19 @@ fn pct(f: Option<f64>) -> String {
     f.map_or_else(|| "n/a".to_owned(), |f| format!("{:.1} %", 100.0 * f))
 }
 
-/// The agreement fractions as a Markdown document.
+/// The figures written next to a Markdown table: their directory relative to the Markdown
+/// file, and their extension.
+#[derive(Debug, Clone, Copy)]
+pub struct FigureLinks<'a> {
+    /// Directory of the figures, relative to the Markdown file, `/`-separated.
+    pub dir: &'a str,
+    /// `png` or `svg`.
+    pub ext: &'a str,
+}
+
+/// The agreement fractions as a Markdown document (with links to the figures when given).
 #[must_use]
-pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
+pub fn markdown(a: &Atlas, generated_by: Option<&str>, figures: Option<FigureLinks>) -> String {
     use std::fmt::Write as _;
     let mut s = String::from("# Stability atlas: simulated growth vs the analytic lines\n\n");
     s.push_str(
@@ -332,15 +342,32 @@ pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
         "Map spec_crc64 `{}`, horizon {} periods.\n",
         a.map_spec_crc64, a.periods
     );
+    if let Some(f) = figures {
+        let _ = writeln!(
+            s,
+            "![agreement per slice]({}/atlas-summary.{})\n\nOne figure per slice (linked in the \
+             last column): simulated classes as grey levels, growing darkest; the worst-case \
+             lines in red, (72) in blue, (74) in light blue, the exact linear boundary in green.\n",
+            f.dir, f.ext
+        );
+    }
     s.push_str("| μ | τ_D | ξ̇₀ | points | growing |");
     for l in Line::ALL {
         let _ = write!(s, " {} |", l.label());
     }
-    s.push_str(" periods run / point | ns / period |\n|---:|---:|---:|---:|---:|");
+    s.push_str(" periods run / point | ns / period |");
+    if figures.is_some() {
+        s.push_str(" figure |");
+    }
+    s.push_str("\n|---:|---:|---:|---:|---:|");
     for _ in Line::ALL {
         s.push_str("---:|");
     }
-    s.push_str("---:|---:|\n");
+    s.push_str("---:|---:|");
+    if figures.is_some() {
+        s.push_str("---|");
+    }
+    s.push('\n');
     for p in &a.panels {
         let _ = write!(
             s,
@@ -350,12 +377,17 @@ pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
         for l in Line::ALL {
             let _ = write!(s, " {} |", pct(p.fraction(l)));
         }
-        let _ = writeln!(
+        let _ = write!(
             s,
             " {:.0} | {:.1} |",
             p.periods_total as f64 / p.points.max(1) as f64,
             p.ns_per_period_mean
         );
+        if let Some(f) = figures {
+            let name = super::atlas_plot::panel_file(p.mu, p.tau_d, p.xidot0, f.ext);
+            let _ = write!(s, " [{}]({}/{name}) |", f.ext, f.dir);
+        }
+        s.push('\n');
     }
     s.push_str("| **mean** | | | | |");
     for l in Line::ALL {
@@ -377,8 +409,9 @@ pub fn markdown(a: &Atlas, generated_by: Option<&str>) -> String {
     };
     let _ = writeln!(
         s,
-        " {:.0} | {ns:.1} |",
-        periods as f64 / points.max(1) as f64
+        " {:.0} | {ns:.1} |{}",
+        periods as f64 / points.max(1) as f64,
+        if figures.is_some() { " |" } else { "" }
     );
     let _ = writeln!(
         s,
@@ -434,7 +467,18 @@ pub fn run(a: &Args) -> Result<()> {
         std::fs::write(out, &json).with_context(|| format!("writing {}", out.display()))?;
     }
     if let Some(md) = &a.markdown {
-        std::fs::write(md, markdown(&atlas, a.generated_by.as_deref()))
+        // Link the figures when they sit below the Markdown file's directory.
+        let parent = md
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
+        let rel = a.plots.as_ref().and_then(|d| {
+            let rel = d.strip_prefix(&parent).ok()?;
+            let parts: Option<Vec<&str>> = rel.iter().map(|c| c.to_str()).collect();
+            Some(parts?.join("/"))
+        });
+        let links = rel.as_deref().map(|dir| FigureLinks { dir, ext: &ext });
+        std::fs::write(md, markdown(&atlas, a.generated_by.as_deref(), links))
             .with_context(|| format!("writing {}", md.display()))?;
     }
     if let Some(dir) = &a.plots {
@@ -557,7 +601,11 @@ mod tests {
             compute(&m).unwrap().panels[0].fraction(Line::WorstCase),
             Some(1.0)
         );
-        let md = markdown(&compute(&m).unwrap(), Some("hostctl map atlas x.json"));
+        let md = markdown(
+            &compute(&m).unwrap(),
+            Some("hostctl map atlas x.json"),
+            None,
+        );
         assert!(
             md.contains("| 100.0000 | 0 | 1 | 16 | 4 | 100.0 % |"),
             "{md}"

@@ -25,8 +25,8 @@ fn line_color(l: Line) -> RGBColor {
 
 /// File name of a panel's image.
 #[must_use]
-pub fn panel_file(p: &Panel, ext: &str) -> String {
-    format!("atlas-mu{:.4}-tau{}-xidot{}.{ext}", p.mu, p.tau_d, p.xidot0)
+pub fn panel_file(mu: f64, tau_d: f64, xidot0: f64, ext: &str) -> String {
+    format!("atlas-mu{mu:.4}-tau{tau_d}-xidot{xidot0}.{ext}")
 }
 
 /// Writes every panel image and `atlas-summary.<ext>` into `dir`; returns the paths.
@@ -36,7 +36,7 @@ pub fn panel_file(p: &Panel, ext: &str) -> String {
 pub fn plot_all(m: &MapFile, a: &Atlas, dir: &Path, ext: &str) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     for (p, ap) in m.panels.iter().zip(&a.panels) {
-        let path = dir.join(panel_file(p, ext));
+        let path = dir.join(panel_file(p.mu, p.tau_d, p.xidot0, ext));
         let fig = PanelFigure {
             map: m,
             panel: p,
