@@ -187,7 +187,10 @@ fn atlas_writes_json_markdown_and_a_figure_per_slice() {
     let text = std::fs::read_to_string(&md).unwrap();
     assert!(text.contains("hostctl map atlas full.json"), "{text}");
     assert!(text.contains("](fig/atlas-summary.png)"), "{text}");
-    assert!(text.contains("[png](fig/atlas-mu10.0000-tau1.25-xidot5.png)"), "{text}");
+    assert!(
+        text.contains("[png](fig/atlas-mu10.0000-tau1.25-xidot5.png)"),
+        "{text}"
+    );
     assert_eq!(text.matches("\n| ").count(), 6 + 2, "{text}");
     let figs = std::fs::read_dir(&plots).unwrap().count();
     assert_eq!(figs, 7);
