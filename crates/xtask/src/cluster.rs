@@ -8,8 +8,9 @@
 //! configuration (/etc/slurm, /etc/munge) is neither read nor changed; submit
 //! `docs/cluster/submit.sh` (the array of `map-array.sbatch` tasks, `--shard
 //! $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`, and the `afterok` merge job); wait; submit
-//! the array again (must be a no-op) and an array numbered 1..n (must be refused); and check
-//! that the merged map equals the single-process map point for point. The daemons are stopped
+//! the array again (must be a no-op), an array numbered 1..n (must be refused), and a long
+//! shard cancelled while it runs (must leave nothing merge accepts, and complete when
+//! re-submitted); and check that the merged map equals the single-process map point for point. The daemons are stopped
 //! (`scontrol shutdown`, `munged --stop`, then only the recorded pids) however the run ends.
 //!
 //! Units: seconds of wall time. Needs root (slurmd and munged run as the invoking user, which
@@ -242,20 +243,21 @@ fn resubmissions(c: &Cluster, dir: &Path, sweep: &Path, hostctl: &Path) -> Resul
         .iter()
         .map(std::fs::read)
         .collect::<std::io::Result<_>>()?;
-    let submit = |array: &str, shards: Option<usize>| -> Result<String> {
+    let submit_to = |sweep: &Path, map_args: &str, array: &str, shards: Option<usize>| {
         let mut cmd = c.slurm("sbatch");
         cmd.args(["--parsable", &format!("--array={array}")])
             .arg(&script)
             .current_dir(dir)
             .env("HOSTCTL", hostctl)
             .env("SWEEP_DIR", sweep)
-            .env("MAP_ARGS", MAP_ARGS)
+            .env("MAP_ARGS", map_args)
             .env_remove("SHARDS");
         if let Some(n) = shards {
             cmd.env("SHARDS", n.to_string());
         }
-        Ok(output(&mut cmd)?.split(';').next().unwrap_or("").to_owned())
+        Ok::<_, anyhow::Error>(output(&mut cmd)?.split(';').next().unwrap_or("").to_owned())
     };
+    let submit = |array: &str, shards: Option<usize>| submit_to(sweep, MAP_ARGS, array, shards);
     let again = submit(&format!("0-{}", SHARDS - 1), Some(SHARDS))?;
     let s = wait_for(c, &again)?;
     let after: Vec<Vec<u8>> = shard_files
@@ -279,6 +281,60 @@ fn resubmissions(c: &Cluster, dir: &Path, sweep: &Path, hostctl: &Path) -> Resul
     eprintln!(
         "xtask: array 1-{SHARDS} refused by its tasks: {}",
         log.trim()
+    );
+    preempted_shard(c, dir, hostctl, &submit_to)
+}
+
+/// Submits `map-array.sbatch`: (sweep directory, MAP_ARGS, array, SHARDS) → job id.
+type Submit<'a> = dyn Fn(&Path, &str, &str, Option<usize>) -> Result<String> + 'a;
+
+/// A shard cancelled while it runs (as pre-emption does) leaves no shard file that merge
+/// accepts; submitted again, it completes.
+fn preempted_shard(c: &Cluster, dir: &Path, hostctl: &Path, submit_to: &Submit) -> Result<()> {
+    let sweep = dir.join("sweep-preempted");
+    // The same panel with a 100 times longer horizon: its persistent points run for seconds.
+    let long = MAP_ARGS.replace("--periods 50000", "--periods 5000000");
+    let shard = sweep.join(format!("shard-0-of-{SHARDS}.json"));
+    let job = submit_to(&sweep, &long, "0", Some(SHARDS))?;
+    let t0 = Instant::now();
+    while !queue(c, &job).contains("RUNNING") {
+        ensure!(t0.elapsed() < UP_TIMEOUT, "job {job} did not start");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    std::thread::sleep(Duration::from_secs(1));
+    ensure!(
+        !shard.exists(),
+        "the long shard finished before it could be cancelled"
+    );
+    output(c.slurm("scancel").arg(&job))?;
+    wait_for(c, &job)?;
+    ensure!(
+        !shard.exists(),
+        "a cancelled shard left {}",
+        shard.display()
+    );
+    let left: Vec<String> = std::fs::read_dir(&sweep)?
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+        .collect();
+    for name in &left {
+        let o = Command::new(hostctl)
+            .args(["map", "merge"])
+            .arg(sweep.join(name))
+            .arg("--out")
+            .arg(dir.join("preempted-merge.json"))
+            .output()?;
+        ensure!(!o.status.success(), "merge accepted the leftover {name}");
+    }
+    eprintln!(
+        "xtask: shard 0/{SHARDS} (5e6 periods) cancelled while running: no shard file; merge refuses what it left ({left:?})"
+    );
+    let t1 = Instant::now();
+    let again = submit_to(&sweep, &long, "0", Some(SHARDS))?;
+    wait_for(c, &again)?;
+    ensure!(shard.exists(), "the re-submitted shard left no file");
+    eprintln!(
+        "xtask: the same shard submitted again completed in {:.1} s",
+        t1.elapsed().as_secs_f64()
     );
     Ok(())
 }
