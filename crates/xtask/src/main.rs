@@ -15,11 +15,17 @@
 //!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
 //! - `tune-table [--quick] [--only NAME]`: K* vs the K `hostctl tune` sets on the plants of
 //!   `sim/plants/`, and the supervisor at 1.5 K* (docs/TUNE.md).
+//! - `cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node cluster
+//!   (installs slurm-wlm and munge; opt-in, not in `ci`; docs/cluster.md).
+//! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
+//!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
+mod atlas;
 mod bench;
 mod bench_firmware;
+mod cluster;
 mod firmware;
 mod flash;
 mod fuzz;
@@ -145,6 +151,8 @@ fn main() -> Result<()> {
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
         Some("fuzz") => fuzz::fuzz(&args[1..]),
         Some("tune-table") => tune_table::tune_table(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], fuzz [--frames N] [--seed S]"),
+        Some("cluster-test") => cluster::cluster_test(&args[1..]),
+        Some("atlas") => atlas::atlas(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], fuzz [--frames N] [--seed S], cluster-test, atlas"),
     }
 }
