@@ -5,6 +5,8 @@
 //! Units: rates in bytes per second, durations in seconds; sample counts are rows of the
 //! recording plus the samples its `# gap:` notes account for.
 
+#![allow(dead_code)] // each test crate that includes this module uses part of it
+
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
