@@ -258,34 +258,7 @@ mod tests {
     /// A finely sub-stepped plant, independent of the solver under test elsewhere: semi-implicit
     /// Euler with 200 sub-steps per period, Coulomb friction with a stick band.
     fn simulate(m: f64, b: f64, c: f64, delta: f64, t: f64, forces: &[f64]) -> Vec<Sample> {
-        let (mut x, mut v) = (0.0f64, 0.0f64);
-        let sub = 200;
-        let dt = t / f64::from(sub);
-        let mut out = Vec::new();
-        for &f in forces {
-            out.push(Sample {
-                count: (x / delta).floor() as i64,
-                force: f,
-            });
-            for _ in 0..sub {
-                if v == 0.0 && f.abs() <= c {
-                    continue;
-                }
-                let fr = if v != 0.0 {
-                    c * v.signum()
-                } else {
-                    c * f.signum()
-                };
-                let vn = v + dt * (f - b * v - fr) / m;
-                v = if v != 0.0 && vn.signum() != v.signum() {
-                    0.0
-                } else {
-                    vn
-                };
-                x += dt * v;
-            }
-        }
-        out
+        simulate_held([m, b, c], [0.0; 3], delta, t, forces)
     }
 
     #[test]
@@ -364,7 +337,8 @@ mod tests {
     }
 
     /// The device of [`simulate`] held by a hand: m_h moves with it, a spring k_h pulls it back
-    /// to x = 0 with damping b_h. Semi-implicit Euler, 200 sub-steps per period.
+    /// to x = 0 with damping b_h (all zero: the free device). Semi-implicit Euler, 200
+    /// sub-steps per period, Coulomb friction with a stick band.
     fn simulate_held(
         p: [f64; 3],
         hand: [f64; 3],
