@@ -144,6 +144,9 @@ pub struct IdentifiedReport {
     pub equations: usize,
     /// Chirp amplitude used, output codes.
     pub excite_amplitude_codes: i32,
+    /// Stiffness of a spring-like force beside the rigid model (a hand, a cable) and its
+    /// standard error, N/m (N·m/rad); None when none was resolved.
+    pub spring: Option<[f64; 2]>,
 }
 
 fn check_interrupt() -> Result<()> {
@@ -646,6 +649,7 @@ fn tune_inner(
             coulomb: [id.coulomb, id.coulomb_se],
             equations: id.equations,
             excite_amplitude_codes: amplitude,
+            spring: id.spring.map(|sp| [sp.stiffness, sp.stiffness_se]),
         },
         params: p,
         max_velocity: v,
