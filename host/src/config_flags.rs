@@ -93,6 +93,32 @@ pub struct Overrides {
     pub safe_damping: Option<f32>,
 }
 
+/// The `hostctl` flag that sets a config field (`--stiffness` for `ConfigField::Stiffness`), or
+/// the field's own name for fields no flag sets.
+#[must_use]
+pub fn flag_name(field: stiffwall_proto::ConfigField) -> &'static str {
+    use stiffwall_proto::ConfigField as F;
+    match field {
+        F::Stiffness => "--stiffness",
+        F::Damping => "--damping",
+        F::ServoRateHz => "--rate",
+        F::ExtraDelayTicks => "--delay-ticks",
+        F::CoarsenShift => "--coarsen-shift",
+        F::Wall => "--wall",
+        F::WallPosition => "--wall-position",
+        F::ForceLimit => "--force-limit",
+        F::MaxVelocity => "--max-velocity",
+        F::EnergyMonitor => "--energy-monitor",
+        F::EnergyLimit => "--energy-limit",
+        F::EnergyGrowthCycles => "--energy-growth-cycles",
+        F::EncoderJumpCounts => "--encoder-jump",
+        F::HeartbeatTimeoutMs => "--heartbeat-timeout-ms",
+        F::SafeMode => "--safe-mode",
+        F::SafeDamping => "--safe-damping",
+        F::Argument => "argument",
+    }
+}
+
 /// A configuration flag outside its allowed range (checked on the host, before sending).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FlagError {

@@ -398,6 +398,7 @@ mod tests {
             counts_per_rev: 8192,
             fast: true,
             initial_position: 0.0,
+            output_range: None,
             scene: None,
         };
         let b = spec.board();

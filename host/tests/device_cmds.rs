@@ -56,6 +56,7 @@ fn maxon(fast: bool) -> Spec {
         counts_per_rev: 8192,
         fast,
         initial_position: 0.0,
+        output_range: None,
         scene: None,
     }
 }
@@ -115,9 +116,9 @@ fn config_get_set_save_defaults() {
 fn config_refusals_name_the_field() {
     // Refused by the device: its message names the field and the range.
     let e = fails(&["config", "set", "--stiffness", "1e6", "--fast"]);
-    assert!(e.contains("Stiffness must be within [0, "), "{e}");
+    assert!(e.contains("--stiffness must be within [0, "), "{e}");
     let e = fails(&["config", "set", "--rate", "50", "--fast"]);
-    assert!(e.contains("ServoRateHz must be within [100, 20000]"), "{e}");
+    assert!(e.contains("--rate must be within [100, 20000]"), "{e}");
     // Refused on the host before sending.
     let e = fails(&["config", "set", "--stiffness", "NaN"]);
     assert!(

@@ -12,12 +12,14 @@ use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use stiffwall_host::cmd::replay::trailing_gap;
 use stiffwall_host::device::client::Client;
 use stiffwall_host::device::transport::pty_pair;
 use stiffwall_host::device::virtual_device::{spawn, Spec};
-use stiffwall_host::recording;
 use stiffwall_host::session::{self, End, Plan};
+
+#[path = "support/flood.rs"]
+mod flood;
+use flood::{check, second_writer, FloodRun};
 use stiffwall_proto::{
     encode, DeviceInfo, DeviceMsg, ErrorCode, ErrorDetail, FrameDecoder, HostMsg, Limits, Request,
     ServoConfig, MAX_FRAME, PROTOCOL_VERSION,
@@ -110,21 +112,6 @@ fn non_telemetry_flood_does_not_defeat_the_silence_watchdog() {
     assert_eq!(stats.received, 0);
 }
 
-/// A second, non-blocking writer on the host side of a pty the client already holds (as
-/// another program on the same serial line would be). The client's port is opened exclusive
-/// (TIOCEXCL), which a process with CAP_SYS_ADMIN (these tests' usual CI user, root) may
-/// still open; that is what this needs.
-/// `nonblocking`: writes return `WouldBlock` instead of waiting when the pty is full;
-/// blocking writes go in whole (one write() call holds the tty's write lock throughout).
-fn second_writer(path: &str, nonblocking: bool) -> std::fs::File {
-    use std::os::unix::fs::OpenOptionsExt;
-    std::fs::OpenOptions::new()
-        .write(true)
-        .custom_flags(if nonblocking { 0o4000 } else { 0 }) // O_NONBLOCK
-        .open(path)
-        .unwrap_or_else(|e| panic!("opening a second writer on {path}: {e}"))
-}
-
 fn maxon(fast: bool) -> Spec {
     let d = stiffwall_core::devices::find("maxon-re35").expect("preset");
     Spec {
@@ -132,18 +119,9 @@ fn maxon(fast: bool) -> Spec {
         counts_per_rev: 8192,
         fast,
         initial_position: 0.0,
+        output_range: None,
         scene: None,
     }
-}
-
-/// Samples kept, samples planned, samples written as gaps, and bad frames the host saw.
-struct FloodRun {
-    rows: u64,
-    planned: u64,
-    gap_samples: u64,
-    end: End,
-    wall_s: f64,
-    flood_bytes: u64,
 }
 
 /// Records `seconds` from the virtual device while another writer floods its pty with
@@ -152,69 +130,7 @@ fn record_under_flood(fast: bool, seconds: f64, rate_bytes_s: f64) -> FloodRun {
     let (vd, port) = spawn(maxon(fast)).expect("spawn virtual device");
     let path = vd.pty.clone();
     let mut c = Client::connect(port, Some(Box::new(vd))).expect("handshake");
-    let cfg = c.get_config().unwrap();
-    let rate_hz = cfg.servo_rate_hz;
-    let mut flood = second_writer(&path, false);
-    let stop = Arc::new(AtomicBool::new(false));
-    let stop2 = Arc::clone(&stop);
-    let flooder = std::thread::spawn(move || {
-        // Chunks of whole `01 00` pairs every 5 ms; each write() ends on a delimiter, so the
-        // host's own frames (single writes) are never cut.
-        let start = Instant::now();
-        let mut sent = 0u64;
-        let pairs = [0x01u8, 0x00].repeat(1024);
-        while !stop2.load(Ordering::Relaxed) {
-            let due = (start.elapsed().as_secs_f64() * rate_bytes_s) as u64;
-            let n = (due.saturating_sub(sent) as usize & !1).min(pairs.len());
-            if n > 0 && flood.write_all(&pairs[..n]).is_ok() {
-                sent += n as u64;
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        sent
-    });
-    // Let the flood start before the stream does.
-    std::thread::sleep(Duration::from_millis(100));
-    let plan = Plan::new(1, Some(seconds), rate_hz).unwrap();
-    let header = session::header(&c, cfg, 1, None);
-    let mut out = Vec::new();
-    let outcome = session::record(&mut c, &plan, &header, &mut out, |_| {}).unwrap();
-    stop.store(true, Ordering::Relaxed);
-    let flood_bytes = flooder.join().unwrap();
-    drop(c);
-    let text = String::from_utf8(out).unwrap();
-    let rec = recording::parse(&text).expect("the recording parses");
-    let rows = rec.rows.len() as u64;
-    assert_eq!(rows, outcome.rows);
-    FloodRun {
-        rows,
-        planned: plan.samples.unwrap(),
-        gap_samples: rec.missing() + trailing_gap(&text),
-        end: outcome.end,
-        wall_s: outcome.stats.wall_s,
-        flood_bytes,
-    }
-}
-
-fn check(run: &FloodRun, min_kept: f64, what: &str) {
-    let kept = run.rows as f64 / run.planned as f64;
-    eprintln!(
-        "{what}: {} of {} samples kept ({:.2} %), {} written as gaps, {:.1} s wall, {} flood bytes ({:.0} B/s)",
-        run.rows,
-        run.planned,
-        100.0 * kept,
-        run.gap_samples,
-        run.wall_s,
-        run.flood_bytes,
-        run.flood_bytes as f64 / run.wall_s.max(1e-3)
-    );
-    assert_eq!(run.end, End::Complete, "{what}");
-    assert_eq!(
-        run.rows + run.gap_samples,
-        run.planned,
-        "{what}: every lost sample written as a gap"
-    );
-    assert!(kept >= min_kept, "{what}: kept {:.2} %", 100.0 * kept);
+    flood::record_under_flood(&mut c, &path, seconds, rate_bytes_s)
 }
 
 /// Issue 11, acceptance (short default): `01 00` at 40 KB/s while recording keeps ≥ 99 % of

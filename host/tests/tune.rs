@@ -28,6 +28,7 @@ fn connect_paced(p: PhysicalParams, fast: bool) -> Client {
         counts_per_rev,
         fast,
         initial_position: 0.0,
+        output_range: None,
         scene: None,
     })
     .unwrap();

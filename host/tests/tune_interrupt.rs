@@ -18,6 +18,7 @@ fn connect() -> Client {
         counts_per_rev: (std::f64::consts::TAU / p.resolution).round() as u32,
         fast: true,
         initial_position: 0.0,
+        output_range: None,
         scene: None,
     })
     .unwrap();

@@ -11,6 +11,7 @@ fn maxon(fast: bool) -> Spec {
         counts_per_rev: 8192,
         fast,
         initial_position: 0.0,
+        output_range: None,
         scene: None,
     }
 }

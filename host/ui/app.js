@@ -392,7 +392,7 @@ async function openMap(file) {
   const m = await r.json();
   if (!r.ok) { msg.className = 'msg small err'; msg.textContent = m.error; return; }
   msg.className = 'msg small ok';
-  msg.textContent = `${file.name}: μ = ${m.mu}, τ_D = ${m.tau_d}, ${m.periods} periods, ${m.panels.length} panel(s). Dark: growing, grey: persistent, light: non-monotone decay, white: monotone decay; red: analytic boundaries.`;
+  msg.textContent = `${file.name}: μ = ${JSON.stringify(m.mu)}, τ_D = ${JSON.stringify(m.tau_d)}, ${m.periods} periods, ${m.panels.length} panel(s). Dark: growing, grey: persistent, light: non-monotone decay, white: monotone decay; red: analytic boundaries.`;
   drawMap(m);
 }
 function drawMap(m) {
@@ -416,7 +416,7 @@ function drawMap(m) {
     g.restore();
     g.strokeStyle = '#333'; g.lineWidth = 1; g.strokeRect(L, T, W, H);
     g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
-    g.fillText(`ξ̇0 = ${p.xidot0}`, L + 4, oy + 14);
+    g.fillText(`μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}, ξ̇0 = ${p.xidot0}`, L + 4, oy + 14);
     g.fillText(fmt(b0), L - 4, T + H + 14); g.fillText(fmt(b1), L + W - 36, T + H + 14); g.fillText('β', L + W / 2, T + H + 26);
     g.fillText(fmt(s1), ox + 2, T + 10); g.fillText(fmt(s0), ox + 2, T + H); g.fillText('σ', ox + 40, T + H / 2);
   });

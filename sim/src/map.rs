@@ -5,7 +5,8 @@
 //! to `periods` periods and is classified by [`crate::classify`]. Grid points are numbered
 //! row-major (σ outer, β inner) so shards (`index % n == k`) can be merged by index.
 //!
-//! Invariant: results are deterministic and independent of thread count and sharding. A spec
+//! Invariant: results are deterministic and independent of thread count and sharding (the
+//! measured cost of [`run_with_cost`], ns of wall time per period, is not a result and varies). A spec
 //! from outside (a file) is checked with [`MapSpec::validate`] before any use: axes of
 //! 1..=[`MAX_AXIS_POINTS`] points, at most [`MAX_GRID_POINTS`] grid points, ≥ 1 period.
 
@@ -264,11 +265,23 @@ fn invalid() -> Outcome {
 
 /// Runs the grid points `indices` in parallel (rayon), calling `progress` once per point.
 pub fn run(spec: &MapSpec, indices: &[usize], progress: &(dyn Fn() + Sync)) -> Vec<MapPoint> {
-    let mut out: Vec<MapPoint> = indices
+    run_with_cost(spec, indices, progress).0
+}
+
+/// [`run`], also returning each point's measured cost in nanoseconds of wall time per simulated
+/// period (the point's solve time on its worker thread over its `periods_run`, at least one),
+/// in the order of the points.
+pub fn run_with_cost(
+    spec: &MapSpec,
+    indices: &[usize],
+    progress: &(dyn Fn() + Sync),
+) -> (Vec<MapPoint>, Vec<f64>) {
+    let mut out: Vec<(MapPoint, f64)> = indices
         .par_iter()
         .with_max_len(1)
         .map(|&i| {
             let (beta, sigma) = spec.point(i);
+            let t0 = std::time::Instant::now();
             let o = simulate_point_with(
                 spec.mu,
                 beta,
@@ -278,8 +291,9 @@ pub fn run(spec: &MapSpec, indices: &[usize], progress: &(dyn Fn() + Sync)) -> V
                 spec.periods,
                 spec.history,
             );
+            let ns = t0.elapsed().as_secs_f64() * 1e9;
             progress();
-            MapPoint {
+            let point = MapPoint {
                 index: i,
                 beta,
                 sigma,
@@ -288,11 +302,12 @@ pub fn run(spec: &MapSpec, indices: &[usize], progress: &(dyn Fn() + Sync)) -> V
                 h0: o.h0,
                 h_end: o.h_end,
                 tail_amplitude: o.tail_amplitude,
-            }
+            };
+            (point, ns / o.periods_run.max(1) as f64)
         })
         .collect();
-    out.sort_by_key(|p| p.index);
-    out
+    out.sort_by_key(|(p, _)| p.index);
+    out.into_iter().unzip()
 }
 
 /// Indices of shard `k` of `n` (k in 0..n): every n-th point starting at k (empty for n = 0).

@@ -15,15 +15,14 @@ use stiffwall_tests::family::{plant_files, plants_dir, PlantCase};
 use stiffwall_tests::kstar;
 
 /// The plants of the default run (quick K*): stiction, amplifier filter, compliant
-/// transmission, cogging. Known failures are not in it: `tune` cannot yet identify the plants
-/// with a hand (negative mass from the fit: phantom-light-grip, freedom6-firm-grip,
-/// phantom-realistic, rotary-realistic), and the every-plant test below fails on them and on
-/// the others listed in docs/TUNE.md; they are open work (issue 10), not hidden.
-pub const DEFAULT_PLANTS: [&str; 4] = [
+/// transmission, cogging, and a hand (the spring-like force tune's identification fits beside
+/// m, b, c). The every-plant test below runs all of `sim/plants/`.
+pub const DEFAULT_PLANTS: [&str; 5] = [
     "phantom-stiction",
     "maxon-re35-amp-3khz",
     "phantom-cable-150hz",
     "rotary-ironcore-cogging",
+    "phantom-light-grip",
 ];
 
 /// Lower bound of K set / K*.

@@ -18,6 +18,10 @@ pub struct Device {
     pub params: PhysicalParams,
     /// Dimensionless (μ, β, σ) as printed in Table II, if the preset is a Table II row.
     pub printed: Option<PrintedDimensionless>,
+    /// Peak output of the device's amplifier, N (N·m for rotary devices): the virtual
+    /// device's full scale. Not in the paper: the manufacturers' published peak forces
+    /// (see `docs/model-notes-core.md`).
+    pub force_limit: f64,
 }
 
 /// Dimensionless values as printed in Table II, with the number of decimals printed.
@@ -82,36 +86,42 @@ pub const DEVICES: [Device; 7] = [
         description: "Force Dimension Delta (Table II)",
         params: linear(0.250, 0.01, 0.883, 30.0, 0.33, 14500.0),
         printed: printed(155.2, 1, 0.002, 3, 2.03, 2),
+        force_limit: 20.0,
     },
     Device {
         name: "freedom6",
         description: "MPB Freedom6 (Table II)",
         params: linear(0.250, 0.01, 0.06, 20.0, 1.0, 2400.0),
         printed: printed(104.2, 1, 0.025, 3, 1.25, 2),
+        force_limit: 2.5,
     },
     Device {
         name: "impulse-engine",
         description: "Immersion Impulse Engine 2000 (Table II)",
         params: linear(0.032, 0.02, 0.024, 31.4, 0.2, 800.0),
         printed: printed(1007.8, 1, 0.13, 2, 0.97, 2),
+        force_limit: 8.9,
     },
     Device {
         name: "mit-toolhandle",
         description: "MIT Toolhandle (Table II)",
         params: linear(0.119, 0.001, 0.034, 20.1, 1.0, 3125.0),
         printed: printed(38.19, 2, 0.0003, 4, 0.54, 2),
+        force_limit: 8.5,
     },
     Device {
         name: "omega",
         description: "Force Dimension Omega (Table II)",
         params: linear(0.220, 0.01, 0.147, 10.0, 0.33, 14500.0),
         printed: printed(136.6, 1, 0.002, 3, 1.01, 2),
+        force_limit: 12.0,
     },
     Device {
         name: "phantom-1.0",
         description: "SensAble Phantom 1.0 (Table II)",
         params: linear(0.072, 0.005, 0.038, 29.1, 1.0, 1015.0),
         printed: printed(70.55, 2, 0.004, 3, 1.29, 2),
+        force_limit: 8.5,
     },
     Device {
         name: "maxon-re35",
@@ -127,6 +137,7 @@ pub const DEVICES: [Device; 7] = [
             rotational: true,
         },
         printed: None,
+        force_limit: 0.1,
     },
 ];
 

@@ -1,9 +1,12 @@
 //! `cargo xtask fuzz [--frames N] [--seed S]`: the fuzz campaign of `firmware/tests/fuzz.rs`
 //! (mutated frames against the decoder, hostile chunks into the firmware `Device` + `Servo`,
-//! power cuts during config saves) with a chosen budget; prints its table of counts.
+//! power cuts during config saves) and the end-to-end harness of `host/tests/fuzz_pty.rs`
+//! (garbage frames into the virtual device's pty while recording) with a chosen budget;
+//! prints their counts.
 //!
-//! Units: N mutated frames (chunks N/10, power cuts N/100). Default CI runs the same harness
-//! with its built-in short budget (20 000 frames) through `cargo test --workspace`.
+//! Units: N mutated frames (chunks N/10, power cuts N/100, pty frames N/10). Default CI runs
+//! the same harnesses with their built-in short budgets (20 000 frames each) through
+//! `cargo test --workspace`.
 
 use anyhow::{bail, Result};
 
@@ -39,6 +42,23 @@ pub fn fuzz(args: &[String]) -> Result<()> {
                 "--nocapture",
             ])
             .env("STIFFWALL_FUZZ_FRAMES", frames.to_string())
+            .env("STIFFWALL_FUZZ_SEED", seed.to_string()),
+    )?;
+    crate::run(
+        crate::cargo()
+            .args([
+                "test",
+                "-p",
+                "stiffwall-host",
+                "--test",
+                "fuzz_pty",
+                "--",
+                "--nocapture",
+            ])
+            .env(
+                "STIFFWALL_FUZZ_PTY_FRAMES",
+                (frames / 10).max(1).to_string(),
+            )
             .env("STIFFWALL_FUZZ_SEED", seed.to_string()),
     )
 }

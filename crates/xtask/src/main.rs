@@ -17,11 +17,17 @@
 //!   `sim/plants/`, and the supervisor at 1.5 K* (docs/TUNE.md).
 //! - `ui-screenshots`: the real-browser test of `hostctl ui`, writing `docs/figures/ui-*.png`
 //!   (installs Debian's chromium and chromium-driver if missing, as `ci` does).
+//! - `cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node cluster
+//!   (installs slurm-wlm and munge; opt-in, not in `ci`; docs/cluster.md).
+//! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
+//!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
 use std::process::Command;
 
+mod atlas;
 mod bench;
 mod bench_firmware;
+mod cluster;
 mod firmware;
 mod flash;
 mod fuzz;
@@ -151,6 +157,8 @@ fn main() -> Result<()> {
         Some("fuzz") => fuzz::fuzz(&args[1..]),
         Some("tune-table") => tune_table::tune_table(&args[1..]),
         Some("ui-screenshots") => ui::screenshots(),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S]"),
+        Some("cluster-test") => cluster::cluster_test(&args[1..]),
+        Some("atlas") => atlas::atlas(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas"),
     }
 }

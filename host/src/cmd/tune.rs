@@ -152,6 +152,13 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
         "  c = {:.4e} ± {:.1e} {}",
         id.coulomb[0], id.coulomb[1], u.3
     );
+    if let Some([k, k_se]) = id.spring {
+        let _ = writeln!(
+            s,
+            "  spring-like force k = {k:.4e} ± {k_se:.1e} {} (a hand, a cable; not in the model)",
+            u.0
+        );
+    }
     let _ = writeln!(
         s,
         "max velocity: {:.4} {} ({:.2} ticks/period)",

@@ -90,11 +90,12 @@ pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
         ErrorDetail::None => what.to_string(),
         ErrorDetail::Field { field, min, max } => {
             // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
+            let name = crate::config_flags::flag_name(*field);
             if *min == f64::from(f32::MIN_POSITIVE) {
-                format!("{what}: {field:?} must be > 0 and ≤ {}", readable(*max))
+                format!("{what}: {name} must be > 0 and ≤ {}", readable(*max))
             } else {
                 format!(
-                    "{what}: {field:?} must be within [{}, {}]",
+                    "{what}: {name} must be within [{}, {}]",
                     readable(*min),
                     readable(*max)
                 )

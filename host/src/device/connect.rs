@@ -104,6 +104,7 @@ impl ConnectArgs {
             counts_per_rev,
             fast: self.fast,
             initial_position: 0.0,
+            output_range: Some(d.force_limit),
             scene: None,
         }))
     }

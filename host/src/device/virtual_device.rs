@@ -13,7 +13,8 @@
 //! (`ServoConfig::extra_delay_ticks`; a plant file's `controller.extra_delay_s`, plus an
 //! amplifier of kind "delay", rounded to whole ticks in the boot configuration).
 //! Output range: 16-bit codes; full scale = the plant's `amplifier.force_limit_n` when set,
-//! otherwise 32.767 × `coulomb_n` (at least 1 mN).
+//! else a preset's published peak force (`--device NAME`: `stiffwall_core::devices`, e.g.
+//! 8.5 N for the Phantom 1.0), otherwise 32.767 × `coulomb_n` (at least 1 mN).
 
 use super::transport;
 use anyhow::{bail, Result};
@@ -53,6 +54,9 @@ pub struct Spec {
     pub fast: bool,
     /// Initial position of the plant, m (rad).
     pub initial_position: f64,
+    /// The amplifier's output range, N (N·m), when known (a preset's published peak force);
+    /// a scene's `amplifier.force_limit_n` takes precedence. `None`: 32.767 × c, ≥ 1 mN.
+    pub output_range: Option<f64>,
     /// The plant and controller of a scene file (`--plant`). `None`: the rigid plant of
     /// `plant`, wall off at boot. The firmware always quantises, so `controller.quantization`
     /// and the scene's `[initial]`/`[run]` are not used by the device.
@@ -90,6 +94,7 @@ impl Spec {
             counts_per_rev: model.counts_per_rev.unwrap_or(0),
             fast,
             initial_position: 0.0,
+            output_range: None,
             scene: Some(ScenePlant {
                 model,
                 controller: ctl,
@@ -117,11 +122,13 @@ impl Spec {
     }
 
     /// The plant's output full scale, N (N·m): `amplifier.force_limit_n` when the plant sets
-    /// one, otherwise 32.767 × the Coulomb friction (at least 1 mN).
+    /// one, else the preset's [`Spec::output_range`], otherwise 32.767 × the Coulomb friction
+    /// (at least 1 mN).
     #[must_use]
     pub fn full_scale(&self) -> f64 {
         self.scene
             .and_then(|s| s.model.force_limit_n())
+            .or(self.output_range)
             .unwrap_or_else(|| (self.plant.coulomb * 32.767).max(1e-3))
     }
 

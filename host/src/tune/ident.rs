@@ -13,9 +13,24 @@
 //! out, since there the friction is static and not c·sgn(v). Least squares over all windows gives
 //! (m, b, c) with standard errors from the residual variance.
 //!
+//! **Position-dependent force.** A hand holding the handle, a cable or a gravity-compensation
+//! spring adds a force k·x + f₀ that the rigid model lacks; fitted without it, a 3 Hz hand
+//! resonance inside the chirp band turns into a negative mass. So the fit is also run with two
+//! more columns, ∫x dt and ∫dt (k and f₀), and that extended fit is kept when k is clearly
+//! resolved (k > [`SPRING_SIGNIFICANCE`] standard errors above zero) and it explains the force
+//! clearly better (relative residual below [`SPRING_RESIDUAL_GAIN`] × the rigid fit's). m, b and
+//! c are then those of the extended fit (m includes whatever moves with the handle, e.g. the
+//! hand's mass), and [`Identified::spring`] reports k for the model check.
+//!
 //! Units: SI (kg, N·s/m, N; or kg·m², N·m·s/rad, N·m for rotary devices with Δ in rad).
 
 use anyhow::{bail, Result};
+use nalgebra::{DMatrix, DVector};
+
+/// The extended fit's k must exceed this many of its standard errors to be kept.
+pub const SPRING_SIGNIFICANCE: f64 = 4.0;
+/// The extended fit is kept only when its relative residual is below this × the rigid fit's.
+pub const SPRING_RESIDUAL_GAIN: f64 = 0.8;
 
 /// One servo sample of an excitation record.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,6 +90,21 @@ pub struct Identified {
     pub equations: usize,
     /// RMS of the fit residual relative to the RMS of the force integrals (0 = exact fit).
     pub residual_rel: f64,
+    /// A position-dependent force k·x + f₀ found beside the rigid model (None: none resolved).
+    pub spring: Option<Spring>,
+}
+
+/// A spring-like force k·x + f₀ on the device (x the mid-tick position of the record's counts).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spring {
+    /// Stiffness k, N/m (N·m/rad).
+    pub stiffness: f64,
+    /// Standard error of `stiffness`.
+    pub stiffness_se: f64,
+    /// Force at x = 0, N (N·m).
+    pub offset: f64,
+    /// Relative residual of the rigid fit without the spring, for the report.
+    pub rigid_residual_rel: f64,
 }
 
 impl Identified {
@@ -125,15 +155,14 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
         v[k] = num / denom;
     }
     let stick_speed = s.stick_speed_ticks * s.resolution / t;
-    // Normal equations of the 3-parameter least squares, accumulated window by window.
-    let mut ata = [[0.0f64; 3]; 3];
-    let mut atb = [0.0f64; 3];
-    let mut rows: Vec<([f64; 3], f64)> = Vec::new();
+    // One integrated equation per window: [Δv, Δx, ∫sgn(v) dt, ∫x dt, ∫dt] · (m, b, c, k, f₀).
+    let mut rows: Vec<([f64; 5], f64)> = Vec::new();
     let mut a = h;
     while a + s.window < n - h {
         let b = a + s.window;
         if (a..=b).all(|k| v[k].abs() >= stick_speed) {
             let sgn_int: f64 = (a..b).map(|k| v[k].signum() * t).sum();
+            let x_int: f64 = (a..b).map(|k| 0.5 * (x[k] + x[k + 1]) * t).sum();
             // Force applied during period k was commanded `delay` periods earlier.
             let f_int: f64 = (a..b)
                 .map(|k| {
@@ -142,14 +171,10 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
                         * t
                 })
                 .sum();
-            let row = [v[b] - v[a], x[b] - x[a], sgn_int];
-            for i in 0..3 {
-                for j in 0..3 {
-                    ata[i][j] += row[i] * row[j];
-                }
-                atb[i] += row[i] * f_int;
-            }
-            rows.push((row, f_int));
+            rows.push((
+                [v[b] - v[a], x[b] - x[a], sgn_int, x_int, (b - a) as f64 * t],
+                f_int,
+            ));
         }
         a += s.window / 2;
     }
@@ -159,58 +184,71 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
             rows.len()
         );
     }
-    let inv = invert3(&ata)
+    let rigid = least_squares(&rows, 3)
         .ok_or_else(|| anyhow::anyhow!("excitation does not separate m, b and c (singular fit)"))?;
-    let mut p = [0.0; 3];
-    for i in 0..3 {
-        p[i] = (0..3).map(|j| inv[i][j] * atb[j]).sum();
-    }
-    let rss: f64 = rows
-        .iter()
-        .map(|(r, y)| {
-            let e = y - (r[0] * p[0] + r[1] * p[1] + r[2] * p[2]);
-            e * e
-        })
-        .sum();
-    let y2: f64 = rows.iter().map(|(_, y)| y * y).sum();
-    let residual_rel = if y2 > 0.0 { (rss / y2).sqrt() } else { 0.0 };
-    let dof = (rows.len() - 3) as f64;
-    let s2 = rss / dof;
-    let se = |i: usize| (s2 * inv[i][i]).max(0.0).sqrt();
+    let extended = least_squares(&rows, 5).filter(|e| {
+        e.p[3] > SPRING_SIGNIFICANCE * e.se[3]
+            && e.residual_rel < SPRING_RESIDUAL_GAIN * rigid.residual_rel
+    });
+    let spring = extended.as_ref().map(|e| Spring {
+        stiffness: e.p[3],
+        stiffness_se: e.se[3],
+        offset: e.p[4],
+        rigid_residual_rel: rigid.residual_rel,
+    });
+    let fit = extended.unwrap_or(rigid);
     Ok(Identified {
-        mass: p[0],
-        mass_se: se(0),
-        viscous: p[1],
-        viscous_se: se(1),
-        coulomb: p[2],
-        coulomb_se: se(2),
+        mass: fit.p[0],
+        mass_se: fit.se[0],
+        viscous: fit.p[1],
+        viscous_se: fit.se[1],
+        coulomb: fit.p[2],
+        coulomb_se: fit.se[2],
         equations: rows.len(),
-        residual_rel,
+        residual_rel: fit.residual_rel,
+        spring,
     })
 }
 
-/// Inverse of a symmetric 3×3 matrix by cofactors, or None when (nearly) singular.
-/// Written out because one 3×3 inverse does not justify a linear-algebra dependency.
-fn invert3(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
-    let c =
-        |r0: usize, r1: usize, c0: usize, c1: usize| m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
-    let cof = [
-        [c(1, 2, 1, 2), -c(1, 2, 0, 2), c(1, 2, 0, 1)],
-        [-c(0, 2, 1, 2), c(0, 2, 0, 2), -c(0, 2, 0, 1)],
-        [c(0, 1, 1, 2), -c(0, 1, 0, 2), c(0, 1, 0, 1)],
-    ];
-    let det = m[0][0] * cof[0][0] + m[0][1] * cof[0][1] + m[0][2] * cof[0][2];
-    let scale = m.iter().flatten().fold(0.0f64, |a, &b| a.max(b.abs()));
-    if !det.is_finite() || det.abs() <= 1e-14 * scale.powi(3) {
+/// A least-squares fit: parameters, their standard errors and the relative residual.
+struct Fit {
+    p: Vec<f64>,
+    se: Vec<f64>,
+    residual_rel: f64,
+}
+
+/// Least squares over the first `cols` columns of `rows`, by QR-free normal equations with
+/// columns scaled to unit norm (the columns differ by many orders of magnitude), solved with
+/// nalgebra's Cholesky. None when the columns are (nearly) dependent.
+fn least_squares(rows: &[([f64; 5], f64)], cols: usize) -> Option<Fit> {
+    let a = DMatrix::from_fn(rows.len(), cols, |i, j| rows[i].0[j]);
+    let y = DVector::from_iterator(rows.len(), rows.iter().map(|r| r.1));
+    let norms: Vec<f64> = (0..cols).map(|j| a.column(j).norm()).collect();
+    if norms.iter().any(|&s| !(s.is_finite() && s > 0.0)) {
         return None;
     }
-    let mut inv = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            inv[i][j] = cof[j][i] / det;
-        }
+    let scaled = DMatrix::from_fn(rows.len(), cols, |i, j| a[(i, j)] / norms[j]);
+    let ata = scaled.transpose() * &scaled;
+    // Condition guard: a scaled Gram matrix with a tiny eigenvalue means dependent columns.
+    let eig = ata.clone().symmetric_eigenvalues();
+    if eig.min() <= 1e-10 * eig.max() {
+        return None;
     }
-    Some(inv)
+    let chol = ata.cholesky()?;
+    let q = chol.solve(&(scaled.transpose() * &y));
+    let inv = chol.inverse();
+    let resid = &y - &scaled * &q;
+    let rss = resid.norm_squared();
+    let y2 = y.norm_squared();
+    let dof = (rows.len() - cols) as f64;
+    let s2 = rss / dof;
+    Some(Fit {
+        p: (0..cols).map(|j| q[j] / norms[j]).collect(),
+        se: (0..cols)
+            .map(|j| (s2 * inv[(j, j)]).max(0.0).sqrt() / norms[j])
+            .collect(),
+        residual_rel: if y2 > 0.0 { (rss / y2).sqrt() } else { 0.0 },
+    })
 }
 
 #[cfg(test)]
@@ -220,34 +258,7 @@ mod tests {
     /// A finely sub-stepped plant, independent of the solver under test elsewhere: semi-implicit
     /// Euler with 200 sub-steps per period, Coulomb friction with a stick band.
     fn simulate(m: f64, b: f64, c: f64, delta: f64, t: f64, forces: &[f64]) -> Vec<Sample> {
-        let (mut x, mut v) = (0.0f64, 0.0f64);
-        let sub = 200;
-        let dt = t / f64::from(sub);
-        let mut out = Vec::new();
-        for &f in forces {
-            out.push(Sample {
-                count: (x / delta).floor() as i64,
-                force: f,
-            });
-            for _ in 0..sub {
-                if v == 0.0 && f.abs() <= c {
-                    continue;
-                }
-                let fr = if v != 0.0 {
-                    c * v.signum()
-                } else {
-                    c * f.signum()
-                };
-                let vn = v + dt * (f - b * v - fr) / m;
-                v = if v != 0.0 && vn.signum() != v.signum() {
-                    0.0
-                } else {
-                    vn
-                };
-                x += dt * v;
-            }
-        }
-        out
+        simulate_held([m, b, c], [0.0; 3], delta, t, forces)
     }
 
     #[test]
@@ -301,16 +312,100 @@ mod tests {
     }
 
     #[test]
-    #[allow(clippy::needless_range_loop)] // matrix indices read clearer here
-    fn invert3_inverts() {
-        let m = [[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 2.0]];
-        let inv = invert3(&m).unwrap();
-        for i in 0..3 {
-            for j in 0..3 {
-                let p: f64 = (0..3).map(|k| m[i][k] * inv[k][j]).sum();
-                assert!((p - if i == j { 1.0 } else { 0.0 }).abs() < 1e-12);
+    fn least_squares_solves_a_known_system_and_refuses_dependent_columns() {
+        // y = 2·a − 3·b + 0.5·c exactly, columns of very different scales.
+        let rows: Vec<([f64; 5], f64)> = (0..20)
+            .map(|i| {
+                let (a, b, c) = (
+                    1e-3 * f64::from(i).sin(),
+                    1e-6 * f64::from(i),
+                    1.0 + f64::from(i % 3),
+                );
+                ([a, b, c, 0.0, 0.0], 2.0 * a - 3.0 * b + 0.5 * c)
+            })
+            .collect();
+        let f = least_squares(&rows, 3).unwrap();
+        for (got, want) in f.p.iter().zip([2.0, -3.0, 0.5]) {
+            assert!((got - want).abs() < 1e-6 * want.abs().max(1.0), "{:?}", f.p);
+        }
+        assert!(f.residual_rel < 1e-9);
+        let dependent: Vec<([f64; 5], f64)> = rows
+            .iter()
+            .map(|(r, y)| ([r[0], 2.0 * r[0], r[2], 0.0, 0.0], *y))
+            .collect();
+        assert!(least_squares(&dependent, 3).is_none());
+    }
+
+    /// The device of [`simulate`] held by a hand: m_h moves with it, a spring k_h pulls it back
+    /// to x = 0 with damping b_h (all zero: the free device). Semi-implicit Euler, 200
+    /// sub-steps per period, Coulomb friction with a stick band.
+    fn simulate_held(
+        p: [f64; 3],
+        hand: [f64; 3],
+        delta: f64,
+        t: f64,
+        forces: &[f64],
+    ) -> Vec<Sample> {
+        let [m, b, c] = p;
+        let [mh, bh, kh] = hand;
+        let (mut x, mut v) = (0.0f64, 0.0f64);
+        let sub = 200;
+        let dt = t / f64::from(sub);
+        let mut out = Vec::new();
+        for &f in forces {
+            out.push(Sample {
+                count: (x / delta).floor() as i64,
+                force: f,
+            });
+            for _ in 0..sub {
+                let fs = f - kh * x;
+                if v == 0.0 && fs.abs() <= c {
+                    continue;
+                }
+                let fr = if v != 0.0 {
+                    c * v.signum()
+                } else {
+                    c * fs.signum()
+                };
+                let vn = v + dt * (fs - (b + bh) * v - fr) / (m + mh);
+                v = if v != 0.0 && vn.signum() != v.signum() {
+                    0.0
+                } else {
+                    vn
+                };
+                x += dt * v;
             }
         }
-        assert!(invert3(&[[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 0.0, 1.0]]).is_none());
+        out
+    }
+
+    #[test]
+    fn a_hand_spring_is_found_and_the_mass_includes_the_hand() {
+        let (delta, t) = (29.1e-6, 1e-3);
+        // Phantom held loosely (0.05 kg, 0.5 N·s/m, 50 N/m): resonance at 3.2 Hz, inside a
+        // 0.5–4 Hz chirp, where the rigid fit's mass goes negative.
+        let forces: Vec<f64> = (0..6000)
+            .map(|k| {
+                let tk = k as f64 * t;
+                let phase = std::f64::consts::TAU * (0.5 * tk + 0.5 * (3.5 / 6.0) * tk * tk);
+                0.4 * phase.sin()
+            })
+            .collect();
+        let samples = simulate_held([0.072, 0.005, 0.038], [0.05, 0.5, 50.0], delta, t, &forces);
+        let s = Settings {
+            period_s: t,
+            resolution: delta,
+            ..Settings::default()
+        };
+        let id = identify(&samples, &s).unwrap();
+        let spring = id.spring.expect("spring found");
+        assert!((spring.stiffness / 50.0 - 1.0).abs() < 0.15, "{id:?}");
+        assert!((id.mass / 0.122 - 1.0).abs() < 0.1, "{id:?}");
+        assert!((id.coulomb / 0.038 - 1.0).abs() < 0.2, "{id:?}");
+        // The same chirp on the free device finds no spring.
+        let free = simulate_held([0.072, 0.005, 0.038], [0.0, 0.0, 0.0], delta, t, &forces);
+        let id = identify(&free, &s).unwrap();
+        assert!(id.spring.is_none(), "{id:?}");
+        assert!((id.mass / 0.072 - 1.0).abs() < 0.05, "{id:?}");
     }
 }

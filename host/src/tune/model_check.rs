@@ -49,17 +49,28 @@ pub fn breakaway_force(counts: &[i64], force: &[f64]) -> Option<f64> {
 
 /// The identified model (Coulomb friction, no static friction) on a force sequence from rest
 /// in the middle of a cell: the counts it would produce (semi-implicit Euler, 50 sub-steps per
-/// period, sticking while |F| ≤ c).
+/// period, sticking while |F| ≤ c). An identified spring k pulls back towards the start, where
+/// it already pushes with `preload` (the spring force at the start position, which static
+/// friction holds: clamped to ±c).
 #[must_use]
-pub fn model_counts(id: &Identified, force: &[f64], period_s: f64, resolution: f64) -> Vec<i64> {
+pub fn model_counts(
+    id: &Identified,
+    force: &[f64],
+    preload: f64,
+    period_s: f64,
+    resolution: f64,
+) -> Vec<i64> {
     let (m, b, c) = (id.mass.max(1e-12), id.viscous.max(0.0), id.coulomb.max(0.0));
-    let (mut x, mut v) = (0.5 * resolution, 0.0f64);
+    let k_spring = id.spring.map_or(0.0, |s| s.stiffness.max(0.0));
+    let x0 = 0.5 * resolution;
+    let (mut x, mut v) = (x0, 0.0f64);
     let sub = 50;
     let dt = period_s / f64::from(sub);
     let mut out = Vec::with_capacity(force.len());
     for &f in force {
         out.push((x / resolution).floor() as i64);
         for _ in 0..sub {
+            let f = f + preload.clamp(-c, c) - k_spring * (x - x0);
             if v == 0.0 && f.abs() <= c {
                 continue;
             }
@@ -125,8 +136,19 @@ pub struct Evidence {
 /// Plain-language findings where the model does not fit the evidence (empty when it does).
 #[must_use]
 pub fn findings(id: &Identified, e: &Evidence, units: (&str, &str)) -> Vec<String> {
-    let (force_unit, _k_unit) = units;
+    let (force_unit, k_unit) = units;
     let mut out = Vec::new();
+    if let Some(sp) = id.spring {
+        out.push(format!(
+            "a position-dependent force acts on the device like a spring of {:.3e} {k_unit} \
+             (a hand holding the handle, a cable or a balancing spring); without it the rigid \
+             model left {:.0} % of the excitation force unexplained. m = {:.3e} includes what \
+             moves with the handle, and the wall's stiffness acts on top of this spring",
+            sp.stiffness,
+            100.0 * sp.rigid_residual_rel,
+            id.mass
+        ));
+    }
     if e.residual_rel > RESIDUAL_LIMIT {
         out.push(format!(
             "the rigid-mass model with viscous and Coulomb friction leaves {:.0} % of the \
@@ -196,6 +218,7 @@ mod tests {
             coulomb_se: 0.0,
             equations: 100,
             residual_rel: 0.01,
+            spring: None,
         }
     }
 
@@ -208,7 +231,7 @@ mod tests {
         let (m, c, delta, t) = (0.07, 0.04, 2.9e-5, 1e-3);
         let f = ramp(3.0 * c, 600);
         let model = id(m, 0.0, c);
-        let counts = model_counts(&model, &f, t, delta);
+        let counts = model_counts(&model, &f, 0.0, t, delta);
         let fb = breakaway_force(&counts, &f).unwrap();
         // The model itself needs a little more than c to move two counts on a ramp (inertia).
         assert!(fb > c && fb < 1.3 * c, "{fb}");

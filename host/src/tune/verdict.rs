@@ -57,6 +57,11 @@ pub enum Verdict {
     Persistent,
     /// Oscillation grows, or the supervisor tripped.
     Growing,
+    /// An impact test whose launch did not bring the device to the wall at the requested speed
+    /// (the firmware's hold could not move it at a controlled speed): says nothing about the
+    /// wall. Does not pass;
+    /// `tune` judges that energy by the releases instead and reports it.
+    NotLaunched,
 }
 
 impl Verdict {
@@ -86,6 +91,7 @@ impl Verdict {
             Self::LimitCycle => "limit cycle within one count",
             Self::Persistent => "buzz: persistent oscillation over more than one count",
             Self::Growing => "growing",
+            Self::NotLaunched => "not launched (the hold did not bring the device to the wall at the requested speed)",
         }
     }
 }

@@ -1,12 +1,15 @@
 //! The map JSON file: format, full validation, atomic writing and shard merging.
 //!
-//! Units: dimensionless (Table I), `seconds` of wall time. Invariants: a file is written to a
+//! Units: dimensionless (Table I), `seconds` of wall time, `ns_per_period` nanoseconds of wall
+//! time per simulated period. Panels are ordered slice-major: for each μ (outer), each τ_D,
+//! each ξ̇₀ (inner). Invariants: a file is written to a
 //! temporary sibling (`<name>.partial-<pid>`) and renamed into place only when complete, so a
 //! killed run never leaves a file under the requested name; every file carries
 //! `spec_crc64`, the CRC-64/XZ of its spec's compact JSON. A file read from disk is used only
 //! after [`validate`]: a valid spec (every field in range, grid size bounded before anything
-//! is allocated), the hash, `0 <= k < n`, one panel per ξ̇₀, and in each panel exactly the
-//! points of its shard, in index order, with the β, σ of their index. [`merge`] also refuses
+//! is allocated), the hash, `0 <= k < n`, one panel per (μ, τ_D, ξ̇₀) with those values, and
+//! in each panel exactly the points of its shard, in index order, with the β, σ of their index,
+//! and one finite, non-negative cost per point. [`merge`] also refuses
 //! mismatched sweeps and duplicate or missing shards; its result does not depend on the order
 //! of its inputs.
 
@@ -17,8 +20,16 @@ use std::path::{Path, PathBuf};
 use stiffwall_sim::exact::History;
 use stiffwall_sim::map::{self, Axis, MapPoint, MapSpec};
 
-/// Largest number of panels (ξ̇₀ values) of one map.
+pub use super::values::Values;
+
+/// Largest number of ξ̇₀ values of one map.
 pub const MAX_PANELS: usize = 64;
+
+/// Largest number of panels (μ values × τ_D values × ξ̇₀ values) of one map.
+pub const MAX_ALL_PANELS: usize = 4096;
+
+/// Largest number of points of one map (all panels).
+pub const MAX_ALL_POINTS: usize = 40_000_000;
 
 /// Largest number of shards of one sweep.
 pub const MAX_SHARDS: usize = 100_000;
@@ -26,10 +37,10 @@ pub const MAX_SHARDS: usize = 100_000;
 /// The sweep description stored in the JSON.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Spec {
-    /// μ.
-    pub mu: f64,
-    /// τ_D.
-    pub tau_d: f64,
+    /// μ: one value or a slice axis.
+    pub mu: Values,
+    /// τ_D: one value or a slice axis.
+    pub tau_d: Values,
     /// Panels' ξ̇₀.
     pub xidot0: Vec<f64>,
     /// β axis.
@@ -44,12 +55,36 @@ pub struct Spec {
 }
 
 impl Spec {
-    /// The single-panel spec of ξ̇₀ = `xidot0`.
+    /// (μ, τ_D) of every slice, μ outer.
     #[must_use]
-    pub fn panel(&self, xidot0: f64) -> MapSpec {
+    pub fn slices(&self) -> Vec<(f64, f64)> {
+        let taus = self.tau_d.values();
+        self.mu
+            .values()
+            .into_iter()
+            .flat_map(|mu| taus.iter().map(move |&t| (mu, t)))
+            .collect()
+    }
+
+    /// The single-panel spec of every panel, in file order (slice outer, ξ̇₀ inner).
+    #[must_use]
+    pub fn panels(&self) -> Vec<MapSpec> {
+        self.slices()
+            .into_iter()
+            .flat_map(|(mu, tau_d)| {
+                self.xidot0
+                    .iter()
+                    .map(move |&v| self.panel_at(mu, tau_d, v))
+            })
+            .collect()
+    }
+
+    /// The single-panel spec of (μ, τ_D, ξ̇₀).
+    #[must_use]
+    pub fn panel_at(&self, mu: f64, tau_d: f64, xidot0: f64) -> MapSpec {
         MapSpec {
-            mu: self.mu,
-            tau_d: self.tau_d,
+            mu,
+            tau_d,
             xidot0,
             beta: self.beta,
             sigma: self.sigma,
@@ -58,7 +93,8 @@ impl Spec {
         }
     }
 
-    /// Checks every field (see [`MapSpec::validate`]) and 1..=[`MAX_PANELS`] panels.
+    /// Checks every field (see [`MapSpec::validate`]), 1..=[`MAX_PANELS`] ξ̇₀ values, at most
+    /// [`MAX_ALL_PANELS`] panels and [`MAX_ALL_POINTS`] points, before anything is allocated.
     ///
     /// # Errors
     /// A message naming the field and its allowed range.
@@ -68,10 +104,36 @@ impl Spec {
             "xidot0: {} values, allowed 1 to {MAX_PANELS}",
             self.xidot0.len()
         );
-        for &v in &self.xidot0 {
-            self.panel(v).validate().map_err(anyhow::Error::msg)?;
+        self.mu.validate().map_err(|e| anyhow::anyhow!("mu: {e}"))?;
+        self.tau_d
+            .validate()
+            .map_err(|e| anyhow::anyhow!("tau_d: {e}"))?;
+        let panels = self.mu.len() * self.tau_d.len() * self.xidot0.len();
+        ensure!(
+            panels <= MAX_ALL_PANELS,
+            "{} mu x {} tau_d x {} xidot0 = {panels} panels: at most {MAX_ALL_PANELS}",
+            self.mu.len(),
+            self.tau_d.len(),
+            self.xidot0.len()
+        );
+        self.panel_at(self.mu.at(0), self.tau_d.at(0), self.xidot0[0])
+            .validate()
+            .map_err(anyhow::Error::msg)?;
+        ensure!(
+            panels.saturating_mul(self.len()) <= MAX_ALL_POINTS,
+            "{panels} panels x {} points: at most {MAX_ALL_POINTS} points",
+            self.len()
+        );
+        for p in self.panels() {
+            p.validate().map_err(anyhow::Error::msg)?;
         }
         Ok(())
+    }
+
+    /// Number of panels (call after [`Self::validate`]).
+    #[must_use]
+    pub fn panel_count(&self) -> usize {
+        self.mu.len() * self.tau_d.len() * self.xidot0.len()
     }
 
     /// Number of (β, σ) points per panel (call after [`Self::validate`]).
@@ -96,9 +158,9 @@ impl Spec {
 
     /// The first field in which `other` differs, for error messages.
     fn first_difference(&self, other: &Self) -> &'static str {
-        if self.mu.to_bits() != other.mu.to_bits() {
+        if self.mu != other.mu {
             "mu"
-        } else if self.tau_d.to_bits() != other.tau_d.to_bits() {
+        } else if self.tau_d != other.tau_d {
             "tau_d"
         } else if self.xidot0 != other.xidot0 {
             "xidot0"
@@ -114,9 +176,13 @@ impl Spec {
     }
 }
 
-/// One panel (one ξ̇₀).
+/// One panel (one μ, τ_D, ξ̇₀).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Panel {
+    /// μ.
+    pub mu: f64,
+    /// τ_D.
+    pub tau_d: f64,
     /// ξ̇₀.
     pub xidot0: f64,
     /// Classified points, sorted by index.
@@ -135,8 +201,84 @@ pub struct MapFile {
     pub shard: Option<(usize, usize)>,
     /// Panels.
     pub panels: Vec<Panel>,
+    /// Measured cost, per panel and point (not part of the result: it differs run to run).
+    pub cost: Cost,
     /// Wall time of the computation in seconds (sum over shards after a merge).
     pub seconds: f64,
+}
+
+/// Measured cost of a map: per point, wall time per simulated period; for the whole run, the
+/// CPU time the operating system charged (which, unlike wall time, does not grow when the
+/// machine is oversubscribed).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Cost {
+    /// Sum of `periods_run` over all points.
+    pub periods_total: u64,
+    /// Sum over points of `periods_run × ns_per_period`, in seconds of worker-thread wall time
+    /// (each point runs on one thread; this is core time when every thread has a core).
+    pub core_seconds: f64,
+    /// `core_seconds / periods_total` in nanoseconds (0 for no periods).
+    pub ns_per_period_mean: f64,
+    /// User + system CPU time of the process during the computation, in seconds (Linux
+    /// `/proc/self/stat`, 10 ms resolution; summed over shards by a merge); `None` where it
+    /// could not be read.
+    #[serde(default)]
+    pub cpu_seconds: Option<f64>,
+    /// `cpu_seconds / periods_total` in nanoseconds: the figure for sizing a sweep.
+    #[serde(default)]
+    pub cpu_ns_per_period: Option<f64>,
+    /// Per panel (in panel order), the ns per period of each point (in point order).
+    pub ns_per_period: Vec<Vec<f64>>,
+}
+
+impl Cost {
+    /// The cost of `panels` with per-point `ns_per_period` (same shape), without CPU time.
+    #[must_use]
+    pub fn of(panels: &[Panel], ns_per_period: Vec<Vec<f64>>) -> Self {
+        let mut periods_total = 0u64;
+        let mut core_ns = 0.0;
+        for (p, ns) in panels.iter().zip(&ns_per_period) {
+            for (pt, &c) in p.points.iter().zip(ns) {
+                periods_total += pt.periods_run;
+                core_ns += pt.periods_run as f64 * c;
+            }
+        }
+        Self {
+            periods_total,
+            core_seconds: core_ns * 1e-9,
+            ns_per_period_mean: if periods_total == 0 {
+                0.0
+            } else {
+                core_ns / periods_total as f64
+            },
+            cpu_seconds: None,
+            cpu_ns_per_period: None,
+            ns_per_period,
+        }
+    }
+
+    /// Sets the measured CPU time (and the CPU ns per period derived from it).
+    #[must_use]
+    pub fn with_cpu_seconds(mut self, cpu_seconds: Option<f64>) -> Self {
+        self.cpu_seconds = cpu_seconds;
+        self.cpu_ns_per_period = cpu_seconds
+            .filter(|_| self.periods_total > 0)
+            .map(|s| s * 1e9 / self.periods_total as f64);
+        self
+    }
+}
+
+/// CPU time (user + system) of this process so far in seconds, from Linux `/proc/self/stat`
+/// (clock ticks of 1/100 s, the fixed `USER_HZ` of Linux's user interface); `None` elsewhere.
+#[must_use]
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which may hold spaces) start at field 3 (state).
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: u64 = f.get(11)?.parse().ok()?;
+    let stime: u64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) as f64 / 100.0)
 }
 
 impl MapFile {
@@ -168,10 +310,14 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
         (1..=MAX_SHARDS).contains(&n) && k < n,
         "{name}: shard [{k}, {n}]: need 0 <= k < n and 1 <= n <= {MAX_SHARDS}"
     );
+    let specs = f.spec.panels();
     ensure!(
-        f.panels.len() == f.spec.xidot0.len(),
-        "{name}: {} panels, but the spec has {} xidot0 values",
+        f.panels.len() == specs.len(),
+        "{name}: {} panels, but the spec has {} ({} mu x {} tau_d x {} xidot0 values)",
         f.panels.len(),
+        specs.len(),
+        f.spec.mu.len(),
+        f.spec.tau_d.len(),
         f.spec.xidot0.len()
     );
     ensure!(
@@ -181,18 +327,34 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
     );
     let len = f.spec.len();
     let want = map::shard_len(len, k, n);
-    for (pi, (panel, &v)) in f.panels.iter().zip(&f.spec.xidot0).enumerate() {
-        ensure!(
-            panel.xidot0.to_bits() == v.to_bits(),
-            "{name}: panel {pi} has xidot0 = {}, the spec says {v}",
-            panel.xidot0
-        );
+    ensure!(
+        f.cost.ns_per_period.len() == specs.len(),
+        "{name}: cost.ns_per_period has {} panels, need {}",
+        f.cost.ns_per_period.len(),
+        specs.len()
+    );
+    for (pi, (panel, ps)) in f.panels.iter().zip(&specs).enumerate() {
+        for (field, got, want) in [
+            ("mu", panel.mu, ps.mu),
+            ("tau_d", panel.tau_d, ps.tau_d),
+            ("xidot0", panel.xidot0, ps.xidot0),
+        ] {
+            ensure!(
+                got.to_bits() == want.to_bits(),
+                "{name}: panel {pi} has {field} = {got}, the spec says {want}"
+            );
+        }
         ensure!(
             panel.points.len() == want,
             "{name}: panel {pi} has {} points; shard {k}/{n} of a {len}-point grid has {want}",
             panel.points.len()
         );
-        let ps = f.spec.panel(v);
+        let ns = &f.cost.ns_per_period[pi];
+        ensure!(
+            ns.len() == panel.points.len() && ns.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "{name}: cost.ns_per_period[{pi}]: need one finite value >= 0 per point ({})",
+            panel.points.len()
+        );
         for (j, pt) in panel.points.iter().enumerate() {
             let index = k + j * n;
             ensure!(
@@ -215,6 +377,19 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
                 f.spec.periods
             );
         }
+    }
+    let recount = Cost::of(&f.panels, f.cost.ns_per_period.clone());
+    ensure!(
+        f.cost.periods_total == recount.periods_total,
+        "{name}: cost.periods_total = {}, but the points ran {} periods",
+        f.cost.periods_total,
+        recount.periods_total
+    );
+    if let Some(c) = f.cost.cpu_seconds {
+        ensure!(
+            c.is_finite() && c >= 0.0,
+            "{name}: cost.cpu_seconds = {c}: need a finite value >= 0"
+        );
     }
     Ok(())
 }
@@ -314,19 +489,35 @@ pub fn merge(files: &[(PathBuf, MapFile)]) -> Result<MapFile> {
     );
     let ordered: Vec<&MapFile> = by_k.iter().flatten().map(|&i| &files[i].1).collect();
     let spec = first.spec.clone();
-    let mut panels = Vec::with_capacity(spec.xidot0.len());
-    for (pi, &v) in spec.xidot0.iter().enumerate() {
-        let mut points: Vec<MapPoint> = ordered
+    let specs = spec.panels();
+    let mut panels = Vec::with_capacity(specs.len());
+    let mut ns = Vec::with_capacity(specs.len());
+    for (pi, ps) in specs.iter().enumerate() {
+        let mut points: Vec<(MapPoint, f64)> = ordered
             .iter()
-            .flat_map(|f| f.panels[pi].points.iter().copied())
+            .flat_map(|f| {
+                let p = &f.panels[pi].points;
+                p.iter()
+                    .copied()
+                    .zip(f.cost.ns_per_period[pi].iter().copied())
+            })
             .collect();
-        points.sort_by_key(|p| p.index);
-        panels.push(Panel { xidot0: v, points });
+        points.sort_by_key(|(p, _)| p.index);
+        let (points, c): (Vec<MapPoint>, Vec<f64>) = points.into_iter().unzip();
+        panels.push(Panel {
+            mu: ps.mu,
+            tau_d: ps.tau_d,
+            xidot0: ps.xidot0,
+            points,
+        });
+        ns.push(c);
     }
+    let cpu: Option<Vec<f64>> = ordered.iter().map(|f| f.cost.cpu_seconds).collect();
     Ok(MapFile {
         spec_crc64: spec.crc64(),
         spec,
         shard: None,
+        cost: Cost::of(&panels, ns).with_cpu_seconds(cpu.map(|c| c.iter().sum())),
         panels,
         seconds: ordered.iter().map(|f| f.seconds).sum(),
     })

@@ -3,22 +3,29 @@
 //! Units: dimensionless (Table I): μ, τ_D in periods, ξ̇₀ in ticks per period, ξ₀ = 0.
 //! Each grid point runs the exact solver (all effects) for `--periods` periods and is classified
 //! as growing / persistent / non-monotonically / monotonically decaying. Several `--xidot0`
-//! values give several panels. `--shard k/n` computes every n-th point (starting at k) so a
-//! batch scheduler can split a sweep; `hostctl map merge` joins the shard files.
+//! values give several panels; `--mu` and `--tau-d` also take lists or ranges (`lo:hi:n`,
+//! `lo:hi:n:log`), a third axis: one panel per (μ, τ_D, ξ̇₀), μ outer. `--shard k/n` computes
+//! every n-th point (starting at k) of every panel so a batch scheduler can split a sweep;
+//! `hostctl map merge` joins the shard files; `hostctl map atlas` compares a map with the
+//! analytic boundaries ([`atlas`]).
 //!
-//! JSON output: `{ "spec": {...}, "spec_crc64", "shard": [k, n] | null, "panels": [{ "xidot0",
-//! "points": [{ index, beta, sigma, class, periods_run, h0, h_end, tail_amplitude }] }],
-//! "seconds" }`, written atomically ([`file::write`]). A run whose `--out` already holds the
+//! JSON output: `{ "spec": {...}, "spec_crc64", "shard": [k, n] | null, "panels": [{ "mu",
+//! "tau_d", "xidot0", "points": [{ index, beta, sigma, class, periods_run, h0, h_end,
+//! tail_amplitude }] }], "cost": { periods_total, core_seconds, ns_per_period_mean,
+//! cpu_seconds, cpu_ns_per_period, ns_per_period: [[per point] per panel] }, "seconds" }`, written atomically ([`file::write`]). A run whose `--out` already holds the
 //! complete, valid result of the same sweep and shard does nothing (resume after a pre-empted
 //! batch job); `--force` recomputes. Bounds: `--threads` in [1, [`THREADS_PER_CORE`] × cores].
 
+pub mod atlas;
+pub mod atlas_plot;
 pub mod file;
 pub mod plot;
+pub mod values;
 
 use crate::figure;
 use crate::output::emit_json;
 use anyhow::{bail, ensure, Context, Result};
-use file::{MapFile, Panel, Spec};
+use file::{Cost, MapFile, Panel, Spec, Values};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use stiffwall_sim::classify::Class;
@@ -34,12 +41,12 @@ pub struct Args {
     /// Sub-commands (`merge`).
     #[command(subcommand)]
     pub cmd: Option<Sub>,
-    /// Dimensionless mass μ.
-    #[arg(long, default_value_t = 100.0, allow_hyphen_values = true)]
-    pub mu: f64,
-    /// Delay τ_D in sampling periods.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub tau_d: f64,
+    /// Dimensionless mass μ: a value, a list v1,v2,… or a range lo:hi:n[:log] (one slice each).
+    #[arg(long, default_value = "100", allow_hyphen_values = true)]
+    pub mu: String,
+    /// Delay τ_D in sampling periods: a value, a list or a range lo:hi:n[:log] (one slice each).
+    #[arg(long, default_value = "0", allow_hyphen_values = true)]
+    pub tau_d: String,
     /// Initial velocities ξ̇₀ (comma separated, one panel each).
     #[arg(
         long,
@@ -110,6 +117,8 @@ pub enum Sub {
         #[arg(long)]
         overlay: bool,
     },
+    /// Compare a complete map with the analytic growth boundaries, slice by slice.
+    Atlas(atlas::Args),
 }
 
 fn parse_shard(s: &str) -> Result<(usize, usize)> {
@@ -133,16 +142,17 @@ fn parse_shard(s: &str) -> Result<(usize, usize)> {
 }
 
 fn spec_of(a: &Args) -> Result<Spec> {
-    ensure!(
-        a.mu.is_finite() && a.mu > 0.0,
-        "--mu {}: allowed range is > 0",
-        a.mu
-    );
-    ensure!(
-        a.tau_d.is_finite() && (0.0..=250.0).contains(&a.tau_d),
-        "--tau-d {}: allowed range is [0, 250]",
-        a.tau_d
-    );
+    let mu = Values::parse(&a.mu).map_err(|e| anyhow::anyhow!("--mu {e}"))?;
+    let tau_d = Values::parse(&a.tau_d).map_err(|e| anyhow::anyhow!("--tau-d {e}"))?;
+    for v in mu.values() {
+        ensure!(v.is_finite() && v > 0.0, "--mu {v}: allowed range is > 0");
+    }
+    for v in tau_d.values() {
+        ensure!(
+            v.is_finite() && (0.0..=250.0).contains(&v),
+            "--tau-d {v}: allowed range is [0, 250]"
+        );
+    }
     ensure!(
         (1..=file::MAX_PANELS).contains(&a.xidot0.len()),
         "--xidot0: give 1 to {} values",
@@ -164,8 +174,8 @@ fn spec_of(a: &Args) -> Result<Spec> {
     ensure!(beta.lo >= 0.0, "--beta: allowed range is >= 0");
     ensure!(sigma.lo >= 0.0, "--sigma: allowed range is >= 0");
     let spec = Spec {
-        mu: a.mu,
-        tau_d: a.tau_d,
+        mu,
+        tau_d,
         xidot0: a.xidot0.clone(),
         beta,
         sigma,
@@ -175,7 +185,8 @@ fn spec_of(a: &Args) -> Result<Spec> {
             HistoryArg::Zero => History::Zero,
         },
     };
-    spec.validate().context("--beta x --sigma")?;
+    spec.validate()
+        .context("--mu x --tau-d x --xidot0 x --beta x --sigma")?;
     Ok(spec)
 }
 
@@ -202,11 +213,9 @@ fn threads_of(a: &Args) -> Result<usize> {
 pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Result<MapFile> {
     let (k, n) = shard.unwrap_or((0, 1));
     let t0 = std::time::Instant::now();
-    let per_panel: Vec<Vec<usize>> = spec
-        .xidot0
-        .iter()
-        .map(|&v| map::shard(&spec.panel(v), k, n))
-        .collect();
+    let cpu0 = file::process_cpu_seconds();
+    let specs = spec.panels();
+    let per_panel: Vec<Vec<usize>> = specs.iter().map(|ps| map::shard(ps, k, n)).collect();
     let total: usize = per_panel.iter().map(Vec::len).sum();
     let pb = if quiet {
         ProgressBar::hidden()
@@ -221,20 +230,29 @@ pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Resul
         pb
     };
     let tick = || pb.inc(1);
-    let panels = spec
-        .xidot0
+    let (panels, ns): (Vec<Panel>, Vec<Vec<f64>>) = specs
         .iter()
         .zip(&per_panel)
-        .map(|(&v, idx)| Panel {
-            xidot0: v,
-            points: map::run(&spec.panel(v), idx, &tick),
+        .map(|(ps, idx)| {
+            let (points, ns) = map::run_with_cost(ps, idx, &tick);
+            let panel = Panel {
+                mu: ps.mu,
+                tau_d: ps.tau_d,
+                xidot0: ps.xidot0,
+                points,
+            };
+            (panel, ns)
         })
-        .collect();
+        .unzip();
     pb.finish_and_clear();
     Ok(MapFile {
         spec: spec.clone(),
         spec_crc64: spec.crc64(),
         shard,
+        cost: Cost::of(&panels, ns).with_cpu_seconds(
+            cpu0.zip(file::process_cpu_seconds())
+                .map(|(a, b)| (b - a).max(0.0)),
+        ),
         panels,
         seconds: t0.elapsed().as_secs_f64(),
     })
@@ -301,6 +319,9 @@ pub fn run(args: &Args) -> Result<()> {
     {
         return run_merge(inputs, out, img.as_ref(), *overlay);
     }
+    if let Some(Sub::Atlas(a)) = &args.cmd {
+        return atlas::run(a);
+    }
     let spec = spec_of(args)?;
     let threads = threads_of(args)?;
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
@@ -335,7 +356,9 @@ pub fn run(args: &Args) -> Result<()> {
         let counts = |p: &Panel, c: Class| p.points.iter().filter(|q| q.class == c).count();
         for p in &m.panels {
             eprintln!(
-                "xidot0 = {}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
+                "mu = {}, tau_d = {}, xidot0 = {}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
+                p.mu,
+                p.tau_d,
                 p.xidot0,
                 p.points.len(),
                 counts(p, Class::Growing),
@@ -344,7 +367,19 @@ pub fn run(args: &Args) -> Result<()> {
                 counts(p, Class::MonotoneDecay)
             );
         }
-        eprintln!("computed in {:.2} s", m.seconds);
+        eprintln!(
+            "computed in {:.2} s: {} periods, {:.1} ns/period (thread wall time), {} CPU",
+            m.seconds,
+            m.cost.periods_total,
+            m.cost.ns_per_period_mean,
+            m.cost.cpu_seconds.map_or_else(
+                || "unknown".to_owned(),
+                |c| format!(
+                    "{c:.2} s = {:.1} ns/period",
+                    m.cost.cpu_ns_per_period.unwrap_or(f64::NAN)
+                )
+            )
+        );
         match &args.out {
             Some(out) => file::write(out, &m)?,
             None if args.plot.is_none() => emit_json(&m)?,

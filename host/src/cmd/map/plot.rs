@@ -1,4 +1,5 @@
-//! Figure of a map: one panel per ξ̇₀, classes as grey levels, optional analytic boundaries.
+//! Figure of a map: one panel per (μ, τ_D, ξ̇₀), classes as grey levels, optional analytic
+//! boundaries.
 //!
 //! Units: dimensionless (β, σ on the axes). Invariant: the image is drawn only from a complete,
 //! validated [`MapFile`]; cells are centred on the grid points.
@@ -12,7 +13,7 @@ use std::path::Path;
 use stiffwall_core::regions;
 use stiffwall_sim::classify::Class;
 
-fn class_color(c: Class) -> RGBColor {
+pub(super) fn class_color(c: Class) -> RGBColor {
     match c {
         Class::Growing => RGBColor(40, 40, 40),
         Class::Persistent => RGBColor(120, 120, 120),
@@ -44,7 +45,11 @@ impl Figure for MapFigure<'_> {
 /// An unsupported extension, or a drawing or file error.
 pub fn plot(m: &MapFile, path: &Path, overlay: bool) -> Result<(), FigureError> {
     let n = m.panels.len();
-    let cols = if n >= 4 { 2 } else { n.max(1) };
+    let cols = match n {
+        0..=3 => n.max(1),
+        4 => 2,
+        _ => (n as f64).sqrt().ceil() as usize,
+    };
     let rows = n.div_ceil(cols);
     let size = (cols as u32 * 480, rows as u32 * 440 + 30);
     let fig = MapFigure {
@@ -71,8 +76,8 @@ where
     let (top, body) = root.split_vertically(30);
     top.titled(
         &format!(
-            "mu = {}, tau_D = {}, {} periods; dark: growing, medium: persistent, light: non-monotone decay, white: monotone decay",
-            s.mu, s.tau_d, s.periods
+            "{} periods; dark: growing, medium: persistent, light: non-monotone decay, white: monotone decay",
+            s.periods
         ),
         ("sans-serif", 14),
     )?;
@@ -92,7 +97,10 @@ where
     for (panel, area) in m.panels.iter().zip(areas.iter()) {
         let mut chart = ChartBuilder::on(area)
             .caption(
-                format!("xidot0 = xidot_max = {}", panel.xidot0),
+                format!(
+                    "mu = {}, tau_D = {}, xidot0 = xidot_max = {}",
+                    panel.mu, panel.tau_d, panel.xidot0
+                ),
                 ("sans-serif", 16),
             )
             .margin(8)
@@ -125,7 +133,8 @@ where
                 sigma_min: sy0,
                 sigma_max: sy1,
             };
-            let lines = regions::boundaries(s.tau_d, Some(v), Some(v / s.mu.sqrt()), &window)?;
+            let lines =
+                regions::boundaries(panel.tau_d, Some(v), Some(v / panel.mu.sqrt()), &window)?;
             for seg in lines.as_slice() {
                 chart.draw_series(LineSeries::new(vec![seg.from, seg.to], red))?;
             }

@@ -171,7 +171,7 @@ pub fn map_view(text: &str) -> anyhow::Result<Value> {
     let mut panels = Vec::new();
     for panel in &m.panels {
         let v = panel.xidot0.abs();
-        let lines = regions::boundaries(s.tau_d, Some(v), Some(v / s.mu.sqrt()), &window)?;
+        let lines = regions::boundaries(panel.tau_d, Some(v), Some(v / panel.mu.sqrt()), &window)?;
         let lines: Vec<Value> = lines
             .as_slice()
             .iter()
@@ -182,12 +182,15 @@ pub fn map_view(text: &str) -> anyhow::Result<Value> {
             .iter()
             .map(|pt| json!([pt.beta, pt.sigma, pt.class]))
             .collect();
-        panels.push(json!({"xidot0": panel.xidot0, "points": points, "lines": lines}));
+        panels.push(
+            json!({"mu": panel.mu, "tau_d": panel.tau_d, "xidot0": panel.xidot0,
+                           "points": points, "lines": lines}),
+        );
     }
     Ok(json!({
         "type": "map",
-        "mu": s.mu,
-        "tau_d": s.tau_d,
+        "mu": serde_json::to_value(&s.mu)?,
+        "tau_d": serde_json::to_value(&s.tau_d)?,
         "periods": s.periods,
         "window": [window.beta_min, window.beta_max, window.sigma_min, window.sigma_max],
         "cell": [2.0 * db, 2.0 * ds],
