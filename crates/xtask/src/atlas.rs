@@ -6,7 +6,7 @@
 //! Units: those of `hostctl map` (dimensionless, Table I). Invariant: every number in
 //! docs/ATLAS.md comes from this command; the map JSON itself stays in target/ (large).
 
-use crate::{cargo, firmware, run};
+use crate::{firmware, run};
 use anyhow::{ensure, Result};
 use std::process::Command;
 
@@ -20,18 +20,10 @@ pub const MAP_ARGS: &str = "--mu 1:1000:7:log --tau-d 0,0.5,1,1.25,2 --xidot0 5 
 /// A failed build, sweep or atlas.
 pub fn atlas(args: &[String]) -> Result<()> {
     ensure!(args.is_empty(), "atlas takes no arguments (got {args:?})");
-    run(cargo().args([
-        "build",
-        "--release",
-        "-p",
-        "stiffwall-host",
-        "--bin",
-        "hostctl",
-    ]))?;
+    let hostctl = crate::build_hostctl()?;
     let root = firmware::root();
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map_or_else(|| root.join("target"), std::path::PathBuf::from);
-    let hostctl = target.join("release").join("hostctl");
     let map = target.join("atlas-map.json");
     let figures = root.join("docs/figures/atlas");
     // Old figures of slices no longer in the sweep must not linger.

@@ -16,7 +16,7 @@
 //! Units: seconds of wall time. Needs root (slurmd and munged run as the invoking user, which
 //! Slurm requires to be root to launch jobs) and Debian (for the install).
 
-use crate::{cargo, firmware, run, toolchain};
+use crate::{firmware, run, toolchain};
 use anyhow::{bail, ensure, Context, Result};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -191,12 +191,6 @@ impl Drop for Cluster {
     }
 }
 
-fn hostctl_path() -> PathBuf {
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map_or_else(|| firmware::root().join("target"), PathBuf::from);
-    target.join("release").join("hostctl")
-}
-
 /// The jobs still in the queue, as `id state reason` lines.
 fn queue(c: &Cluster, jobs: &str) -> String {
     output(c.slurm("squeue").args(["-h", "-j", jobs, "-o", "%i %T %r"])).unwrap_or_default()
@@ -366,15 +360,7 @@ pub fn cluster_test(args: &[String]) -> Result<()> {
         uid == "0",
         "cluster-test starts slurmd, which must run as root to launch jobs (uid is {uid})"
     );
-    run(cargo().args([
-        "build",
-        "--release",
-        "-p",
-        "stiffwall-host",
-        "--bin",
-        "hostctl",
-    ]))?;
-    let hostctl = hostctl_path();
+    let hostctl = crate::build_hostctl()?;
     let dir = std::env::temp_dir().join(format!("stiffwall-cluster-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir)?;

@@ -54,6 +54,21 @@ pub fn cargo() -> Command {
     c
 }
 
+/// Builds the release `hostctl` and returns its path (under `CARGO_TARGET_DIR` when set).
+pub fn build_hostctl() -> Result<std::path::PathBuf> {
+    run(cargo().args([
+        "build",
+        "--release",
+        "-p",
+        "stiffwall-host",
+        "--bin",
+        "hostctl",
+    ]))?;
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map_or_else(|| firmware::root().join("target"), std::path::PathBuf::from);
+    Ok(target.join("release").join("hostctl"))
+}
+
 /// no_std crates that must build for the Cortex-M target.
 const NO_STD_CRATES: &[(&str, &[&str])] = &[
     ("stiffwall-core", &[]),

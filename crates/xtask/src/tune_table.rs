@@ -35,18 +35,7 @@ pub fn tune_table(args: &[String]) -> Result<()> {
         i += 1;
     }
     if !quick {
-        crate::run(crate::cargo().args([
-            "build",
-            "--release",
-            "-p",
-            "stiffwall-host",
-            "--bin",
-            "hostctl",
-        ]))?;
-        let hostctl = crate::firmware::root()
-            .join("target")
-            .join("release")
-            .join("hostctl");
+        let hostctl = crate::build_hostctl()?;
         pass.push("--hostctl".into());
         pass.push(hostctl.to_string_lossy().into_owned());
     }
