@@ -6,7 +6,7 @@
 
 use super::atlas::{Atlas, Line, Slice};
 use super::file::{MapFile, Panel};
-use super::plot::class_color;
+use super::plot::draw_cells;
 use crate::figure::{self, Figure};
 use anyhow::Result;
 use plotters::coord::Shift;
@@ -158,21 +158,7 @@ where
         .x_label_area_size(35)
         .y_label_area_size(45)
         .build_cartesian_2d(bx0..bx1, sy0..sy1)?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_desc("beta")
-        .y_desc("sigma")
-        .draw()?;
-    chart.draw_series(p.points.iter().map(|q| {
-        Rectangle::new(
-            [
-                (q.beta - db / 2.0, q.sigma - ds / 2.0),
-                (q.beta + db / 2.0, q.sigma + ds / 2.0),
-            ],
-            class_color(q.class).filled(),
-        )
-    }))?;
+    draw_cells(&mut chart, &p.points, db, ds)?;
     let v = p.xidot0.abs();
     let window = regions::Window {
         beta_min: bx0.max(0.0),

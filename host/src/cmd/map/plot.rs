@@ -13,6 +13,39 @@ use std::path::Path;
 use stiffwall_core::regions;
 use stiffwall_sim::classify::Class;
 
+/// The (β, σ) axes of a map panel and its grid points as cells of `db` × `ds`, coloured by
+/// class (shared by `map --plot` and the atlas figures).
+pub(super) fn draw_cells<DB: DrawingBackend>(
+    chart: &mut ChartContext<
+        '_,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    points: &[stiffwall_sim::map::MapPoint],
+    db: f64,
+    ds: f64,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("beta")
+        .y_desc("sigma")
+        .draw()?;
+    chart.draw_series(points.iter().map(|p| {
+        Rectangle::new(
+            [
+                (p.beta - db / 2.0, p.sigma - ds / 2.0),
+                (p.beta + db / 2.0, p.sigma + ds / 2.0),
+            ],
+            class_color(p.class).filled(),
+        )
+    }))?;
+    Ok(())
+}
+
 pub(super) fn class_color(c: Class) -> RGBColor {
     match c {
         Class::Growing => RGBColor(40, 40, 40),
@@ -107,21 +140,7 @@ where
             .x_label_area_size(35)
             .y_label_area_size(45)
             .build_cartesian_2d(bx0..bx1, sy0..sy1)?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_desc("beta")
-            .y_desc("sigma")
-            .draw()?;
-        chart.draw_series(panel.points.iter().map(|p| {
-            Rectangle::new(
-                [
-                    (p.beta - db / 2.0, p.sigma - ds / 2.0),
-                    (p.beta + db / 2.0, p.sigma + ds / 2.0),
-                ],
-                class_color(p.class).filled(),
-            )
-        }))?;
+        draw_cells(&mut chart, &panel.points, db, ds)?;
         if overlay {
             // The boundaries of Fig. 3 (tau_D = 0) or Fig. 5 / (19), with the panel's xidot0 as
             // the velocity bound and xiddot_max ~ xidot_max / sqrt(mu) (harmonic motion).
