@@ -91,6 +91,16 @@ async fn attr(c: &Client, id: &str, name: &str) -> Option<String> {
     c.find(Locator::Id(id)).await.ok()?.attr(name).await.ok()?
 }
 
+/// The operating point the plane shows: β, σ and its pixel position x, y.
+async fn plane_point(c: &Client) -> (f64, f64, f64, f64) {
+    (
+        number(c, "plane", "data-beta").await.unwrap(),
+        number(c, "plane", "data-sigma").await.unwrap(),
+        number(c, "plane", "data-px").await.unwrap(),
+        number(c, "plane", "data-py").await.unwrap(),
+    )
+}
+
 async fn number(c: &Client, id: &str, name: &str) -> Option<f64> {
     attr(c, id, name).await?.parse().ok()
 }
@@ -186,14 +196,7 @@ fn the_page_in_chromium() {
         // The fresh virtual device's wall is off: no operating point until K is set.
         assert!(attr(&c, "plane", "data-beta").await.is_none());
         set_stiffness(&c, "0.8").await;
-        let (b1, s1) = (
-            number(&c, "plane", "data-beta").await.unwrap(),
-            number(&c, "plane", "data-sigma").await.unwrap(),
-        );
-        let (x1, y1) = (
-            number(&c, "plane", "data-px").await.unwrap(),
-            number(&c, "plane", "data-py").await.unwrap(),
-        );
+        let (b1, s1, x1, y1) = plane_point(&c).await;
 
         step("K set");
         // A release test from the page (K = 0.8 < the guaranteed 0.88: it settles), in a
@@ -250,14 +253,7 @@ fn the_page_in_chromium() {
         step("release done");
         // Doubling K halves β and σ (Fig. 4): the point moves towards the origin.
         set_stiffness(&c, "1.6").await;
-        let (b2, s2) = (
-            number(&c, "plane", "data-beta").await.unwrap(),
-            number(&c, "plane", "data-sigma").await.unwrap(),
-        );
-        let (x2, y2) = (
-            number(&c, "plane", "data-px").await.unwrap(),
-            number(&c, "plane", "data-py").await.unwrap(),
-        );
+        let (b2, s2, x2, y2) = plane_point(&c).await;
         assert!((b2 / b1 - 0.5).abs() < 1e-6, "beta {b1} -> {b2}");
         assert!((s2 / s1 - 0.5).abs() < 1e-6, "sigma {s1} -> {s2}");
         assert!(
