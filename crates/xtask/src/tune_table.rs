@@ -5,7 +5,9 @@
 //! plant of `sim/plants/` computes the true largest stable stiffness K* with the simulator alone,
 //! runs `hostctl tune --plant FILE --fast --dry-run --json`, drives the firmware supervisor at
 //! 1.5 K* and writes docs/TUNE.md. `--quick` skips the tune runs (K* and the supervisor only);
-//! `--only NAME` restricts to plants by file stem; `--no-write` prints without writing.
+//! `--only NAME` restricts to plants by file stem; `--plant FILE` (repeatable) checks your own
+//! plant files instead (printed; written only with `--out FILE`); `--no-write` prints without
+//! writing.
 use anyhow::{bail, Result};
 
 /// Builds hostctl and runs the table program.
@@ -28,8 +30,19 @@ pub fn tune_table(args: &[String]) -> Result<()> {
                 pass.push(v.clone());
                 i += 1;
             }
+            flag @ ("--plant" | "--out") => {
+                let Some(v) = args.get(i + 1) else {
+                    bail!("{flag} needs a file path");
+                };
+                // The table program runs from the repository root: make the path absolute.
+                let path = std::env::current_dir()
+                    .map_or_else(|_| v.into(), |d| d.join(v));
+                pass.push(flag.into());
+                pass.push(path.to_string_lossy().into_owned());
+                i += 1;
+            }
             other => bail!(
-                "unknown tune-table option {other:?}; available: --quick, --only NAME, --no-write"
+                "unknown tune-table option {other:?}; available: --quick, --only NAME, --plant FILE, --out FILE, --no-write"
             ),
         }
         i += 1;

@@ -166,7 +166,7 @@ pub fn findings(id: &Identified, e: &Evidence, units: (&str, &str)) -> Vec<Strin
                 out.push(format!(
                     "breakaway in the {dir} direction needs {:.3e} {force_unit}, {:.2} × the \
                      sliding friction c = {:.3e} {force_unit}: static friction (stick–slip) \
-                     that the model does not include",
+                     or an amplifier dead band, which the model does not include",
                     meas.abs(),
                     meas.abs() / id.coulomb.max(1e-30),
                     id.coulomb

@@ -10,8 +10,9 @@
 //!
 //! Units: as the plant files (SI; rotary N·m/rad, kg·m², N·m·s/rad, N·m).
 //! Options: `--hostctl PATH` (default: target/release/hostctl), `--out FILE`
-//! (default docs/TUNE.md), `--only NAME` (repeatable), `--quick` (skip tune: K* and the
-//! supervisor only), `--no-write`.
+//! (default docs/TUNE.md), `--only NAME` (repeatable), `--plant FILE` (repeatable: your own
+//! plant files instead of `sim/plants/`; printed, written only with `--out`), `--quick` (skip
+//! tune: K* and the supervisor only), `--no-write`.
 
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
@@ -288,6 +289,7 @@ fn main() -> Result<()> {
     let mut hostctl = root.join("target").join("release").join("hostctl");
     let mut out = root.join("docs").join("TUNE.md");
     let mut only: Vec<String> = Vec::new();
+    let mut extra: Vec<PathBuf> = Vec::new();
     let (mut quick, mut write) = (false, true);
     let mut i = 0;
     while i < args.len() {
@@ -309,24 +311,63 @@ fn main() -> Result<()> {
                 only.push(value(i)?);
                 i += 1;
             }
+            "--plant" => {
+                extra.push(PathBuf::from(value(i)?));
+                i += 1;
+            }
             "--quick" => quick = true,
             "--no-write" => write = false,
             other => bail!(
-                "unknown option {other:?}; available: --hostctl PATH, --out FILE, --only NAME, --quick, --no-write"
+                "unknown option {other:?}; available: --hostctl PATH, --out FILE, --only NAME, --plant FILE, --quick, --no-write"
             ),
         }
         i += 1;
     }
-    let files = family::plant_files(&family::plants_dir()).context("listing sim/plants")?;
+    // `--plant FILE` (repeatable) checks the user's own plant files instead of sim/plants/;
+    // the table is then printed, and written only with an explicit `--out`.
+    let files = if extra.is_empty() {
+        family::plant_files(&family::plants_dir()).context("listing sim/plants")?
+    } else {
+        if !args.iter().any(|a| a == "--out") {
+            write = false;
+        }
+        extra
+    };
     let mut rows = Vec::new();
+    let mut skipped: Vec<String> = Vec::new();
     for f in files {
-        let case = PlantCase::load(&f).map_err(anyhow::Error::msg)?;
+        let case = match PlantCase::load(&f) {
+            Ok(c) => c,
+            Err(e) => {
+                eprintln!("skipped: {e}");
+                skipped.push(e);
+                continue;
+            }
+        };
         if !only.is_empty() && !only.contains(&case.name) {
             continue;
         }
         let t0 = Instant::now();
-        let k_star = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", case.name))?;
+        let k_star = match kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12) {
+            Ok(k) => k,
+            Err(e) => {
+                // Still say what tune sets there: with no finite K*, it cannot be unsafe.
+                let tune = (!quick).then(|| run_tune(&hostctl, &f));
+                let e = format!(
+                    "{}: K*: {e}{}",
+                    case.name,
+                    match tune {
+                        Some(Ok(t)) =>
+                            format!("; tune sets K = {:.5} ({:.1} s)", t.k_set, t.seconds),
+                        Some(Err(e)) => format!("; tune failed: {e:#}"),
+                        None => String::new(),
+                    }
+                );
+                eprintln!("skipped: {e}");
+                skipped.push(e);
+                continue;
+            }
+        };
         let k_star_seconds = t0.elapsed().as_secs_f64();
         let tune = (!quick).then(|| run_tune(&hostctl, &f).map_err(|e| format!("{e:#}")));
         let supervisor = case.supervisor_report(1.5 * k_star.k_star);
@@ -360,6 +401,13 @@ fn main() -> Result<()> {
     print!("{table}");
     let total: f64 = rows.iter().map(|r| r.k_star_seconds).sum();
     eprintln!("K* searches: {total:.1} s in total");
+    if !skipped.is_empty() {
+        bail!(
+            "{} plant(s) without a row (nothing written):\n{}",
+            skipped.len(),
+            skipped.join("\n")
+        );
+    }
     if write {
         let cmd = if quick {
             "cargo xtask tune-table --quick"
