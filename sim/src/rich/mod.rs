@@ -18,17 +18,19 @@
 //! - [`RichPlant::with_method`] picks the engine (exact or [`ode::OdeMethod`]).
 //!
 //! Modules: [`model`] (parameters and validation), [`friction`] (Stribeck curve, stick rule,
-//! closed-form static/dynamic switch), [`ode`] (RK4 / Dormand–Prince 5(4) with event location),
+//! closed-form static/dynamic switch), [`linear`] (the exact engine between events), [`ode`] (RK4 / Dormand–Prince 5(4) with event location),
 //! [`plant`] ([`RichPlant`]), [`scene`] (std: scene keys, sampled loop of `Scene::simulate`).
 //!
 //! Exactness: a rigid plant with a static/dynamic switch (`stribeck_m_per_s = 0`), dead band
-//! and saturation is stepped in closed form; cogging, the transmission, the hand, the amplifier
-//! filter and Stribeck decay use the reference integrator (the transmission is linear between
-//! friction events, but its events would still need root finding on the closed form; the
-//! integrator locates them the same way). Invariant: no allocation in the stepping plant; the
-//! no_std build contains everything except [`scene`].
+//! and saturation is stepped in closed form ([`friction::advance_switch`]); with a
+//! transmission, a hand or an amplifier filter (and its output clamp) the plant is linear
+//! between events and stepped exactly by [`linear`] (matrix exponential, events located on the
+//! closed form); only cogging (sin x₁) and Stribeck decay (exp(−v²)) are nonlinear between
+//! events and use the reference integrator. Invariant: no allocation in the stepping plant;
+//! the no_std build contains everything except [`scene`].
 
 pub mod friction;
+pub mod linear;
 pub mod model;
 pub mod ode;
 pub mod plant;

@@ -277,14 +277,21 @@ impl PlantModel {
     }
 
     /// Whether the motion is piecewise closed-form ([`crate::rich::RichPlant`] then steps it
-    /// exactly): rigid, no cogging, no hand, no amplifier filter, no Stribeck decay.
+    /// exactly): no cogging and no Stribeck decay. A rigid plant without hand or filter is
+    /// stepped by [`crate::rich::friction::advance_switch`]; one with a transmission, a hand or
+    /// an amplifier filter is linear between events and stepped by [`crate::rich::linear`].
     #[must_use]
     pub fn is_exact(&self) -> bool {
+        self.cogging.is_none() && self.stiction.is_none_or(|s| s.stribeck_m_per_s == 0.0)
+    }
+
+    /// Whether the plant is a rigid mass with friction alone (no transmission, hand or
+    /// amplifier filter): the closed form of [`crate::rich::friction::advance_switch`].
+    #[must_use]
+    pub fn is_rigid(&self) -> bool {
         self.transmission.is_none()
-            && self.cogging.is_none()
             && self.hand.is_none()
             && self.amplifier.and_then(|a| a.cutoff_hz).is_none()
-            && self.stiction.is_none_or(|s| s.stribeck_m_per_s == 0.0)
     }
 
     /// Whether any effect beyond the paper's plant (and the existing hand and filter) is on:

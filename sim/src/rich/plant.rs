@@ -15,8 +15,10 @@
 //! - friction: the stick rule of [`crate::rich::friction`] (sliding −F(|v₁|)·sgn v₁, stuck
 //!   while |f_ext| ≤ F_s, events located).
 //!
-//! Engines: [`PlantModel::is_exact`] models step in closed form
-//! ([`crate::rich::friction::advance_switch`]); the others with Dormand–Prince 5(4) (rtol 1e-9,
+//! Engines: [`PlantModel::is_exact`] models step in closed form: rigid ones by
+//! [`crate::rich::friction::advance_switch`], those with a transmission, hand or filter by the
+//! matrix exponential of [`crate::rich::linear`]; the others (cogging, Stribeck decay) with
+//! Dormand–Prince 5(4) (rtol 1e-9,
 //! atol 1e-6 in units of Δ, Δ/ms, max(F_s, 1 mN), per ms) or the method given to
 //! [`RichPlant::with_method`].
 //!
@@ -25,6 +27,7 @@
 //! commands count as 0 N.
 
 use super::friction::{advance_switch, sliding_n, stick_rule};
+use super::linear::{Linear, LinearPlant};
 use super::model::{ModelError, PlantModel};
 use super::ode::{Field, OdeMethod, OdeStats, State, Stepper, NS};
 use crate::plant::{Body, Motion};
@@ -163,9 +166,16 @@ impl Field for Dyn<'_> {
     }
 }
 
+// The linear engine carries its transition-matrix cache inline (about 1.9 KB): the no_std
+// build has no allocator to box it, and a plant is copied only when a trial starts.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Engine {
+    /// Rigid mass with friction: [`advance_switch`].
     Exact(Body),
+    /// Linear between events (transmission, hand, filter): [`Linear`].
+    Linear(Linear),
+    /// Reference integrator.
     Ode(Stepper),
 }
 
@@ -203,16 +213,33 @@ impl RichPlant {
         model.validate()?;
         let d = Derived::new(model);
         let engine = match method {
-            None if model.is_exact() => Engine::Exact(Body::new(
+            None if model.is_exact() && model.is_rigid() => Engine::Exact(Body::new(
                 model.mass_kg + model.hand.map_or(0.0, |h| h.mass_kg),
                 model.viscous_ns_per_m,
                 model.coulomb_n,
             )),
+            None if model.is_exact() => Engine::Linear(Linear::new(LinearPlant {
+                inv_m1: d.inv_m1,
+                inv_m2: d.inv_m2,
+                b: d.b,
+                c: d.c,
+                fs: d.fs,
+                kt: d.kt,
+                dt: d.dt,
+                trans: d.trans,
+                kh: d.kh,
+                bh: d.bh,
+                amp_w: d.amp_w,
+                amp_z: d.amp_z,
+                limit: d.limit,
+                pos_scale: model.resolution_m,
+                force_scale: model.static_friction_n().max(1e-3),
+            })),
             None => {
                 return Err(ModelError {
                     key: "run.solver",
-                    allowed: "rk4 or dopri: kind = \"exact\" needs a rigid plant without cogging, \
-                              hand, amplifier filter or Stribeck decay",
+                    allowed: "rk4 or dopri: kind = \"exact\" needs a plant without cogging or \
+                              Stribeck decay",
                 })
             }
             Some(m) => {
@@ -300,6 +327,17 @@ impl RichPlant {
                     -1.0
                 };
             }
+            Engine::Linear(lin) => {
+                // The rule at zero velocity, with the new command.
+                if self.slide == 0.0 || self.y[1] == 0.0 {
+                    self.y[1] = 0.0;
+                    self.slide = stick_rule(self.d.f_ext(&self.y, u), self.d.fs);
+                }
+                let mut y6 = [0.0; 6];
+                y6.copy_from_slice(&self.y[..6]);
+                lin.advance(&mut y6, &mut self.slide, u, dt_s, MAX_EVENTS);
+                self.y[..6].copy_from_slice(&y6);
+            }
             Engine::Ode(stepper) => {
                 let d = self.d;
                 // The rule at zero velocity, with the new command.
@@ -351,13 +389,21 @@ impl RichPlant {
     /// Link (hand-side) position, m (rad); the motor position without a transmission.
     #[must_use]
     pub fn link_position_m(&self) -> f64 {
-        self.y[2]
+        if self.d.trans {
+            self.y[2]
+        } else {
+            self.y[0]
+        }
     }
 
     /// Link velocity, m/s (rad/s).
     #[must_use]
     pub fn link_velocity_m_per_s(&self) -> f64 {
-        self.y[3]
+        if self.d.trans {
+            self.y[3]
+        } else {
+            self.y[1]
+        }
     }
 
     /// Force the amplifier applies now, N (N·m).
@@ -375,7 +421,7 @@ impl RichPlant {
     /// Whether the closed-form engine runs this plant.
     #[must_use]
     pub fn is_exact(&self) -> bool {
-        matches!(self.engine, Engine::Exact(_))
+        matches!(self.engine, Engine::Exact(_) | Engine::Linear(_))
     }
 
     /// The whole state [x₁, v₁, x₂, v₂, p, ṗ].
@@ -388,7 +434,7 @@ impl RichPlant {
     #[must_use]
     pub fn stats(&self) -> OdeStats {
         match self.engine {
-            Engine::Exact(_) => OdeStats::default(),
+            Engine::Exact(_) | Engine::Linear(_) => OdeStats::default(),
             Engine::Ode(s) => s.stats,
         }
     }

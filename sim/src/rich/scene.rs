@@ -217,8 +217,8 @@ pub fn attach(
         Solver::Exact => {
             if model.has_new_effects() && !model.is_exact() {
                 return Err(SceneError::Effect(
-                    "run.solver: kind = \"exact\" needs a rigid plant without cogging, hand, \
-                     amplifier filter or Stribeck decay (stribeck_m_per_s = 0); use rk4 or dopri"
+                    "run.solver: kind = \"exact\" needs a plant without cogging or Stribeck decay \
+                     (stribeck_m_per_s = 0); use rk4 or dopri"
                         .into(),
                 ));
             }

@@ -1,0 +1,474 @@
+//! The exact engine of a plant that is linear between events: a compliant transmission, a
+//! hand, an amplifier filter (with its output clamp), viscous and Coulomb friction with a
+//! static/dynamic switch — everything of [`crate::rich`] except cogging and Stribeck decay.
+//!
+//! Units: SI (m, m/s, N, s; rotary: rad, rad/s, N·m), the state y = [x₁, v₁, x₂, v₂, p, ṗ] of
+//! [`crate::rich::plant`].
+//!
+//! **Why it is exact.** In each mode — motor sliding forward, backward or stuck (`slide` = ±1,
+//! 0), amplifier output inside its range or clamped at ±limit (`clamp` = 0, ±1) — and for a
+//! held command u, the field of [`crate::rich::plant`] is affine, ẏ = A y + g. With the
+//! augmented state z = [y, 1] it is ż = M z, so z(t) = e^{Mt} z(0): the matrix exponential of
+//! the 7×7 M is the closed-form solution (computed by scaling and squaring of its Taylor
+//! series on a balanced M, accurate to a few ulps of the state). Events end a mode: the motor
+//! velocity reaching zero while sliding, |f_ext| exceeding the breakaway force F_s while stuck,
+//! the filter output crossing ±limit (either way). They are linear functionals of z, so each is
+//! located on the closed form itself: the interval is cut into sub-steps no longer than half
+//! the fastest time constant (1/ρ, ρ the largest natural frequency or damping rate), an event
+//! is detected at a sub-step end, and its instant found by the Illinois variant of regula falsi
+//! on e^{Mτ} z (to the last bits of τ). The stick rule is [`crate::rich::friction::stick_rule`].
+//! The one approximation left: two zero crossings of an event function inside one sub-step
+//! (a graze) go unseen, as with any sampled event detector.
+//!
+//! Invariants: no allocation, no panic, at most [`crate::rich::plant::MAX_EVENTS`] mode switches
+//! per call (the caller's Zeno guard); a non-finite state is never produced from finite inputs.
+
+// Dense 7×7 matrix arithmetic reads as its index formulas; iterator chains would hide them.
+#![allow(clippy::needless_range_loop)]
+
+/// Augmented dimension: the six states and the constant 1.
+const N: usize = 7;
+/// A 7×7 matrix, row-major.
+type Mat = [[f64; N]; N];
+
+/// The plant's constants the engine needs (from the model).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearPlant {
+    /// 1/m₁ (motor side; with the hand's mass without a transmission), 1/kg.
+    pub inv_m1: f64,
+    /// 1/m₂ (link with the hand's mass), 1/kg.
+    pub inv_m2: f64,
+    /// Viscous friction of the motor, N·s/m.
+    pub b: f64,
+    /// Dynamic (sliding) Coulomb friction, N.
+    pub c: f64,
+    /// Breakaway force F_s ≥ c, N.
+    pub fs: f64,
+    /// Transmission stiffness and damping (0 without one), N/m, N·s/m.
+    pub kt: f64,
+    /// Transmission damping, N·s/m.
+    pub dt: f64,
+    /// Whether there is a transmission.
+    pub trans: bool,
+    /// Hand spring and damper (anchored at 0), N/m, N·s/m.
+    pub kh: f64,
+    /// Hand damping, N·s/m.
+    pub bh: f64,
+    /// Filter natural frequency ω, rad/s, and damping ζ (ω = 0: no filter).
+    pub amp_w: f64,
+    /// Filter damping ζ.
+    pub amp_z: f64,
+    /// Output clamp of the filter, N (∞ without a limit).
+    pub limit: f64,
+    /// Position scale for balancing (the encoder resolution), m.
+    pub pos_scale: f64,
+    /// Force scale for balancing (max(F_s, 1 mN)), N.
+    pub force_scale: f64,
+}
+
+/// One cached transition matrix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Cached {
+    slide: f64,
+    clamp: f64,
+    u: f64,
+    h: f64,
+    e: Mat,
+}
+
+/// The engine: the plant's constants and a small cache of sub-step transition matrices.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Linear {
+    p: LinearPlant,
+    /// Fastest rate ρ, 1/s.
+    rho: f64,
+    cache: [Option<Cached>; 4],
+    next: usize,
+}
+
+fn mat_mul(a: &Mat, b: &Mat) -> Mat {
+    let mut o = [[0.0; N]; N];
+    for i in 0..N {
+        for k in 0..N {
+            let aik = a[i][k];
+            if aik != 0.0 {
+                for j in 0..N {
+                    o[i][j] += aik * b[k][j];
+                }
+            }
+        }
+    }
+    o
+}
+
+fn mat_vec(a: &Mat, z: &[f64; N]) -> [f64; N] {
+    let mut o = [0.0; N];
+    for i in 0..N {
+        let mut s = 0.0;
+        for j in 0..N {
+            s += a[i][j] * z[j];
+        }
+        o[i] = s;
+    }
+    o
+}
+
+/// e^{A} by scaling and squaring of the Taylor series (the scaled norm ≤ ½, 18 terms: the
+/// truncation error is below 2⁻¹⁹/19! of the scaled norm).
+fn expm(a: &Mat) -> Mat {
+    let mut norm: f64 = 0.0;
+    for j in 0..N {
+        let col: f64 = (0..N).map(|i| a[i][j].abs()).sum();
+        norm = norm.max(col);
+    }
+    let mut s = 0u32;
+    let mut scale = 1.0;
+    while norm * scale > 0.5 && s < 1100 {
+        scale *= 0.5;
+        s += 1;
+    }
+    let mut x = *a;
+    for row in &mut x {
+        for v in row.iter_mut() {
+            *v *= scale;
+        }
+    }
+    let mut e = [[0.0; N]; N];
+    let mut term = [[0.0; N]; N];
+    for i in 0..N {
+        e[i][i] = 1.0;
+        term[i][i] = 1.0;
+    }
+    for k in 1..=18 {
+        term = mat_mul(&term, &x);
+        let inv = 1.0 / f64::from(k);
+        for row in &mut term {
+            for v in row.iter_mut() {
+                *v *= inv;
+            }
+        }
+        for i in 0..N {
+            for j in 0..N {
+                e[i][j] += term[i][j];
+            }
+        }
+    }
+    for _ in 0..s {
+        e = mat_mul(&e, &e);
+    }
+    e
+}
+
+impl Linear {
+    /// The engine for a plant's constants.
+    #[must_use]
+    pub fn new(p: LinearPlant) -> Self {
+        let m_hand = if p.trans { p.inv_m2 } else { p.inv_m1 };
+        let rates = [
+            libm::sqrt(p.kt * (p.inv_m1 + p.inv_m2)),
+            libm::sqrt(p.kh * m_hand),
+            p.amp_w,
+            (p.b + p.dt + if p.trans { 0.0 } else { p.bh }) * p.inv_m1,
+            (p.dt + p.bh) * p.inv_m2,
+            2.0 * p.amp_z * p.amp_w,
+        ];
+        let rho = rates
+            .iter()
+            .copied()
+            .filter(|r| r.is_finite())
+            .fold(0.0, f64::max);
+        Self {
+            p,
+            rho,
+            cache: [None; 4],
+            next: 0,
+        }
+    }
+
+    /// Balancing scales of the state: Δ, Δρ, Δ, Δρ, F, Fρ, 1.
+    fn scales(&self) -> [f64; N] {
+        let r = self.rho.max(1.0);
+        let (x, f) = (self.p.pos_scale, self.p.force_scale);
+        [x, x * r, x, x * r, f, f * r, 1.0]
+    }
+
+    /// The augmented matrix M of a mode for the shaped command u.
+    fn matrix(&self, slide: f64, clamp: f64, u: f64) -> Mat {
+        let p = &self.p;
+        let mut m = [[0.0; N]; N];
+        let filter = p.amp_w > 0.0;
+        if slide != 0.0 {
+            m[0][1] = 1.0;
+            let k = p.inv_m1;
+            if filter {
+                if clamp == 0.0 {
+                    m[1][4] += k;
+                } else {
+                    m[1][6] += clamp * p.limit * k;
+                }
+            } else {
+                m[1][6] += u * k;
+            }
+            if p.trans {
+                m[1][0] -= p.kt * k;
+                m[1][2] += p.kt * k;
+                m[1][1] -= p.dt * k;
+                m[1][3] += p.dt * k;
+            } else {
+                m[1][0] -= p.kh * k;
+                m[1][1] -= p.bh * k;
+            }
+            m[1][1] -= p.b * k;
+            m[1][6] -= slide * p.c * k;
+        }
+        if p.trans {
+            let k = p.inv_m2;
+            m[2][3] = 1.0;
+            m[3][0] += p.kt * k;
+            m[3][2] -= (p.kt + p.kh) * k;
+            m[3][3] -= (p.dt + p.bh) * k;
+            if slide != 0.0 {
+                m[3][1] += p.dt * k;
+            }
+        }
+        if filter {
+            let w = p.amp_w;
+            m[4][5] = 1.0;
+            m[5][4] = -w * w;
+            m[5][5] = -2.0 * p.amp_z * w;
+            m[5][6] = w * w * u;
+        }
+        m
+    }
+
+    /// e^{Mh} of a mode, balanced (D⁻¹ M D with the state scales) for accuracy, cached.
+    fn transition(&mut self, slide: f64, clamp: f64, u: f64, h: f64) -> Mat {
+        for c in self.cache.iter().flatten() {
+            if c.slide == slide && c.clamp == clamp && c.u == u && c.h == h {
+                return c.e;
+            }
+        }
+        let m = self.matrix(slide, clamp, u);
+        let d = self.scales();
+        let mut a = [[0.0; N]; N];
+        for i in 0..N {
+            for j in 0..N {
+                a[i][j] = m[i][j] * h * d[j] / d[i];
+            }
+        }
+        let eb = expm(&a);
+        let mut e = [[0.0; N]; N];
+        for i in 0..N {
+            for j in 0..N {
+                e[i][j] = eb[i][j] * d[i] / d[j];
+            }
+        }
+        self.cache[self.next] = Some(Cached {
+            slide,
+            clamp,
+            u,
+            h,
+            e,
+        });
+        self.next = (self.next + 1) % self.cache.len();
+        e
+    }
+
+    /// Net non-friction, non-viscous force on the motor at y (the plant's `f_ext`).
+    #[must_use]
+    pub fn f_ext(&self, y: &[f64; 6], u: f64) -> f64 {
+        let p = &self.p;
+        let mut f = if p.amp_w > 0.0 {
+            y[4].clamp(-p.limit, p.limit)
+        } else {
+            u
+        };
+        if p.trans {
+            f += p.kt * (y[2] - y[0]) + p.dt * (y[3] - y[1]);
+        } else {
+            f -= p.kh * y[0] + p.bh * y[1];
+        }
+        f
+    }
+
+    /// The clamp mode of a filter output p.
+    fn clamp_of(&self, p4: f64) -> f64 {
+        if self.p.amp_w > 0.0 && p4 > self.p.limit {
+            1.0
+        } else if self.p.amp_w > 0.0 && p4 < -self.p.limit {
+            -1.0
+        } else {
+            0.0
+        }
+    }
+
+    /// The event function of a mode at z: fired when > 0 (≥ 0 for the slide's zero crossing).
+    fn event(&self, slide: f64, clamp: f64, u: f64, z: &[f64; N]) -> (f64, bool) {
+        let mut worst = f64::NEG_INFINITY;
+        let mut fired = false;
+        if slide != 0.0 {
+            let phi = -slide * z[1];
+            worst = worst.max(phi);
+            fired |= phi >= 0.0;
+        } else {
+            let mut y = [0.0; 6];
+            y.copy_from_slice(&z[..6]);
+            let f = self.f_ext(&y, u);
+            let phi = f.abs() - self.p.fs;
+            worst = worst.max(phi);
+            fired |= phi > 0.0;
+        }
+        if self.p.amp_w > 0.0 && self.p.limit.is_finite() {
+            let phi = if clamp == 0.0 {
+                z[4].abs() - self.p.limit
+            } else {
+                self.p.limit - clamp * z[4]
+            };
+            worst = worst.max(phi);
+            fired |= phi > 0.0;
+        }
+        (worst, fired)
+    }
+
+    /// Advances y over `dt_s` with the shaped command u from the mode `slide`; returns the
+    /// mode at the end. At most `max_events` mode switches, then the rest is skipped.
+    pub fn advance(
+        &mut self,
+        y: &mut [f64; 6],
+        slide: &mut f64,
+        u: f64,
+        dt_s: f64,
+        max_events: u32,
+    ) {
+        let fs = self.p.fs;
+        let subs = if self.rho > 0.0 {
+            libm::ceil(dt_s * self.rho / 0.5).clamp(1.0, 1e6)
+        } else {
+            1.0
+        };
+        let h = dt_s / subs;
+        let mut z = [y[0], y[1], y[2], y[3], y[4], y[5], 1.0];
+        if !self.p.trans {
+            z[2] = z[0];
+            z[3] = z[1];
+        }
+        let mut clamp = self.clamp_of(z[4]);
+        let mut t = 0.0;
+        let mut events = 0;
+        // The sub-step grid is fixed from the start of the interval; after an event the step
+        // to the next grid point is taken with its own length.
+        let mut k = 0.0;
+        while k < subs && events <= max_events {
+            let t_next = if k + 1.0 >= subs { dt_s } else { (k + 1.0) * h };
+            let step = t_next - t;
+            if step <= 0.0 {
+                k += 1.0;
+                continue;
+            }
+            let e = self.transition(*slide, clamp, u, step);
+            let z1 = mat_vec(&e, &z);
+            let (_, fired) = self.event(*slide, clamp, u, &z1);
+            if !fired {
+                z = z1;
+                t = t_next;
+                k += 1.0;
+                continue;
+            }
+            // Locate the event on the closed form: lo not fired, hi fired.
+            let (tau, zh) = self.locate(*slide, clamp, u, &z, step, &z1);
+            z = zh;
+            t += tau;
+            events += 1;
+            let mut yy = [0.0; 6];
+            yy.copy_from_slice(&z[..6]);
+            if *slide != 0.0 && *slide * z[1] <= 0.0 {
+                z[1] = 0.0;
+                yy[1] = 0.0;
+                *slide = super::friction::stick_rule(self.f_ext(&yy, u), fs);
+            } else if *slide == 0.0 {
+                *slide = super::friction::stick_rule(self.f_ext(&yy, u), fs);
+            }
+            clamp = self.clamp_of(z[4]);
+            if t >= t_next {
+                k += 1.0;
+            }
+        }
+        if !self.p.trans {
+            z[2] = z[0];
+            z[3] = z[1];
+        }
+        if z[..6].iter().all(|v| v.is_finite()) {
+            y.copy_from_slice(&z[..6]);
+        }
+    }
+
+    /// The first instant in (0, step] where the mode's event fires from z0, and the state
+    /// there (on the fired side): Illinois regula falsi on the closed form, bisection when the
+    /// secant is of no use.
+    fn locate(
+        &mut self,
+        slide: f64,
+        clamp: f64,
+        u: f64,
+        z0: &[f64; N],
+        step: f64,
+        z_hi: &[f64; N],
+    ) -> (f64, [f64; N]) {
+        let m = self.matrix(slide, clamp, u);
+        let d = self.scales();
+        let at = |tau: f64| {
+            let mut a = [[0.0; N]; N];
+            for i in 0..N {
+                for j in 0..N {
+                    a[i][j] = m[i][j] * tau * d[j] / d[i];
+                }
+            }
+            let eb = expm(&a);
+            let mut e = [[0.0; N]; N];
+            for i in 0..N {
+                for j in 0..N {
+                    e[i][j] = eb[i][j] * d[i] / d[j];
+                }
+            }
+            mat_vec(&e, z0)
+        };
+        let (mut lo, mut hi) = (0.0, step);
+        let (mut f_lo, _) = self.event(slide, clamp, u, z0);
+        let (mut f_hi, _) = self.event(slide, clamp, u, z_hi);
+        let mut z_best = *z_hi;
+        let mut side = 0i8;
+        for _ in 0..100 {
+            if hi - lo <= 4.0 * f64::EPSILON * hi {
+                break;
+            }
+            let secant = f_lo < 0.0 && f_hi > f_lo && f_hi.is_finite();
+            let mut tau = if secant {
+                lo + (hi - lo) * (-f_lo) / (f_hi - f_lo)
+            } else {
+                0.5 * (lo + hi)
+            };
+            if !(tau > lo && tau < hi) {
+                tau = 0.5 * (lo + hi);
+            }
+            let z = at(tau);
+            let (f, fired) = self.event(slide, clamp, u, &z);
+            if fired {
+                hi = tau;
+                f_hi = f;
+                z_best = z;
+                if side == 1 {
+                    f_lo *= 0.5;
+                }
+                side = 1;
+            } else {
+                lo = tau;
+                f_lo = f;
+                if side == -1 {
+                    f_hi *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        (hi, z_best)
+    }
+}
