@@ -90,17 +90,20 @@ fn effect_sets() -> Vec<(&'static str, PlantModel)> {
             PlantModel { cogging, ..b },
         ),
         (
-            "+ transmission 5e4 N/m, link 0.05 kg (DP5)",
+            "+ transmission 5e4 N/m, link 0.05 kg (exact, linear)",
             PlantModel { transmission, ..b },
         ),
         (
-            "+ amplifier filter 1 kHz with limit (DP5)",
+            "+ amplifier filter 1 kHz with limit (exact, linear)",
             PlantModel {
                 amplifier: filter,
                 ..b
             },
         ),
-        ("+ hand of Table II (DP5)", PlantModel { hand, ..b }),
+        (
+            "+ hand of Table II (exact, linear)",
+            PlantModel { hand, ..b },
+        ),
         (
             "all of the above (DP5)",
             PlantModel {
@@ -122,8 +125,9 @@ pub fn rich_rows(md: &mut String, min_s: f64) {
         "## Cost of each plant effect (issue 10, `stiffwall_sim::rich::RichPlant`)\n\n\
          Freedom 6 of Table II in SI (m 0.25 kg, b 0.01 N s/m, c 0.06 N, delta 20 um) behind the \
          quantised wall K = 2400 N/m, T = 1 ms, {HORIZON} periods from an impact at 0.1 m/s \
-         (5 ticks/period). Closed-form rows use `friction::advance_switch`; the others \
-         Dormand-Prince 5(4) at the plant's default tolerance (rtol 1e-9, atol 1e-6 in ticks, \
+         (5 ticks/period). Closed-form rows use `friction::advance_switch`; \"exact, linear\" rows \
+         the matrix exponential of `rich::linear` (events located on the closed form); the \
+         others Dormand-Prince 5(4) at the plant's default tolerance (rtol 1e-9, atol 1e-6 in ticks, \
          ticks/ms, max(F_s, 1 mN)) with event location.\n\n\
          | plant | ns/period | steps/period | events/period |\n|---|---:|---:|---:|"
     )
@@ -212,9 +216,11 @@ fn accuracy_rows(md: &mut String, min_s: f64) {
         ..PlantModel::rigid(m1, 0.0, 0.0, DELTA).expect("valid")
     };
     let w = (k * (1.0 / m1 + 1.0 / m2)).sqrt();
-    for (name, m) in methods() {
+    let exact_linear = ("exact (matrix exponential)".to_string(), None);
+    let odes = methods().into_iter().map(|(n, m)| (n, Some(m)));
+    for (name, m) in std::iter::once(exact_linear).chain(odes) {
         let mut err: f64 = 0.0;
-        let mut p = RichPlant::with_method(&trans, Some(m)).expect("valid");
+        let mut p = RichPlant::with_method(&trans, m).expect("valid");
         for h in 1..=HORIZON {
             p.advance(f, T);
             let t = h as f64 * T;
@@ -223,7 +229,7 @@ fn accuracy_rows(md: &mut String, min_s: f64) {
             err = err.max((p.position_m() - x1).abs() / DELTA);
         }
         let ns = time_per_period(HORIZON, min_s, || {
-            let mut p = RichPlant::with_method(&trans, Some(m)).expect("valid");
+            let mut p = RichPlant::with_method(&trans, m).expect("valid");
             for _ in 0..HORIZON {
                 p.advance(f, T);
             }

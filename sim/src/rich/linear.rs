@@ -8,8 +8,8 @@
 //! **Why it is exact.** In each mode — motor sliding forward, backward or stuck (`slide` = ±1,
 //! 0), amplifier output inside its range or clamped at ±limit (`clamp` = 0, ±1) — and for a
 //! held command u, the field of [`crate::rich::plant`] is affine, ẏ = A y + g. With the
-//! augmented state z = [y, 1] it is ż = M z, so z(t) = e^{Mt} z(0): the matrix exponential of
-//! the 7×7 M is the closed-form solution (computed by scaling and squaring of its Taylor
+//! augmented state z = [y, 1, u] it is ż = M z, so z(t) = e^{Mt} z(0): the matrix exponential of
+//! the augmented M is the closed-form solution (computed by scaling and squaring of its Taylor
 //! series on a balanced M, accurate to a few ulps of the state). Events end a mode: the motor
 //! velocity reaching zero while sliding, |f_ext| exceeding the breakaway force F_s while stuck,
 //! the filter output crossing ±limit (either way). They are linear functionals of z, so each is
@@ -26,9 +26,10 @@
 // Dense 7×7 matrix arithmetic reads as its index formulas; iterator chains would hide them.
 #![allow(clippy::needless_range_loop)]
 
-/// Augmented dimension: the six states and the constant 1.
-const N: usize = 7;
-/// A 7×7 matrix, row-major.
+/// Augmented dimension: the six states, the constant 1 and the held command u (constant over
+/// an interval), so that a mode's transition matrix does not depend on u and is cached.
+const N: usize = 8;
+/// An 8×8 matrix, row-major.
 type Mat = [[f64; N]; N];
 
 /// The plant's constants the engine needs (from the model).
@@ -71,7 +72,6 @@ pub struct LinearPlant {
 struct Cached {
     slide: f64,
     clamp: f64,
-    u: f64,
     h: f64,
     e: Mat,
 }
@@ -185,15 +185,15 @@ impl Linear {
         }
     }
 
-    /// Balancing scales of the state: Δ, Δρ, Δ, Δρ, F, Fρ, 1.
+    /// Balancing scales of the state: Δ, Δρ, Δ, Δρ, F, Fρ, 1, F.
     fn scales(&self) -> [f64; N] {
         let r = self.rho.max(1.0);
         let (x, f) = (self.p.pos_scale, self.p.force_scale);
-        [x, x * r, x, x * r, f, f * r, 1.0]
+        [x, x * r, x, x * r, f, f * r, 1.0, f]
     }
 
-    /// The augmented matrix M of a mode for the shaped command u.
-    fn matrix(&self, slide: f64, clamp: f64, u: f64) -> Mat {
+    /// The augmented matrix M of a mode (column 6: constant terms; column 7: the command's).
+    fn matrix(&self, slide: f64, clamp: f64) -> Mat {
         let p = &self.p;
         let mut m = [[0.0; N]; N];
         let filter = p.amp_w > 0.0;
@@ -207,7 +207,7 @@ impl Linear {
                     m[1][6] += clamp * p.limit * k;
                 }
             } else {
-                m[1][6] += u * k;
+                m[1][7] += k;
             }
             if p.trans {
                 m[1][0] -= p.kt * k;
@@ -236,19 +236,19 @@ impl Linear {
             m[4][5] = 1.0;
             m[5][4] = -w * w;
             m[5][5] = -2.0 * p.amp_z * w;
-            m[5][6] = w * w * u;
+            m[5][7] = w * w;
         }
         m
     }
 
     /// e^{Mh} of a mode, balanced (D⁻¹ M D with the state scales) for accuracy, cached.
-    fn transition(&mut self, slide: f64, clamp: f64, u: f64, h: f64) -> Mat {
+    fn transition(&mut self, slide: f64, clamp: f64, h: f64) -> Mat {
         for c in self.cache.iter().flatten() {
-            if c.slide == slide && c.clamp == clamp && c.u == u && c.h == h {
+            if c.slide == slide && c.clamp == clamp && c.h == h {
                 return c.e;
             }
         }
-        let m = self.matrix(slide, clamp, u);
+        let m = self.matrix(slide, clamp);
         let d = self.scales();
         let mut a = [[0.0; N]; N];
         for i in 0..N {
@@ -263,13 +263,7 @@ impl Linear {
                 e[i][j] = eb[i][j] * d[i] / d[j];
             }
         }
-        self.cache[self.next] = Some(Cached {
-            slide,
-            clamp,
-            u,
-            h,
-            e,
-        });
+        self.cache[self.next] = Some(Cached { slide, clamp, h, e });
         self.next = (self.next + 1) % self.cache.len();
         e
     }
@@ -347,7 +341,7 @@ impl Linear {
             1.0
         };
         let h = dt_s / subs;
-        let mut z = [y[0], y[1], y[2], y[3], y[4], y[5], 1.0];
+        let mut z = [y[0], y[1], y[2], y[3], y[4], y[5], 1.0, u];
         if !self.p.trans {
             z[2] = z[0];
             z[3] = z[1];
@@ -365,7 +359,7 @@ impl Linear {
                 k += 1.0;
                 continue;
             }
-            let e = self.transition(*slide, clamp, u, step);
+            let e = self.transition(*slide, clamp, step);
             let z1 = mat_vec(&e, &z);
             let (_, fired) = self.event(*slide, clamp, u, &z1);
             if !fired {
@@ -414,7 +408,7 @@ impl Linear {
         step: f64,
         z_hi: &[f64; N],
     ) -> (f64, [f64; N]) {
-        let m = self.matrix(slide, clamp, u);
+        let m = self.matrix(slide, clamp);
         let d = self.scales();
         let at = |tau: f64| {
             let mut a = [[0.0; N]; N];
