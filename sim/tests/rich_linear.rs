@@ -164,3 +164,42 @@ fn the_two_mass_resonance_is_exact_without_friction() {
     // better.
     assert!(worst < 1e-8, "{worst:e} counts");
 }
+
+#[test]
+fn coulomb_oscillator_stops_where_the_closed_form_says() {
+    // A mass on the hand's spring (no viscous friction, no transmission), released from rest
+    // at x₀: each half-cycle is a cosine about ±c/k and ends at rest 2c/k closer to the
+    // centre; the mass sticks once |k x| ≤ c. Every stop is a located event, so the final
+    // position checks the event locator against the analytic sequence.
+    let (m_kg, c, k) = (0.05, 0.01, 400.0);
+    let mut model = PlantModel::rigid(m_kg, 0.0, c, DELTA).unwrap();
+    model.hand = Some(HandSi {
+        mass_kg: 0.0,
+        damping_ns_per_m: 0.0,
+        stiffness_n_per_m: k,
+    });
+    let x0 = 1.0e-3;
+    let mut a: f64 = x0;
+    let mut half_cycles = 0;
+    while k * a.abs() > c {
+        a = -(a - a.signum() * 2.0 * c / k);
+        half_cycles += 1;
+    }
+    assert!(half_cycles >= 10, "{half_cycles}");
+    let mut p = RichPlant::new(&model).unwrap();
+    assert!(p.is_exact());
+    p.set_state(x0, 0.0);
+    let w = (k / m_kg).sqrt();
+    let t_end = (f64::from(half_cycles) + 2.0) * std::f64::consts::PI / w;
+    let periods = (t_end / 1e-3).ceil() as u32;
+    for _ in 0..periods {
+        p.advance(0.0, 1e-3);
+    }
+    assert!(p.is_stuck(), "at rest after {half_cycles} half-cycles");
+    let err = (p.position_m() - a).abs() / DELTA;
+    assert!(
+        err < 1e-9,
+        "stops at {} m, closed form {a} m ({err:e} counts)",
+        p.position_m()
+    );
+}
