@@ -259,3 +259,24 @@ fn sampled_loop_matches_the_reference_integrator_with_hand_and_filter() {
     }
     assert!(moved > 1.0);
 }
+
+#[test]
+fn a_plant_file_without_controller_boots_a_passive_wall_at_1_khz() {
+    // Only [device] and [effects]: T = 1 ms, no extra delay, K with σ = c/(KΔ) = 4.
+    let start = PHYS.find("[controller]").expect("PHYS has a controller");
+    let end = PHYS[start..].find("\n[effects]").expect("effects follow") + start;
+    let text = format!("{}{}", &PHYS[..start], &PHYS[end..])
+        .split("[initial]")
+        .next()
+        .unwrap()
+        .to_string();
+    assert!(!text.contains("[controller]"));
+    let (m, c) = PlantModel::from_scene_toml(&text).unwrap();
+    assert_eq!(c.period_s, 1e-3);
+    assert_eq!(c.extra_delay_s, 0.0);
+    let sigma = m.coulomb_n / (c.stiffness_n_per_m * m.resolution_m);
+    assert!((sigma - 4.0).abs() < 1e-9, "σ = {sigma}");
+    // A file that states its controller keeps it.
+    let (_, c2) = PlantModel::from_scene_toml(PHYS).unwrap();
+    assert_ne!(c2.stiffness_n_per_m, c.stiffness_n_per_m);
+}

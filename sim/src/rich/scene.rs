@@ -246,11 +246,43 @@ pub fn attach(
     }))
 }
 
+/// Period of a plant file without `[controller]`, s (the virtual device's 1 kHz servo).
+pub const DEFAULT_PERIOD_S: f64 = 1e-3;
+
+/// The boot stiffness of a plant file without `[controller]`: σ = c/(KΔ) = 4, a wall its
+/// friction makes passive (region A, eq. (12)), N/m (N·m/rad); `None` when the device table
+/// does not give c and Δ (the scene's own errors then name what is missing).
+fn default_stiffness(table: &toml::Table) -> Option<f64> {
+    let dev = table.get("device")?.as_table()?;
+    let num = |k: &str| {
+        dev.get(k)
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+    };
+    let c = num("coulomb_n")?;
+    let delta = match (num("resolution_m"), num("counts_per_rev")) {
+        (Some(d), None) => d,
+        (None, Some(n)) if n >= 1.0 => 2.0 * core::f64::consts::PI / n,
+        _ => return None,
+    };
+    let k = c.max(1e-6) / (4.0 * delta);
+    (k.is_finite() && k > 0.0).then_some(k)
+}
+
 /// Parses a plant file: a physical scene whose `[initial]` and `[run]` may be omitted (then
-/// x = 0, v = 0 and Dormand–Prince are assumed). Errors name the key and the allowed range.
+/// x = 0, v = 0 and Dormand–Prince are assumed), and whose `[controller]` may be omitted (then
+/// T = 1 ms, no extra delay, and a boot stiffness with σ = c/(KΔ) = 4: a passive wall, which
+/// `hostctl tune` replaces). Errors name the key and the allowed range.
 pub fn from_scene_toml(text: &str) -> Result<(PlantModel, Controller), SceneError> {
     let table: toml::Table = toml::from_str(text)?;
     let mut full = String::from(text);
+    if !table.contains_key("controller") {
+        if let Some(k) = default_stiffness(&table) {
+            full.push_str(&format!(
+                "\n[controller]\nstiffness_n_per_m = {k:e}\nperiod_s = {DEFAULT_PERIOD_S:e}\n\
+                 extra_delay_s = 0.0\n"
+            ));
+        }
+    }
     if !table.contains_key("initial") {
         full.push_str("\n[initial]\nposition_m = 0.0\nvelocity_m_per_s = 0.0\n");
     }
