@@ -160,6 +160,37 @@ fn expm(a: &Mat) -> Mat {
     e
 }
 
+/// Terms of the Taylor series of the closed form over a sub-step:
+/// z(s·len) = Σ_k s^k w_k, w_k = (M·len)^k z₀ / k!. A sub-step is at most ½/ρ, so the terms
+/// fall at least as 2^{-k}/k!: [`TAYLOR_TERMS`] of them are exact to rounding.
+fn taylor_terms(m: &Mat, z0: &[f64; N], len: f64) -> [[f64; N]; TAYLOR_TERMS] {
+    let mut w = [[0.0; N]; TAYLOR_TERMS];
+    w[0] = *z0;
+    for k in 1..TAYLOR_TERMS {
+        let mut next = mat_vec(m, &w[k - 1]);
+        let f = len / k as f64;
+        for v in &mut next {
+            *v *= f;
+        }
+        w[k] = next;
+    }
+    w
+}
+
+/// The series of [`taylor_terms`] at s ∈ [0, 1] (Horner).
+fn taylor_at(w: &[[f64; N]; TAYLOR_TERMS], s: f64) -> [f64; N] {
+    let mut z = w[TAYLOR_TERMS - 1];
+    for k in (0..TAYLOR_TERMS - 1).rev() {
+        for i in 0..N {
+            z[i] = z[i] * s + w[k][i];
+        }
+    }
+    z
+}
+
+/// Terms of the in-sub-step Taylor series.
+const TAYLOR_TERMS: usize = 26;
+
 impl Linear {
     /// The engine for a plant's constants.
     #[must_use]
@@ -353,22 +384,34 @@ impl Linear {
         // The sub-step grid is fixed from the start of the interval; after an event the step
         // to the next grid point is taken with its own length.
         let mut k = 0.0;
+        // On the grid (no event since the last grid point) a sub-step is exactly h, so its
+        // cached transition matrix applies; after an event the rest of the sub-step is taken
+        // with the Taylor series of the closed form (shorter than ½/ρ, so it converges).
+        let mut aligned = true;
         while k < subs && events <= max_events {
             let t_next = if k + 1.0 >= subs { dt_s } else { (k + 1.0) * h };
-            let step = t_next - t;
+            let step = if aligned { h } else { t_next - t };
             if step <= 0.0 {
                 k += 1.0;
+                aligned = true;
                 continue;
             }
-            let e = self.transition(*slide, clamp, step);
-            let z1 = mat_vec(&e, &z);
+            let z1 = if aligned {
+                let e = self.transition(*slide, clamp, step);
+                mat_vec(&e, &z)
+            } else {
+                let w = taylor_terms(&self.matrix(*slide, clamp), &z, step);
+                taylor_at(&w, 1.0)
+            };
             let (_, fired) = self.event(*slide, clamp, u, &z1);
             if !fired {
                 z = z1;
                 t = t_next;
                 k += 1.0;
+                aligned = true;
                 continue;
             }
+            aligned = false;
             // Locate the event on the closed form: lo not fired, hi fired.
             let (tau, zh) = self.locate(*slide, clamp, u, &z, step, &z1);
             z = zh;
@@ -386,6 +429,7 @@ impl Linear {
             clamp = self.clamp_of(z[4]);
             if t >= t_next {
                 k += 1.0;
+                aligned = true;
             }
         }
         if !self.p.trans {
@@ -409,33 +453,10 @@ impl Linear {
         step: f64,
         z_hi: &[f64; N],
     ) -> (f64, [f64; N]) {
-        // The closed form inside the sub-step as its Taylor series in s = τ/step:
-        // z(τ) = Σ_k s^k w_k, w_k = (M·step)^k z₀ / k!. The sub-step is at most ½/ρ, so the
-        // terms fall at least as 2^{-k}/k!; 26 terms are exact to rounding, and each evaluation
-        // is a polynomial (no matrix exponential per iteration).
-        const TERMS: usize = 26;
-        let m = self.matrix(slide, clamp);
-        let mut w = [[0.0; N]; TERMS];
-        w[0] = *z0;
-        for k in 1..TERMS {
-            let prev = w[k - 1];
-            let mut next = mat_vec(&m, &prev);
-            let f = step / k as f64;
-            for v in &mut next {
-                *v *= f;
-            }
-            w[k] = next;
-        }
-        let at = |tau: f64| {
-            let s = tau / step;
-            let mut z = w[TERMS - 1];
-            for k in (0..TERMS - 1).rev() {
-                for i in 0..N {
-                    z[i] = z[i] * s + w[k][i];
-                }
-            }
-            z
-        };
+        // The closed form inside the sub-step as its Taylor series (no matrix exponential per
+        // iteration).
+        let w = taylor_terms(&self.matrix(slide, clamp), z0, step);
+        let at = |tau: f64| taylor_at(&w, tau / step);
         let (mut lo, mut hi) = (0.0, step);
         let (mut f_lo, _) = self.event(slide, clamp, u, z0);
         let (mut f_hi, _) = self.event(slide, clamp, u, z_hi);
