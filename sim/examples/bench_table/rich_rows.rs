@@ -128,7 +128,7 @@ pub fn rich_rows(md: &mut String, min_s: f64) {
          (5 ticks/period). Closed-form rows use `friction::advance_switch`; \"exact, linear\" rows \
          the matrix exponential of `rich::linear` (events located on the closed form); the \
          others Dormand-Prince 5(4) at the plant's default tolerance (rtol 1e-9, atol 1e-6 in ticks, \
-         ticks/ms, max(F_s, 1 mN)) with event location.\n\n\
+         ticks/ms, max(F_s, 1 mN)) with event location; steps and events are the integrator's (the exact engines count none).\n\n\
          | plant | ns/period | steps/period | events/period |\n|---|---:|---:|---:|"
     )
     .unwrap();
