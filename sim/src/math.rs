@@ -105,6 +105,52 @@ fn pow2(n: usize) -> f64 {
 }
 
 /// ⌊x⌋ without a libm call: `stiffwall_core`'s, shared with the storage function (35).
+/// Locates an event inside [lo, hi] by the Illinois variant of regula falsi: `lo` is before
+/// the event, `hi` past it (with `s_hi` the state there). `eval(t)` returns the event function,
+/// whether t is past the event, and the state at t. Secant points that fall outside (lo, hi)
+/// or are not finite are replaced by the midpoint. Stops when the bracket is at most `width`
+/// (or after 100 evaluations); returns the past-the-event end and its state. Shared by the
+/// reference integrators and the exact linear plant engine (`rich::linear`).
+pub fn illinois<S: Copy>(
+    mut lo: f64,
+    mut hi: f64,
+    mut f_lo: f64,
+    mut f_hi: f64,
+    s_hi: S,
+    width: f64,
+    mut eval: impl FnMut(f64) -> (f64, bool, S),
+) -> (f64, S) {
+    let mut s_best = s_hi;
+    let mut side = 0;
+    for _ in 0..100 {
+        if hi - lo <= width {
+            break;
+        }
+        let mut c = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        if !(c > lo && c < hi) {
+            c = 0.5 * (lo + hi);
+        }
+        let (fc, past, sc) = eval(c);
+        if past {
+            hi = c;
+            f_hi = fc;
+            s_best = sc;
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        } else {
+            lo = c;
+            f_lo = fc;
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        }
+    }
+    (hi, s_best)
+}
+
 pub use stiffwall_core::energy::floor_fast;
 
 /// Encoder count ⌊x⌋ as an integer, saturating at the i64 range (NaN → 0).

@@ -430,42 +430,18 @@ impl RefSim {
             Mode::Moving(_) => g > 0.0,
             Mode::Stuck => g <= 0.0,
         } && sim.event(y, mode).is_finite();
-        let (mut a, mut fa) = (0.0, self.event(y, mode));
+        let (a, fa) = (0.0, self.event(y, mode));
         let (y_h, _) = self.step(y, h, mode, false);
-        let (mut b, mut fb) = (h, self.event(&y_h, mode));
-        let mut yb = y_h;
+        let (b, fb) = (h, self.event(&y_h, mode));
+        let yb = y_h;
         if !sign_ok(self, fa) {
             return (0.0, *y);
         }
-        let mut side = 0;
-        for _ in 0..100 {
-            if (b - a) <= 1e-15 * (1.0 + h) {
-                break;
-            }
-            let mut c = (a * fb - b * fa) / (fb - fa);
-            if !(c > a && c < b) {
-                c = 0.5 * (a + b);
-            }
+        crate::math::illinois(a, b, fa, fb, yb, 1e-15 * (1.0 + h), |c| {
             let (yc, _) = self.step(y, c, mode, false);
             let fc = self.event(&yc, mode);
-            if sign_ok(self, fc) {
-                a = c;
-                fa = fc;
-                if side == -1 {
-                    fb *= 0.5;
-                }
-                side = -1;
-            } else {
-                b = c;
-                fb = fc;
-                yb = yc;
-                if side == 1 {
-                    fa *= 0.5;
-                }
-                side = 1;
-            }
-        }
-        (b, yb)
+            (fc, !sign_ok(self, fc), yc)
+        })
     }
 
     /// Integrates one segment of length `len` with constant held input.

@@ -457,43 +457,21 @@ impl Linear {
         // iteration).
         let w = taylor_terms(&self.matrix(slide, clamp), z0, step);
         let at = |tau: f64| taylor_at(&w, tau / step);
-        let (mut lo, mut hi) = (0.0, step);
-        let (mut f_lo, _) = self.event(slide, clamp, u, z0);
-        let (mut f_hi, _) = self.event(slide, clamp, u, z_hi);
-        let mut z_best = *z_hi;
-        let mut side = 0i8;
-        for _ in 0..100 {
-            if hi - lo <= 4.0 * f64::EPSILON * hi {
-                break;
-            }
-            let secant = f_lo < 0.0 && f_hi > f_lo && f_hi.is_finite();
-            let mut tau = if secant {
-                lo + (hi - lo) * (-f_lo) / (f_hi - f_lo)
-            } else {
-                0.5 * (lo + hi)
-            };
-            if !(tau > lo && tau < hi) {
-                tau = 0.5 * (lo + hi);
-            }
-            let z = at(tau);
-            let (f, fired) = self.event(slide, clamp, u, &z);
-            if fired {
-                hi = tau;
-                f_hi = f;
-                z_best = z;
-                if side == 1 {
-                    f_lo *= 0.5;
-                }
-                side = 1;
-            } else {
-                lo = tau;
-                f_lo = f;
-                if side == -1 {
-                    f_hi *= 0.5;
-                }
-                side = -1;
-            }
-        }
-        (hi, z_best)
+        let (f_lo, _) = self.event(slide, clamp, u, z0);
+        let (f_hi, _) = self.event(slide, clamp, u, z_hi);
+        let this = &*self;
+        crate::math::illinois(
+            0.0,
+            step,
+            f_lo,
+            f_hi,
+            *z_hi,
+            4.0 * f64::EPSILON * step,
+            |tau| {
+                let z = at(tau);
+                let (f, fired) = this.event(slide, clamp, u, &z);
+                (f, fired, z)
+            },
+        )
     }
 }
