@@ -122,6 +122,14 @@ impl Stepper {
         }
     }
 
+    /// Forgets the step-size memory: the next [`Stepper::run`] starts from a step of its whole
+    /// interval, so its result depends only on its arguments, not on earlier calls.
+    pub fn reset_step(&mut self) {
+        if matches!(self.method, OdeMethod::Dopri { .. }) {
+            self.h = 0.0;
+        }
+    }
+
     /// The method.
     #[must_use]
     pub fn method(&self) -> OdeMethod {

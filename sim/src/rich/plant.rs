@@ -340,6 +340,10 @@ impl RichPlant {
             }
             Engine::Ode(stepper) => {
                 let d = self.d;
+                // Each interval is integrated afresh: its result is a function of the state
+                // and the command alone, not of how many intervals came before (the virtual
+                // device's idle time between commands varies with the host in `--fast`).
+                stepper.reset_step();
                 // The rule at zero velocity, with the new command.
                 if self.slide == 0.0 || self.y[1] == 0.0 {
                     self.y[1] = 0.0;
