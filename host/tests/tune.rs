@@ -213,7 +213,7 @@ fn connect_plant_file(text: &str, fast: bool) -> Client {
 // (1.014 vs 1.099): the link keeps ringing while the encoder is still, so "at rest" between
 // tests is not a frozen state there.
 #[test]
-fn fast_and_real_time_tunes_set_the_same_k_on_three_plants() {
+fn fast_and_real_time_tunes_set_the_same_k_on_four_plants() {
     let plants: Vec<(&str, Box<Connector>)> = vec![
         (
             "maxon-re35",
@@ -224,6 +224,16 @@ fn fast_and_real_time_tunes_set_the_same_k_on_three_plants() {
             Box::new(|f| connect_paced(preset("phantom-1.0"), f)),
         ),
         ("delta", Box::new(|f| connect_paced(preset("delta"), f))),
+        // Beyond the model: breakaway 1.5 × Coulomb with Stribeck decay (the DP5 engine,
+        // which integrates each period afresh, so idle ticks leave no trace).
+        (
+            "phantom-stiction",
+            Box::new(|f| {
+                let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("../sim/plants/phantom-stiction.toml");
+                connect_plant_file(&std::fs::read_to_string(path).unwrap(), f)
+            }),
+        ),
     ];
     for (name, connect_with) in &plants {
         let fast =
