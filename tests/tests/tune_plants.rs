@@ -16,14 +16,16 @@ use stiffwall_tests::family::{plant_files, plants_dir, PlantCase};
 use stiffwall_tests::kstar;
 
 /// The plants of the default run (quick K*): stiction, amplifier filter, compliant
-/// transmission, cogging, and a hand (the spring-like force tune's identification fits beside
-/// m, b, c). The every-plant test below runs all of `sim/plants/`.
-pub const DEFAULT_PLANTS: [&str; 5] = [
+/// transmission, cogging, a fine encoder, and a hand (the spring-like force tune's
+/// identification fits beside m, b, c). The every-plant test below runs all of `sim/plants/`.
+pub const DEFAULT_PLANTS: [&str; 6] = [
     "phantom-stiction",
     "maxon-re35-amp-3khz",
     "phantom-cable-150hz",
     "rotary-ironcore-cogging",
     "phantom-light-grip",
+    // A fine encoder: the first identification chirp trips the encoder-jump fault.
+    "fine-encoder-stage",
 ];
 
 /// Lower bound of K set / K*.
@@ -84,7 +86,7 @@ fn check_all(cases: &[PlantCase]) {
 }
 
 #[test]
-fn tune_is_safe_and_near_optimal_on_four_plants() {
+fn tune_is_safe_and_near_optimal_on_the_default_plants() {
     let cases: Vec<PlantCase> = DEFAULT_PLANTS
         .iter()
         .map(|n| PlantCase::named(n).unwrap_or_else(|e| panic!("{e}")))

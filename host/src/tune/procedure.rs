@@ -210,7 +210,18 @@ fn excite_and_identify(
         resolution: res,
         ..ident::Settings::default()
     };
-    let id = ident::identify(&samples, &settings)?;
+    let id = match ident::identify(&samples, &settings) {
+        Ok(id) => id,
+        Err(e) => {
+            // Say why when the supervisor stopped the excitation (e.g. an encoder jump: a
+            // fine encoder moves many counts per tick); `identify` then tries gentler levels.
+            let latched = c.faults().map_or(0, |f| f.latched);
+            if latched != 0 {
+                return Err(anyhow::Error::new(ExcitationTripped { latched }).context(e));
+            }
+            return Err(e);
+        }
+    };
     if !(id.mass > 0.0 && id.coulomb >= 0.0 && id.equations >= 20) {
         bail!(
             "implausible fit: m = {:.3e}, c = {:.3e} from {} windows",
@@ -225,7 +236,9 @@ fn excite_and_identify(
 
 /// Step 1: identification with the wall off. A low-frequency chirp (0.5 Hz up to 4 Hz, or
 /// rate/250) keeps the velocity fit accurate; the amplitude of half-length probes grows from
-/// 5 % of the force limit until a fit succeeds, then the full chirp runs at about 5·c (when the
+/// 5 % of the force limit until a fit succeeds (when the supervisor stops the 5 % probe — an
+/// encoder jump on a fine encoder, say — gentler levels down to 0.08 % are tried first), then
+/// the full chirp runs at about 5·c (when the
 /// limit allows, else at the probe's level) so that the device slides most of the time and
 /// Coulomb friction acts as c·sgn(v).
 /// Returns the fit, the amplitude used (codes) and where the device ended, in raw counts from
@@ -242,8 +255,12 @@ pub fn identify(
     let fpc = f64::from(c.info.force_per_code);
     let max_code = c.info.max_code.max(1);
     let limit_code = ((f64::from(cfg.force_limit) / fpc) as i32).clamp(1, max_code);
-    let mut last_err = None;
-    for frac in [0.05, 0.1, 0.2, 0.4] {
+    let mut last_err: Option<anyhow::Error> = None;
+    let mut levels = vec![0.05, 0.1, 0.2, 0.4];
+    let mut i = 0;
+    while i < levels.len() {
+        let frac = levels[i];
+        i += 1;
         check_interrupt()?;
         let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
         // A probe of half the length finds the level; the full chirp then gives the fit.
@@ -260,11 +277,49 @@ pub fn identify(
                 }
                 return Ok((probe, amplitude, end));
             }
-            Err(e) => last_err = Some(e),
+            Err(e) => {
+                // The supervisor stopped the first level: the device may be driven too fast
+                // for its limits (a fine encoder), so gentler levels (halving, down to
+                // 0.05 / 64) come first, then the stronger ones as before.
+                if frac == 0.05 && e.chain().any(|c| c.is::<ExcitationTripped>()) {
+                    levels = (1..=6).map(|j| 0.05 / f64::from(1u32 << j)).collect();
+                    levels.extend([0.1, 0.2, 0.4]);
+                    i = 0;
+                }
+                last_err = Some(e);
+            }
         }
     }
-    Err(last_err.unwrap_or_else(|| anyhow::anyhow!("no excitation")))
-        .context("identification failed at every excitation level")
+    let e = last_err.unwrap_or_else(|| anyhow::anyhow!("no excitation"));
+    let tripped = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<ExcitationTripped>())
+        .map(|t| t.latched);
+    if let Some(latched) = tripped {
+        let jump = latched & stiffwall_proto::fault::ENCODER_JUMP != 0;
+        return Err(e).context(format!(
+            "identification failed at every excitation level from 0.08 % to 40 % of the \
+             force limit: the supervisor latched faults {:#x}{} during the chirp",
+            latched,
+            if jump {
+                format!(
+                    " (encoder jump: more than {} counts in one tick; a fine encoder needs a \
+                     higher limit, `hostctl config set --encoder-jump N`)",
+                    cfg.encoder_jump_counts
+                )
+            } else {
+                String::new()
+            }
+        ));
+    }
+    Err(e).context("identification failed at every excitation level")
+}
+
+/// The supervisor latched faults (`latched`, the fault bits) during an identification chirp.
+#[derive(Debug, thiserror::Error)]
+#[error("the supervisor latched faults {latched:#x} during the excitation")]
+struct ExcitationTripped {
+    latched: u32,
 }
 
 /// Step 2: predictions for the identified device.
