@@ -1,6 +1,7 @@
 //! `hostctl tune` and `hostctl experiment`: identification, release-test verdicts, the stiffness
 //! search, and the procedure that runs them on a device.
 
+pub mod excite;
 pub mod ident;
 pub mod model_check;
 pub mod procedure;

@@ -31,7 +31,7 @@
 //! wall off and end at points computed from their counts), not on when the host's messages
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
-use super::ident::{self, Identified};
+use super::excite::{breakaway, device_scale};
 use super::model_check::{self, Evidence};
 use super::release::Verdict;
 use super::search::{largest_settling_k, Found, Search};
@@ -39,7 +39,7 @@ use super::verify::{min_settle_run, rest_position, run_test, test_set, Test, Tes
 use crate::device::client::Client;
 use anyhow::{bail, Context, Result};
 use stiffwall_core::params::PhysicalParams;
-use stiffwall_proto::{flags, ExciteProfile, HostMsg, ServoConfig, TABLE_CHUNK};
+use stiffwall_proto::ServoConfig;
 
 /// Default maximum velocity, in encoder ticks per servo period (ξ̇ of Table I; independent of K).
 pub const DEFAULT_XIDOT: f64 = 5.0;
@@ -53,6 +53,8 @@ pub const MISMATCH_MARGIN: f64 = 0.85;
 /// Duration of each breakaway ramp, s.
 pub const RAMP_SECONDS: f64 = 0.3;
 
+/// Step 1, identification with the wall off (in [`super::excite`]).
+pub use super::excite::identify;
 /// Set by the Ctrl-C handler; checked between experiments (the one flag of every session).
 pub use crate::session::INTERRUPTED;
 
@@ -150,177 +152,11 @@ pub struct IdentifiedReport {
     pub spring: Option<[f64; 2]>,
 }
 
-fn check_interrupt() -> Result<()> {
+pub(super) fn check_interrupt() -> Result<()> {
     if crate::session::interrupted() {
         bail!("interrupted");
     }
     Ok(())
-}
-
-/// Raw-count resolution and servo period of the connected device.
-fn device_scale(c: &Client) -> Result<(f64, f64)> {
-    let res = f64::from(c.info.resolution);
-    let rate = f64::from(c.info.servo_rate_hz);
-    if !(res.is_finite() && res > 0.0 && rate > 0.0) {
-        bail!("device reports resolution {res} and rate {rate} Hz; cannot tune");
-    }
-    Ok((res, 1.0 / rate))
-}
-
-/// One chirp excitation of `amplitude` codes and its identification.
-fn excite_and_identify(
-    c: &mut Client,
-    amplitude: i32,
-    ticks: u32,
-    f1: f32,
-    progress: &dyn Fn(&str),
-) -> Result<(Identified, i32)> {
-    let (res, t) = device_scale(c)?;
-    progress(&format!(
-        "identifying: chirp of {amplitude} codes, 0.5–{f1} Hz, {ticks} ticks"
-    ));
-    super::verify::clear_faults(c)?;
-    // From rest, so that the record does not depend on how long the host took since the
-    // previous excitation (determinism: `--fast` and real time see the same counts).
-    rest_position(c)?;
-    let rec = c.excite(
-        ExciteProfile::Chirp {
-            amplitude,
-            f0_hz: 0.5,
-            f1_hz: f1,
-        },
-        ticks,
-    )?;
-    if rec.gaps.missing > 0 {
-        bail!(
-            "{} telemetry samples lost during identification; use a faster link or --fast",
-            rec.gaps.missing
-        );
-    }
-    let samples: Vec<ident::Sample> = rec
-        .samples
-        .iter()
-        .filter(|x| x.flags & flags::EXCITE != 0)
-        .map(|x| ident::Sample {
-            count: i64::from(x.count),
-            force: f64::from(x.force_code) * f64::from(c.info.force_per_code),
-        })
-        .collect();
-    let settings = ident::Settings {
-        period_s: t,
-        resolution: res,
-        ..ident::Settings::default()
-    };
-    let id = match ident::identify(&samples, &settings) {
-        Ok(id) => id,
-        Err(e) => {
-            // Say why when the supervisor stopped the excitation (e.g. an encoder jump: a
-            // fine encoder moves many counts per tick); `identify` then tries gentler levels.
-            let latched = c.faults().map_or(0, |f| f.latched);
-            if latched != 0 {
-                return Err(anyhow::Error::new(ExcitationTripped { latched }).context(e));
-            }
-            return Err(e);
-        }
-    };
-    if !(id.mass > 0.0 && id.coulomb >= 0.0 && id.equations >= 20) {
-        bail!(
-            "implausible fit: m = {:.3e}, c = {:.3e} from {} windows",
-            id.mass,
-            id.coulomb,
-            id.equations
-        );
-    }
-    let last = rec.samples.last().map_or(0, |x| x.count);
-    Ok((id, last))
-}
-
-/// Step 1: identification with the wall off. A low-frequency chirp (0.5 Hz up to 4 Hz, or
-/// rate/250) keeps the velocity fit accurate; the amplitude of half-length probes grows from
-/// 5 % of the force limit until a fit succeeds (when the supervisor stops the 5 % probe — an
-/// encoder jump on a fine encoder, say — gentler levels down to 0.08 % are tried first), then
-/// the full chirp runs at about 5·c (when the
-/// limit allows, else at the probe's level) so that the device slides most of the time and
-/// Coulomb friction acts as c·sgn(v).
-/// Returns the fit, the amplitude used (codes) and where the device ended, in raw counts from
-/// the configured wall position.
-pub fn identify(
-    c: &mut Client,
-    cfg: &ServoConfig,
-    s: &Settings,
-    progress: &dyn Fn(&str),
-) -> Result<(Identified, i32, i32)> {
-    let rate = f64::from(c.info.servo_rate_hz);
-    let ticks = (s.excite_seconds * rate).round().clamp(500.0, 1e6) as u32;
-    let f1 = (rate / 250.0).min(4.0) as f32;
-    let fpc = f64::from(c.info.force_per_code);
-    let max_code = c.info.max_code.max(1);
-    let limit_code = ((f64::from(cfg.force_limit) / fpc) as i32).clamp(1, max_code);
-    let mut last_err: Option<anyhow::Error> = None;
-    let mut levels = vec![0.05, 0.1, 0.2, 0.4];
-    let mut i = 0;
-    while i < levels.len() {
-        let frac = levels[i];
-        i += 1;
-        check_interrupt()?;
-        let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
-        // A probe of half the length finds the level; the full chirp then gives the fit.
-        match excite_and_identify(c, amplitude, (ticks / 2).max(500), f1, progress) {
-            Ok((probe, end)) => {
-                let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
-                    .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
-                if wanted <= amplitude * 5 / 4 {
-                    wanted = amplitude;
-                }
-                check_interrupt()?;
-                if let Ok((full, end2)) = excite_and_identify(c, wanted, ticks, f1, progress) {
-                    return Ok((full, wanted, end2));
-                }
-                return Ok((probe, amplitude, end));
-            }
-            Err(e) => {
-                // The supervisor stopped the first level: the device may be driven too fast
-                // for its limits (a fine encoder), so gentler levels (halving, down to
-                // 0.05 / 64) come first, then the stronger ones as before.
-                if frac == 0.05 && e.chain().any(|c| c.is::<ExcitationTripped>()) {
-                    levels = (1..=6).map(|j| 0.05 / f64::from(1u32 << j)).collect();
-                    levels.extend([0.1, 0.2, 0.4]);
-                    i = 0;
-                }
-                last_err = Some(e);
-            }
-        }
-    }
-    let e = last_err.unwrap_or_else(|| anyhow::anyhow!("no excitation"));
-    let tripped = e
-        .chain()
-        .find_map(|c| c.downcast_ref::<ExcitationTripped>())
-        .map(|t| t.latched);
-    if let Some(latched) = tripped {
-        let jump = latched & stiffwall_proto::fault::ENCODER_JUMP != 0;
-        return Err(e).context(format!(
-            "identification failed at every excitation level from 0.08 % to 40 % of the \
-             force limit: the supervisor latched faults {:#x}{} during the chirp",
-            latched,
-            if jump {
-                format!(
-                    " (encoder jump: more than {} counts in one tick; a fine encoder needs a \
-                     higher limit, `hostctl config set --encoder-jump N`)",
-                    cfg.encoder_jump_counts
-                )
-            } else {
-                String::new()
-            }
-        ));
-    }
-    Err(e).context("identification failed at every excitation level")
-}
-
-/// The supervisor latched faults (`latched`, the fault bits) during an identification chirp.
-#[derive(Debug, thiserror::Error)]
-#[error("the supervisor latched faults {latched:#x} during the excitation")]
-struct ExcitationTripped {
-    latched: u32,
 }
 
 /// Step 2: predictions for the identified device.
@@ -355,73 +191,6 @@ pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
 pub fn deflection_for(p: &PhysicalParams, k: f64, v: f64) -> i32 {
     let d = v * (p.mass / k).sqrt() / p.resolution;
     d.round().clamp(2.0, 1e6) as i32
-}
-
-/// Breakaway evidence: a slow force ramp from rest (wall off, config `base` with K = 0) in each
-/// direction, up to 3·c (at most 60 % of the force limit), against the identified model on the
-/// same ramp. `rest` is where the chirp left the device, in counts of the chirp's frame (the
-/// wall was moved there). Fills `e.breakaway_*`.
-fn breakaway(
-    c: &mut Client,
-    base: &ServoConfig,
-    id: &Identified,
-    rest: i32,
-    e: &mut Evidence,
-    progress: &dyn Fn(&str),
-) -> Result<()> {
-    let (res, t) = device_scale(c)?;
-    let rate = f64::from(c.info.servo_rate_hz);
-    let fpc = f64::from(c.info.force_per_code);
-    let limit_code = ((f64::from(base.force_limit) / fpc) as i32).clamp(1, c.info.max_code.max(1));
-    let peak = ((3.0 * id.coulomb / fpc) as i32)
-        .clamp(1, (f64::from(limit_code) * 0.6) as i32)
-        .min(i32::from(i16::MAX));
-    let ticks = (RAMP_SECONDS * rate).round().max(20.0) as usize;
-    let hold = ticks.div_ceil(stiffwall_proto::MAX_TABLE).max(1);
-    let len = ticks.div_ceil(hold);
-    for (i, sign) in [1i32, -1].into_iter().enumerate() {
-        check_interrupt()?;
-        progress(&format!("breakaway ramp to {} codes", sign * peak));
-        let table: Vec<i16> = (0..len)
-            .map(|k| (sign * (i64::from(peak) * k as i64 / len as i64) as i32) as i16)
-            .collect();
-        for (j, chunk) in table.chunks(TABLE_CHUNK).enumerate() {
-            let values = heapless::Vec::from_slice(chunk)
-                .map_err(|_| anyhow::anyhow!("table chunk too long"))?;
-            c.request(&HostMsg::TableChunk {
-                offset: u16::try_from(j * TABLE_CHUNK)?,
-                values,
-            })?;
-        }
-        c.set_config(base)?;
-        rest_position(c)?;
-        super::verify::clear_faults(c)?;
-        let rec = c.excite(
-            ExciteProfile::Table {
-                len: u16::try_from(len)?,
-                hold_ticks: u16::try_from(hold)?,
-            },
-            u32::try_from(len * hold)?,
-        )?;
-        let (counts, force): (Vec<i64>, Vec<f64>) = rec
-            .samples
-            .iter()
-            .filter(|x| x.flags & flags::EXCITE != 0)
-            .map(|x| (i64::from(x.count), f64::from(x.force_code) * fpc))
-            .unzip();
-        e.breakaway_measured[i] = model_check::breakaway_force(&counts, &force);
-        // The spring force (if one was identified) at the ramp's start, in the chirp's frame
-        // (counts there were relative to the wall before it moved by `rest`).
-        let preload = match (id.spring, counts.first()) {
-            (Some(sp), Some(&n0)) => {
-                -(sp.stiffness * ((n0 + i64::from(rest)) as f64 + 0.5) * res + sp.offset)
-            }
-            _ => 0.0,
-        };
-        let model = model_check::model_counts(id, &force, preload, t, res);
-        e.breakaway_model[i] = model_check::breakaway_force(&model, &force);
-    }
-    Ok(())
 }
 
 /// Runs the whole procedure. `progress` receives one-line status messages.
