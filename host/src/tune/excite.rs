@@ -97,9 +97,8 @@ fn excite_and_identify(
 /// rate/250) keeps the velocity fit accurate; the amplitude of half-length probes grows from
 /// 5 % of the force limit until a fit succeeds (when the supervisor stops the 5 % probe — an
 /// encoder jump on a fine encoder, say — gentler levels down to 0.08 % are tried first), then
-/// the full chirp runs at about 5·c (when the
-/// limit allows, else at the probe's level) so that the device slides most of the time and
-/// Coulomb friction acts as c·sgn(v).
+/// the full chirp runs at about 5·c (when the limit allows, else at the probe's level) so that
+/// the device slides most of the time and Coulomb friction acts as c·sgn(v).
 /// Returns the fit, the amplitude used (codes) and where the device ended, in raw counts from
 /// the configured wall position.
 pub fn identify(

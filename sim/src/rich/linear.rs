@@ -68,6 +68,29 @@ pub struct LinearPlant {
     pub force_scale: f64,
 }
 
+impl LinearPlant {
+    /// Net non-friction, non-viscous force on the motor at y for the shaped command u: the
+    /// actuator's force, then `extra` (the rich plant's cogging; 0 here), then the spring and
+    /// damper of the transmission, or of the hand without one. The one definition of `f_ext`
+    /// for every engine of [`crate::rich::RichPlant`].
+    #[inline]
+    #[must_use]
+    pub fn f_ext(&self, y: &[f64; 6], u: f64, extra: f64) -> f64 {
+        let mut f = if self.amp_w > 0.0 {
+            y[4].clamp(-self.limit, self.limit)
+        } else {
+            u
+        };
+        f += extra;
+        if self.trans {
+            f += self.kt * (y[2] - y[0]) + self.dt * (y[3] - y[1]);
+        } else {
+            f -= self.kh * y[0] + self.bh * y[1];
+        }
+        f
+    }
+}
+
 /// One cached transition matrix.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Cached {
@@ -300,23 +323,6 @@ impl Linear {
         e
     }
 
-    /// Net non-friction, non-viscous force on the motor at y (the plant's `f_ext`).
-    #[must_use]
-    pub fn f_ext(&self, y: &[f64; 6], u: f64) -> f64 {
-        let p = &self.p;
-        let mut f = if p.amp_w > 0.0 {
-            y[4].clamp(-p.limit, p.limit)
-        } else {
-            u
-        };
-        if p.trans {
-            f += p.kt * (y[2] - y[0]) + p.dt * (y[3] - y[1]);
-        } else {
-            f -= p.kh * y[0] + p.bh * y[1];
-        }
-        f
-    }
-
     /// The clamp mode of a filter output p.
     fn clamp_of(&self, p4: f64) -> f64 {
         if self.p.amp_w > 0.0 && p4 > self.p.limit {
@@ -339,7 +345,7 @@ impl Linear {
         } else {
             let mut y = [0.0; 6];
             y.copy_from_slice(&z[..6]);
-            let f = self.f_ext(&y, u);
+            let f = self.p.f_ext(&y, u, 0.0);
             let phi = f.abs() - self.p.fs;
             worst = worst.max(phi);
             fired |= phi > 0.0;
@@ -422,9 +428,9 @@ impl Linear {
             if *slide != 0.0 && *slide * z[1] <= 0.0 {
                 z[1] = 0.0;
                 yy[1] = 0.0;
-                *slide = super::friction::stick_rule(self.f_ext(&yy, u), fs);
+                *slide = super::friction::stick_rule(self.p.f_ext(&yy, u, 0.0), fs);
             } else if *slide == 0.0 {
-                *slide = super::friction::stick_rule(self.f_ext(&yy, u), fs);
+                *slide = super::friction::stick_rule(self.p.f_ext(&yy, u, 0.0), fs);
             }
             clamp = self.clamp_of(z[4]);
             if t >= t_next {

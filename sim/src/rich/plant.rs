@@ -56,6 +56,8 @@ struct Derived {
     amp_z: f64,
     filter: bool,
     limit: f64,
+    /// The same constants for the linear engine (and the one `f_ext`).
+    lin: LinearPlant,
 }
 
 impl Derived {
@@ -80,25 +82,43 @@ impl Derived {
         let (cog_a, cog_w) = m.cogging.map_or((0.0, 0.0), |c| {
             (c.amplitude_n, 2.0 * core::f64::consts::PI / c.period_m)
         });
-        Self {
+        let lin = LinearPlant {
             inv_m1: 1.0 / m1,
             inv_m2: 1.0 / m2,
             b: m.viscous_ns_per_m,
             c: m.coulomb_n,
             fs: m.static_friction_n(),
-            vs: m.stiction.map_or(0.0, |s| s.stribeck_m_per_s),
-            cog_a,
-            cog_w,
             kt: trans.map_or(0.0, |t| t.stiffness_n_per_m),
             dt: trans.map_or(0.0, |t| t.damping_ns_per_m),
             trans: trans.is_some(),
             kh: hand.stiffness_n_per_m,
             bh: hand.damping_ns_per_m,
-            hand_on_link: trans.is_some(),
+            amp_w,
+            amp_z,
+            limit: m.force_limit_n().unwrap_or(f64::INFINITY),
+            pos_scale: m.resolution_m,
+            force_scale: m.static_friction_n().max(1e-3),
+        };
+        Self {
+            inv_m1: lin.inv_m1,
+            inv_m2: lin.inv_m2,
+            b: lin.b,
+            c: lin.c,
+            fs: lin.fs,
+            vs: m.stiction.map_or(0.0, |s| s.stribeck_m_per_s),
+            cog_a,
+            cog_w,
+            kt: lin.kt,
+            dt: lin.dt,
+            trans: lin.trans,
+            kh: lin.kh,
+            bh: lin.bh,
+            hand_on_link: lin.trans,
             amp_w,
             amp_z,
             filter: amp_w > 0.0,
-            limit: m.force_limit_n().unwrap_or(f64::INFINITY),
+            limit: lin.limit,
+            lin,
         }
     }
 
@@ -115,16 +135,12 @@ impl Derived {
     /// Net non-friction, non-viscous force on the motor.
     #[inline]
     fn f_ext(&self, y: &State, u: f64) -> f64 {
-        let mut f = self.actuator(y, u);
-        if self.cog_a != 0.0 {
-            f += self.cog_a * libm::sin(self.cog_w * y[0]);
-        }
-        if self.trans {
-            f += self.kt * (y[2] - y[0]) + self.dt * (y[3] - y[1]);
+        let cog = if self.cog_a != 0.0 {
+            self.cog_a * libm::sin(self.cog_w * y[0])
         } else {
-            f -= self.kh * y[0] + self.bh * y[1];
-        }
-        f
+            0.0
+        };
+        self.lin.f_ext(y, u, cog)
     }
 }
 
@@ -218,23 +234,7 @@ impl RichPlant {
                 model.viscous_ns_per_m,
                 model.coulomb_n,
             )),
-            None if model.is_exact() => Engine::Linear(Linear::new(LinearPlant {
-                inv_m1: d.inv_m1,
-                inv_m2: d.inv_m2,
-                b: d.b,
-                c: d.c,
-                fs: d.fs,
-                kt: d.kt,
-                dt: d.dt,
-                trans: d.trans,
-                kh: d.kh,
-                bh: d.bh,
-                amp_w: d.amp_w,
-                amp_z: d.amp_z,
-                limit: d.limit,
-                pos_scale: model.resolution_m,
-                force_scale: model.static_friction_n().max(1e-3),
-            })),
+            None if model.is_exact() => Engine::Linear(Linear::new(d.lin)),
             None => {
                 return Err(ModelError {
                     key: "run.solver",
@@ -311,6 +311,12 @@ impl RichPlant {
         }
         let u = self.model.shape_command(force_cmd_n);
         self.u = u;
+        // The stick rule at zero velocity, with the new command (the rigid closed form applies
+        // it itself).
+        if !matches!(self.engine, Engine::Exact(_)) && (self.slide == 0.0 || self.y[1] == 0.0) {
+            self.y[1] = 0.0;
+            self.slide = stick_rule(self.d.f_ext(&self.y, u), self.d.fs);
+        }
         match &mut self.engine {
             Engine::Exact(body) => {
                 let mut m = Motion {
@@ -328,15 +334,7 @@ impl RichPlant {
                 };
             }
             Engine::Linear(lin) => {
-                // The rule at zero velocity, with the new command.
-                if self.slide == 0.0 || self.y[1] == 0.0 {
-                    self.y[1] = 0.0;
-                    self.slide = stick_rule(self.d.f_ext(&self.y, u), self.d.fs);
-                }
-                let mut y6 = [0.0; 6];
-                y6.copy_from_slice(&self.y[..6]);
-                lin.advance(&mut y6, &mut self.slide, u, dt_s, MAX_EVENTS);
-                self.y[..6].copy_from_slice(&y6);
+                lin.advance(&mut self.y, &mut self.slide, u, dt_s, MAX_EVENTS);
             }
             Engine::Ode(stepper) => {
                 let d = self.d;
@@ -344,11 +342,6 @@ impl RichPlant {
                 // and the command alone, not of how many intervals came before (the virtual
                 // device's idle time between commands varies with the host in `--fast`).
                 stepper.reset_step();
-                // The rule at zero velocity, with the new command.
-                if self.slide == 0.0 || self.y[1] == 0.0 {
-                    self.y[1] = 0.0;
-                    self.slide = stick_rule(d.f_ext(&self.y, u), d.fs);
-                }
                 let mut rem = dt_s;
                 let mut events = 0;
                 while rem > 0.0 && events < MAX_EVENTS {
