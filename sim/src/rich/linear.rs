@@ -137,6 +137,9 @@ fn mat_vec(a: &Mat, z: &[f64; N]) -> [f64; N] {
     o
 }
 
+// Written here rather than taken from a crate: this crate is no_std without an allocator and
+// is checked for the Cortex-M target; nalgebra's matrix exponential (the host uses nalgebra for
+// least squares) would bring a large dependency into the simulator for one fixed 8×8 case.
 /// e^{A} by scaling and squaring of the Taylor series (the scaled norm ≤ ½, 18 terms: the
 /// truncation error is below 2⁻¹⁹/19! of the scaled norm).
 fn expm(a: &Mat) -> Mat {
