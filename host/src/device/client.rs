@@ -17,6 +17,10 @@ use stiffwall_proto::{
 
 /// How long a request waits for its answer.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
+/// How long a request waits at most while the device keeps answering bad frames queued ahead
+/// of it (a flood or a noisy line): each such error reply restarts [`ANSWER_TIMEOUT`], up to
+/// this long after the request was sent.
+pub const BACKLOG_WAIT_MAX: Duration = Duration::from_secs(10);
 /// How long a request refused with a full servo queue is repeated.
 pub const QUEUE_FULL_RETRY: Duration = Duration::from_secs(2);
 /// Heartbeat period during experiments (the firmware's default timeout is 500 ms).
@@ -196,8 +200,14 @@ impl Client {
 
     /// Writes all bytes, waiting while the port is full (a device may read its UART one byte at
     /// a time); fails when the port errors or makes no progress for [`ANSWER_TIMEOUT`].
+    ///
+    /// While it waits, what the device sends is read and queued: framing-error replies show it
+    /// is reading input from elsewhere on the line (a flood that fills the link), and each
+    /// restarts the stall timeout, up to [`BACKLOG_WAIT_MAX`] in all.
     fn write_bytes(&mut self, mut bytes: &[u8]) -> Result<()> {
-        let mut stalled_since = Instant::now();
+        let start = Instant::now();
+        let mut stalled_since = start;
+        let mut device_reading = false;
         while !bytes.is_empty() {
             match self.port.write(bytes) {
                 Ok(0) => {}
@@ -213,7 +223,27 @@ impl Client {
                     ) => {}
                 Err(e) => return Err(e).context("writing to the device"),
             }
+            if self.port.bytes_to_read().unwrap_or(0) > 0 {
+                let queued = self.pending.len();
+                self.read_once()?;
+                let answered_garbage = self
+                    .pending
+                    .iter()
+                    .skip(queued)
+                    .any(|m| matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code)));
+                if answered_garbage && start.elapsed() < BACKLOG_WAIT_MAX {
+                    device_reading = true;
+                    stalled_since = Instant::now();
+                }
+            }
             if stalled_since.elapsed() > ANSWER_TIMEOUT {
+                if device_reading {
+                    bail!(
+                        "the link is full: the device keeps reading bad frames from elsewhere \
+                         on the line, and this request could not get in for {} ms",
+                        start.elapsed().as_millis()
+                    );
+                }
                 bail!(
                     "the device stopped reading (no progress writing for {} ms)",
                     ANSWER_TIMEOUT.as_millis()
@@ -230,30 +260,8 @@ impl Client {
             return Ok(Some(m));
         }
         let deadline = Instant::now() + timeout;
-        let mut buf = [0u8; 4096];
         loop {
-            let n = match self.port.read(&mut buf) {
-                Ok(0) => {
-                    return Err(std::io::Error::from(ErrorKind::UnexpectedEof))
-                        .context("the device closed the connection")
-                }
-                Ok(n) => n,
-                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => 0,
-                Err(e) if e.kind() == ErrorKind::Interrupted => 0,
-                Err(e) => return Err(e).context("reading from the device"),
-            };
-            for &b in &buf[..n] {
-                match self.decoder.feed::<DeviceMsg>(b) {
-                    Some(Ok(m)) => {
-                        if let DeviceMsg::Telemetry(batch) = &m {
-                            self.account(batch);
-                        }
-                        self.pending.push_back(m);
-                    }
-                    Some(Err(_)) => self.gaps.bad_frames += 1,
-                    None => {}
-                }
-            }
+            self.read_once()?;
             if let Some(m) = self.pending.pop_front() {
                 return Ok(Some(m));
             }
@@ -261,6 +269,35 @@ impl Client {
                 return Ok(None);
             }
         }
+    }
+
+    /// One read from the port (waiting up to its read timeout); the messages it completes are
+    /// queued, telemetry accounted, undecodable frames counted.
+    fn read_once(&mut self) -> Result<()> {
+        let mut buf = [0u8; 4096];
+        let n = match self.port.read(&mut buf) {
+            Ok(0) => {
+                return Err(std::io::Error::from(ErrorKind::UnexpectedEof))
+                    .context("the device closed the connection")
+            }
+            Ok(n) => n,
+            Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => 0,
+            Err(e) if e.kind() == ErrorKind::Interrupted => 0,
+            Err(e) => return Err(e).context("reading from the device"),
+        };
+        for &b in &buf[..n] {
+            match self.decoder.feed::<DeviceMsg>(b) {
+                Some(Ok(m)) => {
+                    if let DeviceMsg::Telemetry(batch) = &m {
+                        self.account(batch);
+                    }
+                    self.pending.push_back(m);
+                }
+                Some(Err(_)) => self.gaps.bad_frames += 1,
+                None => {}
+            }
+        }
+        Ok(())
     }
 
     fn account(&mut self, batch: &TelemetryBatch) {
@@ -279,19 +316,39 @@ impl Client {
 
     /// Waits for a message matching `want`; other messages (telemetry) are kept for later.
     fn wait(&mut self, timeout: Duration, want: impl Fn(&DeviceMsg) -> bool) -> Result<DeviceMsg> {
-        let deadline = Instant::now() + timeout;
+        self.wait_extending(timeout, timeout, want, |_| false)
+    }
+
+    /// [`Self::wait`], where a message for which `progress` holds restarts the `timeout`, up to
+    /// `cap` after the start: the device is visibly working through input queued ahead of the
+    /// request.
+    fn wait_extending(
+        &mut self,
+        timeout: Duration,
+        cap: Duration,
+        want: impl Fn(&DeviceMsg) -> bool,
+        progress: impl Fn(&DeviceMsg) -> bool,
+    ) -> Result<DeviceMsg> {
+        let start = Instant::now();
+        let end = start + cap.max(timeout);
+        let mut deadline = start + timeout;
         let mut kept = VecDeque::new();
+        let expired = |waited: Duration| anyhow!("no answer within {} ms", waited.as_millis());
         let result = loop {
             let left = deadline.saturating_duration_since(Instant::now());
             match self.recv(left)? {
                 Some(m) if want(&m) => break Ok(m),
                 // On time even while other messages keep arriving.
-                Some(m) if Instant::now() < deadline => kept.push_back(m),
                 Some(m) => {
+                    if progress(&m) {
+                        deadline = (Instant::now() + timeout).min(end).max(deadline);
+                    }
                     kept.push_back(m);
-                    break Err(anyhow!("no answer within {} ms", timeout.as_millis()));
+                    if Instant::now() >= deadline {
+                        break Err(expired(start.elapsed()));
+                    }
                 }
-                None => break Err(anyhow!("no answer within {} ms", timeout.as_millis())),
+                None => break Err(expired(start.elapsed())),
             }
         };
         kept.extend(self.pending.drain(..));
@@ -303,8 +360,9 @@ impl Client {
     ///
     /// Framing errors (CRC, COBS, oversize, unknown tag, malformed body) do not answer a
     /// request this client encoded: they answer bad frames from elsewhere on the link (a
-    /// noisy line, another writer), so the wait goes on; if no answer comes, the timeout
-    /// names the last one seen.
+    /// noisy line, another writer), so the wait goes on. They also show the device working
+    /// through input queued ahead of the request, so each restarts the answer timeout, for at
+    /// most [`BACKLOG_WAIT_MAX`]; if no answer comes, the timeout names the last one seen.
     ///
     /// A full servo command queue (`Busy`, "servo queue full": the servo takes one command per
     /// tick) is transient: the request is repeated, for at most [`QUEUE_FULL_RETRY`].
@@ -329,20 +387,25 @@ impl Client {
         let ack = ack_kind(msg);
         let last_framing = std::cell::Cell::new(None);
         let m = self
-            .wait(ANSWER_TIMEOUT, |m| match m {
-                DeviceMsg::Error { code, detail } if is_framing(*code) => {
-                    last_framing.set(Some(describe_error(*code, detail)));
-                    false
-                }
-                DeviceMsg::Error { .. } => true,
-                DeviceMsg::Ack(r) => Some(*r) == ack,
-                DeviceMsg::Config(_) => {
-                    matches!(msg, HostMsg::GetConfig | HostMsg::LoadDefaults)
-                }
-                DeviceMsg::Faults(_) => matches!(msg, HostMsg::GetFaults),
-                DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
-                _ => false,
-            })
+            .wait_extending(
+                ANSWER_TIMEOUT,
+                BACKLOG_WAIT_MAX,
+                |m| match m {
+                    DeviceMsg::Error { code, detail } if is_framing(*code) => {
+                        last_framing.set(Some(describe_error(*code, detail)));
+                        false
+                    }
+                    DeviceMsg::Error { .. } => true,
+                    DeviceMsg::Ack(r) => Some(*r) == ack,
+                    DeviceMsg::Config(_) => {
+                        matches!(msg, HostMsg::GetConfig | HostMsg::LoadDefaults)
+                    }
+                    DeviceMsg::Faults(_) => matches!(msg, HostMsg::GetFaults),
+                    DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
+                    _ => false,
+                },
+                |m| matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code)),
+            )
             .with_context(|| match last_framing.take() {
                 Some(e) => format!(
                     "waiting for the answer to {} (the device reported bad frames: {e})",
@@ -700,6 +763,54 @@ mod tests {
         });
         let e = c.shutdown(0).unwrap_err();
         assert!(format!("{e:#}").contains("Shutdown refused"), "{e:#}");
+    }
+
+    #[test]
+    fn bad_frames_answered_ahead_of_a_request_extend_its_wait() {
+        // The device works through a backlog of garbage for 2.3 s (longer than ANSWER_TIMEOUT),
+        // answering it with framing errors every 0.5 s, then answers the request.
+        let mut c = scripted(|port, msg| {
+            assert_eq!(msg, HostMsg::GetFaults);
+            for _ in 0..5 {
+                let cobs = DeviceMsg::Error {
+                    code: ErrorCode::Cobs,
+                    detail: ErrorDetail::None,
+                };
+                reply(port, &cobs);
+                std::thread::sleep(Duration::from_millis(500));
+            }
+            std::thread::sleep(Duration::from_millis(300));
+            let report = FaultReport {
+                latched: 4,
+                first_tick: 9,
+                safe_mode: false,
+            };
+            reply(port, &DeviceMsg::Faults(report));
+            std::thread::sleep(Duration::from_millis(200));
+        });
+        assert!(Duration::from_millis(2300) > ANSWER_TIMEOUT);
+        let t = Instant::now();
+        assert_eq!(c.faults().unwrap().latched, 4);
+        assert!(t.elapsed() > ANSWER_TIMEOUT, "{:?}", t.elapsed());
+    }
+
+    #[test]
+    fn silence_after_bad_frames_still_times_out() {
+        let mut c = scripted(|port, _| {
+            let cobs = DeviceMsg::Error {
+                code: ErrorCode::Cobs,
+                detail: ErrorDetail::None,
+            };
+            reply(port, &cobs);
+            std::thread::sleep(Duration::from_secs(4));
+        });
+        let t = Instant::now();
+        let e = c.faults().unwrap_err();
+        assert!(
+            format!("{e:#}").contains("the device reported bad frames: bad COBS framing"),
+            "{e:#}"
+        );
+        assert!(t.elapsed() < Duration::from_secs(3), "{:?}", t.elapsed());
     }
 
     #[test]
