@@ -30,7 +30,10 @@
 //! wall position moved to where it stopped (so the wall's force while the hold starts is the
 //! smallest, KΔ/2), faults cleared, then the release. A test that has settled is ended early
 //! at a point computed from its counts alone ([`settled_at`]), so the verdict does not depend on
-//! how quickly the host reacts.
+//! how quickly the host reacts. A test still oscillating at its base length whose oscillation
+//! still shrinks runs on, up to [`DECAY_EXTENSION`] × (see [`judged_len`]): a slow mode the
+//! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
+//! decays, and a persistent buzz is still judged at the base length.
 
 use super::verdict::{classify, classify_impact, Verdict, Wall, EXIT_WINDOW, MIN_TAIL};
 use crate::device::client::Client;
@@ -177,6 +180,55 @@ pub fn settled_at(counts: &[i64], min_run: usize) -> Option<usize> {
     None
 }
 
+/// Most a test runs, as a multiple of its base length, while its oscillation keeps shrinking.
+pub const DECAY_EXTENSION: usize = 2;
+/// Checkpoints per base length at which a test past its base length is judged still decaying.
+const DECAY_CHECKS: usize = 8;
+
+/// Whether the oscillation at the end of `counts` is still shrinking: the range (max − min) of
+/// the last quarter (at least [`MIN_TAIL`] counts) is smaller than that of the quarter before.
+#[must_use]
+pub fn decaying(counts: &[i64]) -> bool {
+    let w = (counts.len() / 4).max(MIN_TAIL);
+    if 2 * w > counts.len() {
+        return false;
+    }
+    let range = |s: &[i64]| s.iter().max().unwrap_or(&0) - s.iter().min().unwrap_or(&0);
+    let l = counts.len();
+    range(&counts[l - w..]) < range(&counts[l - 2 * w..l - w])
+}
+
+/// Longest record of a test of base length `ticks` (the budget the firmware is given).
+#[must_use]
+pub fn max_test_len(ticks: usize) -> usize {
+    let step = (ticks / DECAY_CHECKS).max(1);
+    ticks + step * DECAY_CHECKS * (DECAY_EXTENSION - 1)
+}
+
+/// The length of a test's record that the verdict judges, once the counts decide it (None while
+/// they do not): where it settled ([`settled_at`]), or else the first checkpoint at or after
+/// the base length `ticks` — every `ticks`/8 up to [`max_test_len`] — at which the oscillation
+/// is no longer [`decaying`]. A slowly decaying mode the encoder sees (a heavy hand ringing on a
+/// soft transmission, say) is thus watched up to [`DECAY_EXTENSION`] × longer instead of being
+/// judged a buzz while it still shrinks; a persistent buzz ends at the base length. Computed
+/// from the counts alone, so it does not depend on when the host sees them.
+#[must_use]
+pub fn judged_len(counts: &[i64], ticks: usize, min_run: usize) -> Option<usize> {
+    let ticks = ticks.max(1);
+    let step = (ticks / DECAY_CHECKS).max(1);
+    let last = DECAY_CHECKS * (DECAY_EXTENSION - 1);
+    let stop = (0..=last)
+        .map(|j| (j, ticks + j * step))
+        .take_while(|&(_, l)| l <= counts.len())
+        .find(|&(j, l)| j == last || !decaying(&counts[..l]))
+        .map(|(_, l)| l);
+    match (settled_at(counts, min_run), stop) {
+        (Some(s), Some(l)) => Some(s.min(l)),
+        (s, None) => s,
+        (None, l) => l,
+    }
+}
+
 /// Waits until the device (wall off) has stopped; returns its count from the wall position.
 pub fn rest_position(c: &mut Client) -> Result<i32> {
     let rate = c.info.servo_rate_hz.max(1);
@@ -229,8 +281,9 @@ pub fn clear_faults(c: &mut Client) -> Result<()> {
     }
 }
 
-/// Runs one test at stiffness `k` (config `base` with that K) for at most `ticks` ticks after
-/// the release; a settled record ends after [`settled_at`] with run `min_run`. Returns the
+/// Runs one test at stiffness `k` (config `base` with that K) for a base length of `ticks`
+/// ticks after the release, longer while its oscillation still decays (at most
+/// [`max_test_len`]); the record ends at [`judged_len`] (settled: run `min_run`). Returns the
 /// verdict and the counts judged.
 pub fn run_test(
     c: &mut Client,
@@ -278,17 +331,18 @@ pub fn run_test(
             }
         }
         seen = s.len();
-        settled_at(&released, min_run).is_some()
+        judged_len(&released, ticks as usize, min_run).is_some()
     };
+    let budget = u32::try_from(max_test_len(ticks as usize)).unwrap_or(u32::MAX);
     let rec = match test {
         Test::Release { deflection_ticks } => {
-            c.release_until(deflection_ticks, ticks, &mut enough)?
+            c.release_until(deflection_ticks, budget, &mut enough)?
         }
         Test::Impact {
             start_ticks,
             velocity_milliticks,
             ..
-        } => c.impact_until(start_ticks, velocity_milliticks, ticks, &mut enough)?,
+        } => c.impact_until(start_ticks, velocity_milliticks, budget, &mut enough)?,
     };
     if rec.gaps.missing > 0 {
         bail!(
@@ -299,10 +353,10 @@ pub fn run_test(
     let mut counts = super::release::released_counts(&rec.samples, shift);
     // Judge only up to where the record settled (what came after is the Stop's latency).
     let tripped = rec.faults != 0;
-    if let Some(len) = settled_at(&counts, min_run) {
+    if let Some(len) = judged_len(&counts, ticks as usize, min_run) {
         counts.truncate(len);
     } else if !tripped {
-        counts.truncate(ticks as usize);
+        counts.truncate(budget as usize);
     }
     let verdict = match test {
         Test::Release { .. } => classify(&counts, tripped),
@@ -422,6 +476,60 @@ mod tests {
         assert!(test_set(0, 5.0, 14.0, false, false, false).iter().all(
             |t| matches!(t, Test::Release { deflection_ticks } if deflection_ticks.abs() == 2)
         ));
+    }
+
+    /// A square-ish oscillation of amplitude `amp(i)` counts, period 40 ticks.
+    fn ringing(len: usize, amp: impl Fn(usize) -> f64) -> Vec<i64> {
+        (0..len)
+            .map(|i| (amp(i) * (std::f64::consts::TAU * i as f64 / 40.0).sin()).round() as i64)
+            .collect()
+    }
+
+    #[test]
+    fn a_shrinking_oscillation_is_decaying_and_a_steady_one_is_not() {
+        let shrinking = ringing(2000, |i| 12.0 * (-(i as f64) / 600.0).exp());
+        assert!(decaying(&shrinking));
+        let steady = ringing(2000, |_| 6.0);
+        assert!(!decaying(&steady));
+        assert!(!decaying(&shrinking[..60]), "too short to tell");
+    }
+
+    #[test]
+    fn a_decaying_test_runs_past_its_base_length_and_a_buzz_does_not() {
+        let ticks = 1000;
+        // A buzz: judged at the base length.
+        let buzz = ringing(max_test_len(ticks) + 500, |_| 6.0);
+        assert_eq!(judged_len(&buzz, ticks, 100), Some(ticks));
+        assert_eq!(
+            judged_len(&buzz[..ticks - 1], ticks, 100),
+            None,
+            "not decided yet"
+        );
+        // Ringing that decays to rest by about 2300 ticks: watched on past the base length and
+        // ended where it settled, within the extension.
+        let slow = ringing(4000, |i| 12.0 * (-(i as f64) / 400.0).exp());
+        let settled = settled_at(&slow, 100).unwrap();
+        assert!(
+            settled > ticks && settled <= max_test_len(ticks),
+            "{settled}"
+        );
+        assert_eq!(judged_len(&slow, ticks, 100), Some(settled));
+        assert_eq!(
+            judged_len(&slow[..ticks + 10], ticks, 100),
+            None,
+            "still shrinking"
+        );
+        // Never past the extension, however long it keeps shrinking.
+        let very_slow = ringing(5000, |i| 40.0 * (-(i as f64) / 3000.0).exp());
+        assert_eq!(
+            judged_len(&very_slow, ticks, 100),
+            Some(max_test_len(ticks))
+        );
+        assert_eq!(max_test_len(ticks), DECAY_EXTENSION * ticks);
+        // A record that settles before its base length ends there, as before.
+        let quick = ringing(3000, |i| 12.0 * (-(i as f64) / 40.0).exp());
+        assert_eq!(judged_len(&quick, ticks, 100), settled_at(&quick, 100));
+        assert!(settled_at(&quick, 100).unwrap() < ticks);
     }
 
     #[test]
