@@ -42,6 +42,13 @@ pub const BUZZ_MIN_HZ: u32 = 15;
 /// one count peak to peak (a toggle between two neighbouring counts, region B, does not count).
 pub const BUZZ_MIN_SWING: u32 = 2;
 
+/// Swings at each end of a buzz window whose largest are compared (the envelope): a decaying
+/// oscillation of two modes beats, so one swing can exceed an earlier one while the envelope
+/// shrinks.
+pub const BUZZ_ENVELOPE: usize = 8;
+const _: () =
+    assert!(BUZZ_ENVELOPE.is_power_of_two() && BUZZ_ENVELOPE <= BUZZ_HALF_CYCLES as usize);
+
 /// The longest a buzz window of [`BUZZ_HALF_CYCLES`] may take at `rate_hz`, ticks: half-cycles
 /// of at most rate/(2·[`BUZZ_MIN_HZ`]) ticks each.
 #[must_use]
@@ -54,16 +61,23 @@ pub fn buzz_window_ticks(rate_hz: u32) -> u32 {
 /// stiffness above the stable one). Fed at turning points only ([`EnergyMonitor::buzz_turn`]),
 /// so it costs nothing on the other ticks. It trips when [`BUZZ_HALF_CYCLES`] consecutive
 /// swings (peak to peak between turning points) of at least [`BUZZ_MIN_SWING`] counts fit in
-/// `window_ticks` (a frequency of at least [`BUZZ_MIN_HZ`]) and the last swing is not smaller
-/// than the first: a decaying oscillation loses at least a count over the window and does not
-/// trip; any swing below the minimum restarts the window.
+/// `window_ticks` (a frequency of at least [`BUZZ_MIN_HZ`]) and the largest of its last
+/// [`BUZZ_ENVELOPE`] swings is not smaller than the largest of its first ones: a decaying
+/// oscillation loses at least a count of envelope over the window and does not trip, even when
+/// two modes beat (a motor mode against the wall and a hand or link mode behind a compliant
+/// transmission: single swings then rise and fall while the envelope shrinks, and comparing
+/// the last swing with the first tripped on decaying motion); any swing below the minimum
+/// restarts the window.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct BuzzDetector {
     have_prev: bool,
     prev_peak: i32,
     count: u16,
     start: u32,
-    first_swing: u32,
+    /// Largest of the window's first [`BUZZ_ENVELOPE`] swings.
+    first_envelope: u32,
+    /// The window's latest swings, by `count % BUZZ_ENVELOPE`.
+    recent: [u32; BUZZ_ENVELOPE],
 }
 
 impl BuzzDetector {
@@ -83,14 +97,20 @@ impl BuzzDetector {
         }
         if self.count == 0 {
             self.start = now;
-            self.first_swing = swing;
+            self.first_envelope = 0;
         }
+        if usize::from(self.count) < BUZZ_ENVELOPE {
+            self.first_envelope = self.first_envelope.max(swing);
+        }
+        // BUZZ_ENVELOPE is a power of two: the index is a mask, in range.
+        self.recent[usize::from(self.count) & (BUZZ_ENVELOPE - 1)] = swing;
         self.count = self.count.saturating_add(1);
         if self.count < BUZZ_HALF_CYCLES {
             return 0;
         }
         self.count = 0;
-        if swing >= self.first_swing && now.wrapping_sub(self.start) <= window_ticks {
+        let last_envelope = self.recent.iter().copied().fold(0, u32::max);
+        if last_envelope >= self.first_envelope && now.wrapping_sub(self.start) <= window_ticks {
             BUZZ
         } else {
             0
@@ -135,8 +155,9 @@ pub fn limit_m(e8_limit: u64) -> u32 {
 
 /// The energy monitor (see `docs/model-notes-firmware.md`): tracks turning points of the
 /// effective count (where ξ̇ = 0, so H_T (35) equals its potential part and needs no mass),
-/// compares each peak with the previous peak on the same side, and keeps a growth score
-/// (+1 peak energy grew, −1 shrank, clamped to ±trip). Score ≥ trip → [`GROWTH`]; energy above
+/// compares each peak with the larger of the previous two peaks on the same side (one, for
+/// the second peak of a side), and keeps a growth score (+1 peak energy grew, −1 shrank,
+/// clamped to ±trip). Score ≥ trip → [`GROWTH`]; energy above
 /// the limit on any tick → [`LIMIT`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct EnergyMonitor {
@@ -146,6 +167,8 @@ pub struct EnergyMonitor {
     peak: i32,
     /// Last scored peak count per side (0: a maximum, after rising; 1: a minimum).
     last: [i32; 2],
+    /// |2n + 1| of the peak scored before `last` on each side (0: none yet).
+    before_m: [u32; 2],
     have: [bool; 2],
     score: i32,
     buzz: BuzzDetector,
@@ -224,18 +247,30 @@ impl EnergyMonitor {
         let side = usize::from(self.dir < 0);
         // e8 = m² + 1 is strictly increasing in m = |2n+1|: comparing m compares the energies.
         let m = odd_abs(self.peak);
+        let before = self.before_m.get(side).copied().unwrap_or(0);
         if let (Some(&had), Some(&last)) = (self.have.get(side), self.last.get(side)) {
             if had {
-                let m_last = odd_abs(last);
-                if m > m_last {
+                // Against the larger of the last two peaks on this side: a decaying motion of
+                // two modes (a hand or link behind a compliant transmission) beats, and its
+                // peaks rise for a few cycles while the envelope shrinks; a growing
+                // oscillation exceeds both.
+                let m_ref = odd_abs(last).max(before);
+                if m > m_ref {
                     self.score = self.score.saturating_add(1).min(trip);
-                } else if m < m_last {
+                } else if m < m_ref {
                     self.score = self.score.saturating_sub(1).max(-trip);
                 }
                 if self.score >= trip {
                     faults |= GROWTH;
                 }
             }
+        }
+        if let (Some(b), Some(&had), Some(&last)) = (
+            self.before_m.get_mut(side),
+            self.have.get(side),
+            self.last.get(side),
+        ) {
+            *b = if had { odd_abs(last) } else { 0 };
         }
         if let Some(l) = self.last.get_mut(side) {
             *l = self.peak;
@@ -463,6 +498,43 @@ mod tests {
         assert_eq!(buzz_tick(&[(-300, 300); 40], w), None);
         // Swings of two counts are enough.
         assert!(buzz_tick(&[(-1, 1); 40], w).is_some());
+    }
+
+    #[test]
+    fn a_decaying_beat_of_two_modes_does_not_trip_the_buzz_detector() {
+        // The swings of a release on a plant with a hand behind a compliant transmission
+        // (a two-mode decay, simulated: motor 0.039 kg, link 0.070 kg at 16 212 N/m, hand
+        // 0.25 kg, K = 5618 N/m, T = 0.5 ms, from 88 counts): swings rise and fall with the
+        // beat while the envelope shrinks. Its 32nd swing (34) exceeds its first (21), which
+        // tripped the single-swing comparison; the envelopes are 69 and 41.
+        let swings = [
+            21u32, 69, 14, 65, 23, 41, 45, 20, 61, 15, 57, 24, 35, 41, 18, 54, 15, 48, 23, 31, 39,
+            17, 47, 15, 41, 21, 26, 34, 15, 41, 13, 34, 19, 21, 30, 13, 34, 11, 28, 17,
+        ];
+        let mut b = BuzzDetector::default();
+        let (mut t, mut peak, mut fire) = (0u32, 0i32, 0u32);
+        fire |= b.turn(t, peak, u32::MAX);
+        for (i, &s) in swings.iter().enumerate() {
+            t += 7;
+            peak = if i % 2 == 0 {
+                peak + s as i32
+            } else {
+                peak - s as i32
+            };
+            fire |= b.turn(t, peak, u32::MAX);
+        }
+        assert_eq!(fire, 0);
+        // The same beat without decay (its first 8 swings over and over) is a buzz.
+        let mut b = BuzzDetector::default();
+        let (mut peak, mut fire) = (0i32, 0u32);
+        fire |= b.turn(t, peak, u32::MAX);
+        for i in 0..40 {
+            t += 7;
+            let s = swings[i % 8] as i32;
+            peak = if i % 2 == 0 { peak + s } else { peak - s };
+            fire |= b.turn(t, peak, u32::MAX);
+        }
+        assert_eq!(fire, BUZZ);
     }
 
     #[test]
