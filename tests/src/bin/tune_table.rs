@@ -275,7 +275,8 @@ impact (first contact) to the latched fault, after which every output code was 0
 means the run is stable without the firmware (nothing to stop). The firmware's monitors are the\n\
 turning-point energy monitor (growth score, limit) and the buzz detector added for this family\n\
 (`stiffwall_core::monitor::BuzzDetector`, fault `buzz`): 32 consecutive turning points with\n\
-swings of two counts or more, at 15 Hz or faster, the last swing not smaller than the first —\n\
+swings of two counts or more, at 15 Hz or faster, the largest of the last 8 swings not smaller\n\
+than the largest of the first 8 —\n\
 the persistent oscillation of a firmly held device or a slow servo above K*, whose peaks do not\n\
 grow. A one-sided wall without a hand spring that throws the plant out faster than it came\n\
 (once: nothing brings it back) latches no fault; the table says so, with the speed gained, and\n\
