@@ -10,10 +10,16 @@ use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{
-    encode, DeviceInfo, DeviceMsg, ErrorCode, ErrorDetail, ExciteProfile, ExperimentKind,
-    FaultReport, FrameDecoder, HostMsg, Request, Sample, ServoConfig, TelemetryBatch, MAX_FRAME,
-    PROTOCOL_VERSION,
+    encode, DeviceInfo, DeviceMsg, ErrorCode, FaultReport, FrameDecoder, HostMsg, Request,
+    ServoConfig, TelemetryBatch, MAX_FRAME, PROTOCOL_VERSION,
 };
+
+mod describe;
+mod experiment;
+
+pub use describe::{describe_error, readable};
+use describe::{is_framing, is_framing_reply, is_hangup};
+pub use experiment::{EnoughFn, Record};
 
 /// How long a request waits for its answer.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
@@ -43,23 +49,6 @@ pub struct GapStats {
     pub bad_frames: u64,
 }
 
-/// Judges the samples of a running experiment so far: true ends it early (see
-/// [`Client::release_until`]).
-pub type EnoughFn<'a> = dyn FnMut(&[Sample]) -> bool + 'a;
-
-/// Samples of one experiment with their bookkeeping.
-#[derive(Debug, Clone)]
-pub struct Record {
-    /// Samples in order.
-    pub samples: Vec<Sample>,
-    /// Whether the experiment ran its full length.
-    pub completed: bool,
-    /// Fault bits latched when it ended.
-    pub faults: u32,
-    /// Telemetry gaps seen.
-    pub gaps: GapStats,
-}
-
 /// A connected device.
 #[derive(Debug)]
 pub struct Client {
@@ -73,65 +62,6 @@ pub struct Client {
     /// The device's handshake answer.
     pub info: DeviceInfo,
     _backend: Option<Box<dyn Backend>>,
-}
-
-/// Renders a device error as a sentence naming the field and its range.
-#[must_use]
-pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
-    let what = match code {
-        ErrorCode::Oversize => "frame too long",
-        ErrorCode::Crc => "CRC mismatch",
-        ErrorCode::Cobs => "bad COBS framing",
-        ErrorCode::UnknownTag => "unknown message",
-        ErrorCode::Deserialize => "malformed message",
-        ErrorCode::VersionMismatch => "protocol version mismatch",
-        ErrorCode::InvalidConfig => "configuration refused",
-        ErrorCode::StoreFailed => "config store failed",
-        ErrorCode::Busy => "device busy",
-        ErrorCode::InvalidArgument => "argument out of range",
-    };
-    match detail {
-        ErrorDetail::None => what.to_string(),
-        ErrorDetail::Field { field, min, max } => {
-            // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
-            let name = crate::config_flags::flag_name(*field);
-            if *min == f64::from(f32::MIN_POSITIVE) {
-                format!("{what}: {name} must be > 0 and ≤ {}", readable(*max))
-            } else {
-                format!(
-                    "{what}: {name} must be within [{}, {}]",
-                    readable(*min),
-                    readable(*max)
-                )
-            }
-        }
-        ErrorDetail::Version { got, expected } => {
-            format!("{what}: device got version {got}, expects {expected}")
-        }
-        ErrorDetail::Tag(t) => format!("{what}: tag {t}"),
-        ErrorDetail::Text(t) => format!("{what}: {t}"),
-        ErrorDetail::Repeated { count } => format!("{what} ({count} frames in a row)"),
-    }
-}
-
-/// `x` with about 6 significant digits, in scientific notation outside [1e-3, 1e7):
-/// `85.4457`, `1.18e-38`, `1048576`.
-#[must_use]
-pub fn readable(x: f64) -> String {
-    let a = x.abs();
-    if x == 0.0 || !x.is_finite() {
-        return x.to_string();
-    }
-    if !(1e-3..1e7).contains(&a) {
-        return format!("{x:.2e}");
-    }
-    let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
-    let s = format!("{x:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
 }
 
 impl Client {
@@ -404,7 +334,7 @@ impl Client {
                     DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
                     _ => false,
                 },
-                |m| matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code)),
+                is_framing_reply,
             )
             .with_context(|| match last_framing.take() {
                 Some(e) => format!(
@@ -499,147 +429,6 @@ impl Client {
             }
         }
     }
-
-    /// Runs a release test and collects every sample until the device reports the end.
-    pub fn release(&mut self, deflection_ticks: i32, ticks: u32) -> Result<Record> {
-        self.experiment(
-            &HostMsg::Release {
-                deflection_ticks,
-                ticks,
-            },
-            ExperimentKind::Release,
-            ticks,
-        )
-    }
-
-    /// Runs a release test like [`Client::release`], but sends `Stop` as soon as `enough`
-    /// returns true for the samples received so far (the caller judges the record, so the
-    /// samples after that point are only the `Stop`'s latency).
-    pub fn release_until(
-        &mut self,
-        deflection_ticks: i32,
-        ticks: u32,
-        enough: &mut EnoughFn<'_>,
-    ) -> Result<Record> {
-        self.experiment_until(
-            &HostMsg::Release {
-                deflection_ticks,
-                ticks,
-            },
-            ExperimentKind::Release,
-            ticks,
-            Some(enough),
-        )
-    }
-
-    /// Runs an impact test (see [`HostMsg::Impact`]), ending it early like
-    /// [`Client::release_until`].
-    pub fn impact_until(
-        &mut self,
-        start_ticks: i32,
-        velocity_milliticks: i32,
-        ticks: u32,
-        enough: &mut EnoughFn<'_>,
-    ) -> Result<Record> {
-        self.experiment_until(
-            &HostMsg::Impact {
-                start_ticks,
-                velocity_milliticks,
-                ticks,
-            },
-            ExperimentKind::Impact,
-            ticks,
-            Some(enough),
-        )
-    }
-
-    /// Runs an open-loop excitation and collects every sample.
-    pub fn excite(&mut self, profile: ExciteProfile, ticks: u32) -> Result<Record> {
-        self.experiment(
-            &HostMsg::Excite { profile, ticks },
-            ExperimentKind::Excite,
-            ticks,
-        )
-    }
-
-    fn experiment(&mut self, msg: &HostMsg, kind: ExperimentKind, ticks: u32) -> Result<Record> {
-        self.experiment_until(msg, kind, ticks, None)
-    }
-
-    fn experiment_until(
-        &mut self,
-        msg: &HostMsg,
-        kind: ExperimentKind,
-        ticks: u32,
-        mut enough: Option<&mut EnoughFn<'_>>,
-    ) -> Result<Record> {
-        self.pending
-            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
-        let before = self.gaps;
-        self.next_seq = None;
-        self.request(msg)?;
-        let rate = f64::from(self.info.servo_rate_hz.max(1));
-        // Generous: the virtual device may run slower than real time on a loaded machine.
-        let limit = Duration::from_secs_f64(f64::from(ticks) / rate * 20.0 + 10.0);
-        let start = Instant::now();
-        let mut last_hb = Instant::now();
-        let mut samples = Vec::with_capacity(ticks as usize + 16);
-        loop {
-            if last_hb.elapsed() >= HEARTBEAT_PERIOD {
-                self.send(&HostMsg::Heartbeat)?;
-                last_hb = Instant::now();
-            }
-            match self.recv(Duration::from_millis(20))? {
-                Some(DeviceMsg::Telemetry(b)) => {
-                    samples.extend_from_slice(&b.samples);
-                    if let Some(f) = enough.as_mut() {
-                        if f(&samples) {
-                            enough = None;
-                            self.send(&HostMsg::Stop)?;
-                        }
-                    }
-                }
-                Some(DeviceMsg::ExperimentDone {
-                    kind: k,
-                    completed,
-                    faults,
-                }) if k == kind => {
-                    // Telemetry queued behind the end message.
-                    while let Some(b) = self.next_batch(Duration::from_millis(50))? {
-                        samples.extend_from_slice(&b.samples);
-                    }
-                    let mut gaps = self.gaps;
-                    gaps.received -= before.received;
-                    gaps.missing -= before.missing;
-                    gaps.dropped_on_device -= before.dropped_on_device;
-                    gaps.bad_frames -= before.bad_frames;
-                    return Ok(Record {
-                        samples,
-                        completed,
-                        faults,
-                        gaps,
-                    });
-                }
-                Some(_) | None => {}
-            }
-            if start.elapsed() > limit {
-                let _ = self.send(&HostMsg::Stop);
-                bail!("the experiment did not finish within {} s", limit.as_secs());
-            }
-        }
-    }
-}
-
-/// Error codes a device gives to frames that did not decode (not to a refused request).
-fn is_framing(code: ErrorCode) -> bool {
-    matches!(
-        code,
-        ErrorCode::Oversize
-            | ErrorCode::Crc
-            | ErrorCode::Cobs
-            | ErrorCode::UnknownTag
-            | ErrorCode::Deserialize
-    )
 }
 
 fn ack_kind(msg: &HostMsg) -> Option<Request> {
@@ -693,23 +482,11 @@ fn placeholder_info() -> DeviceInfo {
     }
 }
 
-/// Whether an error is the link going away (the device hung up or closed its end), as opposed
-/// to a refusal, a timeout or garbage.
-fn is_hangup(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<std::io::Error>().is_some_and(|io| {
-            matches!(
-                io.kind(),
-                ErrorKind::BrokenPipe | ErrorKind::UnexpectedEof | ErrorKind::ConnectionReset
-            )
-        })
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::device::transport::pty_pair;
+    use stiffwall_proto::ErrorDetail;
 
     /// A scripted device on the master side of a pty: answers the handshake, then reads one
     /// request and does `then` with the port (answer, or hang up by dropping it).

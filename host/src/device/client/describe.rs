@@ -1,0 +1,94 @@
+//! Device errors and link failures in words: what a refused request or a bad frame means,
+//! numbers in a readable form, and which errors are framing replies or a hangup.
+
+use std::io::ErrorKind;
+use stiffwall_proto::{DeviceMsg, ErrorCode, ErrorDetail};
+
+/// Renders a device error as a sentence naming the field and its range.
+#[must_use]
+pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
+    let what = match code {
+        ErrorCode::Oversize => "frame too long",
+        ErrorCode::Crc => "CRC mismatch",
+        ErrorCode::Cobs => "bad COBS framing",
+        ErrorCode::UnknownTag => "unknown message",
+        ErrorCode::Deserialize => "malformed message",
+        ErrorCode::VersionMismatch => "protocol version mismatch",
+        ErrorCode::InvalidConfig => "configuration refused",
+        ErrorCode::StoreFailed => "config store failed",
+        ErrorCode::Busy => "device busy",
+        ErrorCode::InvalidArgument => "argument out of range",
+    };
+    match detail {
+        ErrorDetail::None => what.to_string(),
+        ErrorDetail::Field { field, min, max } => {
+            // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
+            let name = crate::config_flags::flag_name(*field);
+            if *min == f64::from(f32::MIN_POSITIVE) {
+                format!("{what}: {name} must be > 0 and ≤ {}", readable(*max))
+            } else {
+                format!(
+                    "{what}: {name} must be within [{}, {}]",
+                    readable(*min),
+                    readable(*max)
+                )
+            }
+        }
+        ErrorDetail::Version { got, expected } => {
+            format!("{what}: device got version {got}, expects {expected}")
+        }
+        ErrorDetail::Tag(t) => format!("{what}: tag {t}"),
+        ErrorDetail::Text(t) => format!("{what}: {t}"),
+        ErrorDetail::Repeated { count } => format!("{what} ({count} frames in a row)"),
+    }
+}
+
+/// `x` with about 6 significant digits, in scientific notation outside [1e-3, 1e7):
+/// `85.4457`, `1.18e-38`, `1048576`.
+#[must_use]
+pub fn readable(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    if !(1e-3..1e7).contains(&a) {
+        return format!("{x:.2e}");
+    }
+    let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// Error codes a device gives to frames that did not decode (not to a refused request).
+pub(super) fn is_framing(code: ErrorCode) -> bool {
+    matches!(
+        code,
+        ErrorCode::Oversize
+            | ErrorCode::Crc
+            | ErrorCode::Cobs
+            | ErrorCode::UnknownTag
+            | ErrorCode::Deserialize
+    )
+}
+
+/// A device reply to a frame that did not decode (see [`is_framing`]).
+pub(super) fn is_framing_reply(m: &DeviceMsg) -> bool {
+    matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code))
+}
+
+/// Whether an error is the link going away (the device hung up or closed its end), as opposed
+/// to a refusal, a timeout or garbage.
+pub(super) fn is_hangup(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>().is_some_and(|io| {
+            matches!(
+                io.kind(),
+                ErrorKind::BrokenPipe | ErrorKind::UnexpectedEof | ErrorKind::ConnectionReset
+            )
+        })
+    })
+}

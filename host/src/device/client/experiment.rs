@@ -1,0 +1,160 @@
+//! Experiments on a connected device: release and impact tests and open-loop excitations,
+//! each run to its end (or ended early when the caller's judge has seen enough), with every
+//! sample and the telemetry gaps seen while it ran.
+//!
+//! Units: ticks are servo ticks; deflections and start positions are effective encoder ticks;
+//! velocities effective ticks per 1000 servo ticks. Heartbeats go out every
+//! [`HEARTBEAT_PERIOD`] while an experiment runs.
+
+use super::{Client, GapStats, HEARTBEAT_PERIOD};
+use anyhow::{bail, Result};
+use std::time::{Duration, Instant};
+use stiffwall_proto::{DeviceMsg, ExciteProfile, ExperimentKind, HostMsg, Sample};
+
+/// Judges the samples of a running experiment so far: true ends it early (see
+/// [`Client::release_until`]).
+pub type EnoughFn<'a> = dyn FnMut(&[Sample]) -> bool + 'a;
+
+/// Samples of one experiment with their bookkeeping.
+#[derive(Debug, Clone)]
+pub struct Record {
+    /// Samples in order.
+    pub samples: Vec<Sample>,
+    /// Whether the experiment ran its full length.
+    pub completed: bool,
+    /// Fault bits latched when it ended.
+    pub faults: u32,
+    /// Telemetry gaps seen.
+    pub gaps: GapStats,
+}
+
+impl Client {
+    /// Runs a release test and collects every sample until the device reports the end.
+    pub fn release(&mut self, deflection_ticks: i32, ticks: u32) -> Result<Record> {
+        self.experiment(
+            &HostMsg::Release {
+                deflection_ticks,
+                ticks,
+            },
+            ExperimentKind::Release,
+            ticks,
+        )
+    }
+
+    /// Runs a release test like [`Client::release`], but sends `Stop` as soon as `enough`
+    /// returns true for the samples received so far (the caller judges the record, so the
+    /// samples after that point are only the `Stop`'s latency).
+    pub fn release_until(
+        &mut self,
+        deflection_ticks: i32,
+        ticks: u32,
+        enough: &mut EnoughFn<'_>,
+    ) -> Result<Record> {
+        self.experiment_until(
+            &HostMsg::Release {
+                deflection_ticks,
+                ticks,
+            },
+            ExperimentKind::Release,
+            ticks,
+            Some(enough),
+        )
+    }
+
+    /// Runs an impact test (see [`HostMsg::Impact`]), ending it early like
+    /// [`Client::release_until`].
+    pub fn impact_until(
+        &mut self,
+        start_ticks: i32,
+        velocity_milliticks: i32,
+        ticks: u32,
+        enough: &mut EnoughFn<'_>,
+    ) -> Result<Record> {
+        self.experiment_until(
+            &HostMsg::Impact {
+                start_ticks,
+                velocity_milliticks,
+                ticks,
+            },
+            ExperimentKind::Impact,
+            ticks,
+            Some(enough),
+        )
+    }
+
+    /// Runs an open-loop excitation and collects every sample.
+    pub fn excite(&mut self, profile: ExciteProfile, ticks: u32) -> Result<Record> {
+        self.experiment(
+            &HostMsg::Excite { profile, ticks },
+            ExperimentKind::Excite,
+            ticks,
+        )
+    }
+
+    fn experiment(&mut self, msg: &HostMsg, kind: ExperimentKind, ticks: u32) -> Result<Record> {
+        self.experiment_until(msg, kind, ticks, None)
+    }
+
+    fn experiment_until(
+        &mut self,
+        msg: &HostMsg,
+        kind: ExperimentKind,
+        ticks: u32,
+        mut enough: Option<&mut EnoughFn<'_>>,
+    ) -> Result<Record> {
+        self.pending
+            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        let before = self.gaps;
+        self.next_seq = None;
+        self.request(msg)?;
+        let rate = f64::from(self.info.servo_rate_hz.max(1));
+        // Generous: the virtual device may run slower than real time on a loaded machine.
+        let limit = Duration::from_secs_f64(f64::from(ticks) / rate * 20.0 + 10.0);
+        let start = Instant::now();
+        let mut last_hb = Instant::now();
+        let mut samples = Vec::with_capacity(ticks as usize + 16);
+        loop {
+            if last_hb.elapsed() >= HEARTBEAT_PERIOD {
+                self.send(&HostMsg::Heartbeat)?;
+                last_hb = Instant::now();
+            }
+            match self.recv(Duration::from_millis(20))? {
+                Some(DeviceMsg::Telemetry(b)) => {
+                    samples.extend_from_slice(&b.samples);
+                    if let Some(f) = enough.as_mut() {
+                        if f(&samples) {
+                            enough = None;
+                            self.send(&HostMsg::Stop)?;
+                        }
+                    }
+                }
+                Some(DeviceMsg::ExperimentDone {
+                    kind: k,
+                    completed,
+                    faults,
+                }) if k == kind => {
+                    // Telemetry queued behind the end message.
+                    while let Some(b) = self.next_batch(Duration::from_millis(50))? {
+                        samples.extend_from_slice(&b.samples);
+                    }
+                    let mut gaps = self.gaps;
+                    gaps.received -= before.received;
+                    gaps.missing -= before.missing;
+                    gaps.dropped_on_device -= before.dropped_on_device;
+                    gaps.bad_frames -= before.bad_frames;
+                    return Ok(Record {
+                        samples,
+                        completed,
+                        faults,
+                        gaps,
+                    });
+                }
+                Some(_) | None => {}
+            }
+            if start.elapsed() > limit {
+                let _ = self.send(&HostMsg::Stop);
+                bail!("the experiment did not finish within {} s", limit.as_secs());
+            }
+        }
+    }
+}
