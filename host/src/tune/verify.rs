@@ -201,8 +201,8 @@ pub fn decaying(counts: &[i64]) -> bool {
 /// Longest record of a test of base length `ticks` (the budget the firmware is given).
 #[must_use]
 pub fn max_test_len(ticks: usize) -> usize {
-    let step = (ticks / DECAY_CHECKS).max(1);
-    ticks + step * DECAY_CHECKS * (DECAY_EXTENSION - 1)
+    let w = DecayWatch::new(ticks);
+    w.ticks + w.step * DecayWatch::LAST
 }
 
 /// The length of a test's record that the verdict judges, once the counts decide it (None while
@@ -214,18 +214,49 @@ pub fn max_test_len(ticks: usize) -> usize {
 /// from the counts alone, so it does not depend on when the host sees them.
 #[must_use]
 pub fn judged_len(counts: &[i64], ticks: usize, min_run: usize) -> Option<usize> {
-    let ticks = ticks.max(1);
-    let step = (ticks / DECAY_CHECKS).max(1);
-    let last = DECAY_CHECKS * (DECAY_EXTENSION - 1);
-    let stop = (0..=last)
-        .map(|j| (j, ticks + j * step))
-        .take_while(|&(_, l)| l <= counts.len())
-        .find(|&(j, l)| j == last || !decaying(&counts[..l]))
-        .map(|(_, l)| l);
+    let stop = DecayWatch::new(ticks).stop(counts);
     match (settled_at(counts, min_run), stop) {
         (Some(s), Some(l)) => Some(s.min(l)),
         (s, None) => s,
         (None, l) => l,
+    }
+}
+
+/// The checkpoints of [`judged_len`] past the base length, examined once each as a record
+/// grows (a prefix never changes, so a checkpoint found still decaying stays so): the running
+/// test asks on every telemetry batch without re-reading the checkpoints already passed.
+struct DecayWatch {
+    ticks: usize,
+    step: usize,
+    next: usize,
+}
+
+impl DecayWatch {
+    const LAST: usize = DECAY_CHECKS * (DECAY_EXTENSION - 1);
+
+    fn new(ticks: usize) -> Self {
+        let ticks = ticks.max(1);
+        Self {
+            ticks,
+            step: (ticks / DECAY_CHECKS).max(1),
+            next: 0,
+        }
+    }
+
+    /// The first checkpoint reached by `counts` at which the oscillation no longer decays (or
+    /// the last one), if any.
+    fn stop(&mut self, counts: &[i64]) -> Option<usize> {
+        while self.next <= Self::LAST {
+            let l = self.ticks + self.next * self.step;
+            if l > counts.len() {
+                return None;
+            }
+            if self.next == Self::LAST || !decaying(&counts[..l]) {
+                return Some(l);
+            }
+            self.next += 1;
+        }
+        None
     }
 }
 
@@ -324,6 +355,8 @@ pub fn run_test(
     let shift = base.coarsen_shift;
     let mut seen = 0usize;
     let mut released: Vec<i64> = Vec::new();
+    // The end of `judged_len`, asked incrementally while the test runs.
+    let mut watch = DecayWatch::new(ticks as usize);
     let mut enough = |s: &[stiffwall_proto::Sample]| {
         for x in &s[seen..] {
             if x.flags & flags::RELEASED != 0 {
@@ -331,7 +364,7 @@ pub fn run_test(
             }
         }
         seen = s.len();
-        judged_len(&released, ticks as usize, min_run).is_some()
+        settled_at(&released, min_run).is_some() || watch.stop(&released).is_some()
     };
     let budget = u32::try_from(max_test_len(ticks as usize)).unwrap_or(u32::MAX);
     let rec = match test {
