@@ -127,9 +127,11 @@ pub fn bench_firmware(args: &[String]) -> Result<()> {
             "Instructions per servo tick on the QEMU image, measured by `cargo xtask bench-firmware`\n\
              (`qemu-system-arm -icount shift=0`: one instruction per virtual ns; SysTick read around\n\
              batches of 200 ticks, 8000 ticks per stage, the empty loop subtracted). Stages are\n\
-             cumulative; the full tick adds the command queue and the telemetry push. The bench's\n\
-             encoder and output stand-ins are measured alone (`io-stand-ins`) and subtracted; on\n\
-             hardware they are one register load and one store. Budgets for the default back-end\n\
+             cumulative; the full tick adds the command queue and the telemetry push. Each stage is\n\
+             its own function, called once per tick as the servo interrupt calls `Servo::tick`,\n\
+             so its count depends on the servo's code only. The call, the return and the bench's\n\
+             encoder and output stand-ins are measured the same way (`io-stand-ins`) and\n\
+             subtracted; on hardware the stand-ins are one register load and one store. Budgets for the default back-end\n\
              ({DEFAULT_NUMERIC}): full tick ≤ {FULL_BUDGET}, spring ≤ {SPRING_BUDGET} (both enforced in CI).\n\n{t}"
         );
         update_section(&root().join("docs/BENCHMARKS.md"), "firmware-icount", &body)?;
