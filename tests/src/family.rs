@@ -52,9 +52,36 @@ impl Supervised {
     /// or — the one failure no monitor can act on — the wall threw the plant out once, faster
     /// than it came, and the firmware applied no force after it left (a one-sided wall without
     /// a hand spring: nothing brings the plant back, so the energy gained is one contact's).
+    /// Or — nothing left to stop — the motion under the firmware dies away by itself
+    /// ([`Supervised::decays_under_firmware`]).
     #[must_use]
     pub fn safe(&self) -> bool {
-        self.unsupervised_settles || self.run.stopped() || self.left_and_released()
+        self.unsupervised_settles
+            || self.run.stopped()
+            || self.left_and_released()
+            || self.decays_under_firmware()
+    }
+
+    /// No fault latched, and the motion under the firmware dies away: the peak-to-peak
+    /// excursion over the run's last sixth is at most a quarter of that over its first sixth
+    /// (or within one count), and no count of the run lies farther from the wall than the
+    /// first sixth reached. The firmware's output differs from the bare spring's (16-bit codes,
+    /// fixed point), so near a limit cycle (cogging with a hand) a trial that does not settle
+    /// without the firmware can converge under it; the monitors rightly leave a decaying
+    /// motion alone.
+    #[must_use]
+    pub fn decays_under_firmware(&self) -> bool {
+        let c = &self.run.counts;
+        if self.run.trip_tick.is_some() || c.len() < 12 {
+            return false;
+        }
+        let sixth = c.len() / 6;
+        let ptp =
+            |w: &[i64]| w.iter().max().copied().unwrap_or(0) - w.iter().min().copied().unwrap_or(0);
+        let head = &c[..sixth];
+        let reach = head.iter().map(|n| n.abs()).max().unwrap_or(0);
+        let tail = ptp(&c[c.len() - sixth..]);
+        (tail <= 1 || 4 * tail <= ptp(head)) && c.iter().all(|n| n.abs() <= reach)
     }
 
     /// The supervised plant left the one-sided wall (count < −1 after a contact), never came
@@ -295,5 +322,70 @@ impl PlantCase {
     #[must_use]
     pub fn counts_per_rev(&self) -> u32 {
         self.model.counts_per_rev.unwrap_or(0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kstar::TrialKind;
+
+    /// A run of `counts` (no fault unless `trip`) after a release that does not settle bare.
+    fn supervised(counts: Vec<i64>, trip: Option<usize>) -> Supervised {
+        let codes = vec![0; counts.len()];
+        Supervised {
+            trial: Trial {
+                wall: 0,
+                side: 1,
+                kind: TrialKind::Release { counts: 40 },
+            },
+            unsupervised_settles: false,
+            unsupervised_peak: 40.5,
+            left_faster: None,
+            delay_ticks: 0,
+            run: SupervisedRun {
+                trip_tick: trip,
+                faults: u32::from(trip.is_some()),
+                nonzero_after_trip: 0,
+                counts,
+                codes,
+            },
+        }
+    }
+
+    /// A triangle oscillation about `offset` whose amplitude, counts, is `amp(cycle)`; 20 ticks
+    /// per cycle, 100 cycles.
+    fn oscillation(offset: i64, amp: impl Fn(usize) -> i64) -> Vec<i64> {
+        (0..2000)
+            .map(|t| {
+                let a = amp(t / 20);
+                let phase = (t % 20) as i64;
+                let tri = if phase < 10 { phase } else { 20 - phase };
+                offset + a - tri * a / 5
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_motion_that_dies_away_under_the_firmware_is_safe_and_a_persistent_one_is_not() {
+        // From ±40 about −16 down to ±1: decays (the cogging-and-hand case).
+        let dying = supervised(oscillation(-16, |c| (40 - c as i64 * 2 / 5).max(1)), None);
+        assert!(dying.decays_under_firmware() && dying.safe());
+        // Settled at rest after a few cycles.
+        let settled = supervised(oscillation(0, |c| if c < 10 { 13 } else { 0 }), None);
+        assert!(settled.decays_under_firmware());
+        // Persistent ±32 (a limit cycle) is neither decaying nor safe without a trip.
+        let persistent = supervised(oscillation(0, |_| 32), None);
+        assert!(!persistent.decays_under_firmware() && !persistent.safe());
+        // Shrinking to half only: not enough.
+        let half = supervised(oscillation(0, |c| 40 - c as i64 / 5), None);
+        assert!(!half.decays_under_firmware());
+        // Growing, even if it ends small: it went farther than it started.
+        let mut grew = oscillation(0, |c| if c < 50 { 10 + c as i64 } else { 0 });
+        grew[1900] = 0;
+        assert!(!supervised(grew, None).decays_under_firmware());
+        // A latched fault is judged by `stopped`, not as a decay.
+        let tripped = supervised(oscillation(0, |c| (40 - c as i64).max(0)), Some(100));
+        assert!(!tripped.decays_under_firmware() && tripped.safe());
     }
 }

@@ -49,6 +49,15 @@ pub const BUZZ_ENVELOPE: usize = 8;
 const _: () =
     assert!(BUZZ_ENVELOPE.is_power_of_two() && BUZZ_ENVELOPE <= BUZZ_HALF_CYCLES as usize);
 
+/// A buzz window's envelope may shrink by up to 1/2^`BUZZ_DECAY_SHIFT` of its first envelope
+/// (rounded down: none below 16 counts) and still count as persistent. Between the centres of
+/// the first and last [`BUZZ_ENVELOPE`] swings lie 12 cycles, so this is an oscillation whose
+/// equivalent damping ratio is below ln(16/15)/(2π·12) ≈ 0.0009: one that converges onto a
+/// limit cycle (cogging and a hand at a stiffness above the stable one: 37 counts settling onto
+/// 32 over 4 s) instead of decaying. A wall that is stable decays far faster: Coulomb friction
+/// alone takes 4σ counts off every cycle, a damping ratio of 0.01 takes 53 % off a window.
+pub const BUZZ_DECAY_SHIFT: u32 = 4;
+
 /// The longest a buzz window of [`BUZZ_HALF_CYCLES`] may take at `rate_hz`, ticks: half-cycles
 /// of at most rate/(2·[`BUZZ_MIN_HZ`]) ticks each.
 #[must_use]
@@ -62,8 +71,9 @@ pub fn buzz_window_ticks(rate_hz: u32) -> u32 {
 /// so it costs nothing on the other ticks. It trips when [`BUZZ_HALF_CYCLES`] consecutive
 /// swings (peak to peak between turning points) of at least [`BUZZ_MIN_SWING`] counts fit in
 /// `window_ticks` (a frequency of at least [`BUZZ_MIN_HZ`]) and the largest of its last
-/// [`BUZZ_ENVELOPE`] swings is not smaller than the largest of its first ones: a decaying
-/// oscillation loses at least a count of envelope over the window and does not trip, even when
+/// [`BUZZ_ENVELOPE`] swings is not smaller than the largest of its first ones, less
+/// 1/2^[`BUZZ_DECAY_SHIFT`] of it: a decaying oscillation loses more than that over the window
+/// and does not trip, even when
 /// two modes beat (a motor mode against the wall and a hand or link mode behind a compliant
 /// transmission: single swings then rise and fall while the envelope shrinks, and comparing
 /// the last swing with the first tripped on decaying motion); any swing below the minimum
@@ -110,7 +120,8 @@ impl BuzzDetector {
         }
         self.count = 0;
         let last_envelope = self.recent.iter().copied().fold(0, u32::max);
-        if last_envelope >= self.first_envelope && now.wrapping_sub(self.start) <= window_ticks {
+        let persistent = self.first_envelope - (self.first_envelope >> BUZZ_DECAY_SHIFT);
+        if last_envelope >= persistent && now.wrapping_sub(self.start) <= window_ticks {
             BUZZ
         } else {
             0
@@ -498,6 +509,17 @@ mod tests {
         assert_eq!(buzz_tick(&[(-300, 300); 40], w), None);
         // Swings of two counts are enough.
         assert!(buzz_tick(&[(-1, 1); 40], w).is_some());
+        // Converging onto a limit cycle: ±40 losing a count every 10 cycles (3.2 counts of
+        // swing per window of 16 cycles, under 80/16 = 5) is persistent: trips in the first
+        // window. Comparing envelopes without the 1/16 tolerance never tripped on it.
+        let converging: std::vec::Vec<(i32, i32)> =
+            (0..40).map(|i| (-40 + i / 10, 40 - i / 10)).collect();
+        let t = buzz_tick(&converging, u32::MAX).expect("converging onto a limit cycle");
+        assert!(t <= 34 * 80, "tripped at tick {t}: not in the first window");
+        // Losing a count every 4 cycles (8 counts of swing per window) is a decay: no trip.
+        let decaying: std::vec::Vec<(i32, i32)> =
+            (0..40).map(|i| (-40 + i / 4, 40 - i / 4)).collect();
+        assert_eq!(buzz_tick(&decaying, u32::MAX), None);
     }
 
     #[test]

@@ -200,6 +200,7 @@ fn render(rows: &[Row], quick: bool) -> String {
                 "thrown out {:+.1} % faster once, no fault, force 0 after",
                 100.0 * (s.left_faster.unwrap_or(1.0) - 1.0)
             ),
+            (false, None) if s.decays_under_firmware() => "decays under the firmware".to_string(),
             (false, _) => "NOT STOPPED".to_string(),
         };
         let trips = sup
@@ -218,7 +219,20 @@ fn render(rows: &[Row], quick: bool) -> String {
                 .filter_map(|s| s.run.trip_tick)
                 .max()
                 .map_or(String::new(), |t| format!(", latest trip {t}"));
-            format!("{stopped} of {} safe{worst}", sup.other_unstable.len())
+            let decays = sup
+                .other_unstable
+                .iter()
+                .filter(|s| s.decays_under_firmware())
+                .count();
+            let decays = if decays > 0 {
+                format!(" ({decays} decay under the firmware)")
+            } else {
+                String::new()
+            };
+            format!(
+                "{stopped} of {} safe{decays}{worst}",
+                sup.other_unstable.len()
+            )
         };
         let zeroed = sup.all_safe();
         let _ = writeln!(
@@ -276,9 +290,14 @@ means the run is stable without the firmware (nothing to stop). The firmware's m
 turning-point energy monitor (growth score, limit) and the buzz detector added for this family\n\
 (`stiffwall_core::monitor::BuzzDetector`, fault `buzz`): 32 consecutive turning points with\n\
 swings of two counts or more, at 15 Hz or faster, the largest of the last 8 swings not smaller\n\
-than the largest of the first 8 —\n\
+than the largest of the first 8 less 1/16 of it (none below 16 counts) —\n\
 the persistent oscillation of a firmly held device or a slow servo above K*, whose peaks do not\n\
-grow. A one-sided wall without a hand spring that throws the plant out faster than it came\n\
+grow, or one converging onto a limit cycle. \"Decays under the firmware\" is a trial that does\n\
+not settle without the firmware but, with no fault, dies away under it (its peak-to-peak motion\n\
+over the last sixth of the run at most a quarter of that over the first sixth, or within one\n\
+count, and never farther from the wall than the first sixth reached): the firmware's 16-bit,\n\
+fixed-point output is not the bare spring's, and near a limit cycle (cogging with a hand) that\n\
+is enough to converge; the monitors rightly leave a decaying motion alone. A one-sided wall without a hand spring that throws the plant out faster than it came\n\
 (once: nothing brings it back) latches no fault; the table says so, with the speed gained, and\n\
 the firmware applies no force after the plant left.\n\n## Table\n\n{table}\n"
     )
