@@ -312,11 +312,75 @@ pub fn clear_faults(c: &mut Client) -> Result<()> {
     }
 }
 
+/// Release tests re-aimed at most this many times when the hold stopped off its target.
+pub const HOLD_REAIMS: usize = 3;
+
+/// A release asked from `requested` ticks, aimed at `target`, started at `start` (the first
+/// released count) with a verdict that `passes` or not: the target of the next attempt when
+/// this one says nothing about the energy asked for, else `None`.
+///
+/// Static friction stops the hold where its spring's force falls below breakaway, up to
+/// F_s/(KΔ) ticks off target (past it after the pull from rest, or short of it). A failure
+/// from farther than asked or a pass from nearer, by more than ⌊|requested|/16⌋ ticks (at
+/// least 1; about 12 % in energy), was a test at another energy: a wall can be stable up to
+/// v_max and unstable just above it, as Coulomb friction damps less at larger amplitude. It is
+/// re-aimed in proportion, target × requested / start, since the overshoot or shortfall grows
+/// with the hold's travel. The tolerance is the same both ways, so that re-aiming does not
+/// favour passes. A failure from nearer or a pass from farther is kept (the wall failed at a
+/// lower energy, or held a higher one).
+#[must_use]
+pub fn reaim(requested: i32, target: i32, start: i64, passes: bool) -> Option<i32> {
+    let want = i64::from(requested).abs();
+    let got = start.abs();
+    let tol = (want / 16).max(1);
+    let off = if passes {
+        got < want - tol
+    } else {
+        got > want + tol
+    };
+    if !off || got == 0 || start.signum() != i64::from(requested).signum() {
+        return None;
+    }
+    let next = (i64::from(target) * want / got).clamp(-(1 << 20), 1 << 20);
+    let next = i32::try_from(next).ok()?;
+    (next != target && next != 0).then_some(next)
+}
+
 /// Runs one test at stiffness `k` (config `base` with that K) for a base length of `ticks`
 /// ticks after the release, longer while its oscillation still decays (at most
 /// [`max_test_len`]); the record ends at [`judged_len`] (settled: run `min_run`). Returns the
-/// verdict and the counts judged.
+/// verdict and the counts judged. A release whose hold stopped off target is re-aimed
+/// ([`reaim`], at most [`HOLD_REAIMS`] times), and the last attempt's verdict is the test's.
 pub fn run_test(
+    c: &mut Client,
+    base: &ServoConfig,
+    k: f64,
+    test: Test,
+    ticks: u32,
+    min_run: usize,
+) -> Result<(Verdict, Vec<i64>)> {
+    let Test::Release { deflection_ticks } = test else {
+        return run_once(c, base, k, test, ticks, min_run);
+    };
+    let mut target = deflection_ticks;
+    let mut result = run_once(c, base, k, test, ticks, min_run)?;
+    for _ in 0..HOLD_REAIMS {
+        let Some(start) = result.1.first().copied() else {
+            break;
+        };
+        let Some(next) = reaim(deflection_ticks, target, start, result.0.passes()) else {
+            break;
+        };
+        target = next;
+        let aimed = Test::Release {
+            deflection_ticks: target,
+        };
+        result = run_once(c, base, k, aimed, ticks, min_run)?;
+    }
+    Ok(result)
+}
+
+fn run_once(
     c: &mut Client,
     base: &ServoConfig,
     k: f64,
@@ -455,6 +519,31 @@ pub fn min_settle_run(mass: f64, k: f64, period_s: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_release_off_its_target_is_reaimed_only_when_it_says_nothing() {
+        // Asked 57, stuck at 66 and failed: aim at 57·57/66 = 49.
+        assert_eq!(reaim(57, 57, 66, false), Some(49));
+        // A second attempt (aimed at 49) that stuck at 68 again: 49·57/68 = 41.
+        assert_eq!(reaim(57, 49, 68, false), Some(41));
+        // Failed from 60 (within 57 + 3): the energy asked for, kept; from 61, re-aimed.
+        assert_eq!(reaim(57, 57, 60, false), None);
+        assert_eq!(reaim(57, 57, 61, false), Some(53));
+        // Passed from 54 (within 57 − 3): kept; from 53, re-aimed.
+        assert_eq!(reaim(57, 57, 54, true), None);
+        assert_eq!(reaim(57, 57, 53, true), Some(61));
+        // Passed from farther, or failed from nearer: kept.
+        assert_eq!(reaim(57, 57, 66, true), None);
+        assert_eq!(reaim(57, 57, 40, false), None);
+        // Passed from well short: aim farther, on the negative side too.
+        assert_eq!(reaim(-40, -40, -30, true), Some(-53));
+        // Small deflections: one tick of tolerance.
+        assert_eq!(reaim(2, 2, 2, true), None);
+        assert_eq!(reaim(4, 4, 2, true), Some(8));
+        // Started on the other side, or at the wall: nothing to scale.
+        assert_eq!(reaim(57, 57, -66, false), None);
+        assert_eq!(reaim(57, 57, 0, true), None);
+    }
 
     #[test]
     fn the_set_has_both_sides_at_two_or_three_energies() {

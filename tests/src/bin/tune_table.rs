@@ -222,7 +222,7 @@ fn render(rows: &[Row], quick: bool) -> String {
             let decays = sup
                 .other_unstable
                 .iter()
-                .filter(|s| s.decays_under_firmware())
+                .filter(|s| !s.run.stopped() && !s.left_and_released() && s.decays_under_firmware())
                 .count();
             let decays = if decays > 0 {
                 format!(" ({decays} decay under the firmware)")
