@@ -212,8 +212,8 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
     } else {
         let _ = writeln!(
             s,
-            "model mismatch (margin ×{:.2}, longer tests at more energies):",
-            procedure::MISMATCH_MARGIN
+            "model mismatch (margin ×{:.3} in all, longer tests at more energies):",
+            o.margin_used
         );
         for f in &o.model_mismatch {
             let _ = writeln!(s, "  - {f}");

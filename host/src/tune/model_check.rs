@@ -179,17 +179,31 @@ pub fn findings(id: &Identified, e: &Evidence, units: (&str, &str)) -> Vec<Strin
             _ => {}
         }
     }
-    if let (Some(meas), Some(model), Some(k)) = (e.release_hz, e.model_hz, e.release_k) {
-        let r = meas / model;
-        if !(1.0 / FREQUENCY_RATIO..=FREQUENCY_RATIO).contains(&r) {
-            out.push(format!(
-                "a release at K = {k:.4} oscillates at {meas:.1} Hz where the rigid model \
-                 predicts {model:.1} Hz: a resonance or lag (compliant transmission, amplifier) \
-                 shapes the wall's response"
-            ));
-        }
+    if let (Some((meas, model)), Some(k)) = (resonance(e), e.release_k) {
+        out.push(format!(
+            "a release at K = {k:.4} oscillates at {meas:.1} Hz where the rigid model \
+             predicts {model:.1} Hz: a resonance or lag (compliant transmission, amplifier) \
+             shapes the wall's response"
+        ));
     }
     out
+}
+
+/// The measured and the rigid model's release frequency, Hz, when their ratio is outside
+/// [1/[`FREQUENCY_RATIO`], [`FREQUENCY_RATIO`]].
+fn resonance(e: &Evidence) -> Option<(f64, f64)> {
+    let (meas, model) = (e.release_hz?, e.model_hz?);
+    let r = meas / model;
+    (!(1.0 / FREQUENCY_RATIO..=FREQUENCY_RATIO).contains(&r)).then_some((meas, model))
+}
+
+/// Whether the identified dynamics (mass, the wall's frequency) fit the device: no spring-like
+/// force, a fit residual within [`RESIDUAL_LIMIT`], no resonance. Then the only findings can
+/// be about friction (breakaway above sliding) or the verified K against the prediction, and
+/// the test energies, computed from the identified mass, are the ones asked for.
+#[must_use]
+pub fn dynamics_fit(id: &Identified, e: &Evidence) -> bool {
+    id.spring.is_none() && e.residual_rel <= RESIDUAL_LIMIT && resonance(e).is_none()
 }
 
 /// Finding when the verified K is far below the prediction, if it is.
@@ -294,5 +308,41 @@ mod tests {
         assert!(found[1].contains("40.0 Hz"));
         assert!(prediction_finding(0.5, 1.0).is_some());
         assert!(prediction_finding(0.9, 1.0).is_none());
+    }
+
+    #[test]
+    fn the_dynamics_fit_unless_a_spring_a_residual_or_a_resonance_says_otherwise() {
+        let model = id(0.07, 0.0, 0.04);
+        // Static friction alone (a breakaway finding) leaves the dynamics fitting.
+        let sticky = Evidence {
+            residual_rel: 0.02,
+            breakaway_measured: [Some(0.08), Some(-0.08)],
+            breakaway_model: [Some(0.045), Some(-0.045)],
+            release_hz: Some(11.0),
+            model_hz: Some(10.0),
+            release_k: Some(100.0),
+        };
+        assert_eq!(findings(&model, &sticky, ("N", "N/m")).len(), 2);
+        assert!(dynamics_fit(&model, &sticky));
+        let resonant = Evidence {
+            release_hz: Some(14.0),
+            ..sticky.clone()
+        };
+        assert!(!dynamics_fit(&model, &resonant));
+        let residual = Evidence {
+            residual_rel: 0.1,
+            ..sticky.clone()
+        };
+        assert!(!dynamics_fit(&model, &residual));
+        let held = Identified {
+            spring: Some(super::super::ident::Spring {
+                stiffness: 250.0,
+                stiffness_se: 1.0,
+                offset: 0.0,
+                rigid_residual_rel: 0.5,
+            }),
+            ..model
+        };
+        assert!(!dynamics_fit(&held, &sticky));
     }
 }

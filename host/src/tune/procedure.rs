@@ -13,8 +13,9 @@
 //!    in both directions (breakaway against the model's), and, after the search, the frequency
 //!    of a release against √(K/m)/2π and the verified K against the expected one. What does
 //!    not fit is reported (`model_mismatch`) and makes the verification thorough: the margin is
-//!    multiplied by [`MISMATCH_MARGIN`], the verification set gains a lower energy level and
-//!    every test runs twice as long.
+//!    multiplied by [`MISMATCH_MARGIN`] ([`FRICTION_MISMATCH_MARGIN`] when only the friction
+//!    does not fit), the verification set gains a lower energy level and every test runs twice
+//!    as long.
 //! 4. **Verify** ([`super::verify`]): the search of [`super::search`] brackets and bisects the
 //!    largest K whose full-energy release (deflection d = v·√(m/K)/Δ, spring energy = kinetic
 //!    energy at v) passes, never above the firmware's stiffness limit. Where the wall's peak
@@ -49,6 +50,12 @@ pub const CONFIRM_BACKOFF: f64 = 0.95;
 
 /// Factor applied to the margin when the model does not fit the device.
 pub const MISMATCH_MARGIN: f64 = 0.85;
+/// Factor applied to the margin instead of [`MISMATCH_MARGIN`] when the only mismatch is the
+/// friction (breakaway above sliding: static friction or a dead band) or the verified K below
+/// the prediction, the identified dynamics fitting ([`model_check::dynamics_fit`]) and every
+/// impact launched: static friction dissipates, and the release tests run at the energy asked
+/// for (re-aimed where the hold stuck off target), so the verified K is the device's own.
+pub const FRICTION_MISMATCH_MARGIN: f64 = 0.9;
 
 /// Duration of each breakaway ramp, s.
 pub const RAMP_SECONDS: f64 = 0.3;
@@ -373,7 +380,14 @@ fn tune_inner(
     for f in &model_mismatch {
         progress(&format!("model mismatch: {f}"));
     }
-    let margin_used = s.margin * if thorough { MISMATCH_MARGIN } else { 1.0 };
+    let margin_used = s.margin
+        * if !thorough {
+            1.0
+        } else if not_launched.is_none() && model_check::dynamics_fit(&id, &evidence) {
+            FRICTION_MISMATCH_MARGIN
+        } else {
+            MISMATCH_MARGIN
+        };
     let mut k_set = found.k_pass * margin_used;
     let mut verification = Vec::new();
     // A failing test backs off in steps of CONFIRM_BACKOFF (finer than the margin).
