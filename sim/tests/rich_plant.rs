@@ -345,3 +345,45 @@ fn non_finite_commands_and_durations_are_harmless() {
     assert_eq!(p.position_m(), 0.0);
     assert_eq!(p.encoder_count(), 0);
 }
+
+#[test]
+fn a_held_plant_is_in_static_equilibrium_under_its_holding_force() {
+    // Motor 0.05 kg, link 0.02 kg on 1e4 N/m, a hand of 0.1 kg on 100 N/m, a 500 Hz filter.
+    let mut m = PlantModel::rigid(0.05, 0.0, 0.0, 1e-6).unwrap();
+    m.transmission = Some(Transmission {
+        link_mass_kg: 0.02,
+        stiffness_n_per_m: 1e4,
+        damping_ns_per_m: 1.0,
+    });
+    m.hand = Some(HandSi {
+        mass_kg: 0.1,
+        damping_ns_per_m: 2.0,
+        stiffness_n_per_m: 100.0,
+    });
+    m.amplifier = Some(Amplifier {
+        cutoff_hz: Some(500.0),
+        damping: 0.7,
+        force_limit_n: None,
+        deadband_n: None,
+    });
+    let mut p = RichPlant::new(&m).unwrap();
+    let x1 = 2e-4;
+    p.set_held(x1);
+    // The link where the transmission balances the hand: x₂ = k_t·x₁/(k_t + k_h).
+    let x2 = 1e4 * x1 / (1e4 + 100.0);
+    assert!((p.link_position_m() - x2).abs() < 1e-15);
+    // The filter carries the holding force k_t(x₁ − x₂) = k_h·x₂.
+    assert!((p.actuator_force_n() - 100.0 * x2).abs() < 1e-12);
+    // Commanding that force keeps everything where it is.
+    for _ in 0..200 {
+        p.advance(100.0 * x2, 1e-4);
+    }
+    assert!((p.position_m() - x1).abs() < 1e-12, "{}", p.position_m());
+    assert!((p.link_position_m() - x2).abs() < 1e-12);
+    // `set_state` instead leaves the link at x₁ with the filter idle: the same command moves it.
+    p.set_state(x1, 0.0);
+    for _ in 0..200 {
+        p.advance(100.0 * x2, 1e-4);
+    }
+    assert!((p.link_position_m() - x2).abs() > 1e-9 || (p.position_m() - x1).abs() > 1e-9);
+}

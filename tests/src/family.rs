@@ -18,6 +18,9 @@ impl SampledPlant for RichPlant {
     fn set_state(&mut self, position_m: f64, velocity_m_per_s: f64) {
         RichPlant::set_state(self, position_m, velocity_m_per_s);
     }
+    fn set_held(&mut self, position_m: f64) {
+        RichPlant::set_held(self, position_m);
+    }
     fn advance(&mut self, force_n: f64, dt_s: f64) {
         RichPlant::advance(self, force_n, dt_s);
     }

@@ -58,6 +58,11 @@ pub trait SampledPlant {
     /// Sets the whole plant at `position_m` moving at `velocity_m_per_s` (internal states at
     /// rest relative to it, amplifier idle).
     fn set_state(&mut self, position_m: f64, velocity_m_per_s: f64);
+    /// Held at rest with the encoder side at `position_m`, in static equilibrium (a hold just
+    /// before its release); [`SampledPlant::set_state`] at rest where no internal state differs.
+    fn set_held(&mut self, position_m: f64) {
+        self.set_state(position_m, 0.0);
+    }
     /// Holds the command `force_n` for `dt_s`.
     fn advance(&mut self, force_n: f64, dt_s: f64);
     /// ⌊x/Δ⌋ of the encoder side.
@@ -192,6 +197,16 @@ pub struct Trial {
 }
 
 impl Trial {
+    /// Puts `plant` in the trial's initial state ([`Trial::initial_state`]); a release starts
+    /// held there ([`SampledPlant::set_held`]: a hand behind a transmission deflects it).
+    pub fn start<P: SampledPlant>(&self, plant: &mut P, resolution_m: f64) {
+        let (x0, v0) = self.initial_state(resolution_m);
+        match self.kind {
+            TrialKind::Impact { .. } => plant.set_state(x0, v0),
+            TrialKind::Release { .. } => plant.set_held(x0),
+        }
+    }
+
     /// Initial position and velocity for resolution Δ = `resolution_m`: an impact starts at the
     /// wall surface (just below it for the negative side), a release at rest in the middle of
     /// its count.
@@ -256,8 +271,7 @@ impl TrialRun {
 pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: Trial) -> TrialRun {
     let d = rig.resolution_m;
     let mut plant = proto.clone();
-    let (x0, v0) = trial.initial_state(d);
-    plant.set_state(x0, v0);
+    trial.start(&mut plant, d);
     // One-sided wall: the speed a passive wall could return — the impact speed, or the speed
     // whose kinetic energy is the spring energy ½K((d + 1)Δ)² of a release from count d.
     let passive = match trial.kind {

@@ -102,8 +102,7 @@ pub fn run<P: SampledPlant>(
     resolution_m: f64,
     ticks: usize,
 ) -> SupervisedRun {
-    let (x0, v0) = trial.initial_state(resolution_m);
-    plant.set_state(x0, v0);
+    trial.start(&mut plant, resolution_m);
     let cfg = ServoConfig {
         wall_position: trial.wall as i32,
         ..*cfg

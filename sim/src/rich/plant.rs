@@ -293,6 +293,27 @@ impl RichPlant {
         };
     }
 
+    /// Held at rest with the motor (encoder side) at `position_m`, as a hold (the paper's Fig. 8
+    /// release test) leaves it just before the release: everything at rest in static
+    /// equilibrium, friction aside. With a transmission the link sits where the transmission
+    /// balances the hand's spring, x₂ = k_t·x₁/(k_t + k_h), so the link is not at x₁ when a
+    /// hand holds it; with an amplifier filter its output is the holding force, which balances
+    /// the transmission (or the hand's spring without one) and the cogging force at x₁. Without
+    /// a hand spring this is [`RichPlant::set_state`] at rest (plus the filter's cogging hold).
+    pub fn set_held(&mut self, position_m: f64) {
+        self.set_state(position_m, 0.0);
+        let x1 = self.y[0];
+        if self.d.trans && self.d.kt + self.d.kh > 0.0 {
+            self.y[2] = self.d.kt * x1 / (self.d.kt + self.d.kh);
+        }
+        if self.d.filter {
+            // f_ext with p = 0 is the force on the motor besides the actuator's; the hold
+            // cancels it.
+            let hold = -self.d.f_ext(&self.y, 0.0);
+            self.set_amplifier_output(hold);
+        }
+    }
+
     /// Sets the amplifier filter to a steady output `force_n` (N): p = force, ṗ = 0. No effect
     /// without a filter.
     pub fn set_amplifier_output(&mut self, force_n: f64) {

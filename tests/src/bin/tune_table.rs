@@ -267,7 +267,10 @@ A stiffness K is **stable** when every trial settles:\n\n\
 - impacts at the wall surface moving into the wall at v_max × {{1, 0.6, 0.3, 0.1}}, from both sides\n\
   (one side for a one-sided wall);\n\
 - releases from rest at deflections d_max × {{1, 0.6, 0.3}} and 1 count, both sides, where\n\
-  ½K(d_max·Δ)² = ½·m·v_max² with m the whole moving mass (motor side, link, hand);\n\
+  ½K(d_max·Δ)² = ½·m·v_max² with m the whole moving mass (motor side, link, hand); a release\n\
+  starts as a hold leaves the device (`RichPlant::set_held`): the motor at the deflection, at\n\
+  rest in static equilibrium, so a hand's spring behind a transmission deflects the link, and an\n\
+  amplifier filter carries the holding force;\n\
 - with cogging, all of them again with the wall a quarter cogging period further on.\n\n\
 A trial runs 120 natural periods 2π√(m/K) (2000–40000 ticks) and **settles** when, over its last\n\
 third, the count stays within one count (at rest, or toggling between two neighbouring counts): a\n\
@@ -290,7 +293,7 @@ means the run is stable without the firmware (nothing to stop). The firmware's m
 turning-point energy monitor (growth score, limit) and the buzz detector added for this family\n\
 (`stiffwall_core::monitor::BuzzDetector`, fault `buzz`): 32 consecutive turning points with\n\
 swings of two counts or more, at 15 Hz or faster, the largest of the last 8 swings not smaller\n\
-than the largest of the first 8 less 1/16 of it (none below 16 counts) —\n\
+than the largest of the first 8 less 1/32 of it (none below 32 counts) —\n\
 the persistent oscillation of a firmly held device or a slow servo above K*, whose peaks do not\n\
 grow, or one converging onto a limit cycle. \"Decays under the firmware\" is a trial that does\n\
 not settle without the firmware but, with no fault, dies away under it (its peak-to-peak motion\n\
