@@ -282,8 +282,8 @@ fn stiff_transmission_tends_to_the_rigid_plant() {
     assert!((a.position_m() - b.position_m()).abs() < 1e-4 * b.position_m().abs().max(1e-6));
 }
 
-#[test]
-fn hand_on_the_link_side_loads_only_the_link() {
+/// Motor 0.05 kg, link 0.02 kg on 1e4 N/m (1 N·s/m), a hand of 0.1 kg on 100 N/m (2 N·s/m).
+fn link_with_hand() -> PlantModel {
     let mut m = PlantModel::rigid(0.05, 0.0, 0.0, 1e-6).unwrap();
     m.transmission = Some(Transmission {
         link_mass_kg: 0.02,
@@ -295,7 +295,12 @@ fn hand_on_the_link_side_loads_only_the_link() {
         damping_ns_per_m: 2.0,
         stiffness_n_per_m: 100.0,
     });
-    let mut p = RichPlant::new(&m).unwrap();
+    m
+}
+
+#[test]
+fn hand_on_the_link_side_loads_only_the_link() {
+    let mut p = RichPlant::new(&link_with_hand()).unwrap();
     for _ in 0..3000 {
         p.advance(0.5, 1e-3);
     }
@@ -348,18 +353,8 @@ fn non_finite_commands_and_durations_are_harmless() {
 
 #[test]
 fn a_held_plant_is_in_static_equilibrium_under_its_holding_force() {
-    // Motor 0.05 kg, link 0.02 kg on 1e4 N/m, a hand of 0.1 kg on 100 N/m, a 500 Hz filter.
-    let mut m = PlantModel::rigid(0.05, 0.0, 0.0, 1e-6).unwrap();
-    m.transmission = Some(Transmission {
-        link_mass_kg: 0.02,
-        stiffness_n_per_m: 1e4,
-        damping_ns_per_m: 1.0,
-    });
-    m.hand = Some(HandSi {
-        mass_kg: 0.1,
-        damping_ns_per_m: 2.0,
-        stiffness_n_per_m: 100.0,
-    });
+    // The link and hand of `link_with_hand`, a 500 Hz filter.
+    let mut m = link_with_hand();
     m.amplifier = Some(Amplifier {
         cutoff_hz: Some(500.0),
         damping: 0.7,
