@@ -384,6 +384,17 @@ pub mod fault {
     pub const ENCODER_JUMP: u32 = 1 << 4;
     /// The energy monitor saw a persistent oscillation of more than one count ("buzz").
     pub const BUZZ: u32 = 1 << 5;
+
+    /// Every fault bit with its machine name (kebab-case: the CLI's text and JSON) and its
+    /// label for people (the live view's banner), in bit order.
+    pub const NAMES: [(u32, &str, &str); 6] = [
+        (ENERGY_GROWTH, "energy-growth", "energy growth"),
+        (ENERGY_LIMIT, "energy-limit", "energy limit"),
+        (OVER_VELOCITY, "over-velocity", "over-velocity"),
+        (HEARTBEAT, "heartbeat", "heartbeat lost"),
+        (ENCODER_JUMP, "encoder-jump", "encoder jump"),
+        (BUZZ, "buzz", "buzz"),
+    ];
 }
 
 /// A sequence of telemetry samples.
@@ -528,4 +539,29 @@ pub enum ErrorDetail {
         /// Bad frames this reply stands for.
         count: u32,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fault;
+
+    #[test]
+    fn every_fault_bit_has_one_name_in_bit_order() {
+        let bits = fault::NAMES.map(|(b, _, _)| b);
+        assert_eq!(
+            bits,
+            [
+                fault::ENERGY_GROWTH,
+                fault::ENERGY_LIMIT,
+                fault::OVER_VELOCITY,
+                fault::HEARTBEAT,
+                fault::ENCODER_JUMP,
+                fault::BUZZ
+            ]
+        );
+        for (i, (b, name, label)) in fault::NAMES.iter().enumerate() {
+            assert_eq!(*b, 1 << i, "{name}");
+            assert!(!name.contains(' ') && !label.is_empty(), "{name} / {label}");
+        }
+    }
 }

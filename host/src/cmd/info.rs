@@ -24,20 +24,12 @@ pub struct Args {
 /// Names of the latched fault bits, `"none"` when clear.
 #[must_use]
 pub fn fault_names(bits: u32) -> String {
-    let names = [
-        (fault::ENERGY_GROWTH, "energy-growth"),
-        (fault::ENERGY_LIMIT, "energy-limit"),
-        (fault::OVER_VELOCITY, "over-velocity"),
-        (fault::HEARTBEAT, "heartbeat"),
-        (fault::ENCODER_JUMP, "encoder-jump"),
-        (fault::BUZZ, "buzz"),
-    ];
-    let mut v: Vec<String> = names
+    let mut v: Vec<String> = fault::NAMES
         .iter()
-        .filter(|(b, _)| bits & b != 0)
-        .map(|(_, n)| (*n).to_string())
+        .filter(|(b, _, _)| bits & b != 0)
+        .map(|(_, n, _)| (*n).to_string())
         .collect();
-    let unknown = bits & !names.iter().fold(0, |a, (b, _)| a | b);
+    let unknown = bits & !fault::NAMES.iter().fold(0, |a, (b, _, _)| a | b);
     if unknown != 0 {
         v.push(format!("unknown {unknown:#x}"));
     }

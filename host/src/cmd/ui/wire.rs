@@ -252,18 +252,11 @@ pub fn frame(chunks: u32, body: &[u8]) -> Vec<u8> {
 /// Names of the latched fault bits.
 #[must_use]
 pub fn fault_names(bits: u32) -> Vec<&'static str> {
-    [
-        (fault::ENERGY_GROWTH, "energy growth"),
-        (fault::ENERGY_LIMIT, "energy limit"),
-        (fault::OVER_VELOCITY, "over-velocity"),
-        (fault::HEARTBEAT, "heartbeat lost"),
-        (fault::ENCODER_JUMP, "encoder jump"),
-        (fault::BUZZ, "buzz"),
-    ]
-    .into_iter()
-    .filter(|(b, _)| bits & b != 0)
-    .map(|(_, n)| n)
-    .collect()
+    fault::NAMES
+        .into_iter()
+        .filter(|(b, _, _)| bits & b != 0)
+        .map(|(_, _, label)| label)
+        .collect()
 }
 
 #[cfg(test)]
