@@ -65,6 +65,16 @@ impl Supervised {
             || self.decays_under_firmware()
     }
 
+    /// Safe only because the motion died away under the firmware (not settled without it, not
+    /// stopped, not thrown out): the "decays under the firmware" of the supervisor table.
+    #[must_use]
+    pub fn safe_by_decay(&self) -> bool {
+        !self.unsupervised_settles
+            && !self.run.stopped()
+            && !self.left_and_released()
+            && self.decays_under_firmware()
+    }
+
     /// No fault latched, and the motion under the firmware dies away: the peak-to-peak
     /// excursion over the run's last sixth is at most a quarter of that over its first sixth
     /// (or within one count), and no count of the run lies farther from the wall than the

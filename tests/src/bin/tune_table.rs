@@ -200,7 +200,7 @@ fn render(rows: &[Row], quick: bool) -> String {
                 "thrown out {:+.1} % faster once, no fault, force 0 after",
                 100.0 * (s.left_faster.unwrap_or(1.0) - 1.0)
             ),
-            (false, None) if s.decays_under_firmware() => "decays under the firmware".to_string(),
+            (false, _) if s.safe_by_decay() => "decays under the firmware".to_string(),
             (false, _) => "NOT STOPPED".to_string(),
         };
         let trips = sup
@@ -222,7 +222,7 @@ fn render(rows: &[Row], quick: bool) -> String {
             let decays = sup
                 .other_unstable
                 .iter()
-                .filter(|s| !s.run.stopped() && !s.left_and_released() && s.decays_under_firmware())
+                .filter(|s| s.safe_by_decay())
                 .count();
             let decays = if decays > 0 {
                 format!(" ({decays} decay under the firmware)")
