@@ -24,6 +24,11 @@ pub const MAX_JUMP_COUNTS: u32 = 1 << 30;
 pub const MAX_ENERGY_J: f32 = 1.0e6;
 /// Velocity window of the over-velocity check, ticks (power of two).
 pub const VEL_WINDOW: usize = 8;
+/// Velocity clamp of the damping terms, effective counts per tick: the damper's code is
+/// `−g·clamp(dn, ±DAMPER_V_MAX)`, which keeps gain × velocity below 2^30 codes (g ≤ 2^16).
+/// The wall law is exact for |dn| ≤ this (2^14 counts per tick; faster than any encoder jump
+/// limit a device would set).
+pub const DAMPER_V_MAX: i32 = 1 << 14;
 /// Dimensionless hold damping β of the release test's holding controller (see [`Gains`]).
 pub const HOLD_BETA: f32 = 2.0;
 
@@ -359,8 +364,9 @@ pub struct Gains<N: Numeric> {
     pub delay: u32,
     /// Output clamp, codes (≤ board max and ≤ [`MAX_LIMIT_CODES`]).
     pub limit: i32,
-    /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit. Clamping n
-    /// to [−n_sat−1, n_sat] leaves the clamped force unchanged and keeps the product in range.
+    /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit + the largest
+    /// damper code (0 without a damper). Clamping n to [−n_sat−1, n_sat] leaves the clamped
+    /// force of spring + damper unchanged and keeps the product in range.
     pub n_sat: i32,
     /// `k_half` precomputed for [`Numeric::spring`].
     pub spring: N::Spring,
@@ -431,8 +437,15 @@ impl<N: Numeric> Gains<N> {
         let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
         let k_half = N::gain(k_half);
         let kf = N::to_f64(k_half);
+        let damp = N::gain(f64::from(cfg.damping) * de * rate / fs);
+        // The largest damper code (|g|·DAMPER_V_MAX, rounded up, + 1 for the rounding): the
+        // spring saturates only where its code exceeds the limit by that much, so that
+        // spring + damper is still exactly clamped at every count (0 without a damper: the
+        // bound is the spring-only one, bit for bit).
+        let damp_max = libm::ceil(libm::fabs(N::to_f64(damp)) * f64::from(DAMPER_V_MAX));
+        let damp_max = if damp_max > 0.0 { damp_max + 1.0 } else { 0.0 };
         let n_sat = if kf > 0.0 {
-            (libm::ceil(f64::from(limit) / (2.0 * kf)) as i32).clamp(0, 1 << 29)
+            (libm::ceil((f64::from(limit) + damp_max) / (2.0 * kf)) as i32).clamp(0, 1 << 29)
         } else {
             1 << 29
         };
@@ -454,8 +467,8 @@ impl<N: Numeric> Gains<N> {
                 n_sat.wrapping_neg().wrapping_sub(1)
             },
             wall_lo: if one_sided { 0 } else { spring_lo },
-            damp: N::gain(f64::from(cfg.damping) * de * rate / fs),
-            damping_on: N::gain(f64::from(cfg.damping) * de * rate / fs) != N::ZERO,
+            damp,
+            damping_on: damp != N::ZERO,
             hold_damp: N::gain(2.0 * f64::from(HOLD_BETA) * kf),
             safe_damp: N::gain(
                 f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
