@@ -360,14 +360,9 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline(always)]
     fn force(&mut self, n: i32, dn: i32) -> (i32, u16) {
         match self.mode {
-            Mode::Wall => {
-                let wall_off = if self.g.one_sided && n < 0 {
-                    flags::WALL_OFF
-                } else {
-                    0
-                };
-                (self.wall_code(n, dn), wall_off)
-            }
+            // One test of the contact condition serves both the flag and the law.
+            Mode::Wall if self.g.one_sided && n < 0 => (0, flags::WALL_OFF),
+            Mode::Wall => (self.contact_code(n, dn), 0),
             Mode::Released => (self.wall_code(n, dn), flags::RELEASED),
             Mode::Other => self.experiment_force(n, dn),
         }
@@ -383,8 +378,14 @@ impl<'a, N: Numeric> Servo<'a, N> {
         if self.g.one_sided && n < 0 {
             0
         } else {
-            self.spring_code(n).saturating_add(self.damping(dn))
+            self.contact_code(n, dn)
         }
+    }
+
+    /// Spring + damper in contact (no one-sided test): `spring_code(n) − g_B·dn`, saturating.
+    #[inline(always)]
+    fn contact_code(&self, n: i32, dn: i32) -> i32 {
+        self.spring_code(n).saturating_add(self.damping(dn))
     }
 
     /// The virtual damping term (skipped when the gain is zero).
