@@ -7,7 +7,7 @@
 //! Regenerate (only if main's undamped behaviour is meant to change) with
 //! `cargo test -p stiffwall-sim --test damper_golden -- --ignored --nocapture print_golden`.
 
-use stiffwall_sim::exact::{dispatch, ExactSim, History, Visitor};
+use stiffwall_sim::exact::{dispatch, dispatch_damped, ExactSim, History, Visitor};
 use stiffwall_sim::{Effects, Motion, Params};
 
 /// FNV-1a over 64-bit words.
@@ -127,6 +127,35 @@ fn run(c: &Case) -> u64 {
     } else {
         dispatch::<_, false>(c.params, c.effects, c.init, c.history, vis).unwrap()
     }
+}
+
+/// The same case through the damped API with damping `beta_v`.
+fn run_damped(c: &Case, beta_v: f64) -> u64 {
+    let vis = Hash {
+        periods: PERIODS,
+        audited: c.audited,
+    };
+    if c.audited {
+        dispatch_damped::<_, true>(c.params, c.effects, c.init, c.history, beta_v, vis).unwrap()
+    } else {
+        dispatch_damped::<_, false>(c.params, c.effects, c.init, c.history, beta_v, vis).unwrap()
+    }
+}
+
+/// β_v = 0 through the damped API is main; β_v > 0 must change trajectories (so the
+/// comparison can fail).
+#[test]
+fn zero_damping_is_main_and_positive_damping_is_not() {
+    let cs = cases();
+    let mut changed = 0;
+    for (i, (c, &g)) in cs.iter().zip(GOLDEN.iter()).enumerate() {
+        assert_eq!(run_damped(c, 0.0), g, "case {i}: {c:?}");
+        changed += usize::from(run_damped(c, 0.5) != g);
+    }
+    assert!(
+        changed > 64,
+        "only {changed} of 128 changed with beta_v = 0.5"
+    );
 }
 
 #[test]
