@@ -80,9 +80,11 @@ pub fn settings(a: &Args) -> Result<Settings> {
         }
     }
     Ok(Settings {
-        damping: a
-            .damping
-            .map_or(procedure::Damping::Search, procedure::Damping::Fixed),
+        damping: if a.search_damping {
+            procedure::Damping::Search
+        } else {
+            procedure::Damping::Fixed(a.damping.unwrap_or(0.0))
+        },
         max_velocity: a.max_velocity,
         margin: a.margin,
         release_ticks: a.release_ticks,
