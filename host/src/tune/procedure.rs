@@ -396,8 +396,8 @@ impl Run<'_> {
         Ok(verdict)
     }
 
-    /// The whole verification set at `k` and the config `base` (its damping): Some(results)
-    /// when every test passes, None at the first failure.
+    /// The whole verification set at `k` and the config `base` (its damping): whether every
+    /// test passed, and the results up to the first failure.
     fn verify_set(
         &self,
         c: &mut Client,
@@ -510,7 +510,7 @@ fn damped(base: &ServoConfig, b: f64) -> ServoConfig {
 }
 
 /// The largest settling K at damping `b`, searched from `start`; None when `start` itself
-/// fails (when `only_above`) — a damping that does not hold the best K so far is not searched.
+/// fails — a damping that does not hold the best K so far is not searched.
 #[allow(clippy::too_many_arguments)]
 fn search_at(
     run: &Run<'_>,
