@@ -30,18 +30,10 @@ pub struct Args {
     #[arg(long, default_value_t = 3.0)]
     pub excite_seconds: f64,
     /// Virtual damping B of the wall, N·s/m (N·m·s/rad for rotary devices), ≥ 0: fixes B and
-    /// finds K (0, the default: the spring-only tune).
-    #[arg(
-        long,
-        value_name = "B",
-        allow_hyphen_values = true,
-        conflicts_with = "search_damping"
-    )]
+    /// finds K; 0 is the spring-only tune. Default: search the (K, B) frontier for the
+    /// stiffest verified spring + damper.
+    #[arg(long, value_name = "B", allow_hyphen_values = true)]
     pub damping: Option<f64>,
-    /// Search the (K, B) frontier for the stiffest verified spring + damper (experimental: not
-    /// yet safe on every plant of the repository).
-    #[arg(long)]
-    pub search_damping: bool,
     /// Find and report K, but leave the device's config as it was.
     #[arg(long)]
     pub dry_run: bool,
@@ -80,11 +72,9 @@ pub fn settings(a: &Args) -> Result<Settings> {
         }
     }
     Ok(Settings {
-        damping: if a.search_damping {
-            procedure::Damping::Search
-        } else {
-            procedure::Damping::Fixed(a.damping.unwrap_or(0.0))
-        },
+        damping: a
+            .damping
+            .map_or(procedure::Damping::Search, procedure::Damping::Fixed),
         max_velocity: a.max_velocity,
         margin: a.margin,
         release_ticks: a.release_ticks,

@@ -119,10 +119,7 @@ impl Default for Settings {
             release_ticks: None,
             excite_seconds: 3.0,
             rel_tol: 0.02,
-            // Spring only until the frontier search is safe on every plant of the repository
-            // (on maxon-re35-amp-3khz it set 1.02 K*(B); two plants latch faults): opt in with
-            // `--search-damping`.
-            damping: Damping::Fixed(0.0),
+            damping: Damping::Search,
         }
     }
 }
@@ -368,7 +365,9 @@ impl Run<'_> {
         if !verdict.passes() {
             return Ok(verdict);
         }
-        if k > self.k_force {
+        // With a damper, every step also runs the impacts: the damper acts on the contact
+        // speed, which a release from rest does not reach at the same energy.
+        if k > self.k_force || base.damping > 0.0 {
             let dirs: &[f64] = if self.one_sided_wall {
                 &[1.0]
             } else {
@@ -378,10 +377,12 @@ impl Run<'_> {
                 let v_ticks = dir * self.v * self.period_s() / self.p.resolution;
                 let test =
                     super::verify::impact(v_ticks, self.natural_ticks(k), self.one_sided_wall);
-                (self.progress)(&format!(
-                    "{} test K={k:.4} (force saturates)",
-                    test.describe()
-                ));
+                let why = if k > self.k_force {
+                    "force saturates"
+                } else {
+                    "damped wall"
+                };
+                (self.progress)(&format!("{} test K={k:.4} ({why})", test.describe()));
                 let (impact, _) = self.test(c, base, k, test, thorough)?;
                 if impact == Verdict::NotLaunched {
                     notes.not_launched.get_or_insert(k);
