@@ -391,9 +391,12 @@ fn run_once(
     if super::procedure::INTERRUPTED.load(Ordering::Relaxed) {
         bail!("interrupted");
     }
-    // A reproducible start (see the module header).
+    // A reproducible start (see the module header), with the damper off too: a damper
+    // alone can be unstable (B·T/m large, or behind a slow amplifier) and must not keep the
+    // device from coming to rest between tests.
     c.set_config(&ServoConfig {
         stiffness: 0.0,
+        damping: 0.0,
         ..*base
     })?;
     let rest = rest_position(c)?;
