@@ -239,6 +239,9 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
         r.mu, r.beta, r.sigma, r.tau_d
     );
     let _ = writeln!(s, "region {:?}: {}", r.region, r.region_meaning);
+    if o.b_set > 0.0 {
+        render_damped_point(&mut s, o, u.0);
+    }
     let _ = writeln!(
         s,
         "{}",
@@ -252,6 +255,26 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
         let _ = writeln!(s, "plot: {}", p.display());
     }
     s
+}
+
+/// With a virtual damper the paper's (β, σ) regions above describe the spring alone: the
+/// linear sampled boundary with the damper (`criteria::k_max_exact_linear`) is printed beside.
+fn render_damped_point(s: &mut String, o: &Outcome, k_unit: &str) {
+    let _ = writeln!(
+        s,
+        "  (the regions of the paper assume no virtual damper; with B = {:.4e} the region is \
+         that of the spring alone)",
+        o.b_set
+    );
+    let linear = stiffwall_core::criteria::k_max_exact_linear(&o.params, o.b_set);
+    if let Ok(k) = linear {
+        let _ = writeln!(
+            s,
+            "  exact linear boundary with the damper (no Coulomb, no quantization): K_max(B) = \
+             {k:.5} {k_unit}, the set K is {:.2} of it",
+            o.k_set / k
+        );
+    }
 }
 
 /// The spring-only wall and the spring + damper wall side by side, and the frontier tried.
