@@ -29,7 +29,7 @@ use file::{Cost, MapFile, Panel, Spec, Values};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use stiffwall_sim::classify::Class;
-use stiffwall_sim::exact::History;
+use stiffwall_sim::exact::{History, MAX_BETA_V};
 use stiffwall_sim::map::{self, Axis};
 
 /// Largest `--threads` per available core.
@@ -88,6 +88,10 @@ pub struct Args {
     /// Delay-line history before tau = 0: the spring force of the initial position, or zero.
     #[arg(long, value_enum, default_value = "hold-initial")]
     pub history: HistoryArg,
+    /// Virtual damping beta_v = B/(K*T) of the wall at every point, dimensionless, in [0, 1000]
+    /// (0: the paper's spring-only wall; the JSON records it only when nonzero).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub damping: f64,
 }
 
 /// `--history` values.
@@ -173,6 +177,11 @@ fn spec_of(a: &Args) -> Result<Spec> {
     let sigma = Axis::parse(&a.sigma).map_err(|e| anyhow::anyhow!("--sigma: {e}"))?;
     ensure!(beta.lo >= 0.0, "--beta: allowed range is >= 0");
     ensure!(sigma.lo >= 0.0, "--sigma: allowed range is >= 0");
+    ensure!(
+        a.damping.is_finite() && (0.0..=MAX_BETA_V).contains(&a.damping),
+        "--damping {}: allowed range is [0, {MAX_BETA_V}] (dimensionless beta_v = B/(K*T))",
+        a.damping
+    );
     let spec = Spec {
         mu,
         tau_d,
@@ -184,9 +193,10 @@ fn spec_of(a: &Args) -> Result<Spec> {
             HistoryArg::HoldInitial => History::HoldInitial,
             HistoryArg::Zero => History::Zero,
         },
+        damping: a.damping,
     };
     spec.validate()
-        .context("--mu x --tau-d x --xidot0 x --beta x --sigma")?;
+        .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --damping")?;
     Ok(spec)
 }
 
@@ -298,10 +308,33 @@ fn run_merge(
         .map(|p| Ok((p.clone(), file::read(p)?)))
         .collect::<Result<Vec<_>>>()?;
     let merged = file::merge(&files)?;
+    if img.is_some() {
+        check_overlay(&merged.spec, overlay)?;
+    }
     file::write(out, &merged)?;
     if let Some(img) = img {
         plot::plot(&merged, img, overlay)?;
     }
+    Ok(())
+}
+
+/// `, beta_v = X` for a damped map, nothing for the spring-only wall.
+pub(crate) fn damping_label(beta_v: f64) -> String {
+    if beta_v == 0.0 {
+        String::new()
+    } else {
+        format!(", beta_v = {beta_v}")
+    }
+}
+
+/// `--overlay` draws the paper's spring-only boundaries: refused on a damped map.
+fn check_overlay(spec: &Spec, overlay: bool) -> Result<()> {
+    ensure!(
+        !overlay || spec.damping == 0.0,
+        "--overlay draws the spring-only boundaries of Fig. 3/5: not valid with --damping {} \
+         (allowed with --overlay: 0)",
+        spec.damping
+    );
     Ok(())
 }
 
@@ -323,6 +356,7 @@ pub fn run(args: &Args) -> Result<()> {
         return atlas::run(a);
     }
     let spec = spec_of(args)?;
+    check_overlay(&spec, args.overlay)?;
     let threads = threads_of(args)?;
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
     if shard.is_some() && args.plot.is_some() {
@@ -356,10 +390,11 @@ pub fn run(args: &Args) -> Result<()> {
         let counts = |p: &Panel, c: Class| p.points.iter().filter(|q| q.class == c).count();
         for p in &m.panels {
             eprintln!(
-                "mu = {}, tau_d = {}, xidot0 = {}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
+                "mu = {}, tau_d = {}, xidot0 = {}{}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
                 p.mu,
                 p.tau_d,
                 p.xidot0,
+                damping_label(m.spec.damping),
                 p.points.len(),
                 counts(p, Class::Growing),
                 counts(p, Class::Persistent),
