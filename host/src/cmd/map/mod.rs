@@ -19,6 +19,9 @@
 pub mod atlas;
 pub mod atlas_plot;
 pub mod file;
+pub mod kb;
+pub mod kb_args;
+pub mod kb_plot;
 pub mod plot;
 pub mod values;
 
@@ -92,6 +95,9 @@ pub struct Args {
     /// (0: the paper's spring-only wall; the JSON records it only when nonzero).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub damping: f64,
+    /// The (K, B) map of one device (`--k-b`, [`kb`]).
+    #[command(flatten)]
+    pub kb: kb_args::KbArgs,
 }
 
 /// `--history` values.
@@ -189,15 +195,21 @@ fn spec_of(a: &Args) -> Result<Spec> {
         beta,
         sigma,
         periods: a.periods,
-        history: match a.history {
-            HistoryArg::HoldInitial => History::HoldInitial,
-            HistoryArg::Zero => History::Zero,
-        },
+        history: history_of(a.history),
         damping: a.damping,
     };
     spec.validate()
         .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --damping")?;
     Ok(spec)
+}
+
+/// The delay-line history of `--history`.
+#[must_use]
+pub fn history_of(h: HistoryArg) -> History {
+    match h {
+        HistoryArg::HoldInitial => History::HoldInitial,
+        HistoryArg::Zero => History::Zero,
+    }
 }
 
 /// Largest `--threads`: [`THREADS_PER_CORE`] × the available cores.
@@ -354,6 +366,9 @@ pub fn run(args: &Args) -> Result<()> {
     }
     if let Some(Sub::Atlas(a)) = &args.cmd {
         return atlas::run(a);
+    }
+    if args.kb.k_b {
+        return kb::run(args, threads_of(args)?);
     }
     let spec = spec_of(args)?;
     check_overlay(&spec, args.overlay)?;
