@@ -7,7 +7,10 @@
 //! `lo:hi:n:log`), a third axis: one panel per (μ, τ_D, ξ̇₀), μ outer. `--shard k/n` computes
 //! every n-th point (starting at k) of every panel so a batch scheduler can split a sweep;
 //! `hostctl map merge` joins the shard files; `hostctl map atlas` compares a map with the
-//! analytic boundaries ([`atlas`]).
+//! analytic boundaries ([`atlas`]). `--damping BETA_V` (dimensionless β_v = B/(K·T) in
+//! [0, 1000]) adds the wall's virtual damper at every point (`spec.damping`, written only when
+//! nonzero: with 0 every file, hash and figure is unchanged). `--k-b` maps the (K, B) plane of
+//! one physical device instead ([`kb`]; SI units).
 //!
 //! JSON output: `{ "spec": {...}, "spec_crc64", "shard": [k, n] | null, "panels": [{ "mu",
 //! "tau_d", "xidot0", "points": [{ index, beta, sigma, class, periods_run, h0, h_end,
