@@ -208,6 +208,12 @@ fn bad_k_b_input_is_refused_naming_the_flag_and_nothing_is_written() {
             "--plant /nonexistent/p.toml",
         ),
         (vec!["--mass", "-1"], "--mass"),
+        (vec!["--device", "phantom-1.0", "--delay", "1"], "--delay"),
+        (vec!["--device", "phantom-1.0", "--delay", "NaN"], "--delay"),
+        (
+            vec!["--device", "phantom-1.0", "--period", "-1"],
+            "--period",
+        ),
     ] {
         let o = hostctl()
             .args(["map", "--k-b", "--k-axis", "1:2:2", "--b-axis", "0:0:1"])

@@ -162,6 +162,18 @@ fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Resu
 /// A flag out of range, naming it and its allowed range.
 pub fn spec_of(a: &super::Args) -> Result<(Plant, KbSpec)> {
     let plant = resolve_plant(&a.kb)?;
+    let tau_d = plant.delay_s / plant.period_s;
+    ensure!(
+        tau_d <= stiffwall_sim::params::MAX_TAU_D,
+        "{}: delay T_D = {} s is {tau_d} periods; allowed range is T_D <= {} T",
+        if a.kb.plant_file.is_some() {
+            "--plant controller.extra_delay_s"
+        } else {
+            "--delay"
+        },
+        plant.delay_s,
+        stiffwall_sim::params::MAX_TAU_D
+    );
     let u = Units::of(plant.rotational);
     let k = axis("--k-axis", a.kb.k_axis.as_deref(), 0.0, true, u.k)?;
     let b = axis("--b-axis", a.kb.b_axis.as_deref(), 0.0, false, u.b)?;
@@ -342,7 +354,18 @@ pub fn run(a: &super::Args, threads: usize) -> Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;
-    let m = pool.install(|| compute(&plant, &spec, &|| {}));
+    let pb = if a.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let pb = indicatif::ProgressBar::new((spec.k.n * spec.b.n) as u64);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} points, eta {eta}")
+                .expect("static template"),
+        );
+        pb
+    };
+    let m = pool.install(|| compute(&plant, &spec, &|| pb.inc(1)));
+    pb.finish_and_clear();
     eprint!("{}", render(&m));
     match &a.out {
         Some(out) => file::write(out, &m)?,
