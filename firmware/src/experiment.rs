@@ -156,6 +156,11 @@ impl Launch {
         }
     }
 
+    /// Whether the hold before the launch has ended (the target is moving).
+    pub(crate) fn launched(&self) -> bool {
+        self.launched
+    }
+
     /// [`Hold::toggle_settles`] for the hold before the launch.
     pub(crate) fn toggle_settles(mut self, on: bool) -> Self {
         self.hold = self.hold.toggle_settles(on);

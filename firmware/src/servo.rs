@@ -423,21 +423,29 @@ impl<'a, N: Numeric> Servo<'a, N> {
         // the wall's own B, so the hold is the wall under test centred on its target (a hold
         // at the test's K with β = 2 can buzz where the wall's (K, B) is stable: the damped
         // frontier is not monotone in B).
-        let g = if self.g.damping_on {
+        // The launch itself (the target moving toward the wall) keeps β = 2, whose lag behind
+        // the target the launch's speed was tuned with.
+        let still_g = if self.g.damping_on {
             self.g.damp
         } else {
             self.g.hold_damp
         };
-        let hold_damp = self.damper(g, dn);
         match &mut self.exp {
             Experiment::None | Experiment::Released { .. } => (0, 0),
             Experiment::Hold(h) => {
                 let e = n.saturating_sub(h.target);
-                (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
+                let d = self.damper(still_g, dn);
+                (self.spring_raw(e).saturating_add(d), flags::HOLD)
             }
             Experiment::Launch(l) => {
                 let e = n.saturating_sub(l.target());
-                (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
+                let g = if l.launched() {
+                    self.g.hold_damp
+                } else {
+                    still_g
+                };
+                let d = self.damper(g, dn);
+                (self.spring_raw(e).saturating_add(d), flags::HOLD)
             }
             Experiment::Excite(x) => (
                 x.next_code(&self.table, self.g.rate_hz),
