@@ -115,16 +115,22 @@ impl ConnectArgs {
         let spec = self.virtual_spec()?;
         if let Some(port) = &self.port {
             let p = transport::open_port(port, self.baud)?;
-            return Client::connect(p, None);
+            let mut c = Client::connect(p, None)?;
+            c.set_field_label(crate::config_flags::flag_name);
+            return Ok(c);
         }
         if self.qemu {
             let image = qemu::find_image(self.qemu_image.as_deref())?;
             let q = qemu::boot(&image)?;
             let p = transport::open_port(&q.pty, transport::DEFAULT_BAUD)?;
-            return Client::connect(p, Some(Box::new(q)));
+            let mut c = Client::connect(p, Some(Box::new(q)))?;
+            c.set_field_label(crate::config_flags::flag_name);
+            return Ok(c);
         }
         let spec = spec.expect("virtual target");
         let (vd, p) = virtual_device::spawn(spec)?;
-        Client::connect(p, Some(Box::new(vd)))
+        let mut c = Client::connect(p, Some(Box::new(vd)))?;
+        c.set_field_label(crate::config_flags::flag_name);
+        Ok(c)
     }
 }

@@ -393,7 +393,7 @@ mod tests {
     use super::*;
 
     fn info() -> DeviceInfo {
-        let spec = crate::device::virtual_device::Spec {
+        let spec = crate::virtual_device::Spec {
             plant: stiffwall_core::devices::find("maxon-re35").unwrap().params,
             counts_per_rev: 8192,
             fast: true,

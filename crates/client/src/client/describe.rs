@@ -2,11 +2,21 @@
 //! numbers in a readable form, and which errors are framing replies or a hangup.
 
 use std::io::ErrorKind;
-use stiffwall_proto::{DeviceMsg, ErrorCode, ErrorDetail};
+use stiffwall_proto::{ConfigField, DeviceMsg, ErrorCode, ErrorDetail};
 
-/// Renders a device error as a sentence naming the field and its range.
+/// How a refused field is named in messages: the protocol's own name
+/// ([`ConfigField::name`], e.g. `"damping"`) unless a front end supplies its spelling.
+pub type FieldLabel = fn(ConfigField) -> &'static str;
+
+/// Renders a device error as a sentence naming the field (by its protocol name) and its range.
 #[must_use]
 pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
+    describe_error_named(code, detail, ConfigField::name)
+}
+
+/// Renders a device error as a sentence naming the field with `label` and its range.
+#[must_use]
+pub fn describe_error_named(code: ErrorCode, detail: &ErrorDetail, label: FieldLabel) -> String {
     let what = match code {
         ErrorCode::Oversize => "frame too long",
         ErrorCode::Crc => "CRC mismatch",
@@ -23,7 +33,7 @@ pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
         ErrorDetail::None => what.to_string(),
         ErrorDetail::Field { field, min, max } => {
             // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
-            let name = crate::config_flags::flag_name(*field);
+            let name = label(*field);
             if *min == f64::from(f32::MIN_POSITIVE) {
                 format!("{what}: {name} must be > 0 and ≤ {}", readable(*max))
             } else {
