@@ -9,6 +9,7 @@
 //! Invariants: every number is validated by `stiffwall-core`; bad input is an error naming the
 //! field and its allowed range.
 
+pub mod damping;
 pub mod plot;
 
 use serde::Serialize;
@@ -86,6 +87,9 @@ pub struct Report {
     pub sigma_min_large_amplitude: f64,
     /// Whether μ ≫ 1/π² of (11) holds (we test μ ≥ 10/π²).
     pub mu_sampling_ok: bool,
+    /// The spring + damper analysis of `--damping B`; absent (no JSON key) without it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<damping::DampingReport>,
 }
 
 /// The `--list-devices` text.
@@ -271,6 +275,7 @@ pub fn analyze(
         limit_cycle,
         sigma_min_large_amplitude,
         mu_sampling_ok: d.mu >= 10.0 / (std::f64::consts::PI * std::f64::consts::PI),
+        damping: None,
     })
 }
 
@@ -373,5 +378,8 @@ pub fn render_table(r: &Report) -> String {
         "  large-amplitude bound (75): stable only if σ >= {:.4} (σ = {:.4})",
         r.sigma_min_large_amplitude, r.sigma
     );
+    if let Some(d) = &r.damping {
+        s.push_str(&damping::render(d, p));
+    }
     s
 }

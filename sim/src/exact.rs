@@ -21,6 +21,15 @@
 //! `W`all, energy `A`udit): [`dispatch`] resolves a runtime [`Effects`] once into one of 32
 //! monomorphised solvers, so a disabled effect costs nothing per step.
 //!
+//! **Virtual damper** ([`Exact::with_damping`]): the rendered law becomes
+//! φ_C(h) = −(n_h + ½) − β_v·(n_h − n_(h−1)) with β_v = B/(K·T) (dimensionless), n_h = ⌊ξ(h)⌋
+//! (ξ(h) without quantization): a backward difference of the counts, constant over each period,
+//! through the same delay line as the spring. The first sample uses n_(−1) = n_0 (no damper kick
+//! at start). On a one-sided wall the whole law (damper included) acts only in contact
+//! (n_h ≥ 0) and is 0 otherwise. The solver stays exact: only the held force changes. The
+//! damper's work is part of the applied force's work, so it lands in E_g (29) and (26) still
+//! balances. With β_v = 0 the solver is bit-for-bit the undamped one (a branch, not `+ 0·x`).
+//!
 //! Invariants: at most 2 segments and at most 2 closed-form sub-steps per segment per period (no
 //! Zeno); no allocation; the state stays finite unless the caller runs a diverging trajectory
 //! past |ξ| ≈ 1e150, which [`ExactSim::diverged`] reports.
@@ -140,7 +149,14 @@ pub struct Exact<
     e_d: f64,
     w_a: f64,
     last_force: f64,
+    /// Dimensionless virtual damping β_v = B/(K·T) (0: no damper).
+    beta_v: f64,
+    /// Count n_(h−1) of the previous sample (ξ(h−1) without quantization).
+    n_prev: f64,
 }
+
+/// Largest accepted dimensionless virtual damping β_v.
+pub const MAX_BETA_V: f64 = 1000.0;
 
 impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, const A: bool>
     Exact<Q, C, V, D, W, A>
@@ -195,7 +211,56 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             e_d: 0.0,
             w_a: 0.0,
             last_force: hist,
+            beta_v: 0.0,
+            n_prev: Self::count(init.x),
         })
+    }
+
+    /// Adds the virtual damper of dimensionless damping β_v = B/(K·T) (see the module header).
+    ///
+    /// # Errors
+    /// [`ParamError`] naming `damping` unless β_v is finite and in [0, [`MAX_BETA_V`]].
+    pub fn with_damping(mut self, beta_v: f64) -> Result<Self, ParamError> {
+        self.beta_v = check_range(
+            "damping",
+            beta_v,
+            0.0,
+            false,
+            MAX_BETA_V,
+            "finite and in [0, 1000] (dimensionless B/(K*T))",
+        )?;
+        Ok(self)
+    }
+
+    /// Dimensionless virtual damping β_v in use.
+    #[must_use]
+    pub fn damping(&self) -> f64 {
+        self.beta_v
+    }
+
+    /// The sampled count n = ⌊ξ⌋ (ξ itself without quantization).
+    #[inline(always)]
+    fn count(xi: f64) -> f64 {
+        if Q {
+            floor_fast(xi)
+        } else {
+            xi
+        }
+    }
+
+    /// The rendered law at position `xi`: the spring, plus the damper when β_v ≠ 0.
+    #[inline(always)]
+    fn law(&self, xi: f64) -> f64 {
+        if self.beta_v == 0.0 {
+            return Self::spring(xi);
+        }
+        let n = Self::count(xi);
+        let f = if Q { -n - 0.5 } else { -n } - self.beta_v * (n - self.n_prev);
+        if W && n < 0.0 {
+            0.0
+        } else {
+            f
+        }
     }
 
     /// The spring force sampled at position `xi` (eq. (8) or (23), one-sided if `W`).
@@ -293,7 +358,8 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             self.e_d = 0.0;
             self.w_a = 0.0;
         }
-        let fc = Self::spring(self.st.x);
+        let fc = self.law(self.st.x);
+        self.n_prev = Self::count(self.st.x);
         let (full, c1, c2) = (self.full, self.c1, self.c2);
         let f_last;
         if D {
@@ -358,7 +424,7 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
         if D && (self.split || self.n > 0) {
             self.delayed(self.n + u64::from(self.split))
         } else {
-            Self::spring(self.st.x)
+            self.law(self.st.x)
         }
     }
 }
@@ -372,14 +438,14 @@ pub trait Visitor {
 }
 
 macro_rules! pick {
-    ($vis:ident, $p:ident, $i:ident, $hi:ident, [$($acc:tt)*]) => {
-        $vis.visit(Exact::<$($acc)* AUDIT>::new($p, $i, $hi)?)
+    ($vis:ident, $p:ident, $i:ident, $hi:ident, $bv:ident, [$($acc:tt)*]) => {
+        $vis.visit(Exact::<$($acc)* AUDIT>::new($p, $i, $hi)?.with_damping($bv)?)
     };
-    ($vis:ident, $p:ident, $i:ident, $hi:ident, [$($acc:tt)*] $b:expr $(, $rest:expr)*) => {
+    ($vis:ident, $p:ident, $i:ident, $hi:ident, $bv:ident, [$($acc:tt)*] $b:expr $(, $rest:expr)*) => {
         if $b {
-            pick!($vis, $p, $i, $hi, [$($acc)* true,] $($rest),*)
+            pick!($vis, $p, $i, $hi, $bv, [$($acc)* true,] $($rest),*)
         } else {
-            pick!($vis, $p, $i, $hi, [$($acc)* false,] $($rest),*)
+            pick!($vis, $p, $i, $hi, $bv, [$($acc)* false,] $($rest),*)
         }
     };
 }
@@ -393,9 +459,25 @@ pub fn dispatch<V: Visitor, const AUDIT: bool>(
     history: History,
     vis: V,
 ) -> Result<V::Output, ParamError> {
+    dispatch_damped::<V, AUDIT>(params, effects, init, history, 0.0, vis)
+}
+
+/// [`dispatch`] with the virtual damper of dimensionless damping `beta_v` = B/(K·T)
+/// ([`Exact::with_damping`]; 0 gives exactly [`dispatch`]).
+///
+/// # Errors
+/// [`ParamError`] naming the offending field (`damping` for β_v).
+pub fn dispatch_damped<V: Visitor, const AUDIT: bool>(
+    params: Params,
+    effects: Effects,
+    init: Motion,
+    history: History,
+    beta_v: f64,
+    vis: V,
+) -> Result<V::Output, ParamError> {
     let e = effects;
     Ok(
-        pick!(vis, params, init, history, [] e.quantization, e.coulomb, e.viscous, e.delay, e.one_sided),
+        pick!(vis, params, init, history, beta_v, [] e.quantization, e.coulomb, e.viscous, e.delay, e.one_sided),
     )
 }
 
@@ -440,6 +522,56 @@ mod tests {
             b.step_period();
         }
         assert_eq!(a, b.state());
+    }
+
+    #[test]
+    fn damping_is_validated_by_name() {
+        let s = Full::new(
+            Params::BASE,
+            Motion { x: 0.0, v: 1.0 },
+            History::HoldInitial,
+        )
+        .unwrap();
+        for bad in [f64::NAN, -0.1, 1000.5, f64::INFINITY] {
+            let e = s.clone().with_damping(bad).unwrap_err();
+            assert_eq!(e.name(), "damping", "{bad}");
+        }
+        assert_eq!(s.with_damping(1000.0).unwrap().damping(), 1000.0);
+    }
+
+    /// Linear sampled spring, no Coulomb, no delay, β = 0: the ZOH spring acts as a negative
+    /// damping of about ½ (Colgate), so the oscillation grows; a backward-difference damper
+    /// β_v = 2 ≫ ½ (and ≪ μ) makes it decay. Also the energy balance (26) with the damper.
+    #[test]
+    fn damper_turns_growth_into_decay_and_balances_energy() {
+        type Lin = Exact<false, false, true, false, false, true>;
+        let p = Params {
+            mu: 100.0,
+            beta: 0.0,
+            sigma: 0.0,
+            tau_d: 0.0,
+        };
+        let init = Motion { x: 0.0, v: 5.0 };
+        let h0 = storage(p.mu, init.x, init.v);
+        let run = |beta_v: f64| {
+            let mut s = Lin::new(p, init, History::HoldInitial)
+                .unwrap()
+                .with_damping(beta_v)
+                .unwrap();
+            let mut worst: f64 = 0.0;
+            for _ in 0..2000 {
+                s.step_period();
+                let a = s.audit();
+                worst = worst.max(a.residual.abs() / a.h_start.max(1.0));
+            }
+            let st = s.state();
+            (storage(p.mu, st.x, st.v), worst)
+        };
+        let (grown, r0) = run(0.0);
+        let (decayed, r2) = run(2.0);
+        assert!(grown > 2.0 * h0, "undamped {grown} vs {h0}");
+        assert!(decayed < 0.01 * h0, "damped {decayed} vs {h0}");
+        assert!(r0 < 1e-9 && r2 < 1e-9, "residuals {r0} {r2}");
     }
 
     #[test]

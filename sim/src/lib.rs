@@ -50,6 +50,6 @@ pub mod map;
 #[cfg(feature = "std")]
 pub mod scene;
 
-pub use exact::{dispatch, Exact, ExactSim, History, PeriodAudit, Visitor};
+pub use exact::{dispatch, dispatch_damped, Exact, ExactSim, History, PeriodAudit, Visitor};
 pub use params::{Effects, ParamError, Params};
 pub use plant::{Body, DimensionlessPlant, Motion, PhysicalPlant};

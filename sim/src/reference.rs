@@ -142,6 +142,10 @@ pub struct RefSim {
     stats: Stats,
     audit: PeriodAudit,
     rest_periods: u64,
+    /// Dimensionless virtual damping β_v = B/(K·T) (0: no damper).
+    beta_v: f64,
+    /// Sampled count of the previous sample, n_(h−1).
+    n_prev: f64,
 }
 
 // Dormand–Prince 5(4) tableau (the nodes c_i are not needed: within a segment the system is
@@ -253,7 +257,10 @@ impl RefSim {
             stats: Stats::default(),
             audit: PeriodAudit::default(),
             rest_periods: 0,
+            beta_v: 0.0,
+            n_prev: 0.0,
         };
+        s.n_prev = s.count(init.x);
         let hist = match model.history {
             History::HoldInitial => s.spring(init.x),
             History::Zero => 0.0,
@@ -278,6 +285,50 @@ impl RefSim {
     #[must_use]
     pub fn stats(&self) -> Stats {
         self.stats
+    }
+
+    /// Adds the virtual damper −β_v·(n_h − n_(h−1)) of the exact solver
+    /// ([`crate::exact::Exact::with_damping`]: same law, n_(−1) = n_0, one-sided only in contact).
+    ///
+    /// # Errors
+    /// [`ParamError`] naming `damping` unless β_v is finite and in [0, 1000].
+    pub fn with_damping(mut self, beta_v: f64) -> Result<Self, ParamError> {
+        self.beta_v = stiffwall_core::params::check_range(
+            "damping",
+            beta_v,
+            0.0,
+            false,
+            crate::exact::MAX_BETA_V,
+            "finite and in [0, 1000] (dimensionless B/(K*T))",
+        )?;
+        Ok(self)
+    }
+
+    /// Sampled count ⌊ξ⌋ (ξ without quantization).
+    fn count(&self, xi: f64) -> f64 {
+        if self.m.effects.quantization {
+            floor_fast(xi)
+        } else {
+            xi
+        }
+    }
+
+    /// Sampled law: spring plus damper (the spring alone when β_v = 0).
+    fn law(&self, xi: f64) -> f64 {
+        if self.beta_v == 0.0 {
+            return self.spring(xi);
+        }
+        let n = self.count(xi);
+        let spring = if self.m.effects.quantization {
+            -n - 0.5
+        } else {
+            -n
+        };
+        if self.m.effects.one_sided && n < 0.0 {
+            0.0
+        } else {
+            spring - self.beta_v * (n - self.n_prev)
+        }
     }
 
     fn spring(&self, xi: f64) -> f64 {
@@ -546,7 +597,8 @@ impl ExactSim for RefSim {
             self.h += 1;
             return;
         }
-        let fc = self.spring(self.y[0]);
+        let fc = self.law(self.y[0]);
+        self.n_prev = self.count(self.y[0]);
         let h = self.h;
         self.line[(h & MASK) as usize] = fc;
         let at = |back: u64| self.line[(h.wrapping_sub(back) & MASK) as usize];
@@ -624,7 +676,7 @@ impl ExactSim for RefSim {
         } else if self.n > 0 {
             at(self.n)
         } else {
-            self.spring(self.y[0])
+            self.law(self.y[0])
         }
     }
 }

@@ -232,6 +232,7 @@ impl PlantCase {
             free_exit: controller.one_sided
                 && model.hand.is_none_or(|h| h.stiffness_n_per_m == 0.0),
             force_limit_n: full_scale_n(&model),
+            damping: 0.0,
             v_max: DEFAULT_XIDOT * d / controller.period_s,
             moving_mass_kg: moving_mass_kg(&model),
             wall_offsets,

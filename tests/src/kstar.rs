@@ -102,6 +102,9 @@ pub struct Rig {
     pub free_exit: bool,
     /// Clamp of the commanded force, N (N·m).
     pub force_limit_n: f64,
+    /// Virtual damping B of the wall, N·s/m (N·m·s/rad), ≥ 0, on the backward difference of the
+    /// counts (0: the pure spring of eq. (2)).
+    pub damping: f64,
     /// Maximum impact velocity v_max, m/s (rad/s).
     pub v_max: f64,
     /// Whole moving mass (motor side + link + hand), kg (kg·m²).
@@ -127,10 +130,24 @@ impl Rig {
     /// The spring of eq. (2) at count `n` relative to the wall, clamped, N.
     #[must_use]
     pub fn spring_n(&self, k: f64, n: i64) -> f64 {
+        self.wall_force_n(k, n, n)
+    }
+
+    /// The firmware's wall law at count `n` after count `n_prev` (the previous sample), clamped,
+    /// N: F = −K·Δ·(n + ½) − B·Δ·(n − n_prev)/T, 0 for n < 0 on a one-sided wall (the damper
+    /// acts only in contact). With B = 0 this is [`Rig::spring_n`] bit for bit.
+    #[must_use]
+    pub fn wall_force_n(&self, k: f64, n: i64, n_prev: i64) -> f64 {
         if self.one_sided && n < 0 {
             return 0.0;
         }
-        (-k * self.resolution_m * (n as f64 + 0.5)).clamp(-self.force_limit_n, self.force_limit_n)
+        let spring = -k * self.resolution_m * (n as f64 + 0.5);
+        let f = if self.damping == 0.0 {
+            spring
+        } else {
+            spring - self.damping * self.resolution_m * (n - n_prev) as f64 / self.period_s
+        };
+        f.clamp(-self.force_limit_n, self.force_limit_n)
     }
 
     /// Every trial of the criterion at stiffness `k`.
@@ -205,6 +222,15 @@ impl Trial {
             TrialKind::Impact { .. } => plant.set_state(x0, v0),
             TrialKind::Release { .. } => plant.set_held(x0),
         }
+    }
+
+    /// The count (relative to the wall) one period before the trial starts, the damper's first
+    /// previous sample: a release starts from a hold at rest (its own count); an impact arrives
+    /// moving, as the firmware's launch brings it (the count at x₀ − v₀·T).
+    #[must_use]
+    pub fn previous_count(&self, resolution_m: f64, period_s: f64) -> i64 {
+        let (x0, v0) = self.initial_state(resolution_m);
+        ((x0 - v0 * period_s) / resolution_m).floor() as i64 - self.wall
     }
 
     /// Initial position and velocity for resolution Δ = `resolution_m`: an impact starts at the
@@ -286,6 +312,7 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
     let delay = rig.delay_ticks as usize;
     let mut line = std::collections::VecDeque::with_capacity(delay + 1);
     let mut counts = Vec::with_capacity(ticks);
+    let mut n_prev = trial.previous_count(d, rig.period_s);
     for _ in 0..ticks {
         let n = plant.encoder_count() - trial.wall;
         counts.push(n);
@@ -310,7 +337,8 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
             }
         }
         // Delay line of `delay` whole periods (zeros first), as the firmware's ring.
-        line.push_back(rig.spring_n(k, n));
+        line.push_back(rig.wall_force_n(k, n, n_prev));
+        n_prev = n;
         let f = if line.len() > delay {
             line.pop_front().unwrap_or(0.0)
         } else {
@@ -411,4 +439,44 @@ pub fn k_star<P: SampledPlant + Clone>(
         failing,
         evaluations,
     })
+}
+
+/// Default grid of the damper for [`frontier`], as β = B/(K*(0)·T): the evidence puts
+/// the best walls at B ≈ 2–4 × K*(0)·T; 0.5 and 1 show the rise, 6 the fall beyond.
+pub const FRONTIER_BETA: [f64; 7] = [0.0, 0.5, 1.0, 2.0, 3.0, 4.0, 6.0];
+
+/// One point of the frontier: K* at damping `b`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrontierPoint {
+    /// Virtual damping B, N·s/m (N·m·s/rad).
+    pub b: f64,
+    /// K*(B), or why the search found none.
+    pub k_star: Result<KStar, KStarError>,
+}
+
+/// K*(B) for every B of `b_grid` (N·s/m): [`k_star`] on the rig with that damping, each scan
+/// started from `k_start` (a stiffness stable at every B of the grid is not known in advance:
+/// the scan goes down from an unstable start until it settles, so K*(B) is the top of the
+/// stable interval found first from `k_start` downwards or upwards). The frontier need not be
+/// monotone in B.
+pub fn frontier<P: SampledPlant + Clone>(
+    proto: &P,
+    rig: &Rig,
+    b_grid: &[f64],
+    k_start: f64,
+    k_cap: f64,
+) -> Vec<FrontierPoint> {
+    b_grid
+        .iter()
+        .map(|&b| {
+            let damped = Rig {
+                damping: b,
+                ..rig.clone()
+            };
+            FrontierPoint {
+                b,
+                k_star: k_star(proto, &damped, k_start, k_cap),
+            }
+        })
+        .collect()
 }

@@ -1,7 +1,7 @@
-//! `hostctl tune` on plants beyond its model (issue 10, item 5): on every plant of
-//! `sim/plants/`, the K that `tune --plant FILE --fast --dry-run` sets is safe (≤ the true
-//! largest stable K*, computed by `stiffwall_tests::kstar` from the simulator alone) and near
-//! optimal (≥ 0.7 K*).
+//! `hostctl tune` on plants beyond its model (issue 10, item 5; with the damper, issue 19): on
+//! every plant of `sim/plants/`, the (K, B) that `tune --plant FILE --fast --dry-run` sets is
+//! safe (K ≤ the true largest stable K*(B) at the B it set, computed by `stiffwall_tests::kstar`
+//! from the simulator alone with the firmware's damper law) and near optimal (≥ 0.7 K*(B)).
 //!
 //! The tune runs the same code as `hostctl tune --plant FILE --fast --dry-run`: the connect
 //! options are parsed from those arguments and `tune::procedure::tune` runs on the client.
@@ -39,7 +39,7 @@ struct Cli {
 
 /// K* and the K set by tune; an error message when tune fails or K is out of [0.7 K*, K*].
 fn check(case: &PlantCase) -> Result<String, String> {
-    let ks = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
+    let ks0 = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
         .map_err(|e| format!("{}: K*: {e}", case.name))?;
     let cli = Cli::try_parse_from([
         "hostctl".as_ref(),
@@ -55,14 +55,29 @@ fn check(case: &PlantCase) -> Result<String, String> {
         .map_err(|e| format!("{}: connect: {e:#}", case.name))?;
     let o = procedure::tune(&mut client, &Settings::default(), true, &|_| {})
         .map_err(|e| format!("{}: tune failed: {e:#}", case.name))?;
+    let tune_s = t0.elapsed().as_secs_f64();
+    // Truth at the damping tune set (the same brute force with the firmware's damper).
+    let ks = if o.b_set > 0.0 {
+        let rig = kstar::Rig {
+            damping: o.b_set,
+            ..case.rig.clone()
+        };
+        kstar::k_star(&case.proto, &rig, ks0.k_star * 0.5, 1e12)
+            .map_err(|e| format!("{}: K*(B = {:.4e}): {e}", case.name, o.b_set))?
+    } else {
+        ks0.clone()
+    };
     let ratio = o.k_set / ks.k_star;
     let line = format!(
-        "{}: K* = {:.5} (first failure {:?}), K set = {:.5}, K/K* = {ratio:.3}, tune {:.1} s",
+        "{}: K*(0) = {:.5}, B set = {:.4e}, K*(B) = {:.5} (first failure {:?}), K set = {:.5}, \
+         K/K*(B) = {ratio:.3}, K/K*(0) = {:.3}, tune {tune_s:.1} s",
         case.name,
+        ks0.k_star,
+        o.b_set,
         ks.k_star,
         ks.failing,
         o.k_set,
-        t0.elapsed().as_secs_f64()
+        o.k_set / ks0.k_star,
     );
     eprintln!("{line}");
     if o.k_set > ks.k_star {

@@ -2,8 +2,11 @@
 //!
 //! Units: inputs are [`PhysicalParams`] (SI; the `stiffness` field is ignored except where a
 //! function says it tests stability *at* that stiffness); results are stiffnesses in N/m
-//! (N·m/rad for rotational devices). Virtual damping B of the cited papers is 0 here (the
-//! wall of eq. (2) is a pure spring).
+//! (N·m/rad for rotational devices). Virtual damping B of the cited papers is 0 in the functions
+//! of this file (the wall of eq. (2) is a pure spring); the spring + damper wall
+//! F = −K·x − B·(x_k − x_{k−1})/T is analysed in the `damped` submodule, re-exported here
+//! ([`k_max_exact_linear`], [`exact_linear_stable`], [`k_max_colgate_schenkel_damped`],
+//! [`k_max_small_b`], [`Frontier`]).
 //!
 //! Invariants: no allocation; the exact linear boundary uses fixed-size coefficient arrays of
 //! length [`MAX_DEGREE`] + 1, which limits the delay to [`MAX_DELAY_PERIODS`] periods.
@@ -106,6 +109,21 @@ fn g_max_no_delay(x: f64) -> f64 {
 /// Characteristic polynomial of the sampled linear loop (see [`gil_avello_rubio_stable`]),
 /// coefficients of z^0..=z^n, with x = bT/m, g = KT²/m, τ_D = d + f.
 fn char_poly(x: f64, g: f64, d: usize, f: f64) -> ([f64; MAX_DEGREE + 1], usize) {
+    let e = libm::exp(-x);
+    let num = numerator(x, f);
+    let n = d + 3;
+    let mut c = [0.0; MAX_DEGREE + 1];
+    c[d + 3] += 1.0;
+    c[d + 2] -= 1.0 + e;
+    c[d + 1] += e;
+    c[2] += g * num[2];
+    c[1] += g * num[1];
+    c[0] += g * num[0];
+    (c, n)
+}
+
+/// Coefficients of z^0..=z^2 of N(z) = z·N₀(z) + N₁(z), the loop numerator of [`char_poly`].
+fn numerator(x: f64, f: f64) -> [f64; 3] {
     // Normalised units: time in periods, mass 1, damping rate x per period.
     let gamma = |h: f64| (h * h * p2(x * h), h * p1(x * h));
     let e = libm::exp(-x);
@@ -116,29 +134,21 @@ fn char_poly(x: f64, g: f64, d: usize, f: f64) -> ([f64; MAX_DEGREE + 1], usize)
     let g1v = libm::exp(-x * (1.0 - f)) * gfv;
     let (a0, b0) = (g0x, phi12 * g0v - e * g0x);
     let (a1, b1) = (g1x, phi12 * g1v - e * g1x);
-    let n = d + 3;
-    let mut c = [0.0; MAX_DEGREE + 1];
-    c[d + 3] += 1.0;
-    c[d + 2] -= 1.0 + e;
-    c[d + 1] += e;
-    c[2] += g * a0;
-    c[1] += g * (b0 + a1);
-    c[0] += g * b1;
-    (c, n)
+    [b1, b0 + a1, a0]
 }
 
 /// Schur–Cohn–Jury test: whether every root of Σ c[i] zⁱ (degree n) lies strictly inside the
 /// unit circle. Reduction: with leading a_n and constant a_0, require |a_0| < |a_n| and recurse
 /// on (a_n p(z) − a_0 z^n p(1/z))/z. (Assumes a_n > 0 after the first step, which the
 /// normalisation below keeps when |a_0| < |a_n|.)
-fn schur_stable(mut c: [f64; MAX_DEGREE + 1], mut n: usize) -> bool {
+fn schur_stable<const L: usize>(mut c: [f64; L], mut n: usize) -> bool {
     while n > 0 {
         let (an, a0) = (c[n], c[0]);
         let shrinking = a0.abs() < an.abs();
         if !shrinking {
             return false;
         }
-        let mut next = [0.0; MAX_DEGREE + 1];
+        let mut next = [0.0; L];
         // a_n·p − a_0·p* written as a_n(p − p*) + (a_n − a_0)p*: near the stability boundary
         // p is nearly self-reciprocal and this form avoids cancelling two O(1) products.
         let dn = an - a0;
@@ -259,6 +269,9 @@ pub fn k_max_gil_avello_rubio(p: &PhysicalParams) -> Result<f64, ParamError> {
     }
     Ok(lo * p.mass / p.period_s / p.period_s)
 }
+
+mod damped;
+pub use damped::*;
 
 #[cfg(test)]
 mod tests {

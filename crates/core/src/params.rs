@@ -4,6 +4,9 @@
 //! Coulomb friction N, resolution m, stiffness N/m; for a rotational device (`rotational: true`)
 //! the same fields are kg·m², N·m·s/rad, N·m, rad and N·m/rad. Times are seconds in both cases.
 //! [`Dimensionless`] holds μ = m/(K T²), β = b/(K T), σ = c/(K Δ), τ_D = T_D/T (Table I).
+//! Beside them, for a spring + damper wall of virtual damping B (N·s/m or N·m·s/rad), the
+//! dimensionless virtual damping is β_v = B/(K T) (not in Table I; the paper's wall has B = 0;
+//! see `criteria::beta_v` and `criteria::k_max_exact_linear`).
 //!
 //! Invariants: a value that passed validation is finite; m, T, Δ, K are > 0; b, c, T_D are ≥ 0.
 //! Every failed check returns a [`ParamError`] naming the parameter and the allowed range.

@@ -8,6 +8,7 @@
 //! flags through [`PlantArgs`]); bad input is an error naming the field and its allowed range,
 //! and nothing is written.
 
+use crate::analysis::damping::damping_report;
 use crate::analysis::{analyze, list_devices, plot, render_table};
 use crate::output::{emit, emit_report};
 use crate::plant_args::PlantArgs;
@@ -20,7 +21,7 @@ use stiffwall_core::{devices, PhysicalParams};
 /// Arguments of `hostctl analyze`.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Examples:\n  hostctl analyze --device phantom-1.0\n  hostctl analyze --device omega --stiffness 8000 --velocity 0.05 --json\n  hostctl analyze --mass 0.1 --viscous 0.01 --coulomb 0.05 --resolution 2e-5 --period 1e-3 --stiffness 2000 --plot wall.svg"
+    after_help = "Examples:\n  hostctl analyze --device phantom-1.0\n  hostctl analyze --device omega --stiffness 8000 --velocity 0.05 --json\n  hostctl analyze --device phantom-1.0 --damping 2\n  hostctl analyze --mass 0.1 --viscous 0.01 --coulomb 0.05 --resolution 2e-5 --period 1e-3 --stiffness 2000 --plot wall.svg"
 )]
 pub struct Args {
     /// Plant: preset and m, b, c.
@@ -53,6 +54,10 @@ pub struct Args {
     /// Rotational device: angles, torques and inertia instead of positions, forces and mass.
     #[arg(long)]
     pub rotational: bool,
+    /// Virtual damping B of the wall [N·s/m, or N·m·s/rad], finite and >= 0: adds the spring +
+    /// damper analysis (exact linear K_max(B), closed forms, frontier over B, best B).
+    #[arg(long, allow_hyphen_values = true)]
+    pub damping: Option<f64>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -69,11 +74,23 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.list_devices {
         return Ok(emit(&list_devices())?);
     }
+    if let Some(b) = args.damping {
+        let unit = if args.rotational {
+            "N·m·s/rad"
+        } else {
+            "N·s/m"
+        };
+        stiffwall_core::criteria::check_damping(b)
+            .map_err(|e| anyhow!("--damping [{unit}]: {e}"))?;
+    }
     if let Some(path) = &args.plot {
         crate::figure::prepare(path)?;
     }
     let (name, p) = resolve_params(args)?;
-    let report = analyze(name, &p, args.velocity, args.acceleration)?;
+    let mut report = analyze(name, &p, args.velocity, args.acceleration)?;
+    if let Some(b) = args.damping {
+        report.damping = Some(damping_report(&p, b)?);
+    }
     if let Some(path) = &args.plot {
         plot::write(path, &report).with_context(|| format!("writing plot {}", path.display()))?;
     }

@@ -29,6 +29,19 @@ pub struct Args {
     /// Duration of the identification excitation, s (0.5–1000).
     #[arg(long, default_value_t = 3.0)]
     pub excite_seconds: f64,
+    /// Virtual damping B of the wall, N·s/m (N·m·s/rad for rotary devices), ≥ 0: fixes B and
+    /// finds K (0, the default: the spring-only tune).
+    #[arg(
+        long,
+        value_name = "B",
+        allow_hyphen_values = true,
+        conflicts_with = "search_damping"
+    )]
+    pub damping: Option<f64>,
+    /// Search the (K, B) frontier for the stiffest verified spring + damper (experimental: not
+    /// yet safe on every plant of the repository).
+    #[arg(long)]
+    pub search_damping: bool,
     /// Find and report K, but leave the device's config as it was.
     #[arg(long)]
     pub dry_run: bool,
@@ -61,7 +74,17 @@ pub fn settings(a: &Args) -> Result<Settings> {
             anyhow::bail!("--release-ticks must be within [100, 10000000] (got {t})");
         }
     }
+    if let Some(b) = a.damping {
+        if !(b.is_finite() && b >= 0.0) {
+            anyhow::bail!("--damping must be finite and >= 0 N·s/m (N·m·s/rad) (got {b})");
+        }
+    }
     Ok(Settings {
+        damping: if a.search_damping {
+            procedure::Damping::Search
+        } else {
+            procedure::Damping::Fixed(a.damping.unwrap_or(0.0))
+        },
         max_velocity: a.max_velocity,
         margin: a.margin,
         release_ticks: a.release_ticks,
@@ -207,6 +230,7 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
             .collect::<Vec<_>>()
             .join("; ")
     );
+    render_walls(&mut s, o, u.0, u.2);
     if o.model_mismatch.is_empty() {
         let _ = writeln!(s, "model check: the identified model fits the device");
     } else {
@@ -238,4 +262,45 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
         let _ = writeln!(s, "plot: {}", p.display());
     }
     s
+}
+
+/// The spring-only wall and the spring + damper wall side by side, and the frontier tried.
+fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
+    let t = o.params.period_s;
+    let _ = writeln!(s, "walls ({k_unit}, {b_unit}):");
+    let _ = writeln!(
+        s,
+        "  {:<22} {:>12} {:>12} {:>10}",
+        "", "K", "B", "β_v=B/(KT)"
+    );
+    let _ = writeln!(
+        s,
+        "  {:<22} {:>12.5} {:>12.4e} {:>10.3}",
+        "spring only", o.k_spring_only, 0.0, 0.0
+    );
+    if o.b_set > 0.0 {
+        let _ = writeln!(
+            s,
+            "  {:<22} {:>12.5} {:>12.4e} {:>10.3}  (×{:.2} the spring only)",
+            "spring + damper (set)",
+            o.k_set,
+            o.b_set,
+            o.b_set / (o.k_set * t),
+            o.k_set / o.k_spring_only
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "  the spring-only wall is set (no damping verified stiffer)"
+        );
+    }
+    let tried: Vec<String> = o
+        .frontier
+        .iter()
+        .map(|f| match f.k_verified {
+            Some(k) => format!("B={:.3e}: K={k:.4}", f.b),
+            None => format!("B={:.3e}: below the best K", f.b),
+        })
+        .collect();
+    let _ = writeln!(s, "  frontier (largest settling K): {}", tried.join("; "));
 }

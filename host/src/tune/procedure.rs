@@ -78,7 +78,38 @@ pub struct Settings {
     pub excite_seconds: f64,
     /// Relative tolerance of the K bisection.
     pub rel_tol: f64,
+    /// Virtual damping B of the wall: searched (default) or fixed.
+    pub damping: Damping,
 }
+
+/// How `tune` chooses the virtual damping B.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub enum Damping {
+    /// Search the (K, B) frontier ([`DAMPING_BETAS`]) for the stiffest verified pair.
+    Search,
+    /// Fixed B, N·s/m (N·m·s/rad), ≥ 0; 0 is the spring-only tune.
+    Fixed(f64),
+}
+
+/// Damping levels the frontier search tries, as β = B/(K₀·T) with K₀ the spring-only largest
+/// settling K, in this order: the brute-force frontiers of the repository's plants rise up to
+/// β ≈ 2–4 (3–8 × K*(0)) where the damper itself stays stable, and fall where it does not.
+pub const DAMPING_BETAS: [f64; 3] = [1.0, 2.0, 4.0];
+
+/// Relative gain in verified K that a larger damping must bring to be kept (and for the search
+/// to go on to the next level): less is within the bisection's resolution.
+pub const DAMPING_MIN_GAIN: f64 = 0.1;
+
+/// Relative tolerance of the bisections at B > 0 (coarser than the spring-only one: the
+/// frontier is sampled at few B and the chosen pair is confirmed with the whole set).
+pub const FRONTIER_REL_TOL: f64 = 0.05;
+
+/// Natural periods per test (at least [`TEST_TICKS`].0, at most .1 ticks).
+pub const TEST_NATURAL_PERIODS: f64 = 60.0;
+/// Fewest / most ticks per test when `release_ticks` is not given.
+pub const TEST_TICKS: (f64, f64) = (1500.0, 30_000.0);
+/// Confirmation attempts, each [`CONFIRM_BACKOFF`] below the last.
+pub const CONFIRM_TRIES: usize = 8;
 
 impl Default for Settings {
     fn default() -> Self {
@@ -88,6 +119,10 @@ impl Default for Settings {
             release_ticks: None,
             excite_seconds: 3.0,
             rel_tol: 0.02,
+            // Spring only until the frontier search is safe on every plant of the repository
+            // (on maxon-re35-amp-3khz it set 1.02 K*(B); two plants latch faults): opt in with
+            // `--search-damping`.
+            damping: Damping::Fixed(0.0),
         }
     }
 }
@@ -122,6 +157,14 @@ pub struct Outcome {
     pub search: Found,
     /// The stiffness set.
     pub k_set: f64,
+    /// The virtual damping set, N·s/m (N·m·s/rad).
+    pub b_set: f64,
+    /// The spring-only stiffness of the same run: verified when it is the one set, otherwise
+    /// the one it would set (largest settling K at B = 0 × the margin).
+    pub k_spring_only: f64,
+    /// The B values tried with their largest verified (settling) K (None: none at or above
+    /// the best K so far), B = 0 first.
+    pub frontier: Vec<FrontierPoint>,
     /// Verdicts of the verification set at `k_set` (in the order of `verification`).
     pub confirmation: Vec<Verdict>,
     /// The verification set at `k_set`, test by test.
@@ -135,6 +178,15 @@ pub struct Outcome {
     pub margin_used: f64,
     /// Whether the config was saved.
     pub saved: bool,
+}
+
+/// One point of the verified frontier.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct FrontierPoint {
+    /// Virtual damping B, N·s/m (N·m·s/rad).
+    pub b: f64,
+    /// Largest settling K found at B, N/m (N·m/rad).
+    pub k_verified: Option<f64>,
 }
 
 /// Identified parameters as reported.
@@ -215,6 +267,11 @@ pub fn tune(
             bail!("--max-velocity must be finite and > 0 (got {v})");
         }
     }
+    if let Damping::Fixed(b) = s.damping {
+        if !(b.is_finite() && b >= 0.0) {
+            bail!("--damping must be finite and >= 0 N·s/m (N·m·s/rad) (got {b})");
+        }
+    }
     let original = c.get_config()?;
     let result = tune_inner(c, s, &original, dry_run, progress);
     // Leave the device as it was unless a new config was deliberately set.
@@ -225,6 +282,354 @@ pub fn tune(
             .context("restoring the previous config")?;
     }
     result
+}
+
+/// What every test of one run needs beyond the config: the identified device and the tune's
+/// targets.
+struct Run<'a> {
+    s: &'a Settings,
+    p: PhysicalParams,
+    /// Maximum velocity v, m/s (rad/s).
+    v: f64,
+    /// Above this K the wall's peak force at v saturates (see [`tune_inner`]).
+    k_force: f64,
+    one_sided_wall: bool,
+    progress: &'a dyn Fn(&str),
+}
+
+/// What the searches found beside their result.
+#[derive(Default)]
+struct Notes {
+    /// The smallest K at which an impact's launch failed (see `Verdict::NotLaunched`).
+    not_launched: Option<f64>,
+    /// The largest K whose release passed at B = 0, with its counts.
+    best: Option<(f64, Vec<i64>)>,
+}
+
+impl Run<'_> {
+    fn period_s(&self) -> f64 {
+        self.p.period_s
+    }
+
+    fn natural_ticks(&self, k: f64) -> f64 {
+        std::f64::consts::TAU * (self.p.mass / k).sqrt() / self.period_s()
+    }
+
+    fn ticks_for(&self, k: f64, thorough: bool) -> u32 {
+        let n = self.s.release_ticks.unwrap_or_else(|| {
+            (TEST_NATURAL_PERIODS * self.natural_ticks(k)).clamp(TEST_TICKS.0, TEST_TICKS.1) as u32
+        });
+        if thorough {
+            n.saturating_mul(2)
+        } else {
+            n
+        }
+    }
+
+    fn test(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        k: f64,
+        test: Test,
+        thorough: bool,
+    ) -> Result<(Verdict, Vec<i64>)> {
+        run_test(
+            c,
+            base,
+            k,
+            test,
+            self.ticks_for(k, thorough),
+            min_settle_run(self.p.mass, k, self.period_s()),
+        )
+    }
+
+    /// One search step at `k`: the full-energy release, and above `k_force` the impacts at v.
+    fn step(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        k: f64,
+        thorough: bool,
+        notes: &mut Notes,
+    ) -> Result<Verdict> {
+        let d = deflection_for(&self.p, k, self.v);
+        let b = base.damping;
+        (self.progress)(&format!("release test K={k:.4} B={b:.4} from {d} ticks"));
+        let (verdict, counts) = self.test(
+            c,
+            base,
+            k,
+            Test::Release {
+                deflection_ticks: d,
+            },
+            thorough,
+        )?;
+        if !verdict.passes() {
+            return Ok(verdict);
+        }
+        if k > self.k_force {
+            let dirs: &[f64] = if self.one_sided_wall {
+                &[1.0]
+            } else {
+                &[1.0, -1.0]
+            };
+            for &dir in dirs {
+                let v_ticks = dir * self.v * self.period_s() / self.p.resolution;
+                let test =
+                    super::verify::impact(v_ticks, self.natural_ticks(k), self.one_sided_wall);
+                (self.progress)(&format!(
+                    "{} test K={k:.4} (force saturates)",
+                    test.describe()
+                ));
+                let (impact, _) = self.test(c, base, k, test, thorough)?;
+                if impact == Verdict::NotLaunched {
+                    notes.not_launched.get_or_insert(k);
+                } else if !impact.passes() {
+                    return Ok(impact);
+                }
+            }
+        }
+        if base.damping == 0.0 && notes.best.as_ref().is_none_or(|(kb, _)| k > *kb) {
+            notes.best = Some((k, counts));
+        }
+        Ok(verdict)
+    }
+
+    /// The whole verification set at `k` and the config `base` (its damping): whether every
+    /// test passed, and the results up to the first failure.
+    fn verify_set(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        k: f64,
+        thorough: bool,
+        notes: &mut Notes,
+    ) -> Result<(bool, Vec<TestResult>)> {
+        let d = deflection_for(&self.p, k, self.v);
+        (self.progress)(&format!(
+            "verifying K={k:.4} B={:.4}: releases from ±{d} ticks and below, impacts",
+            base.damping
+        ));
+        let v_ticks = self.v * self.period_s() / self.p.resolution;
+        let mut set = test_set(
+            d,
+            v_ticks,
+            self.natural_ticks(k),
+            thorough,
+            true,
+            self.one_sided_wall,
+        );
+        // The tests most likely to fail first (impacts at v, then the full-energy releases),
+        // so that a K that fails costs one or two tests, not the whole set.
+        set.sort_by_key(|test| match *test {
+            Test::Impact {
+                velocity_milliticks,
+                ..
+            } if velocity_milliticks.unsigned_abs() >= (1000.0 * v_ticks) as u32 => 0,
+            Test::Release { deflection_ticks } if deflection_ticks.abs() >= d.abs() => 1,
+            _ => 2,
+        });
+        let mut results = Vec::new();
+        for test in set {
+            let (verdict, counts) = self.test(c, base, k, test, thorough)?;
+            results.push(TestResult {
+                test,
+                k,
+                verdict,
+                ticks_judged: counts.len(),
+            });
+            if verdict == Verdict::NotLaunched {
+                // Judged by the releases of the set, which reach the same energy from both
+                // sides; reported by the caller.
+                notes.not_launched.get_or_insert(k);
+                continue;
+            }
+            if !verdict.passes() {
+                (self.progress)(&format!(
+                    "verification at K={k:.4}: {} {}; backing off ×{CONFIRM_BACKOFF}",
+                    test.describe(),
+                    verdict.describe()
+                ));
+                return Ok((false, results));
+            }
+        }
+        Ok((true, results))
+    }
+
+    /// Confirms `k` with the verification set, backing off in steps of [`CONFIRM_BACKOFF`].
+    /// After a confirmation failed, the first K that passes may sit right at the limit (it
+    /// only lies between that failure and it): the K set is one more step down. That step is
+    /// not verified again (it is 5 % below a K that passed the whole set; re-running the set
+    /// would cost the real-time budget a third of its time). None: no K passed.
+    fn confirm(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        mut k: f64,
+        thorough: bool,
+        notes: &mut Notes,
+    ) -> Result<Option<(f64, Vec<TestResult>)>> {
+        let mut backed_off = false;
+        for _ in 0..CONFIRM_TRIES {
+            let (confirmed, results) = self.verify_set(c, base, k, thorough, notes)?;
+            if confirmed {
+                if backed_off {
+                    k *= CONFIRM_BACKOFF;
+                }
+                return Ok(Some((k, results)));
+            }
+            backed_off = true;
+            k *= CONFIRM_BACKOFF;
+        }
+        Ok(None)
+    }
+}
+
+/// The wall chosen: stiffness, damping, the verification at it and the frontier tried.
+struct Wall {
+    k_set: f64,
+    b_set: f64,
+    k_spring_only: f64,
+    verification: Vec<TestResult>,
+    frontier: Vec<FrontierPoint>,
+}
+
+/// Largest B the firmware accepts at the config's rate and coarsening, N·s/m: its limit
+/// K_max(shift)·T/2 (`Board::max_damping`), a little inside for the f32 round trip.
+fn b_cap(c: &Client, base: &ServoConfig, period_s: f64) -> f64 {
+    let k_cap = f64::from(c.info.limits.max_stiffness) / f64::from(1u32 << base.coarsen_shift);
+    0.999 * k_cap * period_s / 2.0
+}
+
+fn damped(base: &ServoConfig, b: f64) -> ServoConfig {
+    ServoConfig {
+        damping: b as f32,
+        ..*base
+    }
+}
+
+/// The largest settling K at damping `b`, searched from `start`; None when `start` itself
+/// fails — a damping that does not hold the best K so far is not searched.
+#[allow(clippy::too_many_arguments)]
+fn search_at(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    b: f64,
+    start: f64,
+    search: &Search,
+    thorough: bool,
+    notes: &mut Notes,
+) -> Result<Option<Found>> {
+    let cfg = damped(base, b);
+    let first = run.step(c, &cfg, start, thorough, notes)?;
+    if !first.passes() {
+        return Ok(None);
+    }
+    let mut cached = Some((start, first));
+    let search = Search {
+        rel_tol: search.rel_tol.max(FRONTIER_REL_TOL),
+        ..*search
+    };
+    largest_settling_k(start, &search, |k| match cached.take() {
+        Some((k0, v)) if k0 == k => Ok(v),
+        _ => run.step(c, &cfg, k, thorough, notes),
+    })
+    .map(Some)
+}
+
+/// Chooses the wall after the spring-only search `found`: spring only, a fixed B, or the
+/// stiffest verified pair of the frontier ([`DAMPING_BETAS`]); the chosen pair is confirmed
+/// with the whole verification set, the spring only is the fallback of the search.
+#[allow(clippy::too_many_arguments)]
+fn choose_wall(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    found: &Found,
+    search: &Search,
+    thorough: bool,
+    margin: f64,
+    notes: &mut Notes,
+) -> Result<Wall> {
+    let k_spring = found.k_pass * margin;
+    let mut frontier = vec![FrontierPoint {
+        b: 0.0,
+        k_verified: Some(found.k_pass),
+    }];
+    let cap = b_cap(c, base, run.period_s());
+    let mut best = (0.0, found.k_pass);
+    match run.s.damping {
+        Damping::Fixed(b) if b > cap => bail!(
+            "--damping must be within [0, {cap:.4e}] N·s/m (N·m·s/rad) on this device (the \
+             firmware's limit at its rate and coarsening; got {b})"
+        ),
+        Damping::Fixed(b) if b > 0.0 => {
+            let f = search_at(run, c, base, b, found.k_pass, search, thorough, notes)?;
+            let f = match f {
+                Some(f) => f,
+                None => largest_settling_k(found.k_pass, search, |k| {
+                    run.step(c, &damped(base, b), k, thorough, notes)
+                })?,
+            };
+            frontier.push(FrontierPoint {
+                b,
+                k_verified: Some(f.k_pass),
+            });
+            best = (b, f.k_pass);
+        }
+        Damping::Fixed(_) => {}
+        Damping::Search => {
+            for beta in DAMPING_BETAS {
+                let b = beta * found.k_pass * run.period_s();
+                if b > cap {
+                    break;
+                }
+                let f = search_at(run, c, base, b, best.1, search, thorough, notes)?;
+                let k = f.map(|f| f.k_pass);
+                frontier.push(FrontierPoint { b, k_verified: k });
+                match k {
+                    Some(k) if k > best.1 * (1.0 + DAMPING_MIN_GAIN) => best = (b, k),
+                    _ => break,
+                }
+            }
+        }
+    }
+    if best.0 > 0.0 {
+        let cfg = damped(base, best.0);
+        if let Some((k_set, verification)) =
+            run.confirm(c, &cfg, best.1 * margin, thorough, notes)?
+        {
+            return Ok(Wall {
+                k_set,
+                b_set: best.0,
+                k_spring_only: k_spring,
+                verification,
+                frontier,
+            });
+        }
+        if let Damping::Fixed(b) = run.s.damping {
+            bail!("no stiffness passed the verification set at the fixed damping B = {b:.4e}");
+        }
+        (run.progress)(&format!(
+            "no K passed the verification set at B = {:.4e}; setting the spring-only wall",
+            best.0
+        ));
+    }
+    let Some((k_set, verification)) = run.confirm(c, base, k_spring, thorough, notes)? else {
+        bail!(
+            "no stiffness passed the verification set (last tried {:.4})",
+            k_spring * CONFIRM_BACKOFF.powi(CONFIRM_TRIES as i32)
+        );
+    };
+    Ok(Wall {
+        k_set,
+        b_set: 0.0,
+        k_spring_only: k_set,
+        verification,
+        frontier,
+    })
 }
 
 fn tune_inner(
@@ -288,80 +693,29 @@ fn tune_inner(
     // A full-energy release then no longer stores the impact's energy, so above k_force each
     // search step also runs what saturates first in use: an impact at v from each side.
     let f_lim = f64::from(base.force_limit);
-    let k_force = (f_lim / (v * id.mass.sqrt())).powi(2);
-    let k_cap = f64::from(c.info.limits.max_stiffness);
-    let one_sided_wall = original.wall == stiffwall_proto::WallMode::OneSided;
-    let ticks_for = |k: f64, thorough: bool| {
-        let n = s.release_ticks.unwrap_or_else(|| {
-            let natural = std::f64::consts::TAU * (id.mass / k).sqrt() / t;
-            (60.0 * natural).clamp(1500.0, 30_000.0) as u32
-        });
-        if thorough {
-            n.saturating_mul(2)
-        } else {
-            n
-        }
+    let run = Run {
+        s,
+        p,
+        v,
+        k_force: (f_lim / (v * id.mass.sqrt())).powi(2),
+        one_sided_wall: original.wall == stiffwall_proto::WallMode::OneSided,
+        progress,
     };
     let search = Search {
-        k_cap,
+        k_cap: f64::from(c.info.limits.max_stiffness),
         rel_tol: s.rel_tol,
         ..Search::default()
     };
     let start = predicted
         .expected
-        .min(k_cap)
-        .max(predicted.guaranteed.min(k_cap) * 0.5);
+        .min(search.k_cap)
+        .max(predicted.guaranteed.min(search.k_cap) * 0.5);
     let thorough_search = !early.is_empty();
-    // The smallest K at which an impact's launch failed (see `Verdict::NotLaunched`).
-    let mut not_launched: Option<f64> = None;
-    let mut best: Option<(f64, Vec<i64>)> = None;
+    let mut notes = Notes::default();
     let found = largest_settling_k(start, &search, |k| {
-        let d = deflection_for(&p, k, v);
-        progress(&format!("release test K={k:.4} from {d} ticks"));
-        let (verdict, counts) = run_test(
-            c,
-            &base,
-            k,
-            Test::Release {
-                deflection_ticks: d,
-            },
-            ticks_for(k, thorough_search),
-            min_settle_run(id.mass, k, t),
-        )?;
-        if !verdict.passes() {
-            return Ok(verdict);
-        }
-        if k > k_force {
-            let natural_ticks = std::f64::consts::TAU * (id.mass / k).sqrt() / t;
-            let dirs: &[f64] = if one_sided_wall { &[1.0] } else { &[1.0, -1.0] };
-            for &dir in dirs {
-                let test =
-                    super::verify::impact(dir * v * t / delta, natural_ticks, one_sided_wall);
-                progress(&format!(
-                    "{} test K={k:.4} (force saturates)",
-                    test.describe()
-                ));
-                let (impact, _) = run_test(
-                    c,
-                    &base,
-                    k,
-                    test,
-                    ticks_for(k, thorough_search),
-                    min_settle_run(id.mass, k, t),
-                )?;
-                if impact == Verdict::NotLaunched {
-                    not_launched.get_or_insert(k);
-                } else if !impact.passes() {
-                    return Ok(impact);
-                }
-            }
-        }
-        if best.as_ref().is_none_or(|(kb, _)| k > *kb) {
-            best = Some((k, counts));
-        }
-        Ok(verdict)
+        run.step(c, &base, k, thorough_search, &mut notes)
     })?;
-    if let Some((k, counts)) = &best {
+    if let Some((k, counts)) = &notes.best {
         evidence.release_k = Some(*k);
         evidence.release_hz = model_check::release_frequency_hz(counts, t, 12);
         evidence.model_hz = Some((k / id.mass).sqrt() / std::f64::consts::TAU);
@@ -376,115 +730,40 @@ fn tune_inner(
     }
     // An impact the search could not launch was judged by releases only: the search's
     // largest K is then less well tested, so the mismatch margin applies as well.
-    let thorough = !model_mismatch.is_empty() || not_launched.is_some();
+    let thorough = !model_mismatch.is_empty() || notes.not_launched.is_some();
     for f in &model_mismatch {
         progress(&format!("model mismatch: {f}"));
     }
     let margin_used = s.margin
         * if !thorough {
             1.0
-        } else if not_launched.is_none() && model_check::dynamics_fit(&id, &evidence) {
+        } else if notes.not_launched.is_none() && model_check::dynamics_fit(&id, &evidence) {
             FRICTION_MISMATCH_MARGIN
         } else {
             MISMATCH_MARGIN
         };
-    let mut k_set = found.k_pass * margin_used;
-    let mut verification = Vec::new();
-    // A failing test backs off in steps of CONFIRM_BACKOFF (finer than the margin).
-    // After a confirmation failed, the first K that passes may sit right at the limit (it
-    // only lies between that failure and it): the K set is one more step down. That step is
-    // not verified again (it is 5 % below a K that passed the whole set; re-running the set
-    // would cost the real-time budget a third of its time).
-    let (mut backed_off, mut accepted) = (false, false);
-    for _ in 0..8 {
-        let d = deflection_for(&p, k_set, v);
-        progress(&format!(
-            "verifying K={k_set:.4}: releases from ±{d} ticks and below, impacts"
-        ));
-        verification.clear();
-        let mut confirmed = true;
-        let natural_ticks = std::f64::consts::TAU * (id.mass / k_set).sqrt() / t;
-        let mut set = test_set(
-            d,
-            v * t / delta,
-            natural_ticks,
-            thorough,
-            true,
-            one_sided_wall,
-        );
-        // The tests most likely to fail first (impacts at v, then the full-energy releases),
-        // so that a K that fails costs one or two tests, not the whole set.
-        set.sort_by_key(|test| match *test {
-            Test::Impact {
-                velocity_milliticks,
-                ..
-            } if velocity_milliticks.unsigned_abs() >= (1000.0 * v * t / delta) as u32 => 0,
-            Test::Release { deflection_ticks } if deflection_ticks.abs() >= d.abs() => 1,
-            _ => 2,
-        });
-        for test in set {
-            let (verdict, counts) = run_test(
-                c,
-                &base,
-                k_set,
-                test,
-                ticks_for(k_set, thorough),
-                min_settle_run(id.mass, k_set, t),
-            )?;
-            verification.push(TestResult {
-                test,
-                k: k_set,
-                verdict,
-                ticks_judged: counts.len(),
-            });
-            if verdict == Verdict::NotLaunched {
-                // Judged by the releases of the set, which reach the same energy from both
-                // sides; reported below.
-                not_launched.get_or_insert(k_set);
-                continue;
-            }
-            if !verdict.passes() {
-                progress(&format!(
-                    "verification at K={k_set:.4}: {} {}; backing off ×{CONFIRM_BACKOFF}",
-                    test.describe(),
-                    verdict.describe()
-                ));
-                confirmed = false;
-                break;
-            }
-        }
-        if confirmed {
-            if backed_off {
-                k_set *= CONFIRM_BACKOFF;
-            }
-            accepted = true;
-            break;
-        }
-        backed_off = true;
-        k_set *= CONFIRM_BACKOFF;
-    }
-    if !accepted {
-        bail!("no stiffness passed the verification set (last tried {k_set:.4})");
-    }
-    if let Some(k) = not_launched {
-        let mu = id.mass / (k * t * t);
-        let finding = format!(
-            "at K = {k:.4} the firmware's impact launch (a hold with damping β = {}) did not \
-             bring the device to the wall at the requested speed (μ = m/(KT²) = {mu:.3}; the \
-             hold oscillates when μ is small, e.g. a light device on a slow servo), and the \
-             impact failed; those impacts were judged by the releases of the same energy \
-             from both sides",
-            stiffwall_firmware::config::HOLD_BETA
-        );
+    let wall = choose_wall(
+        &run,
+        c,
+        &base,
+        &found,
+        &search,
+        thorough,
+        margin_used,
+        &mut notes,
+    )?;
+    if let Some(k) = notes.not_launched {
+        let finding = not_launched_finding(k, id.mass, t);
         progress(&format!("model mismatch: {finding}"));
         model_mismatch.push(finding);
     }
-    p.stiffness = k_set;
+    p.stiffness = wall.k_set;
     let mut saved = false;
     if !dry_run {
         c.clear_faults().ok();
         c.set_config(&ServoConfig {
-            stiffness: k_set as f32,
+            stiffness: wall.k_set as f32,
+            damping: wall.b_set as f32,
             ..*original
         })?;
         c.save_config().context("saving the tuned config")?;
@@ -506,12 +785,27 @@ fn tune_inner(
         xidot: v * t / delta,
         predicted,
         search: found,
-        k_set,
-        confirmation: verification.iter().map(|r| r.verdict).collect(),
-        verification,
+        k_set: wall.k_set,
+        b_set: wall.b_set,
+        k_spring_only: wall.k_spring_only,
+        frontier: wall.frontier,
+        confirmation: wall.verification.iter().map(|r| r.verdict).collect(),
+        verification: wall.verification,
         model_mismatch,
         model_evidence: evidence,
         margin_used,
         saved,
     })
+}
+
+fn not_launched_finding(k: f64, mass: f64, t: f64) -> String {
+    let mu = mass / (k * t * t);
+    format!(
+        "at K = {k:.4} the firmware's impact launch (a hold with damping β = {}) did not \
+         bring the device to the wall at the requested speed (μ = m/(KT²) = {mu:.3}; the \
+         hold oscillates when μ is small, e.g. a light device on a slow servo), and the \
+         impact failed; those impacts were judged by the releases of the same energy \
+         from both sides",
+        stiffwall_firmware::config::HOLD_BETA
+    )
 }

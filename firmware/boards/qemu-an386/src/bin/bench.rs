@@ -58,6 +58,9 @@ impl ForceOutput for Sink {
     }
 }
 
+/// Virtual damping of the damper-on stage, N·s/m (nonzero gain in every back-end).
+const DAMPING_N_S_PER_M: f32 = 0.01;
+
 fn config() -> ServoConfig {
     ServoConfig {
         stiffness: 2.0,
@@ -206,6 +209,36 @@ fn stages<N: Numeric>(baseline: u64) {
     if servo.faults() != 0 {
         hprintln!(
             "BENCH-ERROR faults {:#x} latched during {}",
+            servo.faults(),
+            N::NAME
+        );
+    }
+    // The same full tick with the virtual damper on (B > 0): the sweep moves one count per
+    // tick, so the two-sided wall computes the damper term on every tick.
+    let damped = ServoConfig {
+        damping: DAMPING_N_S_PER_M,
+        ..cfg
+    };
+    let mut channels = Channels::new();
+    let (servo_port, mut host) = channels.split();
+    let mut servo: Servo<'_, N> = Servo::new(board, &damped, servo_port);
+    if host
+        .commands
+        .enqueue(ServoCmd::Stream { decimation: 1 })
+        .is_err()
+    {
+        hprintln!("BENCH-ERROR command queue full");
+    }
+    let c = measure(
+        |t| {
+            black_box(full(&mut servo, t, &mut enc, &mut out));
+        },
+        || while host.telemetry.dequeue().is_some() {},
+    );
+    report("full+damper", N::NAME, c, baseline);
+    if servo.faults() != 0 {
+        hprintln!(
+            "BENCH-ERROR faults {:#x} latched during {} with the damper",
             servo.faults(),
             N::NAME
         );

@@ -1,0 +1,120 @@
+//! The spring + damper part of `hostctl analyze --damping B`: the exact sampled linear
+//! boundary K_max(B), its closed forms and the frontier over B (`stiffwall_core::criteria`).
+//!
+//! Units: B in N·s/m (N·m·s/rad with `--rotational`), K in N/m (N·m/rad). The frontier is
+//! [`criteria::FRONTIER_POINTS`] values of B on the linear grid 0 ..= 4·m/T.
+//!
+//! Invariants: B is validated (finite, ≥ 0, named `damping`) before anything is computed.
+
+use serde::Serialize;
+use std::fmt::Write as _;
+use stiffwall_core::{criteria, ParamError, PhysicalParams};
+
+/// Upper end of the frontier's B grid, in units of m/T.
+pub const FRONTIER_B_MAX_M_PER_T: f64 = 4.0;
+
+/// One point of the K_max(B) frontier.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct FrontierPoint {
+    /// Virtual damping B [N·s/m or N·m·s/rad].
+    pub b: f64,
+    /// Exact linear K_max at that B [N/m or N·m/rad] (0: no stable K).
+    pub k_max: f64,
+}
+
+/// The `damping` key of the `--json` output.
+#[derive(Debug, Clone, Serialize)]
+pub struct DampingReport {
+    /// The device's virtual damping B (from `--damping`).
+    pub b_set: f64,
+    /// β_v = B/(K·T) at the device's K.
+    pub beta_v: f64,
+    /// Exact sampled linear K_max at `b_set` ([`criteria::k_max_exact_linear`]).
+    pub k_max: f64,
+    /// Colgate–Schenkel passivity bound 2(b − B)/T (0 when B ≥ b).
+    pub k_max_colgate_schenkel: f64,
+    /// Small-B approximation (b + B)/(T/2 + T_D).
+    pub k_max_small_b: f64,
+    /// Whether the device's (K, B) is stable by the exact linear test.
+    pub stable: bool,
+    /// K_max(B) on the linear grid 0 ..= 4·m/T.
+    pub frontier: Vec<FrontierPoint>,
+    /// The grid B that maximises K_max.
+    pub b_opt: f64,
+    /// K_max at `b_opt`.
+    pub k_max_opt: f64,
+}
+
+/// Computes the damper analysis of `p` at virtual damping `b_set`.
+///
+/// # Errors
+/// B negative, NaN or infinite (named `damping`), or a parameter out of range.
+pub fn damping_report(p: &PhysicalParams, b_set: f64) -> Result<DampingReport, ParamError> {
+    criteria::check_damping(b_set)?;
+    let f = criteria::frontier(p, FRONTIER_B_MAX_M_PER_T * p.mass / p.period_s)?;
+    Ok(DampingReport {
+        b_set,
+        beta_v: criteria::beta_v(b_set, p.stiffness, p.period_s),
+        k_max: criteria::k_max_exact_linear(p, b_set)?,
+        k_max_colgate_schenkel: criteria::k_max_colgate_schenkel_damped(p, b_set)?,
+        k_max_small_b: criteria::k_max_small_b(p, b_set)?,
+        stable: criteria::exact_linear_stable(p, b_set)?,
+        frontier: f
+            .b_n_s_per_m
+            .iter()
+            .zip(f.k_max.iter())
+            .map(|(&b, &k_max)| FrontierPoint { b, k_max })
+            .collect(),
+        b_opt: f.b_opt_n_s_per_m,
+        k_max_opt: f.k_max_opt,
+    })
+}
+
+/// The text section printed after the main table.
+#[must_use]
+pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
+    let (b_u, k_u) = if p.rotational {
+        ("N·m·s/rad", "N·m/rad")
+    } else {
+        ("N·s/m", "N/m")
+    };
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "\nSpring + damper wall (virtual damping B = {:.5e} {b_u})",
+        d.b_set
+    );
+    let _ = writeln!(s, "  β_v = B/(KT)                 {:>12.5}", d.beta_v);
+    let _ = writeln!(s, "  K_max exact linear (Jury)    {:>12.5e} {k_u}", d.k_max);
+    let _ = writeln!(
+        s,
+        "  Colgate–Schenkel 2(b−B)/T    {:>12.5e} {k_u}",
+        d.k_max_colgate_schenkel
+    );
+    let _ = writeln!(
+        s,
+        "  small-B (b+B)/(T/2+T_D)      {:>12.5e} {k_u}",
+        d.k_max_small_b
+    );
+    let _ = writeln!(
+        s,
+        "  operating point K = {:.5e}, B = {:.5e}: {} by the exact linear boundary",
+        p.stiffness,
+        d.b_set,
+        if d.stable { "stable" } else { "UNSTABLE" }
+    );
+    let _ = writeln!(
+        s,
+        "  best B on the grid: B = {:.5e} {b_u}, K_max = {:.5e} {k_u}",
+        d.b_opt, d.k_max_opt
+    );
+    let _ = writeln!(
+        s,
+        "  K_max(B), B linear in 0 ..= {FRONTIER_B_MAX_M_PER_T}·m/T:\n  {:>12} {:>12}",
+        "B", "K_max"
+    );
+    for pt in &d.frontier {
+        let _ = writeln!(s, "  {:>12.4e} {:>12.4e}", pt.b, pt.k_max);
+    }
+    s
+}
