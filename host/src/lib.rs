@@ -15,6 +15,7 @@
 //! commands' `run` functions add context with `anyhow` at the edge.
 
 pub mod analysis;
+pub mod cli_error;
 pub mod cmd;
 pub mod config_flags;
 pub mod device;

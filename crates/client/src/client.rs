@@ -5,7 +5,8 @@
 //! sample numbers is attributed to the device (its cumulative `dropped` counter grew by the
 //! same amount) or to the link (it did not).
 
-use anyhow::{anyhow, bail, Context, Result};
+use crate::error::{ClientError, Result};
+use crate::transport::Transport;
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
@@ -18,7 +19,7 @@ mod describe;
 mod experiment;
 
 pub use describe::{describe_error, describe_error_named, readable, FieldLabel};
-use describe::{is_framing, is_framing_reply, is_hangup};
+use describe::{is_framing, is_framing_reply};
 pub use experiment::{EnoughFn, Record};
 
 /// How long a request waits for its answer.
@@ -52,7 +53,7 @@ pub struct GapStats {
 /// A connected device.
 #[derive(Debug)]
 pub struct Client {
-    port: Box<dyn serialport::SerialPort>,
+    port: Box<dyn Transport>,
     decoder: FrameDecoder,
     pending: VecDeque<DeviceMsg>,
     next_seq: Option<u32>,
@@ -61,25 +62,24 @@ pub struct Client {
     pub gaps: GapStats,
     /// The device's handshake answer.
     pub info: DeviceInfo,
-    field_label: FieldLabel,
     _backend: Option<Box<dyn Backend>>,
 }
 
 impl Client {
-    /// Performs the handshake on an opened port. `backend` is kept alive with the client.
+    /// Performs the handshake on an opened port (any [`Transport`]: a serial port, a pty, an
+    /// in-memory pair). `backend` is kept alive with the client.
     pub fn connect(
-        port: Box<dyn serialport::SerialPort>,
+        port: impl Transport + 'static,
         backend: Option<Box<dyn Backend>>,
     ) -> Result<Self> {
         let mut c = Self {
-            port,
+            port: Box::new(port),
             decoder: FrameDecoder::new(),
             pending: VecDeque::new(),
             next_seq: None,
             last_dropped: 0,
             gaps: GapStats::default(),
             info: placeholder_info(),
-            field_label: stiffwall_proto::ConfigField::name,
             _backend: backend,
         };
         // A board may still be printing its boot banner or be mid-frame: a 0x00 ends whatever
@@ -90,44 +90,46 @@ impl Client {
             c.send(&HostMsg::Hello {
                 protocol_version: PROTOCOL_VERSION,
             })?;
-            match c.wait(ANSWER_TIMEOUT, |m| match m {
+            match c.wait(ANSWER_TIMEOUT, "Hello", |m| match m {
                 DeviceMsg::HelloReply(_) => true,
                 DeviceMsg::Error { code, .. } => !is_framing(*code),
                 _ => false,
             }) {
                 Ok(DeviceMsg::HelloReply(info)) => {
                     if info.protocol_version != PROTOCOL_VERSION {
-                        bail!(
-                            "device speaks protocol version {}, this hostctl speaks {}; update the {}",
-                            info.protocol_version,
-                            PROTOCOL_VERSION,
-                            if info.protocol_version > PROTOCOL_VERSION { "host" } else { "firmware" }
-                        );
+                        return Err(ClientError::VersionMismatch {
+                            device: info.protocol_version,
+                            host: PROTOCOL_VERSION,
+                        });
                     }
                     c.info = info;
                     return Ok(c);
                 }
                 Ok(DeviceMsg::Error { code, detail }) => {
-                    bail!("handshake refused: {}", describe_error(code, &detail))
+                    return Err(ClientError::Refused {
+                        request: "handshake".into(),
+                        code,
+                        detail,
+                    })
                 }
                 Ok(_) => unreachable!("filtered by the predicate"),
                 Err(e) => last_err = Some(e),
             }
         }
-        Err(last_err.unwrap_or_else(|| anyhow!("no answer")))
-            .context("the device never answered the handshake (wrong port, wrong baud rate, or not running stiffwall firmware?)")
-    }
-
-    /// Names refused fields with `label` in this client's error messages (default: the
-    /// protocol's field names, [`stiffwall_proto::ConfigField::name`]).
-    pub fn set_field_label(&mut self, label: FieldLabel) {
-        self.field_label = label;
+        Err(ClientError::NoHandshake(Box::new(last_err.unwrap_or(
+            ClientError::Timeout {
+                request: Some("Hello".into()),
+                waited: ANSWER_TIMEOUT,
+                bad_frames: None,
+            },
+        ))))
     }
 
     /// Sends one message.
     pub fn send(&mut self, msg: &HostMsg) -> Result<()> {
         let mut buf = [0u8; MAX_FRAME];
-        let frame = encode(msg, &mut buf).map_err(|e| anyhow!("encoding {msg:?}: {e}"))?;
+        let frame = encode(msg, &mut buf)
+            .map_err(|e| ClientError::Framing(format!("encoding {msg:?}: {e}")))?;
         self.write_bytes(frame)
     }
 
@@ -159,7 +161,7 @@ impl Client {
                         e.kind(),
                         ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
                     ) => {}
-                Err(e) => return Err(e).context("writing to the device"),
+                Err(e) => return Err(ClientError::io("writing", e)),
             }
             if self.port.bytes_to_read().unwrap_or(0) > 0 {
                 let queued = self.pending.len();
@@ -175,17 +177,14 @@ impl Client {
                 }
             }
             if stalled_since.elapsed() > ANSWER_TIMEOUT {
-                if device_reading {
-                    bail!(
-                        "the link is full: the device keeps reading bad frames from elsewhere \
-                         on the line, and this request could not get in for {} ms",
-                        start.elapsed().as_millis()
-                    );
-                }
-                bail!(
-                    "the device stopped reading (no progress writing for {} ms)",
-                    ANSWER_TIMEOUT.as_millis()
-                );
+                return Err(ClientError::WriteStalled {
+                    waited: if device_reading {
+                        start.elapsed()
+                    } else {
+                        ANSWER_TIMEOUT
+                    },
+                    link_full: device_reading,
+                });
             }
         }
         self.port.flush().ok();
@@ -215,13 +214,15 @@ impl Client {
         let mut buf = [0u8; 4096];
         let n = match self.port.read(&mut buf) {
             Ok(0) => {
-                return Err(std::io::Error::from(ErrorKind::UnexpectedEof))
-                    .context("the device closed the connection")
+                return Err(ClientError::io(
+                    "reading",
+                    std::io::Error::from(ErrorKind::UnexpectedEof),
+                ))
             }
             Ok(n) => n,
             Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => 0,
             Err(e) if e.kind() == ErrorKind::Interrupted => 0,
-            Err(e) => return Err(e).context("reading from the device"),
+            Err(e) => return Err(ClientError::io("reading", e)),
         };
         for &b in &buf[..n] {
             match self.decoder.feed::<DeviceMsg>(b) {
@@ -253,8 +254,25 @@ impl Client {
     }
 
     /// Waits for a message matching `want`; other messages (telemetry) are kept for later.
-    fn wait(&mut self, timeout: Duration, want: impl Fn(&DeviceMsg) -> bool) -> Result<DeviceMsg> {
+    fn wait(
+        &mut self,
+        timeout: Duration,
+        request: &str,
+        want: impl Fn(&DeviceMsg) -> bool,
+    ) -> Result<DeviceMsg> {
         self.wait_extending(timeout, timeout, want, |_| false)
+            .map_err(|e| match e {
+                ClientError::Timeout {
+                    request: None,
+                    waited,
+                    bad_frames,
+                } => ClientError::Timeout {
+                    request: Some(request.to_string()),
+                    waited,
+                    bad_frames,
+                },
+                e => e,
+            })
     }
 
     /// [`Self::wait`], where a message for which `progress` holds restarts the `timeout`, up to
@@ -271,7 +289,11 @@ impl Client {
         let end = start + cap.max(timeout);
         let mut deadline = start + timeout;
         let mut kept = VecDeque::new();
-        let expired = |waited: Duration| anyhow!("no answer within {} ms", waited.as_millis());
+        let expired = |waited: Duration| ClientError::Timeout {
+            request: None,
+            waited,
+            bad_frames: None,
+        };
         let result = loop {
             let left = deadline.saturating_duration_since(Instant::now());
             match self.recv(left)? {
@@ -311,12 +333,12 @@ impl Client {
             let full = matches!(&m, DeviceMsg::Error { code: ErrorCode::Busy, detail }
                 if describe_error(ErrorCode::Busy, detail).contains("queue full"));
             if !full || Instant::now() > deadline {
-                if let DeviceMsg::Error { code, detail } = &m {
-                    bail!(
-                        "{} refused: {}",
-                        short(msg),
-                        describe_error_named(*code, detail, self.field_label)
-                    );
+                if let DeviceMsg::Error { code, detail } = m {
+                    return Err(ClientError::Refused {
+                        request: short(msg),
+                        code,
+                        detail,
+                    });
                 }
                 return Ok(m);
             }
@@ -328,14 +350,13 @@ impl Client {
         self.send(msg)?;
         let ack = ack_kind(msg);
         let last_framing = std::cell::Cell::new(None);
-        let label = self.field_label;
         let m = self
             .wait_extending(
                 ANSWER_TIMEOUT,
                 BACKLOG_WAIT_MAX,
                 |m| match m {
                     DeviceMsg::Error { code, detail } if is_framing(*code) => {
-                        last_framing.set(Some(describe_error_named(*code, detail, label)));
+                        last_framing.set(Some(describe_error(*code, detail)));
                         false
                     }
                     DeviceMsg::Error { .. } => true,
@@ -349,12 +370,13 @@ impl Client {
                 },
                 is_framing_reply,
             )
-            .with_context(|| match last_framing.take() {
-                Some(e) => format!(
-                    "waiting for the answer to {} (the device reported bad frames: {e})",
-                    short(msg)
-                ),
-                None => format!("waiting for the answer to {}", short(msg)),
+            .map_err(|e| match e {
+                ClientError::Timeout { waited, .. } => ClientError::Timeout {
+                    request: Some(short(msg)),
+                    waited,
+                    bad_frames: last_framing.take(),
+                },
+                e => e,
             })?;
         Ok(m)
     }
@@ -363,7 +385,7 @@ impl Client {
     pub fn get_config(&mut self) -> Result<ServoConfig> {
         match self.request(&HostMsg::GetConfig)? {
             DeviceMsg::Config(c) => Ok(c),
-            other => bail!("unexpected answer {other:?}"),
+            other => Err(unexpected("GetConfig", &other)),
         }
     }
 
@@ -381,7 +403,7 @@ impl Client {
     pub fn load_defaults(&mut self) -> Result<ServoConfig> {
         match self.request(&HostMsg::LoadDefaults)? {
             DeviceMsg::Config(c) => Ok(c),
-            other => bail!("unexpected answer {other:?}"),
+            other => Err(unexpected("LoadDefaults", &other)),
         }
     }
 
@@ -389,7 +411,7 @@ impl Client {
     pub fn faults(&mut self) -> Result<FaultReport> {
         match self.request(&HostMsg::GetFaults)? {
             DeviceMsg::Faults(f) => Ok(f),
-            other => bail!("unexpected answer {other:?}"),
+            other => Err(unexpected("GetFaults", &other)),
         }
     }
 
@@ -404,7 +426,7 @@ impl Client {
     pub fn shutdown(&mut self, exit_code: u8) -> Result<()> {
         match self.request(&HostMsg::Shutdown { exit_code }) {
             Ok(_) => Ok(()),
-            Err(e) if is_hangup(&e) => Ok(()),
+            Err(e) if e.is_hangup() => Ok(()),
             Err(e) => Err(e),
         }
     }
@@ -462,6 +484,13 @@ fn ack_kind(msg: &HostMsg) -> Option<Request> {
     })
 }
 
+fn unexpected(request: &str, answer: &DeviceMsg) -> ClientError {
+    ClientError::Unexpected {
+        request: request.to_string(),
+        answer: format!("{answer:?}"),
+    }
+}
+
 fn short(msg: &HostMsg) -> String {
     let s = format!("{msg:?}");
     s.split(['(', ' ', '{'])
@@ -500,6 +529,10 @@ mod tests {
     use super::*;
     use crate::transport::pty_pair;
     use stiffwall_proto::ErrorDetail;
+
+    fn is_hangup(e: &ClientError) -> bool {
+        e.is_hangup()
+    }
 
     /// A scripted device on the master side of a pty: answers the handshake, then reads one
     /// request and does `then` with the port (answer, or hang up by dropping it).

@@ -143,7 +143,7 @@ pub fn pump(
             ticks,
         }) {
             let _ = client.stream_stop();
-            return Err(e);
+            return Err(e.into());
         }
         experiment = true;
     }

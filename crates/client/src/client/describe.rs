@@ -1,7 +1,6 @@
 //! Device errors and link failures in words: what a refused request or a bad frame means,
-//! numbers in a readable form, and which errors are framing replies or a hangup.
+//! numbers in a readable form, and which errors are framing replies.
 
-use std::io::ErrorKind;
 use stiffwall_proto::{ConfigField, DeviceMsg, ErrorCode, ErrorDetail};
 
 /// How a refused field is named in messages: the protocol's own name
@@ -88,17 +87,4 @@ pub(super) fn is_framing(code: ErrorCode) -> bool {
 /// A device reply to a frame that did not decode (see [`is_framing`]).
 pub(super) fn is_framing_reply(m: &DeviceMsg) -> bool {
     matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code))
-}
-
-/// Whether an error is the link going away (the device hung up or closed its end), as opposed
-/// to a refusal, a timeout or garbage.
-pub(super) fn is_hangup(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<std::io::Error>().is_some_and(|io| {
-            matches!(
-                io.kind(),
-                ErrorKind::BrokenPipe | ErrorKind::UnexpectedEof | ErrorKind::ConnectionReset
-            )
-        })
-    })
 }
