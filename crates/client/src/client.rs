@@ -642,4 +642,94 @@ mod tests {
         let e = c.faults().unwrap_err();
         assert!(is_hangup(&e), "{e:#}");
     }
+
+    /// A scripted device on an in-memory link: answers the handshake, then refuses every
+    /// request with the stiffness out of [0, 10].
+    fn in_memory_refusing() -> Client {
+        let (mut device, host) = crate::transport::memory_pair();
+        std::thread::spawn(move || {
+            let mut dec = FrameDecoder::new();
+            let mut buf = [0u8; 256];
+            loop {
+                let n = match device.read(&mut buf) {
+                    Ok(0) => return,
+                    Ok(n) => n,
+                    Err(_) => continue,
+                };
+                for &b in &buf[..n] {
+                    let Some(Ok(msg)) = dec.feed::<HostMsg>(b) else {
+                        continue;
+                    };
+                    let answer = if matches!(msg, HostMsg::Hello { .. }) {
+                        let mut info = placeholder_info();
+                        info.protocol_version = PROTOCOL_VERSION;
+                        DeviceMsg::HelloReply(info)
+                    } else {
+                        DeviceMsg::Error {
+                            code: ErrorCode::InvalidConfig,
+                            detail: ErrorDetail::Field {
+                                field: stiffwall_proto::ConfigField::Stiffness,
+                                min: 0.0,
+                                max: 10.0,
+                            },
+                        }
+                    };
+                    let mut out = [0u8; MAX_FRAME];
+                    if device
+                        .write_all(encode(&answer, &mut out).unwrap())
+                        .is_err()
+                    {
+                        return;
+                    }
+                }
+            }
+        });
+        Client::connect(host, None).unwrap()
+    }
+
+    #[test]
+    fn a_refusal_carries_the_proto_field_and_its_range() {
+        let mut c = in_memory_refusing();
+        let e = c.set_config(&ServoConfig::default()).unwrap_err();
+        match &e {
+            ClientError::Refused {
+                request,
+                code: ErrorCode::InvalidConfig,
+                detail:
+                    ErrorDetail::Field {
+                        field: stiffwall_proto::ConfigField::Stiffness,
+                        min,
+                        max,
+                    },
+            } => {
+                assert_eq!(request, "SetConfig");
+                assert_eq!((*min, *max), (0.0, 10.0));
+            }
+            other => panic!("not a refusal of the stiffness: {other:?}"),
+        }
+        assert_eq!(
+            e.to_string(),
+            "SetConfig refused: configuration refused: stiffness must be within [0, 10]"
+        );
+        assert!(!e.is_hangup());
+    }
+
+    #[test]
+    fn a_silent_in_memory_device_times_out_and_a_dropped_one_hangs_up() {
+        let (device, host) = crate::transport::memory_pair();
+        let t = Instant::now();
+        let e = Client::connect(host, None).unwrap_err();
+        assert!(
+            matches!(&e, ClientError::NoHandshake(inner)
+            if matches!(**inner, ClientError::Timeout { .. })),
+            "{e:?}"
+        );
+        assert!(t.elapsed() >= ANSWER_TIMEOUT, "{:?}", t.elapsed());
+        drop(device);
+        // Gone before the handshake: the hello cannot be written.
+        let (device, host) = crate::transport::memory_pair();
+        drop(device);
+        let e = Client::connect(host, None).unwrap_err();
+        assert!(e.is_hangup(), "{e:?}");
+    }
 }

@@ -4,7 +4,7 @@
 //! options.
 
 use crate::client::Client;
-use crate::error::{ClientError, Result};
+use crate::error::Result;
 use crate::transport;
 use std::path::PathBuf;
 
@@ -118,12 +118,14 @@ impl ConnectSpec {
             }
             VirtualPlant::Preset(name) => name,
         };
-        let d = stiffwall_core::devices::find(name).ok_or_else(|| ClientError::Plant {
-            path: None,
-            message: format!(
-                "unknown device {name:?} (allowed: {})",
-                stiffwall_core::devices::NAMES
-            ),
+        let d = stiffwall_core::devices::find(name).ok_or_else(|| {
+            crate::error::ClientError::Plant {
+                path: None,
+                message: format!(
+                    "unknown device {name:?} (allowed: {})",
+                    stiffwall_core::devices::NAMES
+                ),
+            }
         })?;
         let counts_per_rev = if d.params.rotational {
             (std::f64::consts::TAU / d.params.resolution).round() as u32
@@ -162,5 +164,44 @@ pub fn connect(spec: &ConnectSpec) -> Result<Client> {
             let port = transport::open_port(&q.pty, transport::DEFAULT_BAUD)?;
             Client::connect(port, Some(Box::new(q)))
         }
+    }
+}
+
+#[cfg(all(test, feature = "virtual"))]
+mod tests {
+    use super::*;
+    use crate::error::ClientError;
+
+    #[test]
+    fn connects_to_the_virtual_device_of_a_preset_and_names_it() {
+        let spec = ConnectSpec::preset("maxon-re35", true);
+        assert_eq!(spec.describe(), "virtual device (maxon-re35, fast)");
+        let mut c = connect(&spec).unwrap();
+        assert_eq!(c.info.board.as_str(), "virtual");
+        assert_eq!(c.faults().unwrap().latched, 0);
+        let serial = ConnectSpec::Serial {
+            path: "/dev/ttyACM0".into(),
+            baud: transport::DEFAULT_BAUD,
+        };
+        assert_eq!(serial.describe(), "serial port /dev/ttyACM0 at 921600 baud");
+        assert_eq!(serial.virtual_plant_name(), None);
+    }
+
+    #[test]
+    fn bad_targets_are_typed_errors() {
+        let e = connect(&ConnectSpec::preset("nope", true)).unwrap_err();
+        assert!(matches!(e, ClientError::Plant { path: None, .. }), "{e:?}");
+        assert!(e.to_string().contains("unknown device \"nope\""), "{e}");
+        let e = connect(&ConnectSpec::plant_file("/nonexistent/plant.toml", true)).unwrap_err();
+        assert!(
+            matches!(&e, ClientError::Plant { path: Some(_), .. }),
+            "{e:?}"
+        );
+        let e = connect(&ConnectSpec::Serial {
+            path: "/dev/does-not-exist-stiffwall".into(),
+            baud: transport::DEFAULT_BAUD,
+        })
+        .unwrap_err();
+        assert!(matches!(e, ClientError::Port(_)), "{e:?}");
     }
 }

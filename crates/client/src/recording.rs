@@ -388,7 +388,8 @@ fn parse_row(ln: usize, line: &str) -> Result<Row> {
     })
 }
 
-#[cfg(test)]
+// The tests take their board facts from the virtual device.
+#[cfg(all(test, feature = "virtual"))]
 mod tests {
     use super::*;
 

@@ -182,6 +182,22 @@ mod tests {
     use std::io::{Read, Write};
 
     #[test]
+    fn memory_pair_carries_bytes_times_out_and_hangs_up() {
+        let (mut a, mut b) = memory_pair();
+        a.write_all(&[1, 2, 0, 3]).unwrap();
+        assert_eq!(b.bytes_to_read().unwrap(), 4);
+        let mut buf = [0u8; 8];
+        assert_eq!(b.read(&mut buf).unwrap(), 4);
+        assert_eq!(buf[..4], [1, 2, 0, 3]);
+        let e = b.read(&mut buf).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::TimedOut);
+        drop(a);
+        assert_eq!(b.read(&mut buf).unwrap(), 0, "the other end closed");
+        let e = b.write(&[1]).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::BrokenPipe);
+    }
+
+    #[test]
     fn pty_pair_carries_bytes_both_ways() {
         let (mut master, mut host, name) = pty_pair().unwrap();
         assert!(name.starts_with("/dev/"), "{name}");
