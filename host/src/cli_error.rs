@@ -4,6 +4,7 @@
 //! ([`crate::config_flags::flag_name`]), a plant file as `--plant FILE`.
 
 use stiffwall_client::client::describe_error_named;
+use stiffwall_client::session::SessionError;
 use stiffwall_client::ClientError;
 
 /// An error whose chain [`message`] renders: an `anyhow::Error` or a [`ClientError`].
@@ -34,12 +35,32 @@ impl<T: ErrorChain + ?Sized> ErrorChain for &T {
 #[must_use]
 pub fn message(e: &impl ErrorChain) -> String {
     std::iter::successors(Some(e.head()), |c| c.source())
-        .map(|cause| match cause.downcast_ref::<ClientError>() {
-            Some(c) => client_message(c),
-            None => cause.to_string(),
+        .map(|cause| {
+            if let Some(c) = cause.downcast_ref::<ClientError>() {
+                client_message(c)
+            } else if let Some(s) = cause.downcast_ref::<SessionError>() {
+                session_message(s)
+            } else {
+                cause.to_string()
+            }
         })
         .collect::<Vec<_>>()
         .join(": ")
+}
+
+/// One session error (not its sources): plan numbers named by their `--flag`.
+#[must_use]
+pub fn session_message(e: &SessionError) -> String {
+    match e {
+        SessionError::OutOfRange { name, range, got } => {
+            format!("--{name} must be {range} (got {got})")
+        }
+        SessionError::ReleaseNeedsEveryTick => {
+            "--release needs --decimation 1 (experiments stream every tick)".into()
+        }
+        SessionError::Client(c) => client_message(c),
+        e => e.to_string(),
+    }
 }
 
 /// One client error (not its sources), with the command line's spelling of refused fields and

@@ -13,12 +13,42 @@
 //! was received ([`End`]) instead of an error. The recorder flushes at least every 100 ms.
 
 use crate::client::{Client, HEARTBEAT_PERIOD};
-use crate::recording::{Header, Writer};
-use anyhow::{bail, Result};
+use crate::error::ClientError;
+use crate::recording::{Header, RecordingError, Writer};
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{HostMsg, ServoConfig, TelemetryBatch};
+
+/// Why a session could not run (device trouble *during* a stream is not an error: it ends the
+/// stream, see [`End`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SessionError {
+    /// A number of the plan out of range (`name`: `"decimation"` or `"seconds"`; `range` in
+    /// words, e.g. `"within [1, 65535]"`).
+    #[error("{name} must be {range} (got {got})")]
+    OutOfRange {
+        /// The plan's field.
+        name: &'static str,
+        /// Its allowed range, in words.
+        range: &'static str,
+        /// The value given.
+        got: String,
+    },
+    /// A release test was asked for with a decimation other than 1.
+    #[error("a release test needs decimation 1 (experiments stream every tick)")]
+    ReleaseNeedsEveryTick,
+    /// The device failed before the stream started.
+    #[error(transparent)]
+    Client(#[from] ClientError),
+    /// The recording could not be written.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// A [`pump`] sink failed.
+    #[error(transparent)]
+    Sink(Box<dyn std::error::Error + Send + Sync>),
+}
 
 /// Set by a front end's Ctrl-C handler: the running stream or recording ends cleanly.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
@@ -41,17 +71,27 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Validated plan from command-line numbers; `seconds` None means until Ctrl-C.
-    pub fn new(decimation: i64, seconds: Option<f64>, rate_hz: u32) -> Result<Self> {
+    /// Validated plan; `seconds` None means until interrupted.
+    pub fn new(decimation: i64, seconds: Option<f64>, rate_hz: u32) -> Result<Self, SessionError> {
         if !(1..=65_535).contains(&decimation) {
-            bail!("--decimation must be within [1, 65535] (got {decimation})");
+            return Err(SessionError::OutOfRange {
+                name: "decimation",
+                range: "within [1, 65535]",
+                got: decimation.to_string(),
+            });
         }
         let samples = match seconds {
             None => None,
             Some(s) if s.is_finite() && s > 0.0 && s <= 1.0e6 => {
                 Some(((s * f64::from(rate_hz.max(1)) / decimation as f64).ceil() as u64).max(1))
             }
-            Some(s) => bail!("--seconds must be a finite number within (0, 1e6] (got {s})"),
+            Some(s) => {
+                return Err(SessionError::OutOfRange {
+                    name: "seconds",
+                    range: "a finite number within (0, 1e6]",
+                    got: s.to_string(),
+                })
+            }
         };
         Ok(Self {
             decimation: decimation as u16,
@@ -117,22 +157,24 @@ impl Stats {
 
 /// Streams telemetry per `plan`, calling `sink(batch_seq, samples, missing_before,
 /// device_dropped_of_those, stats)` for every batch (trimmed to the plan). Stops streaming
-/// (best effort) before returning. Errors only for failures before the stream started.
+/// (best effort) before returning. Errors only for failures before the stream started
+/// and the sink's own errors (a sink's error of its own: [`SessionError::Sink`]).
 pub fn pump(
     client: &mut Client,
     plan: &Plan,
-    mut sink: impl FnMut(u32, &[stiffwall_proto::Sample], u64, u64, &Stats) -> Result<()>,
-) -> Result<(End, Stats)> {
-    let cfg = client.get_config()?;
+    mut sink: impl FnMut(u32, &[stiffwall_proto::Sample], u64, u64, &Stats) -> Result<(), SessionError>,
+) -> Result<(End, Stats), SessionError> {
+    let failed = SessionError::Client;
+    let cfg = client.get_config().map_err(failed)?;
     let rate = f64::from(cfg.servo_rate_hz.max(1));
     let silence = Duration::from_secs_f64((3.0 * f64::from(plan.decimation) / rate).max(2.0));
     let bad0 = client.gaps.bad_frames;
-    client.stream_start(plan.decimation)?;
+    client.stream_start(plan.decimation).map_err(failed)?;
     let mut experiment = false;
     if let Some(d) = plan.release {
         if plan.decimation != 1 {
             let _ = client.stream_stop();
-            bail!("--release needs --decimation 1 (experiments stream every tick)");
+            return Err(SessionError::ReleaseNeedsEveryTick);
         }
         let ticks = plan
             .samples
@@ -143,7 +185,7 @@ pub fn pump(
             ticks,
         }) {
             let _ = client.stream_stop();
-            return Err(e.into());
+            return Err(failed(e));
         }
         experiment = true;
     }
@@ -284,7 +326,7 @@ pub fn record<W: Write>(
     header: &Header,
     out: W,
     mut progress: impl FnMut(&Stats),
-) -> Result<Outcome> {
+) -> Result<Outcome, SessionError> {
     let mut w = Writer::new(out, header)?;
     let mut last_flush = Instant::now();
     let (end, stats) = pump(client, plan, |seq, samples, _missing, dev, st| {
