@@ -15,11 +15,10 @@ use stiffwall_proto::{
     ServoConfig, TelemetryBatch, MAX_FRAME, PROTOCOL_VERSION,
 };
 
-mod describe;
 mod experiment;
 
-pub use describe::{describe_error, describe_error_named, readable, FieldLabel};
-use describe::{is_framing, is_framing_reply};
+pub use crate::describe::{describe_error, describe_error_named, readable, FieldLabel};
+use crate::describe::{is_framing, is_framing_reply};
 pub use experiment::{EnoughFn, Record};
 
 /// How long a request waits for its answer.

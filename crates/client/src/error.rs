@@ -6,9 +6,9 @@
 //! Messages name refused fields by their protocol name ([`stiffwall_proto::ConfigField::name`]);
 //! a front end that spells them otherwise (a command line's `--flag`) renders
 //! [`ClientError::Refused`] itself from its fields, e.g. with
-//! [`crate::client::describe_error_named`].
+//! [`crate::describe::describe_error_named`].
 
-use crate::client::describe_error;
+use crate::describe::describe_error;
 use std::io;
 use std::path::PathBuf;
 use std::time::Duration;

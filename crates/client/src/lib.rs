@@ -2,7 +2,7 @@
 //! command-line code. [`client`] is the protocol client (handshake with version check,
 //! request/answer with timeouts, telemetry with sequence-gap accounting, experiments) over any
 //! [`transport::Transport`] (serial port, pty, in-memory pair); [`error`] its typed errors
-//! ([`ClientError`]); [`connect()`] reaches the device a [`ConnectSpec`] names;
+//! ([`ClientError`]) and [`describe`] device errors in words; [`connect()`] reaches the device a [`ConnectSpec`] names;
 //! [`virtual_device`] runs the firmware core against a simulated plant in-process (feature
 //! `virtual`); [`qemu`] boots the board image (feature `qemu`); [`session`] is the telemetry
 //! pump and lossless recorder; [`recording`] the CSV recording format.
@@ -15,6 +15,7 @@
 
 pub mod client;
 pub mod connect;
+pub mod describe;
 pub mod error;
 #[cfg(feature = "qemu")]
 pub mod qemu;

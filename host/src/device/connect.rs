@@ -96,6 +96,11 @@ impl ConnectArgs {
             if self.device.is_some() || self.plant.is_some() {
                 bail!("--device and --plant pick the virtual device's plant; they cannot be combined with --port or --qemu");
             }
+            if let (true, Some(image)) = (self.qemu, &self.qemu_image) {
+                if !image.is_file() {
+                    bail!("--qemu-image {} does not exist", image.display());
+                }
+            }
             return Ok(self.target());
         }
         if self.plant.is_some() && self.device.is_some() {

@@ -73,7 +73,7 @@ pub fn readable(x: f64) -> String {
 }
 
 /// Error codes a device gives to frames that did not decode (not to a refused request).
-pub(super) fn is_framing(code: ErrorCode) -> bool {
+pub(crate) fn is_framing(code: ErrorCode) -> bool {
     matches!(
         code,
         ErrorCode::Oversize
@@ -85,6 +85,6 @@ pub(super) fn is_framing(code: ErrorCode) -> bool {
 }
 
 /// A device reply to a frame that did not decode (see [`is_framing`]).
-pub(super) fn is_framing_reply(m: &DeviceMsg) -> bool {
+pub(crate) fn is_framing_reply(m: &DeviceMsg) -> bool {
     matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code))
 }
