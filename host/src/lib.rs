@@ -2,7 +2,8 @@
 //! [`cmd`], exposing a clap `Args` struct and a `run` function, so the binary is a thin dispatcher
 //! and the end-to-end tests can call the same code. [`device`] re-exports the transports and
 //! the protocol client of `stiffwall-client` and adds the connection options of every device
-//! command.
+//! command (they convert into a `stiffwall_client::ConnectSpec`); [`cli_error`] prints errors
+//! in the command line's words (refused fields as `--flag`s).
 //!
 //! Commands never import each other: what several of them share lives beside them —
 //! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
