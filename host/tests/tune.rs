@@ -81,7 +81,13 @@ fn tune_identifies_the_rig_and_sets_k_within_80_to_100_percent_of_the_true_limit
     let truth = preset("maxon-re35");
     let mut c = connect(truth);
     let before = c.get_config().unwrap();
-    let o = procedure::tune(&mut c, &Settings::default(), true, &|_| {}).unwrap();
+    // The spring-only tune (`--damping 0`), against the spring-only truth of this file.
+    let spring_only = Settings {
+        damping: procedure::Damping::Fixed(0.0),
+        ..Settings::default()
+    };
+    let o = procedure::tune(&mut c, &spring_only, true, &|_| {}).unwrap();
+    assert_eq!(o.b_set, 0.0);
     let m_err = o.identified.mass[0] / truth.mass - 1.0;
     let c_err = o.identified.coulomb[0] / truth.coulomb - 1.0;
     assert!(m_err.abs() < 0.05, "mass off by {:.1} %", 100.0 * m_err);
@@ -167,7 +173,43 @@ fn bad_max_velocity_is_refused_before_touching_the_device() {
     assert_eq!(c.get_config().unwrap(), before);
 }
 
-/// Issue 10: the same plant gives the same K in `--fast` and in real time. Every decision of
+/// Issue 19: a negative, NaN or infinite `--damping` is refused before connecting, naming the
+/// flag and its range; one above the firmware's limit is refused before any test, and the
+/// device's config is unchanged.
+#[test]
+fn bad_damping_is_refused_naming_the_flag_and_its_range() {
+    let bin = env!("CARGO_BIN_EXE_hostctl");
+    for b in ["-1", "NaN", "inf", "-0.001"] {
+        let out = std::process::Command::new(bin)
+            .args(["tune", "--fast", "--dry-run", "--damping", b])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{b}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("--damping must be finite and >= 0 N·s/m"),
+            "{b}: {err}"
+        );
+        assert!(
+            !err.contains("connecting"),
+            "{b}: refused after connecting: {err}"
+        );
+    }
+    let mut c = connect(preset("maxon-re35"));
+    let before = c.get_config().unwrap();
+    let s = Settings {
+        damping: procedure::Damping::Fixed(1e9),
+        ..Settings::default()
+    };
+    let tests = std::cell::Cell::new(0);
+    let e = procedure::tune(&mut c, &s, false, &|_| tests.set(tests.get() + 1)).unwrap_err();
+    let e = format!("{e:#}");
+    assert!(e.contains("--damping must be within [0, "), "{e}");
+    assert_eq!(tests.get(), 0, "refused before any test");
+    assert_eq!(c.get_config().unwrap(), before);
+}
+
+/// Issue 10 (and 19: the same B): the same plant gives the same K in `--fast` and in real time. Every decision of
 /// the tune depends on the device's counts only (tests start from rest with the wall off and
 /// end at points computed from their counts), so the two runs must agree exactly, test by test.
 /// A rotary rig like maxon-re35 with static friction 1.5 × Coulomb, a lightly damped 250 Hz
@@ -247,9 +289,12 @@ fn fast_and_real_time_tunes_set_the_same_k_on_four_plants() {
         )
         .unwrap();
         eprintln!(
-            "{name}: K fast {:.6} real time {:.6} ({:.1} s real time), mismatch {:?}",
+            "{name}: K fast {:.6} real time {:.6}, B fast {:.4e} real time {:.4e} ({:.1} s real \
+             time), mismatch {:?}",
             fast.k_set,
             paced.k_set,
+            fast.b_set,
+            paced.b_set,
             started.elapsed().as_secs_f64(),
             paced.model_mismatch
         );
@@ -259,6 +304,8 @@ fn fast_and_real_time_tunes_set_the_same_k_on_four_plants() {
             "{name}: verification"
         );
         assert_eq!(fast.k_set, paced.k_set, "{name}: K set");
+        assert_eq!(fast.b_set, paced.b_set, "{name}: B set");
+        assert_eq!(fast.frontier, paced.frontier, "{name}: frontier");
         assert_eq!(fast.model_mismatch, paced.model_mismatch, "{name}");
     }
 }

@@ -250,6 +250,7 @@ fn fig6_seconds() -> f64 {
             },
             periods: 50_000,
             history: History::HoldInitial,
+            damping: 0.0,
         };
         let idx: Vec<usize> = (0..spec.len()).collect();
         std::hint::black_box(map_run(&spec, &idx, &|| {}));
