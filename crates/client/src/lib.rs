@@ -12,6 +12,27 @@
 //! protocol ([`stiffwall_proto::ConfigField::name`]) and carried as data in
 //! [`ClientError::Refused`], for a front end to spell as it likes. This crate installs no
 //! signal handler: a front end sets [`session::INTERRUPTED`].
+//!
+//! ```
+//! use stiffwall_client::{connect, ClientError, ConnectSpec};
+//! use stiffwall_proto::{ConfigField, ErrorDetail};
+//!
+//! // The virtual device running a preset, as fast as this program reads.
+//! let mut client = connect(&ConnectSpec::preset("maxon-re35", true))?;
+//! let mut cfg = client.get_config()?;
+//! cfg.stiffness = 1.0e6; // far beyond what this device allows
+//! match client.set_config(&cfg) {
+//!     Err(ClientError::Refused {
+//!         detail: ErrorDetail::Field { field, max, .. },
+//!         ..
+//!     }) => {
+//!         assert_eq!(field, ConfigField::Stiffness);
+//!         println!("{} at most {max}", field.name());
+//!     }
+//!     other => panic!("expected a refusal: {other:?}"),
+//! }
+//! # Ok::<(), ClientError>(())
+//! ```
 
 pub mod client;
 pub mod connect;
