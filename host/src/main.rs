@@ -58,7 +58,7 @@ fn main() -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", stiffwall_host::cli_error::message(&e));
             std::process::ExitCode::from(2)
         }
     }

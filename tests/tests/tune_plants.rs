@@ -4,14 +4,14 @@
 //! `stiffwall_tests::kstar` from the simulator alone with the firmware's damper law) and near
 //! optimal (K ≥ 0.7 K*(B), the true largest stable K at the B it set).
 //!
-//! The tune runs the same code as `hostctl tune --plant FILE --fast --dry-run`: the connect
-//! options are parsed from those arguments and `tune::procedure::tune` runs on the client.
+//! The tune runs the same code as `hostctl tune --plant FILE --fast --dry-run`: the client
+//! connects to the same target (`ConnectSpec::plant_file(FILE, fast)`, what `--plant FILE
+//! --fast` converts into) and `tune::procedure::tune` runs on it.
 //! Default run: the plants of [`DEFAULT_PLANTS`]; all of them with
 //! `cargo test -p stiffwall-tests --test tune_plants -- --ignored`, which also runs the holdout
 //! plants of `sim/plants-holdout/` (written after tune was built and never tuned against).
 
-use clap::Parser;
-use stiffwall_host::device::connect::ConnectArgs;
+use stiffwall_client::ConnectSpec;
 use stiffwall_host::tune::procedure::{self, Settings};
 use stiffwall_tests::family::{plant_files, plants_dir, PlantCase};
 use stiffwall_tests::kstar;
@@ -32,28 +32,14 @@ pub const DEFAULT_PLANTS: [&str; 6] = [
 /// Lower bound of K set / K*.
 const NEAR_OPTIMAL: f64 = 0.7;
 
-#[derive(Debug, Parser)]
-struct Cli {
-    #[command(flatten)]
-    connect: ConnectArgs,
-}
-
 /// K* and the K set by tune; an error message when tune fails or K is out of [0.7 K*, K*].
 fn check(case: &PlantCase) -> Result<String, String> {
     let ks0 = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
         .map_err(|e| format!("{}: K*: {e}", case.name))?;
-    let cli = Cli::try_parse_from([
-        "hostctl".as_ref(),
-        "--plant".as_ref(),
-        case.path.as_os_str(),
-        "--fast".as_ref(),
-    ])
-    .map_err(|e| format!("{}: {e}", case.name))?;
+    let spec = ConnectSpec::plant_file(&case.path, true);
     let t0 = std::time::Instant::now();
-    let mut client = cli
-        .connect
-        .connect()
-        .map_err(|e| format!("{}: connect: {e:#}", case.name))?;
+    let mut client =
+        stiffwall_client::connect(&spec).map_err(|e| format!("{}: connect: {e:#}", case.name))?;
     let o = procedure::tune(&mut client, &Settings::default(), true, &|_| {})
         .map_err(|e| format!("{}: tune failed: {e:#}", case.name))?;
     let tune_s = t0.elapsed().as_secs_f64();

@@ -482,7 +482,7 @@ fn run_once(
         Err(_) if c.faults().is_ok_and(|f| f.latched != 0) => {
             return Ok((Verdict::Growing, Vec::new()));
         }
-        Err(e) => return Err(e),
+        Err(e) => return Err(e.into()),
     };
     if rec.gaps.missing > 0 {
         bail!(
