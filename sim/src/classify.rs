@@ -11,6 +11,19 @@
 //!    - **non-monotonically** otherwise.
 //! 3. **Persistent**: neither: still moving at the end, with no net energy gain.
 //!
+//! **Cycle detection** (`Thresholds::cycle_detection`, on by default): the sampled system is
+//! deterministic, so once the solver's state at a sample instant repeats bit for bit
+//! ([`ExactSim::same_state`]; Brent's algorithm: one saved state, compared at every sample,
+//! re-saved at powers of two) the trajectory is periodic with the found period L, and every
+//! later sample equals one already classified. The rules above only take maxima (H_T, tail
+//! |ξ| and |ξ̇|), the last H_T, and per-sample tests (monotonicity of consecutive pairs,
+//! divergence, rest); within the cycle every such value and pair has been seen, so whole
+//! cycles are skipped: up to just before the tail window, then, once the tail has covered
+//! one whole cycle, up to the last L − 1 periods before the horizon, which run as usual (they
+//! give H_T at the end). The outcome is identical to the brute-force run, field by field
+//! ([`Outcome::cycle`] apart); states that never repeat exactly run in full. The solver's own
+//! period counter ([`ExactSim::period`]) then lags `periods_run` by the skipped periods.
+//!
 //! Invariant: the classifier calls `step_period` at most `periods` times and stops at rest.
 
 use crate::exact::{storage, ExactSim};
@@ -60,6 +73,9 @@ pub struct Thresholds {
     pub mono_tol: f64,
     /// Fraction of the horizon at its end over which the oscillation amplitude is measured.
     pub tail_fraction: f64,
+    /// Skip whole periods of an exactly repeating state (see the module header; the outcome
+    /// is the same either way, only faster). Off: brute force over the whole horizon.
+    pub cycle_detection: bool,
 }
 
 impl Default for Thresholds {
@@ -69,6 +85,7 @@ impl Default for Thresholds {
             growth_tol: 1e-9,
             mono_tol: 1e-12,
             tail_fraction: 0.1,
+            cycle_detection: true,
         }
     }
 }
@@ -90,6 +107,10 @@ pub struct Outcome {
     pub tail_amplitude: f64,
     /// Largest |ξ̇| at sample instants over the tail of the horizon.
     pub tail_speed: f64,
+    /// The period L (in sampling periods) of the exactly repeating state that ended the run
+    /// early by skipping whole cycles; `None` for a run that simulated every period (no
+    /// repetition found before the end, or detection off). Not part of the classification.
+    pub cycle: Option<u64>,
 }
 
 /// Runs `sim` for up to `periods` periods and classifies the trajectory.
@@ -108,7 +129,38 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
     let mut spd: f64 = 0.0;
     let mut h = 0;
     let mut class = None;
+    // Brent: `saved` is the state at sample `h - lam`; compared with every later sample up to
+    // `power` samples on, then replaced by the current one with `power` doubled.
+    let mut saved = if th.cycle_detection {
+        Some(sim.clone())
+    } else {
+        None
+    };
+    let mut power: u64 = 1;
+    let mut lam: u64 = 0;
+    // (L, c): the state at every sample k >= c equals the state at k + L.
+    let mut cycle: Option<(u64, u64)> = None;
+    let mut skipped = false;
     while h < periods {
+        if let Some((l, c)) = cycle {
+            // Skip q whole cycles (samples h+1 ..= h+q·L): each repeats a sample already
+            // classified; only the tail maxima need care (see the module header).
+            let q = if h + 1 < tail_start {
+                (tail_start - 1 - h) / l
+            } else if h + 1 >= tail_start.max(c + 1) + l {
+                // The tail has covered L consecutive samples of the cycle: all its phases.
+                (periods - h) / l
+            } else {
+                0
+            };
+            if q > 0 {
+                h += q * l;
+                skipped = true;
+                if h >= periods {
+                    break;
+                }
+            }
+        }
         sim.step_period();
         h += 1;
         let s = sim.state();
@@ -136,6 +188,19 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
             });
             break;
         }
+        if cycle.is_none() {
+            if let Some(t) = saved.as_mut() {
+                lam += 1;
+                if sim.same_state(t) {
+                    cycle = Some((lam, h - lam));
+                    saved = None;
+                } else if lam == power {
+                    t.clone_from(sim);
+                    power *= 2;
+                    lam = 0;
+                }
+            }
+        }
     }
     let class = class.unwrap_or(if prev > h0 * (1.0 + th.growth_tol) {
         Class::Growing
@@ -150,5 +215,6 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
         h_max,
         tail_amplitude: amp,
         tail_speed: spd,
+        cycle: if skipped { cycle.map(|(l, _)| l) } else { None },
     }
 }

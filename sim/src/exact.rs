@@ -122,6 +122,13 @@ pub trait ExactSim: Clone {
     fn params(&self) -> Params;
     /// Force applied at the start of the next period's first segment (for CSV output).
     fn applied_force(&self) -> f64;
+    /// True if `self` and `other` (the same solver, at any two sample instants) hold the same
+    /// state bit for bit: everything the following periods depend on (position, velocity, the
+    /// delay line's pending forces, the rest counter and last force of [`Self::at_rest`], the
+    /// damper's previous count). Then both continue identically forever, so a trajectory whose
+    /// state at sample h equals its state at sample h − L is periodic with period L from h − L
+    /// on ([`crate::classify`]'s cycle detection). False whenever unsure (never wrongly true).
+    fn same_state(&self, other: &Self) -> bool;
 }
 
 /// The exact solver with compile-time effect flags.
@@ -417,6 +424,22 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
     }
     fn params(&self) -> Params {
         self.params
+    }
+    #[inline]
+    fn same_state(&self, o: &Self) -> bool {
+        // Position and velocity first: they differ at almost every compare (the cheap filter).
+        if self.st.x.to_bits() != o.st.x.to_bits() || self.st.v.to_bits() != o.st.v.to_bits() {
+            return false;
+        }
+        // The rest of the state; the constants (parameters, coefficients, β_v) are the same
+        // for clones of one solver. The step at sample h writes slot h and reads slots h − n
+        // and h − n − 1: the pending forces are the n + 1 slots before h. The audit fields are
+        // outputs of the last period, not state.
+        self.rest_periods == o.rest_periods
+            && self.last_force.to_bits() == o.last_force.to_bits()
+            && self.n_prev.to_bits() == o.n_prev.to_bits()
+            && self.beta_v.to_bits() == o.beta_v.to_bits()
+            && (!D || (1..=self.n + 1).all(|j| self.delayed(j).to_bits() == o.delayed(j).to_bits()))
     }
     fn applied_force(&self) -> f64 {
         // The force at the start of the next period; with no delay it is the sample about to

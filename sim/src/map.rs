@@ -230,6 +230,32 @@ pub fn simulate_point_with(
     periods: u64,
     history: History,
 ) -> Outcome {
+    simulate_point_th(
+        mu,
+        beta,
+        sigma,
+        tau_d,
+        xidot0,
+        periods,
+        history,
+        &Thresholds::default(),
+    )
+}
+
+/// [`simulate_point_with`] with explicit classification thresholds and options (e.g.
+/// [`Thresholds::cycle_detection`] off).
+#[allow(clippy::too_many_arguments)]
+#[must_use]
+pub fn simulate_point_th(
+    mu: f64,
+    beta: f64,
+    sigma: f64,
+    tau_d: f64,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    th: &Thresholds,
+) -> Outcome {
     let p = Params {
         mu,
         beta,
@@ -237,15 +263,14 @@ pub fn simulate_point_with(
         tau_d,
     };
     let init = Motion { x: 0.0, v: xidot0 };
-    let th = Thresholds::default();
     if tau_d == 0.0 {
         match NoDelay::new(p, init, history) {
-            Ok(mut s) => classify(&mut s, periods, &th),
+            Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
     } else {
         match Full::new(p, init, history) {
-            Ok(mut s) => classify(&mut s, periods, &th),
+            Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
     }
@@ -260,6 +285,43 @@ fn invalid() -> Outcome {
         h_max: f64::NAN,
         tail_amplitude: f64::NAN,
         tail_speed: f64::NAN,
+        cycle: None,
+    }
+}
+
+/// How [`run_with`] computes. Not part of the result: every choice gives the same points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Finish a point from its exactly repeating state ([`Thresholds::cycle_detection`], the
+    /// default); off: brute force over the whole horizon.
+    pub cycle_detection: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            cycle_detection: true,
+        }
+    }
+}
+
+/// What [`run_with`] returns, in the order of the points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOutput {
+    /// The classified points.
+    pub points: Vec<MapPoint>,
+    /// Each point's measured cost: ns of wall time on its worker thread per period of its
+    /// `periods_run` (skipped cycles included), at least one period.
+    pub ns_per_period: Vec<f64>,
+    /// Each point's [`Outcome::cycle`]: the period of the repeating state that ended it early.
+    pub cycle: Vec<Option<u64>>,
+}
+
+impl RunOutput {
+    /// Number of points that ended by cycle detection.
+    #[must_use]
+    pub fn cycle_points(&self) -> usize {
+        self.cycle.iter().filter(|c| c.is_some()).count()
     }
 }
 
@@ -276,13 +338,29 @@ pub fn run_with_cost(
     indices: &[usize],
     progress: &(dyn Fn() + Sync),
 ) -> (Vec<MapPoint>, Vec<f64>) {
-    let mut out: Vec<(MapPoint, f64)> = indices
+    let o = run_with(spec, indices, progress, RunOptions::default());
+    (o.points, o.ns_per_period)
+}
+
+/// [`run_with_cost`] with explicit [`RunOptions`], also reporting which points ended by cycle
+/// detection.
+pub fn run_with(
+    spec: &MapSpec,
+    indices: &[usize],
+    progress: &(dyn Fn() + Sync),
+    opts: RunOptions,
+) -> RunOutput {
+    let th = Thresholds {
+        cycle_detection: opts.cycle_detection,
+        ..Thresholds::default()
+    };
+    let mut out: Vec<(MapPoint, f64, Option<u64>)> = indices
         .par_iter()
         .with_max_len(1)
         .map(|&i| {
             let (beta, sigma) = spec.point(i);
             let t0 = std::time::Instant::now();
-            let o = simulate_point_with(
+            let o = simulate_point_th(
                 spec.mu,
                 beta,
                 sigma,
@@ -290,6 +368,7 @@ pub fn run_with_cost(
                 spec.xidot0,
                 spec.periods,
                 spec.history,
+                &th,
             );
             let ns = t0.elapsed().as_secs_f64() * 1e9;
             progress();
@@ -303,11 +382,21 @@ pub fn run_with_cost(
                 h_end: o.h_end,
                 tail_amplitude: o.tail_amplitude,
             };
-            (point, ns / o.periods_run.max(1) as f64)
+            (point, ns / o.periods_run.max(1) as f64, o.cycle)
         })
         .collect();
-    out.sort_by_key(|(p, _)| p.index);
-    out.into_iter().unzip()
+    out.sort_by_key(|(p, _, _)| p.index);
+    let mut r = RunOutput {
+        points: Vec::with_capacity(out.len()),
+        ns_per_period: Vec::with_capacity(out.len()),
+        cycle: Vec::with_capacity(out.len()),
+    };
+    for (p, ns, c) in out {
+        r.points.push(p);
+        r.ns_per_period.push(ns);
+        r.cycle.push(c);
+    }
+    r
 }
 
 /// Indices of shard `k` of `n` (k in 0..n): every n-th point starting at k (empty for n = 0).

@@ -664,6 +664,12 @@ impl ExactSim for RefSim {
             tau_d: self.tau_d,
         }
     }
+    /// Always false: the reference integrators are never cut short by cycle detection (their
+    /// adaptive step-size controller carries state across periods), so they classify by brute
+    /// force.
+    fn same_state(&self, _other: &Self) -> bool {
+        false
+    }
     fn applied_force(&self) -> f64 {
         // Same convention as the exact solver: the force at the start of the next period.
         if self.m.amp.is_some() || !self.m.zoh {
