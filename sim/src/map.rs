@@ -10,7 +10,7 @@
 //! from outside (a file) is checked with [`MapSpec::validate`] before any use: axes of
 //! 1..=[`MAX_AXIS_POINTS`] points, at most [`MAX_GRID_POINTS`] grid points, ≥ 1 period.
 
-use crate::classify::{classify, Class, Outcome, Thresholds};
+use crate::classify::{classify, Class, Cycle, Outcome, Thresholds};
 use crate::exact::{Full, History, NoDelay};
 use crate::params::Params;
 use crate::plant::Motion;
@@ -313,15 +313,25 @@ pub struct RunOutput {
     /// Each point's measured cost: ns of wall time on its worker thread per period of its
     /// `periods_run` (skipped cycles included), at least one period.
     pub ns_per_period: Vec<f64>,
-    /// Each point's [`Outcome::cycle`]: the period of the repeating state that ended it early.
-    pub cycle: Vec<Option<u64>>,
+    /// Each point's [`Outcome::cycle`]: the repeating state that ended it early.
+    pub cycle: Vec<Option<Cycle>>,
 }
 
 impl RunOutput {
-    /// Number of points that ended by cycle detection.
+    /// Number of points that ended by cycle detection (whole cycles skipped or the rest of
+    /// the horizon replayed).
     #[must_use]
     pub fn cycle_points(&self) -> usize {
         self.cycle.iter().filter(|c| c.is_some()).count()
+    }
+
+    /// Of [`Self::cycle_points`], those whose state repeated bit for bit (cycles skipped).
+    #[must_use]
+    pub fn exact_cycle_points(&self) -> usize {
+        self.cycle
+            .iter()
+            .filter(|c| c.is_some_and(|c| c.exact))
+            .count()
     }
 }
 
@@ -354,7 +364,7 @@ pub fn run_with(
         cycle_detection: opts.cycle_detection,
         ..Thresholds::default()
     };
-    let mut out: Vec<(MapPoint, f64, Option<u64>)> = indices
+    let mut out: Vec<(MapPoint, f64, Option<Cycle>)> = indices
         .par_iter()
         .with_max_len(1)
         .map(|&i| {

@@ -50,6 +50,7 @@ fn fig6_fig7_panels_identical_with_and_without_cycle_detection() {
         ("fig7 docs grid", 1.25, ax(0.0, 3.0, 34), ax(0.0, 2.0, 21)),
     ];
     let mut by_cycle = 0;
+    let mut by_exact = 0;
     for (name, tau_d, beta, sigma) in grids {
         for v in [1.0, 5.0, 10.0, 20.0] {
             let spec = panel(tau_d, v, beta, sigma);
@@ -78,37 +79,47 @@ fn fig6_fig7_panels_identical_with_and_without_cycle_detection() {
                 );
             }
             eprintln!(
-                "{name}, xidot0 {v}: {} of {} points ended by cycle detection",
+                "{name}, xidot0 {v}: {} of {} points ended by cycle detection ({} exact)",
                 on.cycle_points(),
-                on.points.len()
+                on.points.len(),
+                on.exact_cycle_points()
             );
             by_cycle += on.cycle_points();
+            by_exact += on.exact_cycle_points();
         }
     }
-    // The detection does fire on these panels (most persistent points are exact limit cycles).
-    assert!(by_cycle > 500, "{by_cycle} points ended by cycle detection");
+    // The detection does fire on these panels (on most persistent points), both kinds.
+    assert!(
+        by_cycle > 1000,
+        "{by_cycle} points ended by cycle detection"
+    );
+    assert!(
+        by_exact > 500,
+        "{by_exact} points ended by exact repetition"
+    );
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(if cfg!(debug_assertions) { 16 } else { 128 }))]
 
-    /// A random point (β, σ, ξ̇₀, τ_D, history, horizon) classifies the same with cycle
-    /// detection as by brute force; the cases that actually end by cycle detection are the
-    /// point of the test, so the region and horizons are those of persistent limit cycles
-    /// (σ > 0, β in the B/C strip) with some decaying and growing points mixed in.
+    /// A random point (β, σ, ξ̇₀, τ_D, history, horizon) that ends by cycle detection (cases
+    /// where it does not are rejected) classifies the same as by brute force, every field of
+    /// the outcome bit for bit. The region is that of the persistent limit cycles (region B:
+    /// β > ½, σ < ½, and the delayed B of Fig. 7), with decaying and growing points mixed in.
     #[test]
     fn points_ended_by_cycle_detection_classify_as_brute_force(
-        beta in 0.0f64..1.6,
-        sigma in 0.0f64..1.0,
+        beta in 0.4f64..3.0,
+        sigma in 0.0f64..0.6,
         xidot0 in 0.2f64..20.0,
-        tau_d in prop_oneof![Just(0.0), Just(0.0), 0.0f64..2.5],
+        tau_d in prop_oneof![Just(0.0), Just(0.0), 0.0f64..2.0],
         zero_history in any::<bool>(),
-        periods in 1u64..if cfg!(debug_assertions) { 3_000 } else { 30_000 },
+        periods in if cfg!(debug_assertions) { 500u64..3_000 } else { 1_000u64..30_000 },
     ) {
         let history = if zero_history { History::Zero } else { History::HoldInitial };
         let on = Thresholds::default();
         let off = Thresholds { cycle_detection: false, ..Thresholds::default() };
         let a = simulate_point_th(100.0, beta, sigma, tau_d, xidot0, periods, history, &on);
+        prop_assume!(a.cycle.is_some());
         let b = simulate_point_th(100.0, beta, sigma, tau_d, xidot0, periods, history, &off);
         prop_assert!(b.cycle.is_none());
         prop_assert!(same(&a, &b), "with {a:?}\nwithout {b:?}");
@@ -158,4 +169,64 @@ fn limit_cycles_end_by_detection_at_every_horizon() {
         }
     }
     assert_eq!(ended, 12, "runs ended by cycle detection");
+}
+
+/// With the virtual damper (the state then holds the previous count too) and through the
+/// delayed solver, detection on and off classify alike on a small grid of limit cycles.
+#[test]
+fn damped_and_delayed_solvers_classify_alike() {
+    use stiffwall_sim::classify::classify;
+    use stiffwall_sim::exact::{Full, NoDelay};
+    use stiffwall_sim::{Motion, Params};
+    let off = Thresholds {
+        cycle_detection: false,
+        ..Thresholds::default()
+    };
+    let on = Thresholds::default();
+    let periods = if cfg!(debug_assertions) {
+        3_000
+    } else {
+        30_000
+    };
+    let mut ended = 0;
+    for beta_v in [0.0, 0.05, 0.3, 1.0] {
+        for beta in [0.3, 0.55, 0.8, 1.1] {
+            for sigma in [0.05, 0.2, 0.4] {
+                for tau_d in [0.0, 0.75] {
+                    let p = Params {
+                        mu: 100.0,
+                        beta,
+                        sigma,
+                        tau_d,
+                    };
+                    let init = Motion { x: 0.0, v: 5.0 };
+                    let (a, b) = if tau_d == 0.0 {
+                        let s = NoDelay::new(p, init, History::HoldInitial)
+                            .unwrap()
+                            .with_damping(beta_v)
+                            .unwrap();
+                        (
+                            classify(&mut s.clone(), periods, &on),
+                            classify(&mut s.clone(), periods, &off),
+                        )
+                    } else {
+                        let s = Full::new(p, init, History::HoldInitial)
+                            .unwrap()
+                            .with_damping(beta_v)
+                            .unwrap();
+                        (
+                            classify(&mut s.clone(), periods, &on),
+                            classify(&mut s.clone(), periods, &off),
+                        )
+                    };
+                    assert!(
+                        same(&a, &b),
+                        "{beta_v} {beta} {sigma} {tau_d}: {a:?} vs {b:?}"
+                    );
+                    ended += usize::from(a.cycle.is_some());
+                }
+            }
+        }
+    }
+    assert!(ended > 10, "{ended} runs ended by cycle detection");
 }

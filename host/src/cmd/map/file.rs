@@ -229,9 +229,11 @@ pub struct Cost {
     pub cpu_ns_per_period: Option<f64>,
     /// Per panel (in panel order), the ns per period of each point (in point order).
     pub ns_per_period: Vec<Vec<f64>>,
-    /// Number of points that ended by cycle detection (their state repeated bit for bit, so
-    /// whole periods were skipped with an identical result; `stiffwall_sim::classify`).
-    /// Their `periods_run` still counts the skipped periods. 0 in files from before the key.
+    /// Number of points that ended by cycle detection (`stiffwall_sim::classify`): their
+    /// solver state repeated bit for bit (whole cycles skipped) or up to the position's
+    /// rounding drift (the rest replayed from one recorded cycle), with a result identical to
+    /// simulating every period. Their `periods_run` still counts every period of the horizon.
+    /// 0 in files from before the key.
     #[serde(default)]
     pub cycle_points: u64,
 }

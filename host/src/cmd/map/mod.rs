@@ -14,7 +14,8 @@
 //! tail_amplitude }] }], "cost": { periods_total, core_seconds, ns_per_period_mean,
 //! cpu_seconds, cpu_ns_per_period, ns_per_period: [[per point] per panel], cycle_points },
 //! "seconds" }` (`cycle_points`: how many points ended by cycle detection, their state having
-//! repeated bit for bit; `--no-cycle-detection` runs every period, with the same points), written atomically ([`file::write`]). A run whose `--out` already holds the
+//! repeated exactly or up to the position's rounding drift; `--no-cycle-detection` simulates
+//! every period, with the same points), written atomically ([`file::write`]). A run whose `--out` already holds the
 //! complete, valid result of the same sweep and shard does nothing (resume after a pre-empted
 //! batch job); `--force` recomputes. Bounds: `--threads` in [1, [`THREADS_PER_CORE`] × cores].
 
@@ -87,8 +88,8 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
-    /// Simulate every period even where a point's state repeats bit for bit (same result,
-    /// slower; for checking and timing).
+    /// Simulate every period even where a point's state repeats (same result, slower; for
+    /// checking and timing).
     #[arg(long)]
     pub no_cycle_detection: bool,
     /// Delay-line history before tau = 0: the spring force of the initial position, or zero.
