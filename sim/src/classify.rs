@@ -306,6 +306,10 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
                     Replay::Exact(resumed) => {
                         *sim = resumed;
                         cycle = Some((lam, h - lam));
+                        ended = Some(Cycle {
+                            period: lam,
+                            exact: false,
+                        });
                         continue;
                     }
                 }
