@@ -76,6 +76,9 @@ pub(crate) struct Hold {
     still: u32,
     /// Consecutive ticks without motion, anywhere.
     stuck: u32,
+    /// Within a count of the target counts as still even while moving (see
+    /// [`Hold::toggle_settles`]).
+    toggle_ok: bool,
 }
 
 impl Hold {
@@ -87,7 +90,18 @@ impl Hold {
             held: 0,
             still: 0,
             stuck: 0,
+            toggle_ok: false,
         }
+    }
+
+    /// With `on`, a device toggling between counts within one count of the target counts as
+    /// still: a wall with a virtual damper answers every count change and may never rest
+    /// exactly, so without this its hold would wait the full 2 s. The release then starts
+    /// within one count of the target at most one count per tick slow (the host re-aims a
+    /// release off its target). Off (spring only): still means no motion.
+    pub(crate) fn toggle_settles(mut self, on: bool) -> Self {
+        self.toggle_ok = on;
+        self
     }
 
     /// One tick after the output at count `n` (moved `dn` since the last tick): `Some(ticks)`
@@ -97,7 +111,7 @@ impl Hold {
         self.held = self.held.saturating_add(1);
         // `abs_diff`: exact for every pair of i32 (a saturating difference's `abs` overflows at
         // i32::MIN, and in release builds the hold would then never settle).
-        if dn == 0 && n.abs_diff(self.target) <= 1 {
+        if (dn == 0 || self.toggle_ok) && n.abs_diff(self.target) <= 1 {
             self.still = self.still.saturating_add(1);
         } else {
             self.still = 0;
@@ -140,6 +154,17 @@ impl Launch {
             launched: false,
             t: 0,
         }
+    }
+
+    /// Whether the hold before the launch has ended (the target is moving).
+    pub(crate) fn launched(&self) -> bool {
+        self.launched
+    }
+
+    /// [`Hold::toggle_settles`] for the hold before the launch.
+    pub(crate) fn toggle_settles(mut self, on: bool) -> Self {
+        self.hold = self.hold.toggle_settles(on);
+        self
     }
 
     /// The hold target this tick, effective counts (rounded toward −∞).
@@ -270,6 +295,29 @@ mod tests {
         let first = (1..=5000u32).find(|i| h.advance(5 + (*i as i32 & 7), 1, 1000).is_some());
         assert_eq!(first, Some(2000));
         assert_eq!(Hold::new(0, 0).ticks, 1);
+    }
+
+    #[test]
+    fn a_toggle_at_the_target_settles_only_with_toggle_settles() {
+        // Toggling between 5 and 6 (one count per tick): never still for the spring-only
+        // hold (2 s), still for the damped wall's hold (100 ticks at 1 kHz).
+        let toggle = |i: u32| (5 + (i & 1) as i32, if i == 1 { 0 } else { 1 });
+        let mut h = Hold::new(5, 300);
+        let first = (1..=5000u32).find(|&i| {
+            let (n, dn) = toggle(i);
+            h.advance(n, dn, 1000).is_some()
+        });
+        assert_eq!(first, Some(2000));
+        let mut h = Hold::new(5, 300).toggle_settles(true);
+        let first = (1..=5000u32).find(|&i| {
+            let (n, dn) = toggle(i);
+            h.advance(n, dn, 1000).is_some()
+        });
+        assert_eq!(first, Some(100));
+        // Moving two counts off the target is not still, toggle or not.
+        let mut h = Hold::new(5, 300).toggle_settles(true);
+        let first = (1..=5000u32).find(|&i| h.advance(7 + (i & 1) as i32, 1, 1000).is_some());
+        assert_eq!(first, Some(2000));
     }
 
     /// The settled check at the ends of the count range: a hold at i32::MIN (the repro

@@ -419,16 +419,33 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// Hold and excitation forces (out of the wall's hot path).
     #[inline(never)]
     fn experiment_force(&mut self, n: i32, dn: i32) -> (i32, u16) {
-        let hold_damp = self.damper(self.g.hold_damp, dn);
+        // The hold's damping: β = `HOLD_BETA` for a spring-only wall; with a virtual damper
+        // the wall's own B, so the hold is the wall under test centred on its target (a hold
+        // at the test's K with β = 2 can buzz where the wall's (K, B) is stable: the damped
+        // frontier is not monotone in B).
+        // The launch itself (the target moving toward the wall) keeps β = 2, whose lag behind
+        // the target the launch's speed was tuned with.
+        let still_g = if self.g.damping_on {
+            self.g.damp
+        } else {
+            self.g.hold_damp
+        };
         match &mut self.exp {
             Experiment::None | Experiment::Released { .. } => (0, 0),
             Experiment::Hold(h) => {
                 let e = n.saturating_sub(h.target);
-                (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
+                let d = self.damper(still_g, dn);
+                (self.spring_raw(e).saturating_add(d), flags::HOLD)
             }
             Experiment::Launch(l) => {
                 let e = n.saturating_sub(l.target());
-                (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
+                let g = if l.launched() {
+                    self.g.hold_damp
+                } else {
+                    still_g
+                };
+                let d = self.damper(g, dn);
+                (self.spring_raw(e).saturating_add(d), flags::HOLD)
             }
             Experiment::Excite(x) => (
                 x.next_code(&self.table, self.g.rate_hz),
@@ -535,7 +552,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
             ServoCmd::Release { deflection, ticks } => {
                 if self.faults == 0 {
                     self.end_experiment(false);
-                    self.set_exp(Experiment::Hold(Hold::new(deflection, ticks)));
+                    let hold = Hold::new(deflection, ticks).toggle_settles(self.g.damping_on);
+                    self.set_exp(Experiment::Hold(hold));
                     self.start_experiment(now);
                 } else {
                     self.refuse_experiment(ExperimentKind::Release);
@@ -548,11 +566,9 @@ impl<'a, N: Numeric> Servo<'a, N> {
             } => {
                 if self.faults == 0 {
                     self.end_experiment(false);
-                    self.set_exp(Experiment::Launch(Launch::new(
-                        start,
-                        velocity_milli,
-                        ticks,
-                    )));
+                    let launch =
+                        Launch::new(start, velocity_milli, ticks).toggle_settles(self.g.damping_on);
+                    self.set_exp(Experiment::Launch(launch));
                     self.start_experiment(now);
                 } else {
                     self.refuse_experiment(ExperimentKind::Impact);

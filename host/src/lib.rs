@@ -1,7 +1,9 @@
 //! `stiffwall-host`: the library behind `hostctl`. Each subcommand lives in its own module under
 //! [`cmd`], exposing a clap `Args` struct and a `run` function, so the binary is a thin dispatcher
-//! and the end-to-end tests can call the same code. [`device`] holds the transports and the
-//! protocol client shared by every device command.
+//! and the end-to-end tests can call the same code. [`device`] re-exports the transports and
+//! the protocol client of `stiffwall-client` and adds the connection options of every device
+//! command (they convert into a `stiffwall_client::ConnectSpec`); [`cli_error`] prints errors
+//! in the command line's words (refused fields as `--flag`s).
 //!
 //! Commands never import each other: what several of them share lives beside them —
 //! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
@@ -14,6 +16,7 @@
 //! commands' `run` functions add context with `anyhow` at the edge.
 
 pub mod analysis;
+pub mod cli_error;
 pub mod cmd;
 pub mod config_flags;
 pub mod device;
@@ -21,6 +24,6 @@ pub mod figure;
 pub mod monitor_report;
 pub mod output;
 pub mod plant_args;
-pub mod recording;
+pub use stiffwall_client::recording;
 pub mod session;
 pub mod tune;

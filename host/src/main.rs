@@ -18,7 +18,7 @@ enum Command {
     /// Simulate one scene file and write the trajectory as CSV.
     Simulate(cmd::simulate::Args),
     /// Stability map over a (beta, sigma) grid (the paper's Fig. 6/7).
-    Map(cmd::map::Args),
+    Map(Box<cmd::map::Args>),
     /// Show the connected device's identity and limits.
     Info(cmd::info::Args),
     /// Read, change, save or reset the device's servo configuration.
@@ -58,7 +58,7 @@ fn main() -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", stiffwall_host::cli_error::message(&e));
             std::process::ExitCode::from(2)
         }
     }

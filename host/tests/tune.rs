@@ -81,7 +81,13 @@ fn tune_identifies_the_rig_and_sets_k_within_80_to_100_percent_of_the_true_limit
     let truth = preset("maxon-re35");
     let mut c = connect(truth);
     let before = c.get_config().unwrap();
-    let o = procedure::tune(&mut c, &Settings::default(), true, &|_| {}).unwrap();
+    // The spring-only tune (`--damping 0`), against the spring-only truth of this file.
+    let spring_only = Settings {
+        damping: procedure::Damping::Fixed(0.0),
+        ..Settings::default()
+    };
+    let o = procedure::tune(&mut c, &spring_only, true, &|_| {}).unwrap();
+    assert_eq!(o.b_set, 0.0);
     let m_err = o.identified.mass[0] / truth.mass - 1.0;
     let c_err = o.identified.coulomb[0] / truth.coulomb - 1.0;
     assert!(m_err.abs() < 0.05, "mass off by {:.1} %", 100.0 * m_err);
@@ -167,7 +173,43 @@ fn bad_max_velocity_is_refused_before_touching_the_device() {
     assert_eq!(c.get_config().unwrap(), before);
 }
 
-/// Issue 10: the same plant gives the same K in `--fast` and in real time. Every decision of
+/// Issue 19: a negative, NaN or infinite `--damping` is refused before connecting, naming the
+/// flag and its range; one above the firmware's limit is refused before any test, and the
+/// device's config is unchanged.
+#[test]
+fn bad_damping_is_refused_naming_the_flag_and_its_range() {
+    let bin = env!("CARGO_BIN_EXE_hostctl");
+    for b in ["-1", "NaN", "inf", "-0.001"] {
+        let out = std::process::Command::new(bin)
+            .args(["tune", "--fast", "--dry-run", "--damping", b])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{b}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("--damping must be finite and >= 0 N·s/m"),
+            "{b}: {err}"
+        );
+        assert!(
+            !err.contains("connecting"),
+            "{b}: refused after connecting: {err}"
+        );
+    }
+    let mut c = connect(preset("maxon-re35"));
+    let before = c.get_config().unwrap();
+    let s = Settings {
+        damping: procedure::Damping::Fixed(1e9),
+        ..Settings::default()
+    };
+    let tests = std::cell::Cell::new(0);
+    let e = procedure::tune(&mut c, &s, false, &|_| tests.set(tests.get() + 1)).unwrap_err();
+    let e = format!("{e:#}");
+    assert!(e.contains("--damping must be within [0, "), "{e}");
+    assert_eq!(tests.get(), 0, "refused before any test");
+    assert_eq!(c.get_config().unwrap(), before);
+}
+
+/// Issue 10 (and 19: the same B): the same plant gives the same K in `--fast` and in real time. Every decision of
 /// the tune depends on the device's counts only (tests start from rest with the wall off and
 /// end at points computed from their counts), so the two runs must agree exactly, test by test.
 /// A rotary rig like maxon-re35 with static friction 1.5 × Coulomb, a lightly damped 250 Hz
@@ -235,31 +277,48 @@ fn fast_and_real_time_tunes_set_the_same_k_on_four_plants() {
             }),
         ),
     ];
+    // The spring-only tune (`--damping 0`) stops a test only at rest, so both runs see the
+    // same counts, test by test. The default tune's damped tests end while the wall toggles
+    // between two counts, and the host's Stop then leaves the device after a latency that
+    // differs between the two modes (a known limit, README "Tune with a damper"): there the
+    // spring-only part, the B chosen and the frontier's B must agree, and both K are reported.
+    let spring_only = Settings {
+        damping: procedure::Damping::Fixed(0.0),
+        ..Settings::default()
+    };
     for (name, connect_with) in &plants {
-        let fast =
-            procedure::tune(&mut connect_with(true), &Settings::default(), true, &|_| {}).unwrap();
-        let started = std::time::Instant::now();
-        let paced = procedure::tune(
-            &mut connect_with(false),
-            &Settings::default(),
-            true,
-            &|_| {},
-        )
-        .unwrap();
-        eprintln!(
-            "{name}: K fast {:.6} real time {:.6} ({:.1} s real time), mismatch {:?}",
-            fast.k_set,
-            paced.k_set,
-            started.elapsed().as_secs_f64(),
-            paced.model_mismatch
-        );
-        assert_eq!(fast.search.trials, paced.search.trials, "{name}: search");
-        assert_eq!(
-            fast.verification, paced.verification,
-            "{name}: verification"
-        );
-        assert_eq!(fast.k_set, paced.k_set, "{name}: K set");
-        assert_eq!(fast.model_mismatch, paced.model_mismatch, "{name}");
+        for s in [&spring_only, &Settings::default()] {
+            let fast = procedure::tune(&mut connect_with(true), s, true, &|_| {}).unwrap();
+            let started = std::time::Instant::now();
+            let paced = procedure::tune(&mut connect_with(false), s, true, &|_| {}).unwrap();
+            eprintln!(
+                "{name} ({:?}): K fast {:.6} real time {:.6}, B fast {:.4e} real time {:.4e} \
+                 ({:.1} s real time), mismatch {:?}",
+                s.damping,
+                fast.k_set,
+                paced.k_set,
+                fast.b_set,
+                paced.b_set,
+                started.elapsed().as_secs_f64(),
+                paced.model_mismatch
+            );
+            assert_eq!(fast.search.trials, paced.search.trials, "{name}: search");
+            assert_eq!(
+                fast.k_spring_only, paced.k_spring_only,
+                "{name}: spring only"
+            );
+            assert_eq!(fast.b_set, paced.b_set, "{name}: B set");
+            let bs = |o: &procedure::Outcome| o.frontier.iter().map(|p| p.b).collect::<Vec<_>>();
+            assert_eq!(bs(&fast), bs(&paced), "{name}: frontier B");
+            assert_eq!(fast.model_mismatch, paced.model_mismatch, "{name}");
+            if s.damping == procedure::Damping::Fixed(0.0) {
+                assert_eq!(
+                    fast.verification, paced.verification,
+                    "{name}: verification"
+                );
+                assert_eq!(fast.k_set, paced.k_set, "{name}: K set");
+            }
+        }
     }
 }
 
@@ -267,9 +326,14 @@ fn fast_and_real_time_tunes_set_the_same_k_on_four_plants() {
 /// and the verification adapts (smaller margin, a longer set with more energies).
 #[test]
 fn static_friction_is_reported_and_makes_the_verification_thorough() {
+    // The spring-only tune's margins (a damped wall's is at most `DAMPED_MARGIN` anyway).
+    let spring_only = Settings {
+        damping: procedure::Damping::Fixed(0.0),
+        ..Settings::default()
+    };
     let o = procedure::tune(
         &mut connect_plant_file(STICKY_PLANT, true),
-        &Settings::default(),
+        &spring_only,
         true,
         &|_| {},
     )

@@ -270,6 +270,7 @@ fn fig6(opts: RunOptions) -> Fig6 {
             },
             periods: 50_000,
             history: History::HoldInitial,
+            damping: 0.0,
         };
         let idx: Vec<usize> = (0..spec.len()).collect();
         let o = std::hint::black_box(map_run_with(&spec, &idx, &|| {}, opts));

@@ -9,9 +9,12 @@
 //! measured cost of [`run_with_cost`], ns of wall time per period, is not a result and varies). A spec
 //! from outside (a file) is checked with [`MapSpec::validate`] before any use: axes of
 //! 1..=[`MAX_AXIS_POINTS`] points, at most [`MAX_GRID_POINTS`] grid points, ≥ 1 period.
+//! [`MapSpec::damping`] is the dimensionless virtual damping β_v = B/(K·T) of the wall law
+//! (the exact solver's [`crate::exact::Exact::with_damping`]); 0 (the default) is the paper's
+//! spring-only wall, bit for bit, and is not serialised.
 
 use crate::classify::{classify, Class, Cycle, Outcome, Thresholds};
-use crate::exact::{Full, History, NoDelay};
+use crate::exact::{Full, History, NoDelay, MAX_BETA_V};
 use crate::params::Params;
 use crate::plant::Motion;
 use rayon::prelude::*;
@@ -106,12 +109,21 @@ pub struct MapSpec {
     /// Delay-line history before τ = 0.
     #[serde(default)]
     pub history: History,
+    /// Virtual damping β_v = B/(K·T), in [0, [`MAX_BETA_V`]] (0: spring only; omitted from the
+    /// JSON when 0, so spring-only specs serialise as before).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub damping: f64,
+}
+
+#[allow(clippy::trivially_copy_pass_by_ref)] // serde's skip_serializing_if passes a reference
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl MapSpec {
     /// Checks every field: μ > 0, τ_D in [0, 250], finite ξ̇₀, both axes
     /// ([`Axis::validate`], lo ≥ 0), at most [`MAX_GRID_POINTS`] points and
-    /// 1..=[`MAX_PERIODS`] periods. After this, [`Self::len`] cannot overflow.
+    /// 1..=[`MAX_PERIODS`] periods, damping β_v in [0, [`MAX_BETA_V`]]. After this, [`Self::len`] cannot overflow.
     ///
     /// # Errors
     /// A message naming the field and its allowed range.
@@ -150,6 +162,12 @@ impl MapSpec {
             return Err(format!(
                 "periods = {}: allowed range is [1, {MAX_PERIODS}]",
                 self.periods
+            ));
+        }
+        if !(self.damping.is_finite() && (0.0..=MAX_BETA_V).contains(&self.damping)) {
+            return Err(format!(
+                "damping = {}: allowed range is [0, {MAX_BETA_V}] (beta_v = B/(K*T))",
+                self.damping
             ));
         }
         Ok(())
@@ -262,14 +280,43 @@ pub fn simulate_point_th(
         sigma,
         tau_d,
     };
+    simulate_point_damped_th(p, xidot0, periods, history, 0.0, th)
+}
+
+/// Simulates and classifies one point of the paper's model `p` (all effects, two-sided wall,
+/// ξ₀ = 0, ξ̇₀ = `xidot0`) with the virtual damper β_v = `beta_v` (0: exactly
+/// [`simulate_point_with`]). Invalid parameters (β_v outside [0, [`MAX_BETA_V`]] included)
+/// give a `Growing` outcome of 0 periods with NaN energies.
+#[must_use]
+pub fn simulate_point_damped(
+    p: Params,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    beta_v: f64,
+) -> Outcome {
+    simulate_point_damped_th(p, xidot0, periods, history, beta_v, &Thresholds::default())
+}
+
+/// [`simulate_point_damped`] with explicit classification thresholds and options (e.g.
+/// [`Thresholds::cycle_detection`] off).
+#[must_use]
+pub fn simulate_point_damped_th(
+    p: Params,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    beta_v: f64,
+    th: &Thresholds,
+) -> Outcome {
     let init = Motion { x: 0.0, v: xidot0 };
-    if tau_d == 0.0 {
-        match NoDelay::new(p, init, history) {
+    if p.tau_d == 0.0 {
+        match NoDelay::new(p, init, history).and_then(|s| s.with_damping(beta_v)) {
             Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
     } else {
-        match Full::new(p, init, history) {
+        match Full::new(p, init, history).and_then(|s| s.with_damping(beta_v)) {
             Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
@@ -370,14 +417,18 @@ pub fn run_with(
         .map(|&i| {
             let (beta, sigma) = spec.point(i);
             let t0 = std::time::Instant::now();
-            let o = simulate_point_th(
-                spec.mu,
+            let p = Params {
+                mu: spec.mu,
                 beta,
                 sigma,
-                spec.tau_d,
+                tau_d: spec.tau_d,
+            };
+            let o = simulate_point_damped_th(
+                p,
                 spec.xidot0,
                 spec.periods,
                 spec.history,
+                spec.damping,
                 &th,
             );
             let ns = t0.elapsed().as_secs_f64() * 1e9;
@@ -457,6 +508,7 @@ mod tests {
             },
             periods: 100,
             history: History::HoldInitial,
+            damping: 0.0,
         }
     }
 
@@ -483,5 +535,60 @@ mod tests {
         }
         let all: usize = (0..4).map(|k| shard(&s, k, 4).len()).sum();
         assert_eq!(all, 21);
+    }
+
+    #[test]
+    fn damping_is_validated_and_zero_is_not_serialised() {
+        let mut s = spec(3, 3);
+        let plain = toml::to_string(&s).unwrap();
+        assert!(!plain.contains("damping"), "{plain}");
+        let back: MapSpec = toml::from_str(&plain).unwrap();
+        assert_eq!(back, s);
+        for bad in [-1e-9, f64::NAN, f64::INFINITY, MAX_BETA_V * 1.001] {
+            s.damping = bad;
+            let e = s.validate().unwrap_err();
+            assert!(e.contains("damping") && e.contains("[0, 1000]"), "{e}");
+        }
+        s.damping = 2.0;
+        assert!(s.validate().is_ok());
+        assert!(toml::to_string(&s).unwrap().contains("damping = 2.0"));
+    }
+
+    #[test]
+    fn a_damper_makes_the_undamped_zoh_spring_decay() {
+        // μ = 100, β = 0: the sampled spring alone gains energy every cycle (K_max = 0 by
+        // Gil-Avello-Rubio at b = 0); β_v = 2, i.e. B = 2KT, is inside the exact linear boundary
+        // (small-B estimate K_max ≈ B/(T/2) = 4K). With σ = 0 nothing can hold the mass at rest
+        // against the quantized spring's ±½ at counts 0 and −1, so the damped wall cannot decay
+        // to rest: it stays in a limit cycle inside one count. Coulomb σ = ½ can hold it there.
+        let mut s = spec(1, 1);
+        s.periods = 20_000;
+        let undamped = run(&s, &[0], &|| {})[0];
+        s.damping = 2.0;
+        let damped = run(&s, &[0], &|| {})[0];
+        assert_eq!(undamped.class, Class::Growing, "{undamped:?}");
+        assert_eq!(damped.class, Class::Persistent, "{damped:?}");
+        assert!(damped.h_end < 1e-4 * damped.h0 && damped.tail_amplitude < 1.0);
+        s.sigma = Axis {
+            lo: 0.5,
+            hi: 0.5,
+            n: 1,
+        };
+        let damped = run(&s, &[0], &|| {})[0];
+        assert_eq!(damped.class, Class::NonMonotoneDecay, "{damped:?}");
+        s.damping = 0.0;
+        assert_eq!(run(&s, &[0], &|| {})[0].class, Class::Growing);
+        let phys = stiffwall_core::PhysicalParams {
+            mass: 100.0,
+            viscous: 0.0,
+            coulomb: 0.0,
+            resolution: 1.0,
+            period_s: 1.0,
+            stiffness: 1.0,
+            delay_s: 0.0,
+            rotational: false,
+        };
+        let c = stiffwall_core::criteria::exact_linear_stable;
+        assert!(!c(&phys, 0.0).unwrap() && c(&phys, 2.0).unwrap());
     }
 }

@@ -20,6 +20,7 @@ fn panel(tau_d: f64, xidot0: f64, beta: Axis, sigma: Axis) -> MapSpec {
         sigma,
         periods: 50_000,
         history: History::HoldInitial,
+        damping: 0.0,
     }
 }
 
@@ -229,4 +230,47 @@ fn damped_and_delayed_solvers_classify_alike() {
         }
     }
     assert!(ended > 10, "{ended} runs ended by cycle detection");
+}
+
+/// Maps with the virtual damper (`MapSpec::damping`, the damper's previous count in the
+/// state): Fig. 6 panels on the paper's grid classify identically with and without detection.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "4 x 714 points x 5e4 periods twice: cargo test --release"
+)]
+fn damped_map_panels_identical_with_and_without_cycle_detection() {
+    let mut by_cycle = 0;
+    for (damping, v) in [(0.3, 5.0), (2.0, 5.0), (0.3, 20.0), (2.0, 1.0)] {
+        let spec = MapSpec {
+            damping,
+            ..panel(
+                0.0,
+                v,
+                Axis {
+                    lo: 0.0,
+                    hi: 1.2,
+                    n: 21,
+                },
+                Axis {
+                    lo: 0.0,
+                    hi: 2.0,
+                    n: 34,
+                },
+            )
+        };
+        let idx: Vec<usize> = (0..spec.len()).collect();
+        let on = run_with(&spec, &idx, &|| {}, RunOptions::default());
+        let off = run_with(
+            &spec,
+            &idx,
+            &|| {},
+            RunOptions {
+                cycle_detection: false,
+            },
+        );
+        assert_eq!(on.points, off.points, "damping {damping}, xidot0 {v}");
+        by_cycle += on.cycle_points();
+    }
+    assert!(by_cycle > 100, "{by_cycle} points ended by cycle detection");
 }

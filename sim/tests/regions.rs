@@ -119,6 +119,7 @@ fn full_fig6_set_under_5_s() {
             },
             periods: 50_000,
             history: stiffwall_sim::History::HoldInitial,
+            damping: 0.0,
         };
         let idx: Vec<usize> = (0..spec.len()).collect();
         assert_eq!(run(&spec, &idx, &|| {}).len(), 714);

@@ -12,6 +12,7 @@
 use crate::kstar::{self, Rig, SampledPlant, Trial, TrialKind, DEFAULT_XIDOT};
 use crate::supervise::{self, SupervisedRun};
 use std::path::{Path, PathBuf};
+use stiffwall_proto::ServoConfig;
 use stiffwall_sim::rich::{Controller, PlantModel, RichPlant};
 
 impl SampledPlant for RichPlant {
@@ -262,7 +263,8 @@ impl PlantCase {
     }
 
     /// A trial of the K* criterion at stiffness `k` under the firmware supervisor (the
-    /// virtual device's board and boot config), one K* trial long.
+    /// virtual device's board and boot config, with the rig's virtual damping), one K* trial
+    /// long.
     #[must_use]
     pub fn supervised(&self, k: f64, trial: Trial) -> SupervisedRun {
         let c = &self.controller;
@@ -271,13 +273,16 @@ impl PlantCase {
             self.counts_per_rev(),
             full_scale_n(&self.model),
         );
-        let cfg = supervise::config(
-            &b,
-            k,
-            c.period_s,
-            delay_ticks(c).min(255) as u8,
-            c.one_sided,
-        );
+        let cfg = ServoConfig {
+            damping: self.rig.damping as f32,
+            ..supervise::config(
+                &b,
+                k,
+                c.period_s,
+                delay_ticks(c).min(255) as u8,
+                c.one_sided,
+            )
+        };
         supervise::run(
             self.proto,
             b,

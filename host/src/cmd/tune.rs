@@ -30,18 +30,10 @@ pub struct Args {
     #[arg(long, default_value_t = 3.0)]
     pub excite_seconds: f64,
     /// Virtual damping B of the wall, N·s/m (N·m·s/rad for rotary devices), ≥ 0: fixes B and
-    /// finds K (0, the default: the spring-only tune).
-    #[arg(
-        long,
-        value_name = "B",
-        allow_hyphen_values = true,
-        conflicts_with = "search_damping"
-    )]
+    /// finds K; 0 is the spring-only tune. Default: search the (K, B) frontier for the
+    /// stiffest verified spring + damper.
+    #[arg(long, value_name = "B", allow_hyphen_values = true)]
     pub damping: Option<f64>,
-    /// Search the (K, B) frontier for the stiffest verified spring + damper (experimental: not
-    /// yet safe on every plant of the repository).
-    #[arg(long)]
-    pub search_damping: bool,
     /// Find and report K, but leave the device's config as it was.
     #[arg(long)]
     pub dry_run: bool,
@@ -80,11 +72,9 @@ pub fn settings(a: &Args) -> Result<Settings> {
         }
     }
     Ok(Settings {
-        damping: if a.search_damping {
-            procedure::Damping::Search
-        } else {
-            procedure::Damping::Fixed(a.damping.unwrap_or(0.0))
-        },
+        damping: a
+            .damping
+            .map_or(procedure::Damping::Search, procedure::Damping::Fixed),
         max_velocity: a.max_velocity,
         margin: a.margin,
         release_ticks: a.release_ticks,
@@ -249,6 +239,9 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
         r.mu, r.beta, r.sigma, r.tau_d
     );
     let _ = writeln!(s, "region {:?}: {}", r.region, r.region_meaning);
+    if o.b_set > 0.0 {
+        render_damped_point(&mut s, o, u.0);
+    }
     let _ = writeln!(
         s,
         "{}",
@@ -262,6 +255,26 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
         let _ = writeln!(s, "plot: {}", p.display());
     }
     s
+}
+
+/// With a virtual damper the paper's (β, σ) regions above describe the spring alone: the
+/// linear sampled boundary with the damper (`criteria::k_max_exact_linear`) is printed beside.
+fn render_damped_point(s: &mut String, o: &Outcome, k_unit: &str) {
+    let _ = writeln!(
+        s,
+        "  (the regions of the paper assume no virtual damper; with B = {:.4e} the region is \
+         that of the spring alone)",
+        o.b_set
+    );
+    let linear = stiffwall_core::criteria::k_max_exact_linear(&o.params, o.b_set);
+    if let Ok(k) = linear {
+        let _ = writeln!(
+            s,
+            "  exact linear boundary with the damper (no Coulomb, no quantization): K_max(B) = \
+             {k:.5} {k_unit}, the set K is {:.2} of it",
+            o.k_set / k
+        );
+    }
 }
 
 /// The spring-only wall and the spring + damper wall side by side, and the frontier tried.

@@ -1,14 +1,15 @@
 //! `--port/--baud/--device/--plant/--fast/--qemu` options shared by every device command, and
-//! the connection they describe: a real serial port, QEMU, or (default) the built-in virtual
-//! device running a preset (`--device NAME`) or a scene file's plant (`--plant FILE.toml`).
+//! the connection they describe ([`ConnectSpec`] of `stiffwall-client`): a real serial port,
+//! QEMU, or (default) the built-in virtual device running a preset (`--device NAME`) or a scene
+//! file's plant (`--plant FILE.toml`). The options only convert into a [`ConnectSpec`]
+//! ([`ConnectArgs::spec`]); `stiffwall_client::connect` does the rest.
 
 use super::client::Client;
-use super::{qemu, transport, virtual_device};
+use super::{transport, virtual_device};
 use anyhow::{anyhow, bail, Result};
 use std::path::PathBuf;
-
-/// The virtual device's plant when `--device` is not given: the paper's own rig (Sec. V).
-pub const DEFAULT_VIRTUAL_DEVICE: &str = "maxon-re35";
+pub use stiffwall_client::connect::DEFAULT_VIRTUAL_DEVICE;
+use stiffwall_client::{ConnectSpec, VirtualPlant};
 
 /// How to reach the device.
 #[derive(Debug, Clone, clap::Args)]
@@ -48,83 +49,90 @@ impl ConnectArgs {
     /// A short description of the target, for reports.
     #[must_use]
     pub fn describe(&self) -> String {
-        if let Some(p) = &self.port {
-            format!("serial port {p} at {} baud", self.baud)
-        } else if self.qemu {
-            "QEMU board image (mps2-an386)".into()
-        } else {
-            format!(
-                "virtual device ({}{})",
-                self.virtual_plant_name(),
-                if self.fast { ", fast" } else { "" }
-            )
-        }
+        self.target().describe()
     }
 
     /// The virtual device's plant as written in recordings: the preset name, or `plant:FILE`.
     #[must_use]
     pub fn virtual_plant_name(&self) -> String {
-        match &self.plant {
-            Some(p) => format!("plant:{}", p.display()),
-            None => self
-                .device
-                .clone()
-                .unwrap_or_else(|| DEFAULT_VIRTUAL_DEVICE.to_string()),
+        self.virtual_target()
+            .virtual_plant_name()
+            .unwrap_or_default()
+    }
+
+    /// The target these options name, unchecked (for descriptions).
+    fn target(&self) -> ConnectSpec {
+        if let Some(p) = &self.port {
+            ConnectSpec::Serial {
+                path: p.clone(),
+                baud: self.baud,
+            }
+        } else if self.qemu {
+            ConnectSpec::Qemu {
+                image: self.qemu_image.clone(),
+            }
+        } else {
+            self.virtual_target()
         }
     }
 
-    /// The virtual device's specification, when the target is the virtual device.
-    pub fn virtual_spec(&self) -> Result<Option<virtual_device::Spec>> {
+    /// The virtual device these options name (`--plant` before `--device`).
+    fn virtual_target(&self) -> ConnectSpec {
+        let plant = match (&self.plant, &self.device) {
+            (Some(p), _) => VirtualPlant::File(p.clone()),
+            (None, Some(d)) => VirtualPlant::Preset(d.clone()),
+            (None, None) => VirtualPlant::default(),
+        };
+        ConnectSpec::Virtual {
+            plant,
+            fast: self.fast,
+        }
+    }
+
+    /// The connection these options describe, refusing combinations that contradict each
+    /// other and unknown `--device` presets (messages name the flags).
+    pub fn spec(&self) -> Result<ConnectSpec> {
         if self.port.is_some() || self.qemu {
             if self.device.is_some() || self.plant.is_some() {
                 bail!("--device and --plant pick the virtual device's plant; they cannot be combined with --port or --qemu");
             }
-            return Ok(None);
-        }
-        if let Some(path) = &self.plant {
-            if self.device.is_some() {
-                bail!("--device and --plant both pick the virtual device's plant; give one");
+            if let (true, Some(image)) = (self.qemu, &self.qemu_image) {
+                if !image.is_file() {
+                    bail!("--qemu-image {} does not exist", image.display());
+                }
             }
-            return virtual_device::Spec::from_plant_file(path, self.fast).map(Some);
+            return Ok(self.target());
         }
-        let name = self.device.as_deref().unwrap_or(DEFAULT_VIRTUAL_DEVICE);
-        let d = stiffwall_core::devices::find(name).ok_or_else(|| {
-            anyhow!(
-                "unknown device {name:?} for --device (allowed: {})",
-                stiffwall_core::devices::NAMES
-            )
-        })?;
-        let counts_per_rev = if d.params.rotational {
-            (std::f64::consts::TAU / d.params.resolution).round() as u32
-        } else {
-            0
-        };
-        Ok(Some(virtual_device::Spec {
-            plant: d.params,
-            counts_per_rev,
-            fast: self.fast,
-            initial_position: 0.0,
-            output_range: Some(d.force_limit),
-            scene: None,
-        }))
+        if self.plant.is_some() && self.device.is_some() {
+            bail!("--device and --plant both pick the virtual device's plant; give one");
+        }
+        if self.plant.is_none() {
+            let name = self.device.as_deref().unwrap_or(DEFAULT_VIRTUAL_DEVICE);
+            if stiffwall_core::devices::find(name).is_none() {
+                return Err(anyhow!(
+                    "unknown device {name:?} for --device (allowed: {})",
+                    stiffwall_core::devices::NAMES
+                ));
+            }
+        }
+        Ok(self.target())
+    }
+
+    /// The virtual device's specification, when the target is the virtual device.
+    pub fn virtual_spec(&self) -> Result<Option<virtual_device::Spec>> {
+        Ok(self.spec()?.virtual_spec()?)
     }
 
     /// Connects and performs the handshake.
     pub fn connect(&self) -> Result<Client> {
-        // Refuses --device with --port or --qemu (instead of ignoring it).
-        let spec = self.virtual_spec()?;
-        if let Some(port) = &self.port {
-            let p = transport::open_port(port, self.baud)?;
-            return Client::connect(p, None);
-        }
-        if self.qemu {
-            let image = qemu::find_image(self.qemu_image.as_deref())?;
-            let q = qemu::boot(&image)?;
-            let p = transport::open_port(&q.pty, transport::DEFAULT_BAUD)?;
-            return Client::connect(p, Some(Box::new(q)));
-        }
-        let spec = spec.expect("virtual target");
-        let (vd, p) = virtual_device::spawn(spec)?;
-        Client::connect(p, Some(Box::new(vd)))
+        Ok(stiffwall_client::connect(&self.spec()?)?)
+    }
+}
+
+impl TryFrom<&ConnectArgs> for ConnectSpec {
+    type Error = anyhow::Error;
+
+    fn try_from(a: &ConnectArgs) -> Result<Self> {
+        a.spec()
     }
 }

@@ -1,8 +1,8 @@
-//! Talking to a device: transports (serial port, virtual device over a pty, QEMU over a pty)
-//! and the protocol client.
+//! Talking to a device: the protocol client, transports, virtual device and QEMU launcher live
+//! in `stiffwall-client` (re-exported here); this module adds the command line's side: the
+//! `--port/--device/--plant/--qemu` options ([`connect`]) and the `--flag` spelling of refused
+//! fields in messages ([`client`]).
 
 pub mod client;
 pub mod connect;
-pub mod qemu;
-pub mod transport;
-pub mod virtual_device;
+pub use stiffwall_client::{qemu, transport, virtual_device};

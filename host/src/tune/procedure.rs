@@ -39,6 +39,7 @@ use super::search::{largest_settling_k, Found, Search};
 use super::verify::{min_settle_run, rest_position, run_test, test_set, Test, TestResult};
 use crate::device::client::Client;
 use anyhow::{bail, Context, Result};
+use stiffwall_core::criteria;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
 
@@ -91,23 +92,47 @@ pub enum Damping {
     Fixed(f64),
 }
 
-/// Damping levels the frontier search tries, as β = B/(K₀·T) with K₀ the spring-only largest
-/// settling K, in this order: the brute-force frontiers of the repository's plants rise up to
-/// β ≈ 2–4 (3–8 × K*(0)) where the damper itself stays stable, and fall where it does not.
-pub const DAMPING_BETAS: [f64; 3] = [1.0, 2.0, 4.0];
+/// Damping levels of the predicted frontier, as β = B/(K₀·T) with K₀ the spring-only largest
+/// settling K: the brute-force frontiers of the repository's plants rise up to β ≈ 2–6
+/// (3–8 × K*(0)) where the damper itself stays stable, and fall where it does not.
+pub const DAMPING_BETAS: [f64; 5] = [1.0, 2.0, 3.0, 4.0, 6.0];
 
-/// Relative gain in verified K that a larger damping must bring to be kept (and for the search
-/// to go on to the next level): less is within the bisection's resolution.
+/// Damping levels searched on the device, in the order of their predicted K: the second is
+/// searched only when the first held no K above the spring-only one.
+pub const FRONTIER_TRIES: usize = 2;
+
+/// Relative gain in verified K that a damping must bring over the spring alone to be kept:
+/// less is within the bisection's resolution.
 pub const DAMPING_MIN_GAIN: f64 = 0.1;
 
+/// The damped search starts at this fraction of the predicted K (the prediction is the exact
+/// linear boundary with Coulomb friction as describing-function damping, scaled by what the
+/// spring-only search measured against its own prediction).
+pub const FRONTIER_START: f64 = 0.85;
+
+/// Bracketing factor of the damped search (finer than the spring-only one: it starts near the
+/// predicted limit).
+pub const FRONTIER_STEP: f64 = 1.2;
+
+/// Largest fraction of the damped search's largest settling K that is set (the smaller of it
+/// and the margin in use): near its edge a damped wall's stable K are speckled with persistent
+/// limit cycles that only some starts reach (maxon-re35-amp-3khz at B = 4.4e-3 N·m·s/rad: a
+/// release from 4 counts buzzes at 0.96 K*(B), one from 6 at 0.90, none below 0.89), which a
+/// verification set of a few tests cannot rule out.
+pub const DAMPED_MARGIN: f64 = 0.8;
+
 /// Relative tolerance of the bisections at B > 0 (coarser than the spring-only one: the
-/// frontier is sampled at few B and the chosen pair is confirmed with the whole set).
+/// chosen pair is confirmed with the whole set).
 pub const FRONTIER_REL_TOL: f64 = 0.05;
 
 /// Natural periods per test (at least [`TEST_TICKS`].0, at most .1 ticks).
 pub const TEST_NATURAL_PERIODS: f64 = 60.0;
 /// Fewest / most ticks per test when `release_ticks` is not given.
 pub const TEST_TICKS: (f64, f64) = (1500.0, 30_000.0);
+/// Fewest ticks per test of a damped wall (when `release_ticks` is not given): its damper ends
+/// a transient within a few natural periods, so 60 natural periods suffice down to this floor;
+/// a persistent oscillation is judged (and fails) sooner.
+pub const DAMPED_TEST_MIN_TICKS: f64 = 400.0;
 /// Confirmation attempts, each [`CONFIRM_BACKOFF`] below the last.
 pub const CONFIRM_TRIES: usize = 8;
 
@@ -119,10 +144,7 @@ impl Default for Settings {
             release_ticks: None,
             excite_seconds: 3.0,
             rel_tol: 0.02,
-            // Spring only until the frontier search is safe on every plant of the repository
-            // (on maxon-re35-amp-3khz it set 1.02 K*(B); two plants latch faults): opt in with
-            // `--search-damping`.
-            damping: Damping::Fixed(0.0),
+            damping: Damping::Search,
         }
     }
 }
@@ -174,7 +196,8 @@ pub struct Outcome {
     pub model_mismatch: Vec<String>,
     /// What the model checks measured.
     pub model_evidence: Evidence,
-    /// Margin applied (the requested one, times [`MISMATCH_MARGIN`] on a mismatch).
+    /// Margin applied to the set wall's largest settling K (the requested one, times
+    /// [`MISMATCH_MARGIN`] on a mismatch; at most [`DAMPED_MARGIN`] with a damper).
     pub margin_used: f64,
     /// Whether the config was saved.
     pub saved: bool,
@@ -220,17 +243,14 @@ pub(super) fn check_interrupt() -> Result<()> {
 
 /// Step 2: predictions for the identified device.
 pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
-    use stiffwall_core::{criteria, limits};
+    use stiffwall_core::limits;
     let passive = limits::k_max_passive(p)?;
     let guaranteed = if p.delay_s > 0.0 {
         limits::k_max_delayed_harmonic(p, v)?
     } else {
         limits::k_max_at_velocity(p, v)?
     };
-    let equivalent = PhysicalParams {
-        viscous: p.viscous + 4.0 * p.coulomb / (std::f64::consts::PI * v),
-        ..*p
-    };
+    let equivalent = df_equivalent(p, v);
     let expected = criteria::k_max_gil_avello_rubio(&equivalent)?;
     // (74) with ξ̇ = vT/Δ: c/(KΔ) = (π/4)ξ̇(τ_L − b/(KT))  ⇒  K = (c/Δ + (π/4)ξ̇ b/T)/((π/4)ξ̇ τ_L).
     let xidot = v * p.period_s / p.resolution;
@@ -243,6 +263,15 @@ pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
         expected,
         expected_paper_74,
     })
+}
+
+/// The linear device whose viscous damping adds Coulomb friction's describing-function damping
+/// 4c/(πv) at velocity amplitude v.
+fn df_equivalent(p: &PhysicalParams, v: f64) -> PhysicalParams {
+    PhysicalParams {
+        viscous: p.viscous + 4.0 * p.coulomb / (std::f64::consts::PI * v),
+        ..*p
+    }
 }
 
 /// Release deflection (effective ticks) whose spring energy equals the kinetic energy at v.
@@ -273,6 +302,16 @@ pub fn tune(
         }
     }
     let original = c.get_config()?;
+    if let Damping::Fixed(b) = s.damping {
+        // Checked before any test: the firmware's limit at the config's rate and coarsening.
+        let cap = b_cap(c, &original, device_scale(c)?.1);
+        if b > cap {
+            bail!(
+                "--damping must be within [0, {cap:.4e}] N·s/m (N·m·s/rad) on this device (the \
+                 firmware's limit at its rate and coarsening; got {b})"
+            );
+        }
+    }
     let result = tune_inner(c, s, &original, dry_run, progress);
     // Leave the device as it was unless a new config was deliberately set.
     let keep = matches!(&result, Ok(o) if !dry_run && o.saved);
@@ -315,9 +354,14 @@ impl Run<'_> {
         std::f64::consts::TAU * (self.p.mass / k).sqrt() / self.period_s()
     }
 
-    fn ticks_for(&self, k: f64, thorough: bool) -> u32 {
+    fn ticks_for(&self, k: f64, thorough: bool, damped: bool) -> u32 {
+        let fewest = if damped {
+            DAMPED_TEST_MIN_TICKS
+        } else {
+            TEST_TICKS.0
+        };
         let n = self.s.release_ticks.unwrap_or_else(|| {
-            (TEST_NATURAL_PERIODS * self.natural_ticks(k)).clamp(TEST_TICKS.0, TEST_TICKS.1) as u32
+            (TEST_NATURAL_PERIODS * self.natural_ticks(k)).clamp(fewest, TEST_TICKS.1) as u32
         });
         if thorough {
             n.saturating_mul(2)
@@ -339,7 +383,7 @@ impl Run<'_> {
             base,
             k,
             test,
-            self.ticks_for(k, thorough),
+            self.ticks_for(k, thorough, base.damping > 0.0),
             min_settle_run(self.p.mass, k, self.period_s()),
         )
     }
@@ -368,8 +412,11 @@ impl Run<'_> {
         if !verdict.passes() {
             return Ok(verdict);
         }
-        if k > self.k_force {
-            let dirs: &[f64] = if self.one_sided_wall {
+        // With a damper, every step also runs the impacts: the damper acts on the contact
+        // speed, which a release from rest does not reach at the same energy.
+        if k > self.k_force || base.damping > 0.0 {
+            // Below k_force a damped step runs one side (the confirmation runs both).
+            let dirs: &[f64] = if self.one_sided_wall || k <= self.k_force {
                 &[1.0]
             } else {
                 &[1.0, -1.0]
@@ -378,10 +425,12 @@ impl Run<'_> {
                 let v_ticks = dir * self.v * self.period_s() / self.p.resolution;
                 let test =
                     super::verify::impact(v_ticks, self.natural_ticks(k), self.one_sided_wall);
-                (self.progress)(&format!(
-                    "{} test K={k:.4} (force saturates)",
-                    test.describe()
-                ));
+                let why = if k > self.k_force {
+                    "force saturates"
+                } else {
+                    "damped wall"
+                };
+                (self.progress)(&format!("{} test K={k:.4} ({why})", test.describe()));
                 let (impact, _) = self.test(c, base, k, test, thorough)?;
                 if impact == Verdict::NotLaunched {
                     notes.not_launched.get_or_insert(k);
@@ -490,6 +539,8 @@ impl Run<'_> {
 struct Wall {
     k_set: f64,
     b_set: f64,
+    /// The margin applied to the chosen wall's largest settling K.
+    margin: f64,
     k_spring_only: f64,
     verification: Vec<TestResult>,
     frontier: Vec<FrontierPoint>,
@@ -509,8 +560,8 @@ fn damped(base: &ServoConfig, b: f64) -> ServoConfig {
     }
 }
 
-/// The largest settling K at damping `b`, searched from `start`; None when `start` itself
-/// fails — a damping that does not hold the best K so far is not searched.
+/// The largest settling K at damping `b`: from `start` down by [`FRONTIER_STEP`] until a step
+/// passes, then up and bisected ([`FRONTIER_REL_TOL`]); None when no K above `floor` passes.
 #[allow(clippy::too_many_arguments)]
 fn search_at(
     run: &Run<'_>,
@@ -518,25 +569,63 @@ fn search_at(
     base: &ServoConfig,
     b: f64,
     start: f64,
+    floor: f64,
     search: &Search,
     thorough: bool,
     notes: &mut Notes,
 ) -> Result<Option<Found>> {
     let cfg = damped(base, b);
-    let first = run.step(c, &cfg, start, thorough, notes)?;
-    if !first.passes() {
-        return Ok(None);
+    // Verdicts already measured, looked up by K (the bracketing revisits the K it came down
+    // from).
+    let mut seen: Vec<(f64, Verdict)> = Vec::new();
+    let mut k = start;
+    loop {
+        let v = run.step(c, &cfg, k, thorough, notes)?;
+        seen.push((k, v));
+        if v.passes() {
+            break;
+        }
+        k /= FRONTIER_STEP;
+        if k < floor {
+            return Ok(None);
+        }
     }
-    let mut cached = Some((start, first));
     let search = Search {
+        step: FRONTIER_STEP,
         rel_tol: search.rel_tol.max(FRONTIER_REL_TOL),
         ..*search
     };
-    largest_settling_k(start, &search, |k| match cached.take() {
-        Some((k0, v)) if k0 == k => Ok(v),
-        _ => run.step(c, &cfg, k, thorough, notes),
+    largest_settling_k(k, &search, |k| {
+        match seen.iter().find(|(k0, _)| (k / k0 - 1.0).abs() < 1e-9) {
+            Some(&(_, v)) => Ok(v),
+            None => run.step(c, &cfg, k, thorough, notes),
+        }
     })
     .map(Some)
+}
+
+/// The K predicted at damping `b` for a device whose spring-only search found `k0`: the exact
+/// linear boundary with the damper and Coulomb friction as describing-function damping at v,
+/// times what the spring-only search measured against the same prediction at B = 0.
+fn predicted_k(run: &Run<'_>, k0: f64, b: f64) -> Option<f64> {
+    let eq = df_equivalent(&run.p, run.v);
+    let at_0 = criteria::k_max_exact_linear(&eq, 0.0).ok()?;
+    let at_b = criteria::k_max_exact_linear(&eq, b).ok()?;
+    (at_0 > 0.0 && at_b > 0.0).then(|| k0 * at_b / at_0)
+}
+
+/// The damping levels of [`DAMPING_BETAS`] within the firmware's limit `cap`, with their
+/// predicted K, stiffest first; only those predicted to gain [`DAMPING_MIN_GAIN`] over `k0`.
+fn predicted_frontier(run: &Run<'_>, k0: f64, cap: f64) -> Vec<(f64, f64)> {
+    let mut levels: Vec<(f64, f64)> = DAMPING_BETAS
+        .iter()
+        .map(|beta| beta * k0 * run.period_s())
+        .filter(|&b| b <= cap)
+        .filter_map(|b| predicted_k(run, k0, b).map(|k| (b, k)))
+        .filter(|&(_, k)| k > k0 * (1.0 + DAMPING_MIN_GAIN))
+        .collect();
+    levels.sort_by(|a, b| b.1.total_cmp(&a.1));
+    levels
 }
 
 /// Chooses the wall after the spring-only search `found`: spring only, a fixed B, or the
@@ -561,17 +650,14 @@ fn choose_wall(
     let cap = b_cap(c, base, run.period_s());
     let mut best = (0.0, found.k_pass);
     match run.s.damping {
-        Damping::Fixed(b) if b > cap => bail!(
-            "--damping must be within [0, {cap:.4e}] N·s/m (N·m·s/rad) on this device (the \
-             firmware's limit at its rate and coarsening; got {b})"
-        ),
         Damping::Fixed(b) if b > 0.0 => {
-            let f = search_at(run, c, base, b, found.k_pass, search, thorough, notes)?;
-            let f = match f {
-                Some(f) => f,
-                None => largest_settling_k(found.k_pass, search, |k| {
-                    run.step(c, &damped(base, b), k, thorough, notes)
-                })?,
+            let start = predicted_k(run, found.k_pass, b).map_or(found.k_pass, |k| {
+                (k * FRONTIER_START).clamp(found.k_pass * 1e-3, search.k_cap)
+            });
+            let floor = found.k_pass * 1e-3;
+            let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
+            let Some(f) = f else {
+                bail!("no stiffness down to {floor:.4e} settles at the fixed damping B = {b:.4e}");
             };
             frontier.push(FrontierPoint {
                 b,
@@ -581,17 +667,22 @@ fn choose_wall(
         }
         Damping::Fixed(_) => {}
         Damping::Search => {
-            for beta in DAMPING_BETAS {
-                let b = beta * found.k_pass * run.period_s();
-                if b > cap {
-                    break;
-                }
-                let f = search_at(run, c, base, b, best.1, search, thorough, notes)?;
-                let k = f.map(|f| f.k_pass);
+            let floor = found.k_pass * (1.0 + DAMPING_MIN_GAIN);
+            for (b, k_pred) in predicted_frontier(run, found.k_pass, cap)
+                .into_iter()
+                .take(FRONTIER_TRIES)
+            {
+                (run.progress)(&format!(
+                    "damping B = {b:.4e}: predicted K {k_pred:.4}, searching from {:.4}",
+                    (k_pred * FRONTIER_START).max(floor)
+                ));
+                let start = (k_pred * FRONTIER_START).clamp(floor, search.k_cap);
+                let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
+                let k = f.map(|f| f.k_pass).filter(|&k| k >= floor);
                 frontier.push(FrontierPoint { b, k_verified: k });
-                match k {
-                    Some(k) if k > best.1 * (1.0 + DAMPING_MIN_GAIN) => best = (b, k),
-                    _ => break,
+                if let Some(k) = k {
+                    best = (b, k);
+                    break;
                 }
             }
         }
@@ -599,11 +690,12 @@ fn choose_wall(
     if best.0 > 0.0 {
         let cfg = damped(base, best.0);
         if let Some((k_set, verification)) =
-            run.confirm(c, &cfg, best.1 * margin, thorough, notes)?
+            run.confirm(c, &cfg, best.1 * margin.min(DAMPED_MARGIN), thorough, notes)?
         {
             return Ok(Wall {
                 k_set,
                 b_set: best.0,
+                margin: margin.min(DAMPED_MARGIN),
                 k_spring_only: k_spring,
                 verification,
                 frontier,
@@ -626,6 +718,7 @@ fn choose_wall(
     Ok(Wall {
         k_set,
         b_set: 0.0,
+        margin,
         k_spring_only: k_set,
         verification,
         frontier,
@@ -793,7 +886,7 @@ fn tune_inner(
         verification: wall.verification,
         model_mismatch,
         model_evidence: evidence,
-        margin_used,
+        margin_used: wall.margin,
         saved,
     })
 }
@@ -801,7 +894,8 @@ fn tune_inner(
 fn not_launched_finding(k: f64, mass: f64, t: f64) -> String {
     let mu = mass / (k * t * t);
     format!(
-        "at K = {k:.4} the firmware's impact launch (a hold with damping β = {}) did not \
+        "at K = {k:.4} the firmware's impact launch (a hold moving at the requested speed, with \
+         damping β = {}) did not \
          bring the device to the wall at the requested speed (μ = m/(KT²) = {mu:.3}; the \
          hold oscillates when μ is small, e.g. a light device on a slow servo), and the \
          impact failed; those impacts were judged by the releases of the same energy \

@@ -2,11 +2,13 @@
 //! `cargo xtask tune-table`.
 //!
 //! For every plant file of `sim/plants/` (or those named with `--only`): the true largest
-//! stable stiffness K* ([`stiffwall_tests::kstar`]), the K set by
-//! `hostctl tune --plant FILE --fast --dry-run --json` (`tune.k_set`, its identified m, b, c,
-//! `tune.model_mismatch` when the tune reports it, wall-clock time), and the firmware
-//! supervisor at 1.5 K* after an impact at v_max ([`stiffwall_tests::supervise`]): ticks from
-//! the impact to the trip and whether the force was zeroed. Writes docs/TUNE.md.
+//! stable stiffness K*(0) of the spring alone ([`stiffwall_tests::kstar`]), the frontier
+//! K*(B) over the damper grid [`kstar::FRONTIER_BETA`] × K*(0)·T and its best point, the
+//! (K, B) set by `hostctl tune --plant FILE --fast --dry-run --json` (`tune.k_set`,
+//! `tune.b_set`, its identified m, b, c, `tune.model_mismatch` when the tune reports it,
+//! wall-clock time) with K*(B_set) at the B it set, and the firmware supervisor at
+//! 1.5 K*(B_set) with that B after an impact at v_max ([`stiffwall_tests::supervise`]): ticks
+//! from the impact to the trip and whether the force was zeroed. Writes docs/TUNE.md.
 //!
 //! Units: as the plant files (SI; rotary N·m/rad, kg·m², N·m·s/rad, N·m).
 //! Options: `--hostctl PATH` (default: target/release/hostctl), `--out FILE`
@@ -15,14 +17,16 @@
 //! tune: K* and the supervisor only), `--no-write`.
 
 use anyhow::{bail, Context, Result};
+use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use stiffwall_tests::family::{self, PlantCase, Supervised, SupervisorReport};
-use stiffwall_tests::kstar::{self, KStar, TrialKind};
+use stiffwall_tests::kstar::{self, KStar, Rig, Trial, TrialKind};
 
 struct Tuned {
     k_set: f64,
+    b_set: f64,
     mass: f64,
     viscous: f64,
     coulomb: f64,
@@ -32,9 +36,17 @@ struct Tuned {
 
 struct Row {
     case: PlantCase,
+    /// K*(0), the spring alone.
     k_star: KStar,
+    /// The stiffest point of the frontier grid: (B, K*(B)).
+    best: Option<(f64, f64)>,
+    /// K*(B_set) at the damping tune set (K*(0) when it set none).
+    k_star_set: Option<Result<KStar, String>>,
+    /// Every trial of the criterion at (K set, B set): None settles, else the first failing.
+    unstable_at_set: Option<Option<String>>,
     k_star_seconds: f64,
     tune: Option<Result<Tuned, String>>,
+    /// At 1.5 K*(B_set) with B_set (B = 0 without a tune).
     supervisor: SupervisorReport,
 }
 
@@ -70,6 +82,7 @@ fn run_tune(hostctl: &Path, file: &Path) -> Result<Tuned> {
     });
     Ok(Tuned {
         k_set: num(&t["k_set"], "tune.k_set")?,
+        b_set: num(&t["b_set"], "tune.b_set")?,
         mass: num(&t["identified"]["mass"][0], "tune.identified.mass")?,
         viscous: num(&t["identified"]["viscous"][0], "tune.identified.viscous")?,
         coulomb: num(&t["identified"]["coulomb"][0], "tune.identified.coulomb")?,
@@ -79,13 +92,17 @@ fn run_tune(hostctl: &Path, file: &Path) -> Result<Tuned> {
 }
 
 fn describe_trial(k: &KStar) -> String {
-    let side = if k.failing.side > 0 { "+" } else { "−" };
-    let wall = if k.failing.wall == 0 {
+    describe(&k.failing)
+}
+
+fn describe(t: &Trial) -> String {
+    let side = if t.side > 0 { "+" } else { "−" };
+    let wall = if t.wall == 0 {
         String::new()
     } else {
-        format!(", wall +{} counts", k.failing.wall)
+        format!(", wall +{} counts", t.wall)
     };
-    match k.failing.kind {
+    match t.kind {
         TrialKind::Impact { velocity_m_per_s } => {
             format!("impact {side}{velocity_m_per_s:.3}{wall}")
         }
@@ -135,27 +152,99 @@ fn effects(case: &PlantCase) -> String {
     e.join(", ")
 }
 
+/// The stiffest point (B, K*(B)) of the frontier over B = [`kstar::FRONTIER_BETA`] ×
+/// K*(0)·T (the grid's K* searches run in parallel); None when no damped K* was found.
+fn best_of_frontier(case: &PlantCase, k0: f64) -> Option<(f64, f64)> {
+    let grid: Vec<f64> = kstar::FRONTIER_BETA
+        .iter()
+        .map(|beta| beta * k0 * case.rig.period_s)
+        .collect();
+    grid.par_iter()
+        .filter_map(|&b| {
+            let rig = Rig {
+                damping: b,
+                ..case.rig.clone()
+            };
+            kstar::k_star(&case.proto, &rig, k0 * 0.5, 1e12)
+                .ok()
+                .map(|k| (b, k.k_star))
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
 fn g(v: f64) -> String {
     format!("{v:.4}")
 }
 
-fn render(rows: &[Row], quick: bool) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "| plant | effects | K* | first failure above K* | K set | K/K* | tune s | m id / true | b id / true | c id / true (static) | mismatch findings | v_max impact at 1.5 K*: ticks to trip (+/−) | other unstable trials at 1.5 K* | all safe |"
-    );
-    let _ = writeln!(
-        s,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-    );
-    for r in rows {
-        let m = &r.case.model;
-        let true_m = family::moving_mass_kg(m);
-        let true_b = m.viscous_ns_per_m + m.hand.map_or(0.0, |h| h.damping_ns_per_m);
-        let (k_set, ratio, secs, mi, bi, ci, mm) = match &r.tune {
-            Some(Ok(t)) => (
+/// The supervisor cell of one v_max impact.
+fn trip(s: &Supervised) -> String {
+    match (s.unsupervised_settles, s.run.trip_tick) {
+        (true, None) => "settles".to_string(),
+        (true, Some(t)) => format!("settles (trip {t})"),
+        (false, Some(t)) if s.run.stopped() => t.to_string(),
+        (false, _) if s.left_and_released() => format!(
+            "thrown out {:+.1} % faster once, no fault, force 0 after",
+            100.0 * (s.left_faster.unwrap_or(1.0) - 1.0)
+        ),
+        (false, _) if s.safe_by_decay() => "decays under the firmware".to_string(),
+        (false, _) => "NOT STOPPED".to_string(),
+    }
+}
+
+/// The cell of the other unstable trials under the supervisor.
+fn others(sup: &SupervisorReport) -> String {
+    if sup.other_unstable.is_empty() {
+        return "none".to_string();
+    }
+    let stopped = sup.other_unstable.iter().filter(|s| s.safe()).count();
+    let worst = sup
+        .other_unstable
+        .iter()
+        .filter_map(|s| s.run.trip_tick)
+        .max()
+        .map_or(String::new(), |t| format!(", latest trip {t}"));
+    let decays = sup
+        .other_unstable
+        .iter()
+        .filter(|s| s.safe_by_decay())
+        .count();
+    let decays = if decays > 0 {
+        format!(" ({decays} decay under the firmware)")
+    } else {
+        String::new()
+    };
+    format!(
+        "{stopped} of {} safe{decays}{worst}",
+        sup.other_unstable.len()
+    )
+}
+
+/// The tune's cells: K set, B set, K*(B set), K/K*(B set), stable at the set point, K/K*(0),
+/// seconds, m, b, c, mismatch findings.
+fn tune_cells(r: &Row, quick: bool) -> [String; 11] {
+    let m = &r.case.model;
+    let true_m = family::moving_mass_kg(m);
+    let true_b = m.viscous_ns_per_m + m.hand.map_or(0.0, |h| h.damping_ns_per_m);
+    let dash = || "—".to_string();
+    match &r.tune {
+        Some(Ok(t)) => {
+            let (ks, ratio) = match &r.k_star_set {
+                Some(Ok(k)) => (g(k.k_star), format!("{:.3}", t.k_set / k.k_star)),
+                Some(Err(e)) => (format!("failed: {}", e.replace('|', "/")), dash()),
+                None => (dash(), dash()),
+            };
+            [
                 g(t.k_set),
+                format!("{:.4e}", t.b_set),
+                ks,
+                ratio,
+                match &r.unstable_at_set {
+                    Some(None) => "yes".to_string(),
+                    Some(Some(trial)) => format!("NO: {trial}"),
+                    None => dash(),
+                },
                 format!("{:.3}", t.k_set / r.k_star.k_star),
                 format!("{:.1}", t.seconds),
                 format!("{:.3e} / {:.3e}", t.mass, true_m),
@@ -171,81 +260,100 @@ fn render(rows: &[Row], quick: bool) -> String {
                     Some(v) if v.is_empty() => "none".to_string(),
                     Some(v) => v.join("; ").replace('|', "/"),
                 },
-            ),
-            Some(Err(e)) => (
-                format!("failed: {}", e.replace('|', "/")),
-                "—".into(),
-                "—".into(),
-                "—".into(),
-                "—".into(),
-                "—".into(),
-                "—".into(),
-            ),
-            None => (
-                if quick { "(--quick)" } else { "—" }.into(),
-                "—".into(),
-                "—".into(),
-                format!("— / {true_m:.3e}"),
-                format!("— / {true_b:.2e}"),
-                format!("— / {:.3e} ({:.3e})", m.coulomb_n, m.static_friction_n()),
-                "—".into(),
-            ),
-        };
+            ]
+        }
+        other => [
+            match other {
+                Some(Err(e)) => format!("failed: {}", e.replace('|', "/")),
+                _ if quick => "(--quick)".into(),
+                _ => dash(),
+            },
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            format!("— / {true_m:.3e}"),
+            format!("— / {true_b:.2e}"),
+            format!("— / {:.3e} ({:.3e})", m.coulomb_n, m.static_friction_n()),
+            dash(),
+        ],
+    }
+}
+
+fn render(rows: &[Row], quick: bool) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| plant | effects | K*(0) | first failure above K*(0) | best K*(B) of the grid (B) | K set | B set | K*(B set) | K/K*(B set) | stable at (K, B) set | K/K*(0) | tune s | m id / true | b id / true | c id / true (static) | mismatch findings | v_max impact at 1.5 K*(B set), B set: ticks to trip (+/−) | other unstable trials there | all safe |"
+    );
+    let _ = writeln!(
+        s,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for r in rows {
         let sup = &r.supervisor;
-        let trip = |s: &Supervised| match (s.unsupervised_settles, s.run.trip_tick) {
-            (true, None) => "settles".to_string(),
-            (true, Some(t)) => format!("settles (trip {t})"),
-            (false, Some(t)) if s.run.stopped() => t.to_string(),
-            (false, _) if s.left_and_released() => format!(
-                "thrown out {:+.1} % faster once, no fault, force 0 after",
-                100.0 * (s.left_faster.unwrap_or(1.0) - 1.0)
-            ),
-            (false, _) if s.safe_by_decay() => "decays under the firmware".to_string(),
-            (false, _) => "NOT STOPPED".to_string(),
-        };
         let trips = sup
             .v_max_impacts
             .iter()
             .map(trip)
             .collect::<Vec<_>>()
             .join(" / ");
-        let others = if sup.other_unstable.is_empty() {
-            "none".to_string()
-        } else {
-            let stopped = sup.other_unstable.iter().filter(|s| s.safe()).count();
-            let worst = sup
-                .other_unstable
-                .iter()
-                .filter_map(|s| s.run.trip_tick)
-                .max()
-                .map_or(String::new(), |t| format!(", latest trip {t}"));
-            let decays = sup
-                .other_unstable
-                .iter()
-                .filter(|s| s.safe_by_decay())
-                .count();
-            let decays = if decays > 0 {
-                format!(" ({decays} decay under the firmware)")
-            } else {
-                String::new()
-            };
-            format!(
-                "{stopped} of {} safe{decays}{worst}",
-                sup.other_unstable.len()
-            )
-        };
-        let zeroed = sup.all_safe();
+        let best = r
+            .best
+            .map_or("—".to_string(), |(b, k)| format!("{} ({b:.3e})", g(k)));
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {k_set} | {ratio} | {secs} | {mi} | {bi} | {ci} | {mm} | {trips} | {others} | {} |",
+            "| {} | {} | {} | {} | {best} | {} | {trips} | {} | {} |",
             r.case.name,
             effects(&r.case),
             g(r.k_star.k_star),
             describe_trial(&r.k_star),
-            if zeroed { "yes" } else { "NO" },
+            tune_cells(r, quick).join(" | "),
+            others(sup),
+            if sup.all_safe() { "yes" } else { "NO" },
         );
     }
+    if let Some(summary) = summary(rows) {
+        let _ = writeln!(s, "\n{summary}");
+    }
     s
+}
+
+/// The line under the table: median gain k_set / K*(0), smallest K/K*(B set), unsafe count.
+fn summary(rows: &[Row]) -> Option<String> {
+    let mut gains = Vec::new();
+    let mut ratios = Vec::new();
+    let mut unstable = 0;
+    for r in rows {
+        if let (Some(Ok(t)), Some(Ok(k))) = (&r.tune, &r.k_star_set) {
+            gains.push(t.k_set / r.k_star.k_star);
+            ratios.push(t.k_set / k.k_star);
+        }
+        if matches!(r.unstable_at_set, Some(Some(_))) {
+            unstable += 1;
+        }
+    }
+    if gains.is_empty() {
+        return None;
+    }
+    gains.sort_by(f64::total_cmp);
+    let n = gains.len();
+    let median = if n % 2 == 1 {
+        gains[n / 2]
+    } else {
+        0.5 * (gains[n / 2 - 1] + gains[n / 2])
+    };
+    let min_ratio = ratios.iter().copied().fold(f64::INFINITY, f64::min);
+    let above = ratios.iter().filter(|&&q| q > 1.0).count();
+    Some(format!(
+        "Over {n} tuned plants: median K set / K*(0) = {median:.2} (the damper's gain), \
+         smallest K set / K*(B set) = {min_ratio:.3}; {unstable} unstable at the set point; \
+         {above} above K*(B set), the top of the first stable interval (with a damper the \
+         stable K need not form one interval: see the test's header, \
+         tests/tests/tune_plants.rs)."
+    ))
 }
 
 fn document(table: &str, command: &str, source: &str) -> String {
@@ -254,12 +362,17 @@ fn document(table: &str, command: &str, source: &str) -> String {
 <!-- Generated by `{command}` (crates/xtask/src/tune_table.rs, tests/src/bin/tune_table.rs); do not edit by hand. -->\n\n\
 Each plant of {source} (a physical scene with the effects of `stiffwall-sim`'s `rich` module) is\n\
 tuned with `hostctl tune --plant FILE --fast --dry-run --json` against the virtual device, whose\n\
-firmware core runs that plant; the K it sets is compared with the true largest stable stiffness K*\n\
-computed from the simulator alone. Units: N/m, kg, N·s/m, N for linear plants; N·m/rad, kg·m²,\n\
+firmware core runs that plant; the wall (K, B) it sets, a spring and a virtual damper, is compared\n\
+with the true largest stable stiffness K*(B) at that damping, computed from the simulator alone.\n\
+K*(0) is the spring alone; the best K*(B) is the stiffest of the frontier over\n\
+B = β·K*(0)·T, β ∈ {{0, 0.5, 1, 2, 3, 4, 6}} (`kstar::FRONTIER_BETA`); K set / K*(0) is what the\n\
+damper buys. Units: N/m, kg, N·s/m, N for linear plants; N·m/rad, kg·m²,\n\
 N·m·s/rad, N·m for rotary ones (`counts_per_rev`).\n\n\
 ## How K* is computed (tests/src/kstar.rs)\n\n\
-The sampled spring of eq. (2), F = −K·Δ·(n + ½) on the encoder count n = ⌊x/Δ⌋ of the motor side\n\
-(0 for n < 0 on a one-sided wall), clamped to the amplifier's range, delayed by the plant's extra\n\
+The sampled wall of eq. (2) with the firmware's damper, F = −K·Δ·(n + ½) − B·Δ·(n − n_prev)/T on\n\
+the encoder count n = ⌊x/Δ⌋ of the motor side and the previous sample's count n_prev (the whole\n\
+law 0 for n < 0 on a one-sided wall; an impact's first n_prev is the count one period before\n\
+contact, a release's its own), clamped to the amplifier's range, delayed by the plant's extra\n\
 delay in whole periods and held over each period T (ZOH), steps the plant's `RichPlant` (amplifier\n\
 filter, dead band and saturation, stiction, cogging, transmission and hand inside). No firmware, no\n\
 identification. v_max = 5 counts per period (5Δ/T, the default maximum velocity of `hostctl tune`).\n\
@@ -282,12 +395,13 @@ passive wall returns it (the impact speed; after a release from count d, the spe
 energy ½K((d + 1)Δ)²). K is scanned upwards by ×1.25 from\n\
 σ = c/(KΔ) = 4 until a trial fails, then bisected to 0.5 %: K* is the largest K below the first\n\
 failure. The trial that failed just above K* is listed.\n\n\
-## The supervisor at 1.5 K* (tests/src/supervise.rs, tests/tests/supervisor_plants.rs)\n\n\
+## The supervisor at 1.5 K*(B) (tests/src/supervise.rs, tests/tests/supervisor_plants.rs)\n\n\
 The firmware core (`stiffwall-firmware`'s `Servo`, the virtual device's boot config: energy monitor\n\
-on, growth trip 4, force limit at full scale) with K forced to 1.5 K* drives the same plant\n\
+on, growth trip 4, force limit at full scale) with the damping B that tune set and K forced to\n\
+1.5 K*(B) drives the same plant\n\
 (software in the loop, the virtual device's board: 32-bit counter, ±32767 codes over the\n\
 amplifier's range). Runs: the impact at v_max from each side, and every other trial of the K*\n\
-criterion that does not settle without the firmware at 1.5 K*. A number is the ticks from the\n\
+criterion that does not settle without the firmware at 1.5 K*(B). A number is the ticks from the\n\
 impact (first contact) to the latched fault, after which every output code was 0; \"settles\"\n\
 means the run is stable without the firmware (nothing to stop). The firmware's monitors are the\n\
 turning-point energy monitor (growth score, limit) and the buzz detector added for this family\n\
@@ -393,19 +507,51 @@ fn main() -> Result<()> {
                 continue;
             }
         };
+        let best = best_of_frontier(&case, k_star.k_star);
         let k_star_seconds = t0.elapsed().as_secs_f64();
         let tune = (!quick).then(|| run_tune(&hostctl, &f).map_err(|e| format!("{e:#}")));
-        let supervisor = case.supervisor_report(1.5 * k_star.k_star);
+        let b_set = match &tune {
+            Some(Ok(t)) => t.b_set,
+            _ => 0.0,
+        };
+        let damped = PlantCase {
+            rig: Rig {
+                damping: b_set,
+                ..case.rig.clone()
+            },
+            ..case.clone()
+        };
+        let k_star_set = tune.as_ref().map(|_| {
+            if b_set > 0.0 {
+                kstar::k_star(&damped.proto, &damped.rig, k_star.k_star * 0.5, 1e12)
+                    .map_err(|e| format!("K*(B = {b_set:.4e}): {e}"))
+            } else {
+                Ok(k_star.clone())
+            }
+        });
+        let unstable_at_set = match &tune {
+            Some(Ok(t)) => Some(
+                kstar::first_failure(&damped.proto, &damped.rig, t.k_set)
+                    .map(|(trial, _)| describe(&trial)),
+            ),
+            _ => None,
+        };
+        let k_sup = match &k_star_set {
+            Some(Ok(k)) => k.k_star,
+            _ => k_star.k_star,
+        };
+        let supervisor = damped.supervisor_report(1.5 * k_sup);
         eprintln!(
-            "{}: K* = {:.5} ({} evaluations, {k_star_seconds:.1} s), tune {}, at 1.5 K*: v_max impacts trip {:?}, {} other unstable trials, all stopped: {}",
+            "{}: K*(0) = {:.5} ({} evaluations), best K*(B) {best:?} ({k_star_seconds:.1} s), tune {}, at 1.5 K*(B set) = {:.5}: v_max impacts trip {:?}, {} other unstable trials, all stopped: {}",
             case.name,
             k_star.k_star,
             k_star.evaluations,
             match &tune {
-                Some(Ok(t)) => format!("K = {:.5} ({:.3} K*, {:.1} s)", t.k_set, t.k_set / k_star.k_star, t.seconds),
+                Some(Ok(t)) => format!("K = {:.5}, B = {:.4e} ({:.3} K*(B set), {:.1} s)", t.k_set, t.b_set, t.k_set / k_sup, t.seconds),
                 Some(Err(e)) => format!("failed: {e}"),
                 None => "skipped".into(),
             },
+            1.5 * k_sup,
             supervisor
                 .v_max_impacts
                 .iter()
@@ -417,6 +563,9 @@ fn main() -> Result<()> {
         rows.push(Row {
             case,
             k_star,
+            best,
+            k_star_set,
+            unstable_at_set,
             k_star_seconds,
             tune,
             supervisor,

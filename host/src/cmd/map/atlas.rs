@@ -244,6 +244,12 @@ pub fn compute(m: &MapFile) -> Result<Atlas> {
         m.shard.is_none(),
         "the atlas needs a complete map: merge the shards first (hostctl map merge)"
     );
+    ensure!(
+        m.spec.damping == 0.0,
+        "the atlas compares with the spring-only boundaries of the paper: the map has \
+         damping beta_v = {} (recompute it with --damping 0)",
+        m.spec.damping
+    );
     let mut panels = Vec::with_capacity(m.panels.len());
     for (pi, p) in m.panels.iter().enumerate() {
         let cost = Cost::of(
@@ -515,6 +521,7 @@ mod tests {
             },
             periods: 10,
             history: History::HoldInitial,
+            damping: 0.0,
         };
         let ps = spec.panels()[0];
         let points: Vec<MapPoint> = (0..16)

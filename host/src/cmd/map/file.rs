@@ -52,6 +52,15 @@ pub struct Spec {
     /// Delay-line history before tau = 0.
     #[serde(default)]
     pub history: History,
+    /// Virtual damping β_v = B/(K·T) of every point, dimensionless, in [0, 1000]; omitted from
+    /// the JSON (and so from `spec_crc64`) when 0, so spring-only files are unchanged.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub damping: f64,
+}
+
+#[allow(clippy::trivially_copy_pass_by_ref)] // serde's skip_serializing_if passes a reference
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl Spec {
@@ -90,6 +99,7 @@ impl Spec {
             sigma: self.sigma,
             periods: self.periods,
             history: self.history,
+            damping: self.damping,
         }
     }
 
@@ -170,8 +180,10 @@ impl Spec {
             "sigma"
         } else if self.periods != other.periods {
             "periods"
-        } else {
+        } else if self.history != other.history {
             "history"
+        } else {
+            "damping"
         }
     }
 }
@@ -437,11 +449,12 @@ pub fn partial_path(path: &Path) -> PathBuf {
     path.with_file_name(name)
 }
 
-/// Writes `m` atomically: to [`partial_path`], flushed to disk, then renamed onto `path`.
+/// Writes `m` (a [`MapFile`], or any JSON document such as the (K, B) map) atomically: to
+/// [`partial_path`], flushed to disk, then renamed onto `path`.
 ///
 /// # Errors
 /// A file error, naming the path.
-pub fn write(path: &Path, m: &MapFile) -> Result<()> {
+pub fn write<T: Serialize>(path: &Path, m: &T) -> Result<()> {
     let tmp = partial_path(path);
     let result = (|| -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;

@@ -7,7 +7,10 @@
 //! `lo:hi:n:log`), a third axis: one panel per (μ, τ_D, ξ̇₀), μ outer. `--shard k/n` computes
 //! every n-th point (starting at k) of every panel so a batch scheduler can split a sweep;
 //! `hostctl map merge` joins the shard files; `hostctl map atlas` compares a map with the
-//! analytic boundaries ([`atlas`]).
+//! analytic boundaries ([`atlas`]). `--damping BETA_V` (dimensionless β_v = B/(K·T) in
+//! [0, 1000]) adds the wall's virtual damper at every point (`spec.damping`, written only when
+//! nonzero: with 0 every file, hash and figure is unchanged). `--k-b` maps the (K, B) plane of
+//! one physical device instead ([`kb`]; SI units).
 //!
 //! JSON output: `{ "spec": {...}, "spec_crc64", "shard": [k, n] | null, "panels": [{ "mu",
 //! "tau_d", "xidot0", "points": [{ index, beta, sigma, class, periods_run, h0, h_end,
@@ -22,6 +25,9 @@
 pub mod atlas;
 pub mod atlas_plot;
 pub mod file;
+pub mod kb;
+pub mod kb_args;
+pub mod kb_plot;
 pub mod plot;
 pub mod values;
 
@@ -32,7 +38,7 @@ use file::{Cost, MapFile, Panel, Spec, Values};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use stiffwall_sim::classify::Class;
-use stiffwall_sim::exact::History;
+use stiffwall_sim::exact::{History, MAX_BETA_V};
 use stiffwall_sim::map::{self, Axis};
 
 /// Largest `--threads` per available core.
@@ -95,6 +101,13 @@ pub struct Args {
     /// Delay-line history before tau = 0: the spring force of the initial position, or zero.
     #[arg(long, value_enum, default_value = "hold-initial")]
     pub history: HistoryArg,
+    /// Virtual damping beta_v = B/(K*T) of the wall at every point, dimensionless, in [0, 1000]
+    /// (0: the paper's spring-only wall; the JSON records it only when nonzero).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub damping: f64,
+    /// The (K, B) map of one device (`--k-b`, [`kb`]).
+    #[command(flatten)]
+    pub kb: kb_args::KbArgs,
 }
 
 /// `--history` values.
@@ -180,6 +193,11 @@ fn spec_of(a: &Args) -> Result<Spec> {
     let sigma = Axis::parse(&a.sigma).map_err(|e| anyhow::anyhow!("--sigma: {e}"))?;
     ensure!(beta.lo >= 0.0, "--beta: allowed range is >= 0");
     ensure!(sigma.lo >= 0.0, "--sigma: allowed range is >= 0");
+    ensure!(
+        a.damping.is_finite() && (0.0..=MAX_BETA_V).contains(&a.damping),
+        "--damping {}: allowed range is [0, {MAX_BETA_V}] (dimensionless beta_v = B/(K*T))",
+        a.damping
+    );
     let spec = Spec {
         mu,
         tau_d,
@@ -187,14 +205,21 @@ fn spec_of(a: &Args) -> Result<Spec> {
         beta,
         sigma,
         periods: a.periods,
-        history: match a.history {
-            HistoryArg::HoldInitial => History::HoldInitial,
-            HistoryArg::Zero => History::Zero,
-        },
+        history: history_of(a.history),
+        damping: a.damping,
     };
     spec.validate()
-        .context("--mu x --tau-d x --xidot0 x --beta x --sigma")?;
+        .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --damping")?;
     Ok(spec)
+}
+
+/// The delay-line history of `--history`.
+#[must_use]
+pub fn history_of(h: HistoryArg) -> History {
+    match h {
+        HistoryArg::HoldInitial => History::HoldInitial,
+        HistoryArg::Zero => History::Zero,
+    }
 }
 
 /// Largest `--threads`: [`THREADS_PER_CORE`] × the available cores.
@@ -322,10 +347,33 @@ fn run_merge(
         .map(|p| Ok((p.clone(), file::read(p)?)))
         .collect::<Result<Vec<_>>>()?;
     let merged = file::merge(&files)?;
+    if img.is_some() {
+        check_overlay(&merged.spec, overlay)?;
+    }
     file::write(out, &merged)?;
     if let Some(img) = img {
         plot::plot(&merged, img, overlay)?;
     }
+    Ok(())
+}
+
+/// `, beta_v = X` for a damped map, nothing for the spring-only wall.
+pub(crate) fn damping_label(beta_v: f64) -> String {
+    if beta_v == 0.0 {
+        String::new()
+    } else {
+        format!(", beta_v = {beta_v}")
+    }
+}
+
+/// `--overlay` draws the paper's spring-only boundaries: refused on a damped map.
+fn check_overlay(spec: &Spec, overlay: bool) -> Result<()> {
+    ensure!(
+        !overlay || spec.damping == 0.0,
+        "--overlay draws the spring-only boundaries of Fig. 3/5: not valid with --damping {} \
+         (allowed with --overlay: 0)",
+        spec.damping
+    );
     Ok(())
 }
 
@@ -346,7 +394,11 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(Sub::Atlas(a)) = &args.cmd {
         return atlas::run(a);
     }
+    if args.kb.k_b {
+        return kb::run(args, threads_of(args)?);
+    }
     let spec = spec_of(args)?;
+    check_overlay(&spec, args.overlay)?;
     let threads = threads_of(args)?;
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
     if shard.is_some() && args.plot.is_some() {
@@ -383,10 +435,11 @@ pub fn run(args: &Args) -> Result<()> {
         let counts = |p: &Panel, c: Class| p.points.iter().filter(|q| q.class == c).count();
         for p in &m.panels {
             eprintln!(
-                "mu = {}, tau_d = {}, xidot0 = {}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
+                "mu = {}, tau_d = {}, xidot0 = {}{}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
                 p.mu,
                 p.tau_d,
                 p.xidot0,
+                damping_label(m.spec.damping),
                 p.points.len(),
                 counts(p, Class::Growing),
                 counts(p, Class::Persistent),

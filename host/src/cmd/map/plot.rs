@@ -131,8 +131,11 @@ where
         let mut chart = ChartBuilder::on(area)
             .caption(
                 format!(
-                    "mu = {}, tau_D = {}, xidot0 = xidot_max = {}",
-                    panel.mu, panel.tau_d, panel.xidot0
+                    "mu = {}, tau_D = {}, xidot0 = xidot_max = {}{}",
+                    panel.mu,
+                    panel.tau_d,
+                    panel.xidot0,
+                    super::damping_label(s.damping)
                 ),
                 ("sans-serif", 16),
             )

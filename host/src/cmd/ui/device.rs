@@ -195,14 +195,17 @@ pub fn run(
     if let Some(r) = d.rec.take() {
         let how = match &result {
             Ok(()) => "hostctl ui stopped".to_string(),
-            Err(e) => format!("DISCONNECTED: {e:#}"),
+            Err(e) => format!(
+                "DISCONNECTED: {e_text}",
+                e_text = crate::cli_error::message(&e)
+            ),
         };
         let _ = finish_recording(r, &how);
     }
     if let Err(e) = &result {
         d.shared.publish(
             "device",
-            json!({"type": "device", "error": format!("{e:#}")}),
+            json!({"type": "device", "error": crate::cli_error::message(&e)}),
         );
     }
     let _ = d.client.stream_stop();
@@ -288,9 +291,12 @@ impl Dev {
             if let Err(e) = record_batch(r, seq, dropped, samples, self.client.gaps.bad_frames) {
                 let r = self.rec.take().expect("recorder");
                 let path = r.path.clone();
-                let _ = finish_recording(r, &format!("FAILED: {e:#}"));
+                let _ = finish_recording(
+                    r,
+                    &format!("FAILED: {e_text}", e_text = crate::cli_error::message(&e)),
+                );
                 self.shared.event(&json!({"type": "log", "level": "error",
-                    "message": format!("recording {} stopped: {e:#}", path.display())}));
+                    "message": format!("recording {} stopped: {e_text}", path.display(), e_text = crate::cli_error::message(&e))}));
             }
         }
         if let Some(rel) = &mut self.release {
@@ -408,7 +414,7 @@ impl Dev {
                 );
             }
             Err(e) => self.shared.event(&json!({"type": "log", "level": "error",
-                "message": format!("reading faults: {e:#}")})),
+                "message": format!("reading faults: {e_text}", e_text = crate::cli_error::message(&e))})),
         }
     }
 
@@ -429,7 +435,7 @@ impl Dev {
                     }
                     return;
                 }
-                Err(e) => Err(format!("{e:#}")),
+                Err(e) => Err(crate::cli_error::message(&e)),
             },
         };
         let _ = reply.send(r);
@@ -461,7 +467,7 @@ impl Dev {
                 self.config_changed(cfg);
             }
         }
-        out.map_err(|e| format!("{e:#}"))
+        out.map_err(|e| crate::cli_error::message(&e))
     }
 
     fn config_changed(&mut self, cfg: ServoConfig) {
@@ -477,14 +483,23 @@ impl Dev {
     }
 
     fn get(&mut self) -> Reply {
-        let cfg = self.client.get_config().map_err(|e| format!("{e:#}"))?;
-        let f = self.client.faults().map_err(|e| format!("{e:#}"))?;
+        let cfg = self
+            .client
+            .get_config()
+            .map_err(|e| crate::cli_error::message(&e))?;
+        let f = self
+            .client
+            .faults()
+            .map_err(|e| crate::cli_error::message(&e))?;
         Ok(json!({"config": cfg, "faults": f, "gaps": self.client.gaps,
                   "release_running": self.release.is_some(), "recording": self.rec.is_some()}))
     }
 
     fn clear_faults(&mut self) -> Reply {
-        let r = self.client.clear_faults().map_err(|e| format!("{e:#}"));
+        let r = self
+            .client
+            .clear_faults()
+            .map_err(|e| crate::cli_error::message(&e));
         self.poll_faults();
         r.map(|()| json!({"latched": self.faults}))
     }
@@ -520,7 +535,7 @@ impl Dev {
             });
             Ok(json!({"file": path.display().to_string()}))
         };
-        let r = run().map_err(|e| format!("{e:#}"));
+        let r = run().map_err(|e| crate::cli_error::message(&e));
         self.status();
         r
     }
@@ -529,7 +544,8 @@ impl Dev {
         let Some(r) = self.rec.take() else {
             return Err("not recording".into());
         };
-        let out = finish_recording(r, "stopped from the page").map_err(|e| format!("{e:#}"));
+        let out =
+            finish_recording(r, "stopped from the page").map_err(|e| crate::cli_error::message(&e));
         self.status();
         out
     }
@@ -554,7 +570,7 @@ impl Dev {
             ticks: a.ticks,
         }) {
             let _ = self.client.set_config(&original);
-            return Err(e);
+            return Err(e.into());
         }
         self.poll_faults();
         self.shared.publish(
@@ -612,8 +628,9 @@ impl Dev {
         let reply = match restored {
             Ok(()) => Ok(v),
             Err(e) => Err(format!(
-                "the test ran ({}), but restoring the configuration failed: {e:#}",
-                verdict.describe()
+                "the test ran ({}), but restoring the configuration failed: {e_text}",
+                verdict.describe(),
+                e_text = crate::cli_error::message(&e)
             )),
         };
         if let Some(tx) = rel.reply.take() {
@@ -679,12 +696,12 @@ impl Dev {
         if let Err(e) = &r {
             self.shared.publish(
                 "tune",
-                json!({"type": "tune", "state": "error", "error": format!("{e:#}")}),
+                json!({"type": "tune", "state": "error", "error": crate::cli_error::message(&e)}),
             );
             if !self.streaming {
                 if let Err(e2) = self.start_stream() {
                     self.shared.event(&json!({"type": "log", "level": "error",
-                        "message": format!("restarting telemetry: {e2:#}")}));
+                        "message": format!("restarting telemetry: {e2_text}", e2_text = crate::cli_error::message(&e2))}));
                 }
             }
         }
@@ -693,6 +710,6 @@ impl Dev {
         }
         self.publish_config();
         self.poll_faults();
-        r.map_err(|e| format!("{e:#}"))
+        r.map_err(|e| crate::cli_error::message(&e))
     }
 }

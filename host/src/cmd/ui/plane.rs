@@ -139,7 +139,8 @@ pub fn plane(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot:
 }
 
 /// A `hostctl map` JSON opened on the page: validated like every map file read from disk, then
-/// returned with the analytic boundaries of `hostctl map --overlay` for each panel.
+/// returned with the analytic boundaries of `hostctl map --overlay` for each panel (none for a
+/// map with a virtual damper, `spec.damping` > 0: those boundaries are the spring-only wall's).
 ///
 /// # Errors
 /// The JSON does not parse as a map file, or the file is invalid (the message names the field).
@@ -172,11 +173,16 @@ pub fn map_view(text: &str) -> anyhow::Result<Value> {
     for panel in &m.panels {
         let v = panel.xidot0.abs();
         let lines = regions::boundaries(panel.tau_d, Some(v), Some(v / panel.mu.sqrt()), &window)?;
-        let lines: Vec<Value> = lines
-            .as_slice()
-            .iter()
-            .map(|seg| json!([seg.from, seg.to]))
-            .collect();
+        // The analytic boundaries are the spring-only wall's: none for a damped map.
+        let lines: Vec<Value> = if s.damping == 0.0 {
+            lines
+                .as_slice()
+                .iter()
+                .map(|seg| json!([seg.from, seg.to]))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let points: Vec<Value> = panel
             .points
             .iter()
@@ -287,5 +293,30 @@ mod tests {
     fn map_view_refuses_bad_files() {
         let e = map_view("{}").unwrap_err().to_string();
         assert!(e.contains("not a hostctl map JSON"), "{e}");
+    }
+
+    #[test]
+    fn a_damped_map_gets_no_spring_only_boundaries() {
+        use crate::cmd::map::file::{Spec, Values};
+        use stiffwall_sim::map::Axis;
+        let axis = |hi| Axis { lo: 0.0, hi, n: 3 };
+        let mut spec = Spec {
+            mu: Values::One(100.0),
+            tau_d: Values::One(0.0),
+            xidot0: vec![5.0],
+            beta: axis(1.0),
+            sigma: axis(2.0),
+            periods: 50,
+            history: stiffwall_sim::History::HoldInitial,
+            damping: 0.0,
+        };
+        let lines = |spec: &Spec| {
+            let m = crate::cmd::map::compute(spec, None, true).unwrap();
+            let v = map_view(&serde_json::to_string(&m).unwrap()).unwrap();
+            v["panels"][0]["lines"].as_array().unwrap().len()
+        };
+        assert!(lines(&spec) > 0);
+        spec.damping = 1.0;
+        assert_eq!(lines(&spec), 0);
     }
 }

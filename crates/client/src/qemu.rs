@@ -1,7 +1,7 @@
 //! Boots the QEMU board image (`firmware/boards/qemu-an386`) with `-serial pty` and finds the
 //! pseudo-terminal QEMU created, so hostctl can talk to the real Cortex-M firmware.
 
-use anyhow::{anyhow, bail, Context, Result};
+use crate::error::{ClientError, Result};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -30,11 +30,14 @@ impl Qemu {
     pub fn wait_exit(&mut self, timeout: Duration) -> Result<std::process::ExitStatus> {
         let deadline = Instant::now() + timeout;
         loop {
-            if let Some(status) = self.child.try_wait()? {
+            if let Some(status) = self.child.try_wait().map_err(qemu_io)? {
                 return Ok(status);
             }
             if Instant::now() > deadline {
-                bail!("QEMU did not exit within {} s", timeout.as_secs());
+                return Err(ClientError::Qemu(format!(
+                    "QEMU did not exit within {} s",
+                    timeout.as_secs()
+                )));
             }
             std::thread::sleep(Duration::from_millis(20));
         }
@@ -52,14 +55,20 @@ pub fn find_image(explicit: Option<&Path>) -> Result<PathBuf> {
         if p.is_file() {
             return Ok(p.to_path_buf());
         }
-        bail!("--qemu-image {} does not exist", p.display());
+        return Err(ClientError::Qemu(format!(
+            "QEMU image {} does not exist",
+            p.display()
+        )));
     }
     if let Some(p) = std::env::var_os("STIFFWALL_QEMU_IMAGE") {
         let p = PathBuf::from(p);
         if p.is_file() {
             return Ok(p);
         }
-        bail!("STIFFWALL_QEMU_IMAGE={} does not exist", p.display());
+        return Err(ClientError::Qemu(format!(
+            "STIFFWALL_QEMU_IMAGE={} does not exist",
+            p.display()
+        )));
     }
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     for base in [PathBuf::from("."), repo] {
@@ -68,7 +77,10 @@ pub fn find_image(explicit: Option<&Path>) -> Result<PathBuf> {
             return Ok(p);
         }
     }
-    bail!("no QEMU image found; build it with `cargo xtask firmware` or pass --qemu-image PATH")
+    Err(ClientError::Qemu(
+        "no QEMU image found; build it with `cargo xtask firmware` or pass --qemu-image PATH"
+            .into(),
+    ))
 }
 
 /// Longest a QEMU instance may live; a watchdog kills it after that even if the host hangs.
@@ -100,11 +112,12 @@ pub fn boot(image: &Path) -> Result<Qemu> {
         .spawn()
         .map_err(|e| {
             if e.kind() == std::io::ErrorKind::NotFound {
-                anyhow!(
+                ClientError::Qemu(
                     "qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)"
+                        .into(),
                 )
             } else {
-                anyhow!("cannot start qemu-system-arm: {e}")
+                ClientError::Qemu(format!("cannot start qemu-system-arm: {e}"))
             }
         })?;
     // QEMU announces the pty on stdout; the semihosting console shares stdout, so a thread
@@ -125,10 +138,16 @@ pub fn boot(image: &Path) -> Result<Qemu> {
         eprintln!("qemu: killing pid {pid} after {} s", TIME_LIMIT.as_secs());
         let _ = Command::new("kill").args(["-9", &pid.to_string()]).status();
     });
-    let stdout = child.stdout.take().context("QEMU stdout")?;
+    let stdout = child
+        .stdout
+        .take()
+        .ok_or_else(|| ClientError::Qemu("QEMU stdout".into()))?;
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+        for line in BufReader::new(stdout)
+            .lines()
+            .map_while(std::result::Result::ok)
+        {
             if !line.contains("redirected to ") {
                 eprintln!("qemu: {line}");
             }
@@ -143,12 +162,20 @@ pub fn boot(image: &Path) -> Result<Qemu> {
         if let Ok(pty) = rx.recv_timeout(Duration::from_millis(50)) {
             return Ok(Qemu { child, pty, reaped });
         }
-        if let Some(status) = child.try_wait()? {
-            bail!("QEMU exited before creating its pty ({status})");
+        if let Some(status) = child.try_wait().map_err(qemu_io)? {
+            return Err(ClientError::Qemu(format!(
+                "QEMU exited before creating its pty ({status})"
+            )));
         }
         if Instant::now() > deadline {
             let _ = child.kill();
-            bail!("QEMU did not report its pty within 10 s");
+            return Err(ClientError::Qemu(
+                "QEMU did not report its pty within 10 s".into(),
+            ));
         }
     }
+}
+
+fn qemu_io(e: std::io::Error) -> ClientError {
+    ClientError::Qemu(format!("waiting for QEMU: {e}"))
 }

@@ -1,12 +1,21 @@
 //! Device errors and link failures in words: what a refused request or a bad frame means,
-//! numbers in a readable form, and which errors are framing replies or a hangup.
+//! numbers in a readable form, and which errors are framing replies.
 
-use std::io::ErrorKind;
-use stiffwall_proto::{DeviceMsg, ErrorCode, ErrorDetail};
+use stiffwall_proto::{ConfigField, DeviceMsg, ErrorCode, ErrorDetail};
 
-/// Renders a device error as a sentence naming the field and its range.
+/// How a refused field is named in messages: the protocol's own name
+/// ([`ConfigField::name`], e.g. `"damping"`) unless a front end supplies its spelling.
+pub type FieldLabel = fn(ConfigField) -> &'static str;
+
+/// Renders a device error as a sentence naming the field (by its protocol name) and its range.
 #[must_use]
 pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
+    describe_error_named(code, detail, ConfigField::name)
+}
+
+/// Renders a device error as a sentence naming the field with `label` and its range.
+#[must_use]
+pub fn describe_error_named(code: ErrorCode, detail: &ErrorDetail, label: FieldLabel) -> String {
     let what = match code {
         ErrorCode::Oversize => "frame too long",
         ErrorCode::Crc => "CRC mismatch",
@@ -23,7 +32,7 @@ pub fn describe_error(code: ErrorCode, detail: &ErrorDetail) -> String {
         ErrorDetail::None => what.to_string(),
         ErrorDetail::Field { field, min, max } => {
             // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
-            let name = crate::config_flags::flag_name(*field);
+            let name = label(*field);
             if *min == f64::from(f32::MIN_POSITIVE) {
                 format!("{what}: {name} must be > 0 and ≤ {}", readable(*max))
             } else {
@@ -64,7 +73,7 @@ pub fn readable(x: f64) -> String {
 }
 
 /// Error codes a device gives to frames that did not decode (not to a refused request).
-pub(super) fn is_framing(code: ErrorCode) -> bool {
+pub(crate) fn is_framing(code: ErrorCode) -> bool {
     matches!(
         code,
         ErrorCode::Oversize
@@ -76,19 +85,6 @@ pub(super) fn is_framing(code: ErrorCode) -> bool {
 }
 
 /// A device reply to a frame that did not decode (see [`is_framing`]).
-pub(super) fn is_framing_reply(m: &DeviceMsg) -> bool {
+pub(crate) fn is_framing_reply(m: &DeviceMsg) -> bool {
     matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code))
-}
-
-/// Whether an error is the link going away (the device hung up or closed its end), as opposed
-/// to a refusal, a timeout or garbage.
-pub(super) fn is_hangup(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<std::io::Error>().is_some_and(|io| {
-            matches!(
-                io.kind(),
-                ErrorKind::BrokenPipe | ErrorKind::UnexpectedEof | ErrorKind::ConnectionReset
-            )
-        })
-    })
 }

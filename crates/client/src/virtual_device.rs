@@ -16,8 +16,8 @@
 //! else a preset's published peak force (`--device NAME`: `stiffwall_core::devices`, e.g.
 //! 8.5 N for the Phantom 1.0), otherwise 32.767 × `coulomb_n` (at least 1 mN).
 
-use super::transport;
-use anyhow::{bail, Result};
+use crate::error::{ClientError, Result};
+use crate::transport;
 use serialport::SerialPort as _;
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
@@ -76,10 +76,13 @@ impl Spec {
     /// The virtual device of a scene file: `[device]` and `[effects]` are the plant,
     /// `[controller]` the boot configuration. Errors name the key and its allowed range.
     pub fn from_plant_file(path: &std::path::Path, fast: bool) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| anyhow::anyhow!("--plant {}: {e}", path.display()))?;
-        let (model, ctl) = PlantModel::from_scene_toml(&text)
-            .map_err(|e| anyhow::anyhow!("--plant {}: {e}", path.display()))?;
+        let plant_error = |message: String| ClientError::Plant {
+            path: Some(path.to_path_buf()),
+            message,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| plant_error(e.to_string()))?;
+        let (model, ctl) =
+            PlantModel::from_scene_toml(&text).map_err(|e| plant_error(e.to_string()))?;
         let spec = Self {
             plant: PhysicalParams {
                 mass: model.mass_kg,
@@ -110,13 +113,12 @@ impl Spec {
                 F::ExtraDelayTicks => ("controller.extra_delay_s", e.min * t, e.max * t, "s"),
                 _ => ("the boot configuration", e.min, e.max, ""),
             };
-            bail!(
-                "--plant {}: {key} is outside the virtual board's range [{lo}, {hi}] {unit} \
+            return Err(plant_error(format!(
+                "{key} is outside the virtual board's range [{lo}, {hi}] {unit} \
                  ({:?} of the boot configuration; the output range is amplifier.force_limit_n, \
                  or 32.767 x device.coulomb_n)",
-                path.display(),
                 e.field
-            );
+            )));
         }
         Ok(spec)
     }
@@ -185,8 +187,12 @@ impl Spec {
             Some(s) => Ok(s.model),
             None => {
                 let p = &self.plant;
-                PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution)
-                    .map_err(|e| anyhow::anyhow!("virtual device plant: {e}"))
+                PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution).map_err(|e| {
+                    ClientError::Plant {
+                        path: None,
+                        message: format!("virtual device plant: {e}"),
+                    }
+                })
             }
         }
     }
@@ -234,16 +240,27 @@ impl ByteLink for MemLink {
 pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPort>)> {
     let mut plant = match RichPlant::new(&spec.plant_model()?) {
         Ok(pl) => pl,
-        Err(e) => bail!("virtual device plant: {e}"),
+        Err(e) => {
+            return Err(ClientError::Plant {
+                path: None,
+                message: format!("virtual device plant: {e}"),
+            })
+        }
     };
     plant.set_state(spec.initial_position, 0.0);
     let (mut master, host, pty) = transport::pty_pair()?;
-    master.set_timeout(Duration::from_millis(1))?;
+    master
+        .set_timeout(Duration::from_millis(1))
+        .map_err(|e| ClientError::Port(format!("virtual device pty: {e}")))?;
     let stop = Arc::new(AtomicBool::new(false));
     let stop2 = Arc::clone(&stop);
     let thread = std::thread::Builder::new()
         .name("virtual-device".into())
-        .spawn(move || run(&spec, plant, &mut master, &stop2))?;
+        .spawn(move || run(&spec, plant, &mut master, &stop2))
+        .map_err(|e| ClientError::Io {
+            op: "starting the virtual device for",
+            source: e,
+        })?;
     Ok((
         VirtualDevice {
             stop,

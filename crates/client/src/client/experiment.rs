@@ -7,7 +7,7 @@
 //! [`HEARTBEAT_PERIOD`] while an experiment runs.
 
 use super::{Client, GapStats, HEARTBEAT_PERIOD};
-use anyhow::{bail, Result};
+use crate::error::{ClientError, Result};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{DeviceMsg, ExciteProfile, ExperimentKind, HostMsg, Sample};
 
@@ -153,7 +153,7 @@ impl Client {
             }
             if start.elapsed() > limit {
                 let _ = self.send(&HostMsg::Stop);
-                bail!("the experiment did not finish within {} s", limit.as_secs());
+                return Err(ClientError::ExperimentTimeout(limit));
             }
         }
     }

@@ -29,10 +29,59 @@
 //! its wire type, and the header carries `device`, `config` and `decimation`. Any violation is
 //! an error naming the line and the column, and nothing is returned.
 
-use anyhow::{anyhow, bail, Context, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use stiffwall_proto::{DeviceInfo, Sample, ServoConfig};
+
+/// Why a recording could not be written or read.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RecordingError {
+    /// Writing failed.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// The header could not be written as JSON.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// The file could not be read.
+    #[error("reading recording {}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text breaks a rule of the format (the message names the line and the column).
+    #[error("{0}")]
+    Format(String),
+    /// [`RecordingError::Format`] of a file.
+    #[error("recording {}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong in it.
+        #[source]
+        source: Box<RecordingError>,
+    },
+}
+
+/// Result of the recording format.
+pub type Result<T, E = RecordingError> = std::result::Result<T, E>;
+
+/// Returns a [`RecordingError::Format`] error from the enclosing function.
+macro_rules! fail {
+    ($($t:tt)*) => {
+        return Err(RecordingError::Format(format!($($t)*)))
+    };
+}
+
+/// A [`RecordingError::Format`] error.
+macro_rules! format_err {
+    ($($t:tt)*) => {
+        RecordingError::Format(format!($($t)*))
+    };
+}
 
 /// First line of every recording.
 pub const MAGIC: &str = "# stiffwall recording v1";
@@ -155,7 +204,7 @@ impl<W: Write> Writer<W> {
         if let Some(expect) = self.next_seq {
             let gap = seq.wrapping_sub(expect);
             if gap >= u32::MAX / 2 {
-                bail!(
+                fail!(
                     "telemetry went backwards: got sample {seq} after {}",
                     expect.wrapping_sub(1)
                 );
@@ -218,9 +267,14 @@ fn one_line(s: &str) -> String {
 
 /// Reads and validates a recording file.
 pub fn read(path: &Path) -> Result<Recording> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading recording {}", path.display()))?;
-    parse(&text).with_context(|| format!("recording {}", path.display()))
+    let text = std::fs::read_to_string(path).map_err(|source| RecordingError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&text).map_err(|e| RecordingError::InFile {
+        path: path.to_path_buf(),
+        source: Box::new(e),
+    })
 }
 
 /// Parses and validates a recording (see the module docs for the rules).
@@ -228,11 +282,11 @@ pub fn parse(text: &str) -> Result<Recording> {
     let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
     match lines.next() {
         Some((_, l)) if l.trim_end() == MAGIC => {}
-        Some((_, l)) => bail!(
+        Some((_, l)) => fail!(
             "line 1: not a stiffwall recording (expected {MAGIC:?}, found {:?})",
             truncate(l)
         ),
-        None => bail!("line 1: empty file, not a stiffwall recording"),
+        None => fail!("line 1: empty file, not a stiffwall recording"),
     }
     let mut host_time = None;
     let mut target = None;
@@ -251,26 +305,25 @@ pub fn parse(text: &str) -> Result<Recording> {
             match key.trim() {
                 "host_time_unix_s" => {
                     host_time = Some(value.parse::<f64>().map_err(|e| {
-                        anyhow!("line {ln}: header host_time_unix_s: {e} (found {value:?})")
+                        format_err!("line {ln}: header host_time_unix_s: {e} (found {value:?})")
                     })?);
                 }
                 "target" => target = Some(value.to_string()),
                 "virtual_plant" => plant = Some(value.to_string()),
                 "decimation" => {
                     let d = value.parse::<u16>().ok().filter(|d| *d >= 1).ok_or_else(|| {
-                        anyhow!("line {ln}: header decimation must be an integer in [1, 65535] (found {value:?})")
+                        format_err!("line {ln}: header decimation must be an integer in [1, 65535] (found {value:?})")
                     })?;
                     decimation = Some(d);
                 }
                 "device" => {
-                    device =
-                        Some(serde_json::from_str(value).map_err(|e| {
-                            anyhow!("line {ln}: header device (DeviceInfo JSON): {e}")
-                        })?);
+                    device = Some(serde_json::from_str(value).map_err(|e| {
+                        format_err!("line {ln}: header device (DeviceInfo JSON): {e}")
+                    })?);
                 }
                 "config" => {
                     config = Some(serde_json::from_str(value).map_err(|e| {
-                        anyhow!("line {ln}: header config (ServoConfig JSON): {e}")
+                        format_err!("line {ln}: header config (ServoConfig JSON): {e}")
                     })?);
                 }
                 _ => {}
@@ -281,17 +334,18 @@ pub fn parse(text: &str) -> Result<Recording> {
             saw_columns = true;
             break;
         }
-        bail!(
+        fail!(
             "line {ln}: expected the column header {COLUMNS:?}, found {:?}",
             truncate(line)
         );
     }
     if !saw_columns {
-        bail!("no column header {COLUMNS:?}: the file ends inside the header");
+        fail!("no column header {COLUMNS:?}: the file ends inside the header");
     }
-    let device = device.ok_or_else(|| anyhow!("header: missing `# device:` line"))?;
-    let config = config.ok_or_else(|| anyhow!("header: missing `# config:` line"))?;
-    let decimation = decimation.ok_or_else(|| anyhow!("header: missing `# decimation:` line"))?;
+    let device = device.ok_or_else(|| format_err!("header: missing `# device:` line"))?;
+    let config = config.ok_or_else(|| format_err!("header: missing `# config:` line"))?;
+    let decimation =
+        decimation.ok_or_else(|| format_err!("header: missing `# decimation:` line"))?;
     check_header(&device, &config)?;
     let mut rows: Vec<Row> = Vec::new();
     for (ln, line) in lines {
@@ -302,7 +356,7 @@ pub fn parse(text: &str) -> Result<Recording> {
         let row = parse_row(ln, line)?;
         if let Some(prev) = rows.last() {
             if row.seq <= prev.seq {
-                bail!(
+                fail!(
                     "line {ln}, column 1 (seq): {} does not increase (previous row has {})",
                     row.seq,
                     prev.seq
@@ -326,22 +380,22 @@ pub fn parse(text: &str) -> Result<Recording> {
 
 fn check_header(d: &DeviceInfo, c: &ServoConfig) -> Result<()> {
     if !(d.resolution.is_finite() && d.resolution > 0.0) {
-        bail!(
+        fail!(
             "header device.resolution must be finite and > 0 (found {})",
             d.resolution
         );
     }
     if !(d.force_per_code.is_finite() && d.force_per_code > 0.0) {
-        bail!(
+        fail!(
             "header device.force_per_code must be finite and > 0 (found {})",
             d.force_per_code
         );
     }
     if c.servo_rate_hz == 0 {
-        bail!("header config.servo_rate_hz must be >= 1 (found 0)");
+        fail!("header config.servo_rate_hz must be >= 1 (found 0)");
     }
     if !(1..=32).contains(&d.encoder_bits) {
-        bail!(
+        fail!(
             "header device.encoder_bits must be within [1, 32] (found {})",
             d.encoder_bits
         );
@@ -356,7 +410,7 @@ fn truncate(s: &str) -> String {
 fn parse_row(ln: usize, line: &str) -> Result<Row> {
     let fields: Vec<&str> = line.split(',').collect();
     if fields.len() != COLUMN_NAMES.len() {
-        bail!(
+        fail!(
             "line {ln}: expected {} columns ({COLUMNS}), found {}",
             COLUMN_NAMES.len(),
             fields.len()
@@ -367,7 +421,7 @@ fn parse_row(ln: usize, line: &str) -> Result<Row> {
         T::Err: std::fmt::Display,
     {
         s.trim().parse::<T>().map_err(|e| {
-            anyhow!(
+            format_err!(
                 "line {ln}, column {} ({}): {e} (found {:?}, expected {})",
                 col + 1,
                 COLUMN_NAMES[col],
@@ -388,12 +442,13 @@ fn parse_row(ln: usize, line: &str) -> Result<Row> {
     })
 }
 
-#[cfg(test)]
+// The tests take their board facts from the virtual device.
+#[cfg(all(test, feature = "virtual"))]
 mod tests {
     use super::*;
 
     fn info() -> DeviceInfo {
-        let spec = crate::device::virtual_device::Spec {
+        let spec = crate::virtual_device::Spec {
             plant: stiffwall_core::devices::find("maxon-re35").unwrap().params,
             counts_per_rev: 8192,
             fast: true,

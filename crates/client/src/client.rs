@@ -1,0 +1,734 @@
+//! Host side of the stiffwall protocol over any byte port: handshake with version check,
+//! request/answer with timeouts, telemetry with sequence-gap accounting, and experiments.
+//!
+//! Telemetry that arrives while a request waits for its answer is queued, never lost. A gap in
+//! sample numbers is attributed to the device (its cumulative `dropped` counter grew by the
+//! same amount) or to the link (it did not).
+
+use crate::error::{ClientError, Result};
+use crate::transport::Transport;
+use std::collections::VecDeque;
+use std::io::{ErrorKind, Read, Write};
+use std::time::{Duration, Instant};
+use stiffwall_proto::{
+    encode, DeviceInfo, DeviceMsg, ErrorCode, FaultReport, FrameDecoder, HostMsg, Request,
+    ServoConfig, TelemetryBatch, MAX_FRAME, PROTOCOL_VERSION,
+};
+
+mod experiment;
+
+pub use crate::describe::{describe_error, describe_error_named, readable, FieldLabel};
+use crate::describe::{is_framing, is_framing_reply};
+pub use experiment::{EnoughFn, Record};
+
+/// How long a request waits for its answer.
+pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
+/// How long a request waits at most while the device keeps answering bad frames queued ahead
+/// of it (a flood or a noisy line): each such error reply restarts [`ANSWER_TIMEOUT`], up to
+/// this long after the request was sent.
+pub const BACKLOG_WAIT_MAX: Duration = Duration::from_secs(10);
+/// How long a request refused with a full servo queue is repeated.
+pub const QUEUE_FULL_RETRY: Duration = Duration::from_secs(2);
+/// Heartbeat period during experiments (the firmware's default timeout is 500 ms).
+pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(100);
+
+/// Keeps whatever serves the port (virtual device thread, QEMU process) alive with the client.
+pub trait Backend: std::fmt::Debug + Send {}
+impl<T: std::fmt::Debug + Send> Backend for T {}
+
+/// Telemetry bookkeeping.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct GapStats {
+    /// Samples received.
+    pub received: u64,
+    /// Samples missing in sequence numbers.
+    pub missing: u64,
+    /// Of those, samples the device reports it dropped (queue overflow).
+    pub dropped_on_device: u64,
+    /// Frames that failed to decode (CRC, COBS, …), i.e. lost on the link.
+    pub bad_frames: u64,
+}
+
+/// A connected device.
+#[derive(Debug)]
+pub struct Client {
+    port: Box<dyn Transport>,
+    decoder: FrameDecoder,
+    pending: VecDeque<DeviceMsg>,
+    next_seq: Option<u32>,
+    last_dropped: u32,
+    /// Telemetry bookkeeping since connecting.
+    pub gaps: GapStats,
+    /// The device's handshake answer.
+    pub info: DeviceInfo,
+    _backend: Option<Box<dyn Backend>>,
+}
+
+impl Client {
+    /// Performs the handshake on an opened port (any [`Transport`]: a serial port, a pty, an
+    /// in-memory pair). `backend` is kept alive with the client.
+    pub fn connect(
+        port: impl Transport + 'static,
+        backend: Option<Box<dyn Backend>>,
+    ) -> Result<Self> {
+        let mut c = Self {
+            port: Box::new(port),
+            decoder: FrameDecoder::new(),
+            pending: VecDeque::new(),
+            next_seq: None,
+            last_dropped: 0,
+            gaps: GapStats::default(),
+            info: placeholder_info(),
+            _backend: backend,
+        };
+        // A board may still be printing its boot banner or be mid-frame: a 0x00 ends whatever
+        // it holds, and the handshake is retried before giving up.
+        let _ = c.port.write_all(&[0]);
+        let mut last_err = None;
+        for _ in 0..3 {
+            c.send(&HostMsg::Hello {
+                protocol_version: PROTOCOL_VERSION,
+            })?;
+            match c.wait(ANSWER_TIMEOUT, "Hello", |m| match m {
+                DeviceMsg::HelloReply(_) => true,
+                DeviceMsg::Error { code, .. } => !is_framing(*code),
+                _ => false,
+            }) {
+                Ok(DeviceMsg::HelloReply(info)) => {
+                    if info.protocol_version != PROTOCOL_VERSION {
+                        return Err(ClientError::VersionMismatch {
+                            device: info.protocol_version,
+                            host: PROTOCOL_VERSION,
+                        });
+                    }
+                    c.info = info;
+                    return Ok(c);
+                }
+                Ok(DeviceMsg::Error { code, detail }) => {
+                    return Err(ClientError::Refused {
+                        request: "handshake".into(),
+                        code,
+                        detail,
+                    })
+                }
+                Ok(_) => unreachable!("filtered by the predicate"),
+                Err(e) => last_err = Some(e),
+            }
+        }
+        Err(ClientError::NoHandshake(Box::new(last_err.unwrap_or(
+            ClientError::Timeout {
+                request: Some("Hello".into()),
+                waited: ANSWER_TIMEOUT,
+                bad_frames: None,
+            },
+        ))))
+    }
+
+    /// Sends one message.
+    pub fn send(&mut self, msg: &HostMsg) -> Result<()> {
+        let mut buf = [0u8; MAX_FRAME];
+        let frame = encode(msg, &mut buf)
+            .map_err(|e| ClientError::Framing(format!("encoding {msg:?}: {e}")))?;
+        self.write_bytes(frame)
+    }
+
+    /// Writes raw bytes (tests of malformed input).
+    pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
+        self.write_bytes(bytes)
+    }
+
+    /// Writes all bytes, waiting while the port is full (a device may read its UART one byte at
+    /// a time); fails when the port errors or makes no progress for [`ANSWER_TIMEOUT`].
+    ///
+    /// While it waits, what the device sends is read and queued: framing-error replies show it
+    /// is reading input from elsewhere on the line (a flood that fills the link), and each
+    /// restarts the stall timeout, up to [`BACKLOG_WAIT_MAX`] in all.
+    fn write_bytes(&mut self, mut bytes: &[u8]) -> Result<()> {
+        let start = Instant::now();
+        let mut stalled_since = start;
+        let mut device_reading = false;
+        while !bytes.is_empty() {
+            match self.port.write(bytes) {
+                Ok(0) => {}
+                Ok(n) => {
+                    bytes = &bytes[n..];
+                    stalled_since = Instant::now();
+                    continue;
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                    ) => {}
+                Err(e) => return Err(ClientError::io("writing", e)),
+            }
+            if self.port.bytes_to_read().unwrap_or(0) > 0 {
+                let queued = self.pending.len();
+                self.read_once()?;
+                let answered_garbage = self
+                    .pending
+                    .iter()
+                    .skip(queued)
+                    .any(|m| matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code)));
+                if answered_garbage && start.elapsed() < BACKLOG_WAIT_MAX {
+                    device_reading = true;
+                    stalled_since = Instant::now();
+                }
+            }
+            if stalled_since.elapsed() > ANSWER_TIMEOUT {
+                return Err(ClientError::WriteStalled {
+                    waited: if device_reading {
+                        start.elapsed()
+                    } else {
+                        ANSWER_TIMEOUT
+                    },
+                    link_full: device_reading,
+                });
+            }
+        }
+        self.port.flush().ok();
+        Ok(())
+    }
+
+    /// Reads what is available and returns the next message, waiting up to `timeout`.
+    pub fn recv(&mut self, timeout: Duration) -> Result<Option<DeviceMsg>> {
+        if let Some(m) = self.pending.pop_front() {
+            return Ok(Some(m));
+        }
+        let deadline = Instant::now() + timeout;
+        loop {
+            self.read_once()?;
+            if let Some(m) = self.pending.pop_front() {
+                return Ok(Some(m));
+            }
+            if Instant::now() >= deadline {
+                return Ok(None);
+            }
+        }
+    }
+
+    /// One read from the port (waiting up to its read timeout); the messages it completes are
+    /// queued, telemetry accounted, undecodable frames counted.
+    fn read_once(&mut self) -> Result<()> {
+        let mut buf = [0u8; 4096];
+        let n = match self.port.read(&mut buf) {
+            Ok(0) => {
+                return Err(ClientError::io(
+                    "reading",
+                    std::io::Error::from(ErrorKind::UnexpectedEof),
+                ))
+            }
+            Ok(n) => n,
+            Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => 0,
+            Err(e) if e.kind() == ErrorKind::Interrupted => 0,
+            Err(e) => return Err(ClientError::io("reading", e)),
+        };
+        for &b in &buf[..n] {
+            match self.decoder.feed::<DeviceMsg>(b) {
+                Some(Ok(m)) => {
+                    if let DeviceMsg::Telemetry(batch) = &m {
+                        self.account(batch);
+                    }
+                    self.pending.push_back(m);
+                }
+                Some(Err(_)) => self.gaps.bad_frames += 1,
+                None => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn account(&mut self, batch: &TelemetryBatch) {
+        if let Some(expect) = self.next_seq {
+            let gap = batch.seq.wrapping_sub(expect);
+            if gap != 0 && gap < u32::MAX / 2 {
+                self.gaps.missing += u64::from(gap);
+                let dev = batch.dropped.wrapping_sub(self.last_dropped);
+                self.gaps.dropped_on_device += u64::from(dev.min(gap));
+            }
+        }
+        self.last_dropped = batch.dropped;
+        self.gaps.received += batch.samples.len() as u64;
+        self.next_seq = Some(batch.seq.wrapping_add(batch.samples.len() as u32));
+    }
+
+    /// Waits for a message matching `want`; other messages (telemetry) are kept for later.
+    fn wait(
+        &mut self,
+        timeout: Duration,
+        request: &str,
+        want: impl Fn(&DeviceMsg) -> bool,
+    ) -> Result<DeviceMsg> {
+        self.wait_extending(timeout, timeout, want, |_| false)
+            .map_err(|e| match e {
+                ClientError::Timeout {
+                    request: None,
+                    waited,
+                    bad_frames,
+                } => ClientError::Timeout {
+                    request: Some(request.to_string()),
+                    waited,
+                    bad_frames,
+                },
+                e => e,
+            })
+    }
+
+    /// [`Self::wait`], where a message for which `progress` holds restarts the `timeout`, up to
+    /// `cap` after the start: the device is visibly working through input queued ahead of the
+    /// request.
+    fn wait_extending(
+        &mut self,
+        timeout: Duration,
+        cap: Duration,
+        want: impl Fn(&DeviceMsg) -> bool,
+        progress: impl Fn(&DeviceMsg) -> bool,
+    ) -> Result<DeviceMsg> {
+        let start = Instant::now();
+        let end = start + cap.max(timeout);
+        let mut deadline = start + timeout;
+        let mut kept = VecDeque::new();
+        let expired = |waited: Duration| ClientError::Timeout {
+            request: None,
+            waited,
+            bad_frames: None,
+        };
+        let result = loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.recv(left)? {
+                Some(m) if want(&m) => break Ok(m),
+                // On time even while other messages keep arriving.
+                Some(m) => {
+                    if progress(&m) {
+                        deadline = (Instant::now() + timeout).min(end).max(deadline);
+                    }
+                    kept.push_back(m);
+                    if Instant::now() >= deadline {
+                        break Err(expired(start.elapsed()));
+                    }
+                }
+                None => break Err(expired(start.elapsed())),
+            }
+        };
+        kept.extend(self.pending.drain(..));
+        self.pending = kept;
+        result
+    }
+
+    /// Sends a request and waits for its answer; a device `Error` becomes an error.
+    ///
+    /// Framing errors (CRC, COBS, oversize, unknown tag, malformed body) do not answer a
+    /// request this client encoded: they answer bad frames from elsewhere on the link (a
+    /// noisy line, another writer), so the wait goes on. They also show the device working
+    /// through input queued ahead of the request, so each restarts the answer timeout, for at
+    /// most [`BACKLOG_WAIT_MAX`]; if no answer comes, the timeout names the last one seen.
+    ///
+    /// A full servo command queue (`Busy`, "servo queue full": the servo takes one command per
+    /// tick) is transient: the request is repeated, for at most [`QUEUE_FULL_RETRY`].
+    pub fn request(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
+        let deadline = Instant::now() + QUEUE_FULL_RETRY;
+        loop {
+            let m = self.request_once(msg)?;
+            let full = matches!(&m, DeviceMsg::Error { code: ErrorCode::Busy, detail }
+                if describe_error(ErrorCode::Busy, detail).contains("queue full"));
+            if !full || Instant::now() > deadline {
+                if let DeviceMsg::Error { code, detail } = m {
+                    return Err(ClientError::Refused {
+                        request: short(msg),
+                        code,
+                        detail,
+                    });
+                }
+                return Ok(m);
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    fn request_once(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
+        self.send(msg)?;
+        let ack = ack_kind(msg);
+        let last_framing = std::cell::Cell::new(None);
+        let m = self
+            .wait_extending(
+                ANSWER_TIMEOUT,
+                BACKLOG_WAIT_MAX,
+                |m| match m {
+                    DeviceMsg::Error { code, detail } if is_framing(*code) => {
+                        last_framing.set(Some(describe_error(*code, detail)));
+                        false
+                    }
+                    DeviceMsg::Error { .. } => true,
+                    DeviceMsg::Ack(r) => Some(*r) == ack,
+                    DeviceMsg::Config(_) => {
+                        matches!(msg, HostMsg::GetConfig | HostMsg::LoadDefaults)
+                    }
+                    DeviceMsg::Faults(_) => matches!(msg, HostMsg::GetFaults),
+                    DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
+                    _ => false,
+                },
+                is_framing_reply,
+            )
+            .map_err(|e| match e {
+                ClientError::Timeout { waited, .. } => ClientError::Timeout {
+                    request: Some(short(msg)),
+                    waited,
+                    bad_frames: last_framing.take(),
+                },
+                e => e,
+            })?;
+        Ok(m)
+    }
+
+    /// Reads the active configuration.
+    pub fn get_config(&mut self) -> Result<ServoConfig> {
+        match self.request(&HostMsg::GetConfig)? {
+            DeviceMsg::Config(c) => Ok(c),
+            other => Err(unexpected("GetConfig", &other)),
+        }
+    }
+
+    /// Applies a configuration (validated by the device; refused ones change nothing).
+    pub fn set_config(&mut self, config: &ServoConfig) -> Result<()> {
+        self.request(&HostMsg::SetConfig(*config)).map(drop)
+    }
+
+    /// Persists the active configuration.
+    pub fn save_config(&mut self) -> Result<()> {
+        self.request(&HostMsg::SaveConfig).map(drop)
+    }
+
+    /// Applies the firmware defaults and returns them.
+    pub fn load_defaults(&mut self) -> Result<ServoConfig> {
+        match self.request(&HostMsg::LoadDefaults)? {
+            DeviceMsg::Config(c) => Ok(c),
+            other => Err(unexpected("LoadDefaults", &other)),
+        }
+    }
+
+    /// Reads latched faults.
+    pub fn faults(&mut self) -> Result<FaultReport> {
+        match self.request(&HostMsg::GetFaults)? {
+            DeviceMsg::Faults(f) => Ok(f),
+            other => Err(unexpected("GetFaults", &other)),
+        }
+    }
+
+    /// Asks the board to end its run (the QEMU image exits through semihosting).
+    ///
+    /// The board exits as soon as its acknowledgement has left its UART. A host that is still
+    /// reading a backlog (error replies to a flood, say) can then see the link hang up before
+    /// it reads the Ack: the serial driver reports the hangup (`POLLHUP`, "Broken pipe") in
+    /// place of the bytes still queued. A hangup after the request was written is therefore
+    /// the shutdown having happened, and counts as acknowledged; callers that need proof check
+    /// the board's exit status (the QEMU scenarios do). Any other error is returned.
+    pub fn shutdown(&mut self, exit_code: u8) -> Result<()> {
+        match self.request(&HostMsg::Shutdown { exit_code }) {
+            Ok(_) => Ok(()),
+            Err(e) if e.is_hangup() => Ok(()),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Clears latched faults.
+    pub fn clear_faults(&mut self) -> Result<()> {
+        self.request(&HostMsg::ClearFaults).map(drop)
+    }
+
+    /// Starts telemetry at one sample per `decimation` ticks.
+    pub fn stream_start(&mut self, decimation: u16) -> Result<()> {
+        self.next_seq = None;
+        self.request(&HostMsg::StreamStart { decimation }).map(drop)
+    }
+
+    /// Stops telemetry and discards batches still queued.
+    pub fn stream_stop(&mut self) -> Result<()> {
+        self.request(&HostMsg::StreamStop)?;
+        self.pending
+            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        Ok(())
+    }
+
+    /// Next telemetry batch, or None after `timeout` (on time whatever else arrives).
+    pub fn next_batch(&mut self, timeout: Duration) -> Result<Option<TelemetryBatch>> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.recv(left)? {
+                Some(DeviceMsg::Telemetry(b)) => return Ok(Some(b)),
+                // Other messages (errors of a flood of bad frames, stray replies) never hold
+                // the caller past its deadline: its watchdogs and heartbeats must run.
+                Some(_) if Instant::now() < deadline => {}
+                Some(_) | None => return Ok(None),
+            }
+        }
+    }
+}
+
+fn ack_kind(msg: &HostMsg) -> Option<Request> {
+    Some(match msg {
+        HostMsg::SetConfig(_) => Request::SetConfig,
+        HostMsg::SaveConfig => Request::SaveConfig,
+        HostMsg::StreamStart { .. } => Request::StreamStart,
+        HostMsg::StreamStop => Request::StreamStop,
+        HostMsg::Release { .. } => Request::Release,
+        HostMsg::Excite { .. } => Request::Excite,
+        HostMsg::TableChunk { .. } => Request::TableChunk,
+        HostMsg::Heartbeat => Request::Heartbeat,
+        HostMsg::ClearFaults => Request::ClearFaults,
+        HostMsg::Stop => Request::Stop,
+        HostMsg::Shutdown { .. } => Request::Shutdown,
+        HostMsg::Impact { .. } => Request::Impact,
+        _ => return None,
+    })
+}
+
+fn unexpected(request: &str, answer: &DeviceMsg) -> ClientError {
+    ClientError::Unexpected {
+        request: request.to_string(),
+        answer: format!("{answer:?}"),
+    }
+}
+
+fn short(msg: &HostMsg) -> String {
+    let s = format!("{msg:?}");
+    s.split(['(', ' ', '{'])
+        .next()
+        .unwrap_or("request")
+        .to_string()
+}
+
+fn placeholder_info() -> DeviceInfo {
+    DeviceInfo {
+        protocol_version: 0,
+        firmware_name: heapless::String::new(),
+        firmware_version: heapless::String::new(),
+        board: heapless::String::new(),
+        servo_rate_hz: 1000,
+        counts_per_rev: 0,
+        resolution: 0.0,
+        encoder_bits: 32,
+        force_per_code: 0.0,
+        max_code: 0,
+        limits: stiffwall_proto::Limits {
+            min_rate_hz: 0,
+            max_rate_hz: 0,
+            max_stiffness: 0.0,
+            max_force: 0.0,
+            max_delay_ticks: 0,
+            max_coarsen_shift: 0,
+            telemetry_batch: 0,
+            max_table: 0,
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transport::pty_pair;
+    use stiffwall_proto::ErrorDetail;
+
+    fn is_hangup(e: &ClientError) -> bool {
+        e.is_hangup()
+    }
+
+    /// A scripted device on the master side of a pty: answers the handshake, then reads one
+    /// request and does `then` with the port (answer, or hang up by dropping it).
+    fn scripted(then: fn(&mut serialport::TTYPort, HostMsg)) -> Client {
+        let (mut master, host, _name) = pty_pair().unwrap();
+        std::thread::spawn(move || {
+            let mut dec = FrameDecoder::new();
+            let mut requests = 0;
+            let mut byte = [0u8; 1];
+            while master.read_exact(&mut byte).is_ok() {
+                let Some(Ok(msg)) = dec.feed::<HostMsg>(byte[0]) else {
+                    continue;
+                };
+                requests += 1;
+                if requests == 1 {
+                    let mut info = placeholder_info();
+                    info.protocol_version = PROTOCOL_VERSION;
+                    reply(&mut master, &DeviceMsg::HelloReply(info));
+                } else {
+                    then(&mut master, msg);
+                    return; // drops the master: the host sees the pty hang up
+                }
+            }
+        });
+        Client::connect(host, None).unwrap()
+    }
+
+    fn reply(port: &mut serialport::TTYPort, msg: &DeviceMsg) {
+        let mut buf = [0u8; MAX_FRAME];
+        port.write_all(encode(msg, &mut buf).unwrap()).unwrap();
+    }
+
+    #[test]
+    fn a_hangup_after_shutdown_counts_as_the_shutdown() {
+        let mut c = scripted(|_, msg| assert_eq!(msg, HostMsg::Shutdown { exit_code: 3 }));
+        c.shutdown(3)
+            .expect("the board hung up after reading Shutdown");
+    }
+
+    #[test]
+    fn a_refused_shutdown_is_an_error() {
+        let mut c = scripted(|port, _| {
+            reply(
+                port,
+                &DeviceMsg::Error {
+                    code: ErrorCode::Busy,
+                    detail: ErrorDetail::None,
+                },
+            );
+            std::thread::sleep(Duration::from_millis(200)); // the host reads it before the hangup
+        });
+        let e = c.shutdown(0).unwrap_err();
+        assert!(format!("{e:#}").contains("Shutdown refused"), "{e:#}");
+    }
+
+    #[test]
+    fn bad_frames_answered_ahead_of_a_request_extend_its_wait() {
+        // The device works through a backlog of garbage for 2.3 s (longer than ANSWER_TIMEOUT),
+        // answering it with framing errors every 0.5 s, then answers the request.
+        let mut c = scripted(|port, msg| {
+            assert_eq!(msg, HostMsg::GetFaults);
+            for _ in 0..5 {
+                let cobs = DeviceMsg::Error {
+                    code: ErrorCode::Cobs,
+                    detail: ErrorDetail::None,
+                };
+                reply(port, &cobs);
+                std::thread::sleep(Duration::from_millis(500));
+            }
+            std::thread::sleep(Duration::from_millis(300));
+            let report = FaultReport {
+                latched: 4,
+                first_tick: 9,
+                safe_mode: false,
+            };
+            reply(port, &DeviceMsg::Faults(report));
+            std::thread::sleep(Duration::from_millis(200));
+        });
+        assert!(Duration::from_millis(2300) > ANSWER_TIMEOUT);
+        let t = Instant::now();
+        assert_eq!(c.faults().unwrap().latched, 4);
+        assert!(t.elapsed() > ANSWER_TIMEOUT, "{:?}", t.elapsed());
+    }
+
+    #[test]
+    fn silence_after_bad_frames_still_times_out() {
+        let mut c = scripted(|port, _| {
+            let cobs = DeviceMsg::Error {
+                code: ErrorCode::Cobs,
+                detail: ErrorDetail::None,
+            };
+            reply(port, &cobs);
+            std::thread::sleep(Duration::from_secs(4));
+        });
+        let t = Instant::now();
+        let e = c.faults().unwrap_err();
+        assert!(
+            format!("{e:#}").contains("the device reported bad frames: bad COBS framing"),
+            "{e:#}"
+        );
+        assert!(t.elapsed() < Duration::from_secs(3), "{:?}", t.elapsed());
+    }
+
+    #[test]
+    fn a_hangup_during_any_other_request_is_an_error() {
+        let mut c = scripted(|_, msg| assert_eq!(msg, HostMsg::GetFaults));
+        let e = c.faults().unwrap_err();
+        assert!(is_hangup(&e), "{e:#}");
+    }
+
+    /// A scripted device on an in-memory link: answers the handshake, then refuses every
+    /// request with the stiffness out of [0, 10].
+    fn in_memory_refusing() -> Client {
+        let (mut device, host) = crate::transport::memory_pair();
+        std::thread::spawn(move || {
+            let mut dec = FrameDecoder::new();
+            let mut buf = [0u8; 256];
+            loop {
+                let n = match device.read(&mut buf) {
+                    Ok(0) => return,
+                    Ok(n) => n,
+                    Err(_) => continue,
+                };
+                for &b in &buf[..n] {
+                    let Some(Ok(msg)) = dec.feed::<HostMsg>(b) else {
+                        continue;
+                    };
+                    let answer = if matches!(msg, HostMsg::Hello { .. }) {
+                        let mut info = placeholder_info();
+                        info.protocol_version = PROTOCOL_VERSION;
+                        DeviceMsg::HelloReply(info)
+                    } else {
+                        DeviceMsg::Error {
+                            code: ErrorCode::InvalidConfig,
+                            detail: ErrorDetail::Field {
+                                field: stiffwall_proto::ConfigField::Stiffness,
+                                min: 0.0,
+                                max: 10.0,
+                            },
+                        }
+                    };
+                    let mut out = [0u8; MAX_FRAME];
+                    if device
+                        .write_all(encode(&answer, &mut out).unwrap())
+                        .is_err()
+                    {
+                        return;
+                    }
+                }
+            }
+        });
+        Client::connect(host, None).unwrap()
+    }
+
+    #[test]
+    fn a_refusal_carries_the_proto_field_and_its_range() {
+        let mut c = in_memory_refusing();
+        let e = c.set_config(&ServoConfig::default()).unwrap_err();
+        match &e {
+            ClientError::Refused {
+                request,
+                code: ErrorCode::InvalidConfig,
+                detail:
+                    ErrorDetail::Field {
+                        field: stiffwall_proto::ConfigField::Stiffness,
+                        min,
+                        max,
+                    },
+            } => {
+                assert_eq!(request, "SetConfig");
+                assert_eq!((*min, *max), (0.0, 10.0));
+            }
+            other => panic!("not a refusal of the stiffness: {other:?}"),
+        }
+        assert_eq!(
+            e.to_string(),
+            "SetConfig refused: configuration refused: stiffness must be within [0, 10]"
+        );
+        assert!(!e.is_hangup());
+    }
+
+    #[test]
+    fn a_silent_in_memory_device_times_out_and_a_dropped_one_hangs_up() {
+        let (device, host) = crate::transport::memory_pair();
+        let t = Instant::now();
+        let e = Client::connect(host, None).unwrap_err();
+        assert!(
+            matches!(&e, ClientError::NoHandshake(inner)
+            if matches!(**inner, ClientError::Timeout { .. })),
+            "{e:?}"
+        );
+        assert!(t.elapsed() >= ANSWER_TIMEOUT, "{:?}", t.elapsed());
+        drop(device);
+        // Gone before the handshake: the hello cannot be written.
+        let (device, host) = crate::transport::memory_pair();
+        drop(device);
+        let e = Client::connect(host, None).unwrap_err();
+        assert!(e.is_hangup(), "{e:?}");
+    }
+}

@@ -1,0 +1,379 @@
+//! `hostctl map --k-b`: the stability map over the (K, B) plane of one physical device.
+//!
+//! Units: SI. K in N/m and B (virtual damping) in N·s/m for a linear device; N·m/rad and
+//! N·m·s/rad for a rotational one (a plant file with `counts_per_rev`, a rotary preset or
+//! `--rotational`). The plant: m [kg or kg·m²], b, c, Δ [m or rad], T [s], T_D [s]. ξ̇₀ is in
+//! counts per period (independent of K, so one value for the whole plane).
+//!
+//! Model: every (K, B) is mapped by Table I to μ = m/(KT²), β = b/(KT), σ = c/(KΔ),
+//! τ_D = T_D/T and β_v = B/(KT), then simulated by the same exact solver, horizon and classes
+//! as the (β, σ) map (quantization, Coulomb, viscous, delay, two-sided wall, ξ₀ = 0). That
+//! solver knows only the paper's rigid plant: a plant file's stiction, cogging, transmission,
+//! amplifier filter/dead band/saturation, hand and one-sided wall are NOT simulated (they are
+//! listed under `plant.ignored` in the JSON and on standard error). The predicted boundary is
+//! core's exact sampled linear K_max(B) (`criteria::k_max_exact_linear`: ZOH, backward
+//! difference, b, T_D; no quantization or Coulomb).
+//!
+//! Invariants: every flag is checked before anything is computed or written; β_v ≤ 1000 and
+//! τ_D ≤ 250 at every point; the result is deterministic and independent of thread count.
+
+use super::file;
+use super::kb_args::{resolve_plant, Plant};
+use anyhow::{ensure, Context, Result};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::fmt::Write as _;
+use stiffwall_core::criteria;
+use stiffwall_sim::classify::Class;
+use stiffwall_sim::exact::{History, MAX_BETA_V};
+use stiffwall_sim::map::{self as smap, Axis};
+
+/// Number of B values of the predicted boundary curve.
+pub const BOUNDARY_POINTS: usize = 101;
+
+/// What the (K, B) map simulates (stated in the JSON `model` key).
+pub const MODEL_NOTE: &str = "rigid plant m, b, c, resolution, T, T_D of the device mapped by \
+Table I to (mu, beta, sigma, tau_d, beta_v = B/(K*T)) and simulated by the exact solver of the \
+(beta, sigma) map (quantization, Coulomb, viscous, delay, two-sided wall); a plant file's \
+stiction, cogging, transmission, amplifier, hand and one-sided wall are not simulated; boundary: \
+exact sampled linear K_max(B) (no quantization, no Coulomb)";
+
+/// The (K, B) sweep.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct KbSpec {
+    /// K axis [N/m or N·m/rad], lo > 0.
+    pub k: Axis,
+    /// B axis [N·s/m or N·m·s/rad], lo ≥ 0.
+    pub b: Axis,
+    /// ξ̇₀ [counts per period], ξ₀ = 0.
+    pub xidot0: f64,
+    /// ξ̇₀ as a physical velocity ξ̇₀·Δ/T [m/s or rad/s].
+    pub velocity: f64,
+    /// Horizon in periods.
+    pub periods: u64,
+    /// Delay-line history before τ = 0.
+    pub history: History,
+}
+
+/// One classified (K, B) point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct KbPoint {
+    /// Index, row-major (K outer, B inner).
+    pub index: usize,
+    /// K.
+    pub k: f64,
+    /// B.
+    pub b: f64,
+    /// μ = m/(KT²).
+    pub mu: f64,
+    /// β = b/(KT).
+    pub beta: f64,
+    /// σ = c/(KΔ).
+    pub sigma: f64,
+    /// β_v = B/(KT).
+    pub beta_v: f64,
+    /// Class of the simulation.
+    pub class: Class,
+    /// Periods simulated.
+    pub periods_run: u64,
+    /// H_T(0).
+    pub h0: f64,
+    /// H_T at the end.
+    pub h_end: f64,
+    /// Largest |ξ| over the tail.
+    pub tail_amplitude: f64,
+    /// Stable by core's exact sampled linear test (`criteria::exact_linear_stable`).
+    pub linear_stable: bool,
+}
+
+/// One point of the predicted boundary.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BoundaryPoint {
+    /// B.
+    pub b: f64,
+    /// Exact linear K_max(B) (0: no stable K).
+    pub k_max: f64,
+}
+
+/// The JSON document of `hostctl map --k-b`.
+#[derive(Debug, Clone, Serialize)]
+pub struct KbFile {
+    /// Always `"k-b"`.
+    pub kind: &'static str,
+    /// [`MODEL_NOTE`].
+    pub model: &'static str,
+    /// Units of K and B.
+    pub units: Units,
+    /// The device.
+    pub plant: Plant,
+    /// The sweep.
+    pub spec: KbSpec,
+    /// Points, by index.
+    pub points: Vec<KbPoint>,
+    /// K_max(B) on [`BOUNDARY_POINTS`] B values spanning the B axis.
+    pub boundary: Vec<BoundaryPoint>,
+    /// Wall time of the computation, s.
+    pub seconds: f64,
+}
+
+/// Units of the axes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Units {
+    /// Unit of K.
+    pub k: &'static str,
+    /// Unit of B.
+    pub b: &'static str,
+}
+
+impl Units {
+    /// SI units of K and B.
+    #[must_use]
+    pub fn of(rotational: bool) -> Self {
+        if rotational {
+            Self {
+                k: "N·m/rad",
+                b: "N·m·s/rad",
+            }
+        } else {
+            Self {
+                k: "N/m",
+                b: "N·s/m",
+            }
+        }
+    }
+}
+
+fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Result<Axis> {
+    let s = s.with_context(|| format!("--k-b needs {flag} LO:HI:N [{unit}]"))?;
+    let a = Axis::parse(s).map_err(|e| anyhow::anyhow!("{flag} [{unit}]: {e}"))?;
+    let ok = if strict { a.lo > min } else { a.lo >= min };
+    ensure!(
+        ok,
+        "{flag} lo = {}: allowed range is {} {min} {unit}",
+        a.lo,
+        if strict { ">" } else { ">=" }
+    );
+    Ok(a)
+}
+
+/// Checks the flags of `--k-b` and returns the plant and sweep (nothing is computed).
+///
+/// # Errors
+/// A flag out of range, naming it and its allowed range.
+pub fn spec_of(a: &super::Args) -> Result<(Plant, KbSpec)> {
+    let plant = resolve_plant(&a.kb)?;
+    let tau_d = plant.delay_s / plant.period_s;
+    ensure!(
+        tau_d <= stiffwall_sim::params::MAX_TAU_D,
+        "{}: delay T_D = {} s is {tau_d} periods; allowed range is T_D <= {} T",
+        if a.kb.plant_file.is_some() {
+            "--plant controller.extra_delay_s"
+        } else {
+            "--delay"
+        },
+        plant.delay_s,
+        stiffwall_sim::params::MAX_TAU_D
+    );
+    let u = Units::of(plant.rotational);
+    let k = axis("--k-axis", a.kb.k_axis.as_deref(), 0.0, true, u.k)?;
+    let b = axis("--b-axis", a.kb.b_axis.as_deref(), 0.0, false, u.b)?;
+    ensure!(
+        k.n.checked_mul(b.n)
+            .is_some_and(|n| n <= smap::MAX_GRID_POINTS),
+        "--k-axis x --b-axis: {} x {} points, at most {}",
+        k.n,
+        b.n,
+        smap::MAX_GRID_POINTS
+    );
+    let bv_max = b.hi / (k.lo * plant.period_s);
+    ensure!(
+        bv_max.is_finite() && bv_max <= MAX_BETA_V,
+        "--b-axis hi = {} {}: beta_v = B/(K*T) = {bv_max:e} at K = {} (--k-axis lo); allowed \
+         range is B <= {MAX_BETA_V}*K*T = {:e} {}",
+        b.hi,
+        u.b,
+        k.lo,
+        MAX_BETA_V * k.lo * plant.period_s,
+        u.b
+    );
+    ensure!(
+        a.xidot0.len() == 1 && a.xidot0[0].is_finite() && a.xidot0[0].abs() <= 1e12,
+        "--xidot0 with --k-b: give one finite value, |v| <= 1e12 (counts per period)"
+    );
+    ensure!(
+        (1..=smap::MAX_PERIODS).contains(&a.periods),
+        "--periods {}: allowed range is [1, 1e8]",
+        a.periods
+    );
+    let spec = KbSpec {
+        k,
+        b,
+        xidot0: a.xidot0[0],
+        velocity: a.xidot0[0] * plant.resolution / plant.period_s,
+        periods: a.periods,
+        history: super::history_of(a.history),
+    };
+    for kk in [k.lo, k.hi] {
+        plant
+            .at(kk, b.hi)
+            .map_err(|e| anyhow::anyhow!("--k-axis K = {kk}: {e}"))?;
+    }
+    Ok((plant, spec))
+}
+
+fn point(plant: &Plant, spec: &KbSpec, index: usize) -> KbPoint {
+    let k = spec.k.at(index / spec.b.n);
+    let b = spec.b.at(index % spec.b.n);
+    // In range at both ends of the K axis (checked by `spec_of`), hence everywhere.
+    let (d, beta_v) = plant
+        .at(k, b)
+        .unwrap_or((stiffwall_sim::Params::BASE, f64::NAN));
+    let o = smap::simulate_point_damped(d, spec.xidot0, spec.periods, spec.history, beta_v);
+    let phys = plant.physical(k);
+    KbPoint {
+        index,
+        k,
+        b,
+        mu: d.mu,
+        beta: d.beta,
+        sigma: d.sigma,
+        beta_v,
+        class: o.class,
+        periods_run: o.periods_run,
+        h0: o.h0,
+        h_end: o.h_end,
+        tail_amplitude: o.tail_amplitude,
+        linear_stable: criteria::exact_linear_stable(&phys, b).unwrap_or(false),
+    }
+}
+
+/// K_max(B) on [`BOUNDARY_POINTS`] values spanning the B axis.
+#[must_use]
+pub fn boundary(plant: &Plant, b: &Axis) -> Vec<BoundaryPoint> {
+    let n = if b.hi > b.lo { BOUNDARY_POINTS } else { 1 };
+    let axis = Axis { n, ..*b };
+    let p = plant.physical(1.0);
+    (0..n)
+        .map(|i| {
+            let b = axis.at(i);
+            BoundaryPoint {
+                b,
+                k_max: criteria::k_max_exact_linear(&p, b).unwrap_or(f64::NAN),
+            }
+        })
+        .collect()
+}
+
+/// Simulates every point of `spec` in parallel (rayon), calling `progress` once per point.
+#[must_use]
+pub fn compute(plant: &Plant, spec: &KbSpec, progress: &(dyn Fn() + Sync)) -> KbFile {
+    let t0 = std::time::Instant::now();
+    let points: Vec<KbPoint> = (0..spec.k.n * spec.b.n)
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|i| {
+            let p = point(plant, spec, i);
+            progress();
+            p
+        })
+        .collect();
+    KbFile {
+        kind: "k-b",
+        model: MODEL_NOTE,
+        units: Units::of(plant.rotational),
+        plant: plant.clone(),
+        spec: spec.clone(),
+        points,
+        boundary: boundary(plant, &spec.b),
+        seconds: t0.elapsed().as_secs_f64(),
+    }
+}
+
+fn class_char(c: Class) -> char {
+    match c {
+        Class::Growing => '#',
+        Class::Persistent => 'o',
+        Class::NonMonotoneDecay => '~',
+        Class::MonotoneDecay => '.',
+    }
+}
+
+/// The text report: class counts, the class grid (K rows from the top, B columns) and K_max(B).
+#[must_use]
+pub fn render(m: &KbFile) -> String {
+    let (s, u) = (&m.spec, m.units);
+    let mut out = String::new();
+    let _ = writeln!(out, "(K, B) map of {}: {}", m.plant.source, MODEL_NOTE);
+    if !m.plant.ignored.is_empty() {
+        let _ = writeln!(out, "not simulated: {}", m.plant.ignored.join(", "));
+    }
+    let count = |c: Class| m.points.iter().filter(|p| p.class == c).count();
+    let _ = writeln!(
+        out,
+        "{} points: growing {} (#), persistent {} (o), non-monotone decay {} (~), monotone decay {} (.); linear-stable {}",
+        m.points.len(),
+        count(Class::Growing),
+        count(Class::Persistent),
+        count(Class::NonMonotoneDecay),
+        count(Class::MonotoneDecay),
+        m.points.iter().filter(|p| p.linear_stable).count()
+    );
+    let _ = writeln!(
+        out,
+        "rows K [{}] from {:e} (top) down, columns B [{}] {:e}..{:e}:",
+        u.k, s.k.hi, u.b, s.b.lo, s.b.hi
+    );
+    for row in m.points.chunks(s.b.n).rev() {
+        let cells: String = row.iter().map(|p| class_char(p.class)).collect();
+        let _ = writeln!(out, "{:>12.4e} {cells}", row[0].k);
+    }
+    let _ = writeln!(out, "predicted exact linear K_max(B):");
+    let step = (m.boundary.len() / 10).max(1);
+    for bp in m.boundary.iter().step_by(step) {
+        let _ = writeln!(
+            out,
+            "  B = {:>11.4e} {}: K_max = {:.4e} {}",
+            bp.b, u.b, bp.k_max, u.k
+        );
+    }
+    out
+}
+
+/// Runs `hostctl map --k-b`: checks every flag, computes, then writes JSON, text and plot.
+///
+/// # Errors
+/// A flag out of range or a file error, before anything is written.
+pub fn run(a: &super::Args, threads: usize) -> Result<()> {
+    let (plant, spec) = spec_of(a)?;
+    if let Some(img) = &a.plot {
+        crate::figure::prepare(img)?;
+    }
+    if let Some(out) = &a.out {
+        crate::figure::check_writable(out).with_context(|| format!("--out {}", out.display()))?;
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    let pb = if a.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let pb = indicatif::ProgressBar::new((spec.k.n * spec.b.n) as u64);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} points, eta {eta}")
+                .expect("static template"),
+        );
+        pb
+    };
+    let m = pool.install(|| compute(&plant, &spec, &|| pb.inc(1)));
+    pb.finish_and_clear();
+    eprint!("{}", render(&m));
+    match &a.out {
+        Some(out) => file::write(out, &m)?,
+        None if a.plot.is_none() => crate::output::emit_json(&m)?,
+        None => {}
+    }
+    if let Some(img) = &a.plot {
+        super::kb_plot::plot(&m, img)?;
+    }
+    Ok(())
+}

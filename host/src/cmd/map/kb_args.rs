@@ -1,0 +1,221 @@
+//! The flags of `hostctl map --k-b` and the device they describe.
+//!
+//! Units: SI. A linear device: m [kg], b [N·s/m], c [N], Δ [m], K [N/m], B [N·s/m]; a
+//! rotational one: kg·m², N·m·s/rad, N·m, rad, N·m/rad, N·m·s/rad. T and T_D in s.
+//!
+//! The device comes from exactly one of: a plant file (`--plant FILE`, the scene format of
+//! `sim/plants/`, read as `hostctl tune --plant` reads it: `[device]` m, b, c, Δ and
+//! `[controller]` period and extra delay; its stiffness is not used), a preset (`--device`,
+//! whose m, b, c `--mass`, `--viscous`, `--coulomb` may override) or all of `--mass`,
+//! `--viscous`, `--coulomb`, `--resolution`, `--period` (`--delay` 0 by default). Invariant:
+//! every value is checked by `stiffwall-core`'s ranges, errors name the flag.
+
+use crate::plant_args::{PlantArgs, PlantArgsError};
+use anyhow::{anyhow, ensure, Context, Result};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use stiffwall_core::params::check_positive;
+use stiffwall_core::PhysicalParams;
+use stiffwall_sim::params::{Params, MAX_TAU_D};
+use stiffwall_sim::rich::PlantModel;
+
+/// Flags of the (K, B) map (`hostctl map --k-b`).
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct KbArgs {
+    /// Map the (K, B) plane of one physical device instead of the (beta, sigma) plane.
+    #[arg(
+        long = "k-b",
+        conflicts_with_all = ["mu", "tau_d", "beta", "sigma", "shard", "overlay", "damping"]
+    )]
+    pub k_b: bool,
+    /// With --k-b: K axis lo:hi:n, N/m (N·m/rad for rotational devices), lo > 0.
+    #[arg(long, requires = "k_b", allow_hyphen_values = true)]
+    pub k_axis: Option<String>,
+    /// With --k-b: virtual damping B axis lo:hi:n, N·s/m (N·m·s/rad), lo >= 0,
+    /// B/(K*T) <= 1000 at the smallest K.
+    #[arg(long, requires = "k_b", allow_hyphen_values = true)]
+    pub b_axis: Option<String>,
+    /// With --k-b: the device as a plant file (sim/plants/NAME.toml).
+    #[arg(
+        long = "plant",
+        value_name = "FILE",
+        requires = "k_b",
+        conflicts_with = "device"
+    )]
+    pub plant_file: Option<PathBuf>,
+    /// With --k-b: the device preset and m, b, c overrides.
+    #[command(flatten)]
+    pub plant: PlantArgs,
+    /// With --k-b: encoder resolution Δ, m (rad), > 0 (default: the preset's).
+    #[arg(long, requires = "k_b", allow_hyphen_values = true)]
+    pub resolution: Option<f64>,
+    /// With --k-b: sampling period T, s, > 0 (default: the preset's).
+    #[arg(long, requires = "k_b", allow_hyphen_values = true)]
+    pub period: Option<f64>,
+    /// With --k-b: loop delay T_D beyond the ZOH, s, in [0, 250·T] (default: the preset's, or 0).
+    #[arg(long, requires = "k_b", allow_hyphen_values = true)]
+    pub delay: Option<f64>,
+    /// With --k-b and physical numbers: the device is rotational (rad, N·m).
+    #[arg(long, requires = "k_b")]
+    pub rotational: bool,
+}
+
+/// The device of a (K, B) map (its K is the sweep's).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Plant {
+    /// Where it came from (`plant file …`, `preset …`, `flags`).
+    pub source: String,
+    /// m [kg or kg·m²].
+    pub mass: f64,
+    /// b [N·s/m or N·m·s/rad].
+    pub viscous: f64,
+    /// c [N or N·m].
+    pub coulomb: f64,
+    /// Δ [m or rad].
+    pub resolution: f64,
+    /// T [s].
+    pub period_s: f64,
+    /// T_D [s].
+    pub delay_s: f64,
+    /// Rotational units.
+    pub rotational: bool,
+    /// Effects of the plant file that the map does not simulate.
+    pub ignored: Vec<String>,
+}
+
+impl Plant {
+    /// Core's physical parameters at stiffness `k`.
+    #[must_use]
+    pub fn physical(&self, k: f64) -> PhysicalParams {
+        PhysicalParams {
+            mass: self.mass,
+            viscous: self.viscous,
+            coulomb: self.coulomb,
+            resolution: self.resolution,
+            period_s: self.period_s,
+            stiffness: k,
+            delay_s: self.delay_s,
+            rotational: self.rotational,
+        }
+    }
+
+    /// Table I at (K, B): (μ, β, σ, τ_D) and β_v = B/(KT).
+    ///
+    /// # Errors
+    /// A value out of the solver's range (μ underflow, τ_D > 250), naming the quantity.
+    pub fn at(&self, k: f64, b: f64) -> Result<(Params, f64)> {
+        let d = self.physical(k).to_dimensionless()?;
+        ensure!(
+            d.tau_d <= MAX_TAU_D,
+            "tau_d = T_D/T = {}: allowed range is [0, {MAX_TAU_D}]",
+            d.tau_d
+        );
+        Ok((d, b / (k * self.period_s)))
+    }
+}
+
+fn ignored_effects(m: &PlantModel, one_sided: bool) -> Vec<String> {
+    let mut v = Vec::new();
+    let mut add = |on: bool, name: &str| {
+        if on {
+            v.push(name.to_owned());
+        }
+    };
+    add(m.stiction.is_some(), "stiction");
+    add(m.cogging.is_some(), "cogging");
+    add(m.transmission.is_some(), "transmission");
+    let amp = m.amplifier;
+    add(
+        amp.is_some_and(|a| a.cutoff_hz.is_some()),
+        "amplifier filter",
+    );
+    add(
+        amp.is_some_and(|a| a.force_limit_n.is_some()),
+        "amplifier saturation",
+    );
+    add(
+        amp.is_some_and(|a| a.deadband_n.is_some()),
+        "amplifier dead band",
+    );
+    add(m.hand.is_some(), "hand");
+    add(one_sided, "one-sided wall");
+    v
+}
+
+fn from_file(path: &Path) -> Result<Plant> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
+    let (m, ctl) = PlantModel::from_scene_toml(&text)
+        .map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
+    Ok(Plant {
+        source: format!("plant file {}", path.display()),
+        mass: m.mass_kg,
+        viscous: m.viscous_ns_per_m,
+        coulomb: m.coulomb_n,
+        resolution: m.resolution_m,
+        period_s: ctl.period_s,
+        delay_s: ctl.extra_delay_s,
+        rotational: m.counts_per_rev.is_some(),
+        ignored: ignored_effects(&m, ctl.one_sided),
+    })
+}
+
+fn checked(
+    flag: &str,
+    v: Option<f64>,
+    f: fn(&'static str, f64) -> Result<f64, stiffwall_core::ParamError>,
+) -> Result<Option<f64>> {
+    v.map(|x| f("value", x).map_err(|e| anyhow!("--{flag} {x}: {e}")))
+        .transpose()
+}
+
+fn from_flags(a: &KbArgs) -> Result<Plant> {
+    let friction = a.plant.friction(None).map_err(|e| match e {
+        PlantArgsError::Incomplete => anyhow!(
+            "--k-b needs a device: --plant FILE, --device NAME, or all of --mass, --viscous, \
+             --coulomb, --resolution and --period"
+        ),
+        e => e.into(),
+    })?;
+    let preset = a.plant.preset()?.map(|d| d.params);
+    let need = |flag: &str, v: Option<f64>, p: Option<f64>| {
+        v.or(p)
+            .with_context(|| format!("--k-b with physical numbers needs --{flag}"))
+    };
+    let resolution = checked("resolution", a.resolution, check_positive)?;
+    let period = checked("period", a.period, check_positive)?;
+    let delay = checked("delay", a.delay, stiffwall_core::params::check_non_negative)?;
+    Ok(Plant {
+        source: friction.source,
+        mass: friction.mass,
+        viscous: friction.viscous,
+        coulomb: friction.coulomb,
+        resolution: need("resolution", resolution, preset.map(|p| p.resolution))?,
+        period_s: need("period", period, preset.map(|p| p.period_s))?,
+        delay_s: delay.or(preset.map(|p| p.delay_s)).unwrap_or(0.0),
+        rotational: a.rotational || preset.is_some_and(|p| p.rotational),
+        ignored: Vec::new(),
+    })
+}
+
+/// The device of `--k-b`, checked.
+///
+/// # Errors
+/// No device, two sources, or a value out of range (naming the flag).
+pub fn resolve_plant(a: &KbArgs) -> Result<Plant> {
+    let Some(path) = &a.plant_file else {
+        return from_flags(a);
+    };
+    let extra = [
+        ("mass", a.plant.mass),
+        ("viscous", a.plant.viscous),
+        ("coulomb", a.plant.coulomb),
+        ("resolution", a.resolution),
+        ("period", a.period),
+        ("delay", a.delay),
+    ];
+    if let Some((flag, _)) = extra.iter().find(|(_, v)| v.is_some()) {
+        anyhow::bail!("--plant gives the whole device: --{flag} cannot be combined with it");
+    }
+    from_file(path)
+}

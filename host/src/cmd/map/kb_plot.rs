@@ -1,0 +1,82 @@
+//! Figure of a (K, B) map: B on x, K on y (SI, the units of [`super::kb::Units`]), classes as
+//! the grey levels of the (β, σ) map, and core's predicted exact linear boundary K_max(B) in
+//! red (clamped to the plotted K range; K_max = 0 where no K is stable).
+//!
+//! Invariant: cells are centred on the grid points; drawn only from a computed [`KbFile`].
+
+use super::kb::KbFile;
+use super::plot::class_color;
+use crate::figure::{self, Figure, FigureError};
+use anyhow::Result;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+struct KbFigure<'a>(&'a KbFile);
+
+fn step(lo: f64, hi: f64, n: usize) -> f64 {
+    if n > 1 {
+        (hi - lo) / (n - 1) as f64
+    } else if lo > 0.0 {
+        0.1 * lo
+    } else {
+        1.0
+    }
+}
+
+impl Figure for KbFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let m = self.0;
+        let (k, b, u) = (&m.spec.k, &m.spec.b, m.units);
+        root.fill(&WHITE)?;
+        let (dk, db) = (step(k.lo, k.hi, k.n), step(b.lo, b.hi, b.n));
+        let (x0, x1) = (b.lo - db / 2.0, b.hi + db / 2.0);
+        let (y0, y1) = (k.lo - dk / 2.0, k.hi + dk / 2.0);
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!(
+                    "(K, B) map, xidot0 = {}, {} periods; red: exact linear K_max(B)",
+                    m.spec.xidot0, m.spec.periods
+                ),
+                ("sans-serif", 16),
+            )
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(format!("B [{}]", u.b))
+            .y_desc(format!("K [{}]", u.k))
+            .draw()?;
+        chart.draw_series(m.points.iter().map(|p| {
+            Rectangle::new(
+                [
+                    (p.b - db / 2.0, p.k - dk / 2.0),
+                    (p.b + db / 2.0, p.k + dk / 2.0),
+                ],
+                class_color(p.class).filled(),
+            )
+        }))?;
+        let line: Vec<(f64, f64)> = m
+            .boundary
+            .iter()
+            .filter(|p| p.k_max.is_finite())
+            .map(|p| (p.b, p.k_max.clamp(y0, y1)))
+            .collect();
+        chart.draw_series(LineSeries::new(line, RED.stroke_width(2)))?;
+        Ok(())
+    }
+}
+
+/// Draws the (K, B) map to `path` (.svg or .png).
+///
+/// # Errors
+/// An unsupported extension, or a drawing or file error.
+pub fn plot(m: &KbFile, path: &Path) -> Result<(), FigureError> {
+    figure::write(path, (720, 600), &KbFigure(m))
+}
