@@ -11,9 +11,33 @@
 //!    - **non-monotonically** otherwise.
 //! 3. **Persistent**: neither: still moving at the end, with no net energy gain.
 //!
+//! **Cycle detection** (`Thresholds::cycle_detection`, on by default): the sampled system is
+//! deterministic, so once the solver's state at a sample instant repeats bit for bit
+//! ([`ExactSim::same_state`]; Brent's algorithm: one saved state, compared at every sample,
+//! position and velocity first as the cheap filter, re-saved at powers of two) the trajectory
+//! is periodic with the found period L, and every later sample equals one already classified.
+//! The rules above only take maxima (H_T, tail |ξ| and |ξ̇|), the last H_T, and per-sample
+//! tests (monotonicity of consecutive pairs, divergence, rest); within the cycle every such
+//! value and pair has been seen, so whole cycles are skipped: up to just before the tail
+//! window, then, once the tail has covered one whole cycle, up to the last L − 1 periods before
+//! the horizon, which run as usual (they give H_T at the end).
+//!
+//! Most limit cycles of the quantized loop repeat everything but the last bits of ξ: the
+//! velocity, the forces and the counts ⌊ξ⌋ are periodic while ξ drifts by rounding errors of
+//! ξ ← ξ + Δ (the dynamics do not depend on ξ within a count). Those
+//! ([`ExactSim::same_but_position`], cycles of at most [`MAX_REPLAY`] periods) are recorded
+//! for one cycle (the count at each sample, the increments Δ in the solver's order, ξ̇) and
+//! replayed: ξ ← ξ + Δ with the recorded Δ (the solver's own arithmetic, so ξ is bit for bit
+//! the simulated one) while every sample's count equals the recorded one; a different count
+//! resumes the solver at that sample, and a replayed cycle that returns ξ bit for bit turns
+//! into the skipping above. Either way the outcome is identical to the brute-force run, field
+//! by field ([`Outcome::cycle`] apart); states that never repeat run in full. The solver's own
+//! state and period counter ([`ExactSim::period`]) are then not those of the horizon.
+//!
 //! Invariant: the classifier calls `step_period` at most `periods` times and stops at rest.
 
 use crate::exact::{storage, ExactSim};
+use crate::plant::Increments;
 
 /// The four classes, darkest first (Fig. 6/7 shading).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -60,6 +84,9 @@ pub struct Thresholds {
     pub mono_tol: f64,
     /// Fraction of the horizon at its end over which the oscillation amplitude is measured.
     pub tail_fraction: f64,
+    /// Skip whole periods of an exactly repeating state (see the module header; the outcome
+    /// is the same either way, only faster). Off: brute force over the whole horizon.
+    pub cycle_detection: bool,
 }
 
 impl Default for Thresholds {
@@ -69,6 +96,7 @@ impl Default for Thresholds {
             growth_tol: 1e-9,
             mono_tol: 1e-12,
             tail_fraction: 0.1,
+            cycle_detection: true,
         }
     }
 }
@@ -90,6 +118,67 @@ pub struct Outcome {
     pub tail_amplitude: f64,
     /// Largest |ξ̇| at sample instants over the tail of the horizon.
     pub tail_speed: f64,
+    /// The cycle that ended the run early (whole cycles skipped, or periods replayed from a
+    /// recorded cycle); `None` for a run that simulated every period (no repetition found
+    /// before the end, or detection off). Not part of the classification.
+    pub cycle: Option<Cycle>,
+}
+
+/// A repeating state found by cycle detection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Cycle {
+    /// The period L in sampling periods.
+    pub period: u64,
+    /// True: the state repeated bit for bit and whole cycles were skipped. False: it repeated
+    /// up to the position's last bits (a drift of rounding errors) and periods were replayed
+    /// from one recorded cycle, a few operations per period.
+    pub exact: bool,
+}
+
+/// Per-sample bookkeeping of the rules (shared by the simulated and the replayed samples).
+struct Acc {
+    mu: f64,
+    limit: f64,
+    tol: f64,
+    tail_start: u64,
+    prev: f64,
+    h_max: f64,
+    mono: bool,
+    amp: f64,
+    spd: f64,
+}
+
+impl Acc {
+    /// Records sample `h` at (x, v); true if it makes the point growing (H_T NaN or over the
+    /// limit; divergence of the state is the solver's to report).
+    #[inline(always)]
+    fn sample(&mut self, h: u64, x: f64, v: f64) -> bool {
+        let e = storage(self.mu, x, v);
+        if e > self.prev + self.tol {
+            self.mono = false;
+        }
+        self.prev = e;
+        if e > self.h_max {
+            self.h_max = e;
+        }
+        if h >= self.tail_start {
+            self.amp = self.amp.max(x.abs());
+            self.spd = self.spd.max(v.abs());
+        }
+        e.is_nan() || e > self.limit
+    }
+}
+
+/// Longest cycle recorded for replay (no allocation: the phases live on the stack).
+pub const MAX_REPLAY: usize = 128;
+
+/// One period of a cycle recorded for replay: the count the law reads at its start sample,
+/// the position increments, and ξ̇ at its end sample.
+#[derive(Clone, Copy, Default)]
+struct Phase {
+    count: u64,
+    dx: Increments,
+    v_end: f64,
 }
 
 /// Runs `sim` for up to `periods` periods and classifies the trajectory.
@@ -98,46 +187,158 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
     let s0 = sim.state();
     let h0 = storage(mu, s0.x, s0.v);
     let scale = if h0 > 1.0 { h0 } else { 1.0 };
-    let limit = th.divergence_ratio * scale;
-    let tol = th.mono_tol * scale;
-    let tail_start = periods - (periods as f64 * th.tail_fraction) as u64;
-    let mut prev = h0;
-    let mut h_max = h0;
-    let mut mono = true;
-    let mut amp: f64 = 0.0;
-    let mut spd: f64 = 0.0;
+    let mut acc = Acc {
+        mu,
+        limit: th.divergence_ratio * scale,
+        tol: th.mono_tol * scale,
+        tail_start: periods - (periods as f64 * th.tail_fraction) as u64,
+        prev: h0,
+        h_max: h0,
+        mono: true,
+        amp: 0.0,
+        spd: 0.0,
+    };
+    let tail_start = acc.tail_start;
     let mut h = 0;
     let mut class = None;
+    // Brent: `saved` is the state at sample `h - lam`; compared with every later sample up to
+    // `power` samples on, then replaced by the current one with `power` doubled.
+    let mut saved = if th.cycle_detection {
+        Some(sim.clone())
+    } else {
+        None
+    };
+    let mut power: u64 = 1;
+    let mut lam: u64 = 0;
+    // (L, c): the state at every sample k >= c equals the state at k + L.
+    let mut cycle: Option<(u64, u64)> = None;
+    let mut ended = None;
+    // A cycle up to the position's bits being recorded for replay: the solver at its first
+    // sample, and the phases so far.
+    let mut recording: Option<S> = None;
+    let mut phases = [Phase::default(); MAX_REPLAY];
+    let mut recorded = 0;
+    let mut tr = Increments::default();
     while h < periods {
-        sim.step_period();
+        if let Some((l, c)) = cycle {
+            // Skip q whole cycles (samples h+1 ..= h+q·L): each repeats a sample already
+            // classified; only the tail maxima need care (see the module header).
+            let q = if h + 1 < tail_start {
+                (tail_start - 1 - h) / l
+            } else if h + 1 >= tail_start.max(c + 1) + l {
+                // The tail has covered L consecutive samples of the cycle: all its phases.
+                (periods - h) / l
+            } else {
+                0
+            };
+            if q > 0 {
+                h += q * l;
+                ended = Some(Cycle {
+                    period: l,
+                    exact: true,
+                });
+                if h >= periods {
+                    break;
+                }
+            }
+        }
+        if recording.is_some() {
+            let count = sim.count_at(sim.state().x).to_bits();
+            sim.step_period_traced(&mut tr);
+            phases[recorded] = Phase {
+                count,
+                dx: tr,
+                v_end: sim.state().v,
+            };
+            recorded += 1;
+        } else {
+            sim.step_period();
+        }
         h += 1;
         let s = sim.state();
-        let e = storage(mu, s.x, s.v);
-        if e > prev + tol {
-            mono = false;
-        }
-        prev = e;
-        if e > h_max {
-            h_max = e;
-        }
-        if h >= tail_start {
-            amp = amp.max(s.x.abs());
-            spd = spd.max(s.v.abs());
-        }
-        if e.is_nan() || e > limit || sim.diverged() {
+        if acc.sample(h, s.x, s.v) || sim.diverged() {
             class = Some(Class::Growing);
             break;
         }
         if sim.at_rest() {
-            class = Some(if mono {
+            class = Some(if acc.mono {
                 Class::MonotoneDecay
             } else {
                 Class::NonMonotoneDecay
             });
             break;
         }
+        if let Some(first) = recording.as_ref() {
+            if (recorded as u64) < lam {
+                continue;
+            }
+            // One period of the candidate recorded: replayable if it returned to the same state
+            // up to the position's bits and never rested (the rest test compares positions).
+            let ph = &phases[..recorded];
+            let ok = sim.same_but_position(first)
+                && !ph
+                    .iter()
+                    .zip(core::iter::once(first.state().v).chain(ph.iter().map(|p| p.v_end)))
+                    .any(|(p, v0)| v0 == 0.0 && p.v_end == 0.0);
+            recording = None;
+            recorded = 0;
+            if ok {
+                let base = sim.clone();
+                match replay(&base, ph, &mut acc, &mut h, periods) {
+                    Replay::Horizon => {
+                        ended = Some(Cycle {
+                            period: lam,
+                            exact: false,
+                        });
+                        break;
+                    }
+                    Replay::Growing => {
+                        class = Some(Class::Growing);
+                        break;
+                    }
+                    Replay::Left(resumed) => {
+                        *sim = resumed;
+                        ended = Some(Cycle {
+                            period: lam,
+                            exact: false,
+                        });
+                    }
+                    Replay::Exact(resumed) => {
+                        *sim = resumed;
+                        cycle = Some((lam, h - lam));
+                        ended = Some(Cycle {
+                            period: lam,
+                            exact: false,
+                        });
+                        continue;
+                    }
+                }
+            }
+            // Not replayable (or left): start the search afresh from here.
+            saved = Some(sim.clone());
+            power = 1;
+            lam = 0;
+            continue;
+        }
+        if cycle.is_none() {
+            if let Some(t) = saved.as_mut() {
+                lam += 1;
+                if sim.same_state(t) {
+                    cycle = Some((lam, h - lam));
+                    saved = None;
+                } else if lam as usize <= MAX_REPLAY && sim.same_but_position(t) {
+                    // Same state but for the position's last bits: record one period exactly
+                    // (with the increments) and replay it.
+                    recording = Some(sim.clone());
+                } else if lam == power {
+                    t.clone_from(sim);
+                    power *= 2;
+                    lam = 0;
+                }
+            }
+        }
     }
-    let class = class.unwrap_or(if prev > h0 * (1.0 + th.growth_tol) {
+    let class = class.unwrap_or(if acc.prev > h0 * (1.0 + th.growth_tol) {
         Class::Growing
     } else {
         Class::Persistent
@@ -146,9 +347,73 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
         class,
         periods_run: h,
         h0,
-        h_end: prev,
-        h_max,
-        tail_amplitude: amp,
-        tail_speed: spd,
+        h_end: acc.prev,
+        h_max: acc.h_max,
+        tail_amplitude: acc.amp,
+        tail_speed: acc.spd,
+        cycle: ended,
     }
+}
+
+/// How a replay ended.
+enum Replay<S> {
+    /// At the horizon.
+    Horizon,
+    /// A replayed sample made the point growing.
+    Growing,
+    /// A count differed from the recorded one: the solver resumed at the current sample.
+    Left(S),
+    /// The position repeated bit for bit after one period: the solver at the current sample,
+    /// whose state equals the state one period of the cycle earlier.
+    Exact(S),
+}
+
+/// Replays the recorded `phases` from `base` (the solver one cycle after their first sample,
+/// in the same state up to the position's bits) while every sample's count matches the
+/// recorded one: ξ ← ξ + Δ with the recorded increments, ξ̇ as recorded, and the per-sample
+/// rules of [`Acc`]. This is exactly the solver's own arithmetic (its future depends on ξ only
+/// through the counts and these increments: [`ExactSim::same_but_position`]).
+fn replay<S: ExactSim>(
+    base: &S,
+    phases: &[Phase],
+    acc: &mut Acc,
+    h: &mut u64,
+    periods: u64,
+) -> Replay<S> {
+    let mut x = base.state().x;
+    let mut x_cycle = x;
+    let l = phases.len();
+    let mut j = 0;
+    while *h < periods {
+        let p = &phases[j];
+        if base.count_at(x).to_bits() != p.count {
+            // Resume the solver at this sample: the base stepped j periods (the samples in
+            // between matched, so it passes through the same states up to the position) with
+            // the replayed position.
+            let mut s = base.clone();
+            for _ in 0..j {
+                s.step_period();
+            }
+            s.set_position(x);
+            return Replay::Left(s);
+        }
+        for &d in p.dx.as_slice() {
+            x += d;
+        }
+        *h += 1;
+        if acc.sample(*h, x, p.v_end) || !(x.abs() <= 1e150 && p.v_end.abs() <= 1e150) {
+            return Replay::Growing;
+        }
+        j += 1;
+        if j == l {
+            j = 0;
+            if x.to_bits() == x_cycle.to_bits() {
+                let mut s = base.clone();
+                s.set_position(x);
+                return Replay::Exact(s);
+            }
+            x_cycle = x;
+        }
+    }
+    Replay::Horizon
 }

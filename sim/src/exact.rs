@@ -36,7 +36,7 @@
 
 use crate::math::{e1, floor_fast, g, g1, g2};
 use crate::params::{validate, Effects, ParamError, Params};
-use crate::plant::{advance, Body, Motion};
+use crate::plant::{advance_traced, Body, Increments, Motion};
 use stiffwall_core::params::check_range;
 
 /// Capacity of the delay line (a power of two, > MAX_TAU_D + 2).
@@ -122,6 +122,26 @@ pub trait ExactSim: Clone {
     fn params(&self) -> Params;
     /// Force applied at the start of the next period's first segment (for CSV output).
     fn applied_force(&self) -> f64;
+    /// True if `self` and `other` (the same solver, at any two sample instants) hold the same
+    /// state bit for bit: everything the following periods depend on (position, velocity, the
+    /// delay line's pending forces, the rest counter and last force of [`Self::at_rest`], the
+    /// damper's previous count). Then both continue identically forever, so a trajectory whose
+    /// state at sample h equals its state at sample h − L is periodic with period L from h − L
+    /// on ([`crate::classify`]'s cycle detection). False whenever unsure (never wrongly true).
+    fn same_state(&self, other: &Self) -> bool;
+    /// [`Self::same_state`] except for the bits of the position, whose sampled count (what
+    /// the law reads, [`Self::count_at`]) must still be equal: true only for a solver whose
+    /// future depends on ξ through that count at each sample and through the increments
+    /// ξ ← ξ + Δ alone (the quantized exact solver), false otherwise.
+    fn same_but_position(&self, other: &Self) -> bool;
+    /// [`Self::step_period`], also writing the period's position increments Δ (ξ ← ξ + Δ, in
+    /// order) to `tr`; the same arithmetic. A solver without the trace leaves `tr` empty (and
+    /// never reports [`Self::same_but_position`]).
+    fn step_period_traced(&mut self, tr: &mut Increments);
+    /// The sampled count the law reads at position `x` (⌊x⌋ when quantized).
+    fn count_at(&self, x: f64) -> f64;
+    /// Replaces the position at the current sample instant (for resuming a replayed cycle).
+    fn set_position(&mut self, x: f64);
 }
 
 /// The exact solver with compile-time effect flags.
@@ -277,7 +297,7 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
 
     /// One segment of constant force `f` with precomputed coefficients.
     #[inline(always)]
-    fn seg(&mut self, f: f64, co: &Coef) {
+    fn seg<const T: bool>(&mut self, f: f64, co: &Coef, tr: &mut Increments) {
         let v = self.st.v;
         let sigma = if C { self.body.coulomb } else { 0.0 };
         let (e, p1, p2) = if V {
@@ -295,10 +315,13 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
                     self.account(f, dx, v, acc, co, sigma);
                 }
                 self.st.x += dx;
+                if T {
+                    tr.push(dx);
+                }
                 self.st.v = v1;
                 return;
             }
-            self.slow(f, co.len);
+            self.slow::<T>(f, co.len, tr);
         } else if f.abs() > sigma {
             let s = if f > 0.0 { 1.0 } else { -1.0 };
             let acc = (f - sigma * s) * self.body.inv_mass;
@@ -307,6 +330,9 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
                 self.account(f, dx, 0.0, acc, co, sigma);
             }
             self.st.x += dx;
+            if T {
+                tr.push(dx);
+            }
             self.st.v = acc * p1;
         }
         // else: at rest with |f| ≤ σ, stays.
@@ -328,26 +354,18 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
     /// Segment with a velocity zero crossing: general closed form (rare).
     #[cold]
     #[inline(never)]
-    fn slow(&mut self, f: f64, len: f64) {
+    fn slow<const T: bool>(&mut self, f: f64, len: f64, tr: &mut Increments) {
         let x0 = self.st.x;
-        let r = advance::<A>(&self.body, &mut self.st, f, len);
+        let r = advance_traced::<A, T>(&self.body, &mut self.st, f, len, tr);
         if A {
             self.e_d += self.body.damping * r.int_v2 + self.body.coulomb * r.int_abs_v;
             self.w_a += f * (self.st.x - x0);
         }
     }
 
+    /// One sampling period; with `T` the position increments go to `tr` (same arithmetic).
     #[inline(always)]
-    fn delayed(&self, back: u64) -> f64 {
-        self.line[(self.h.wrapping_sub(back) & MASK) as usize]
-    }
-}
-
-impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, const A: bool>
-    ExactSim for Exact<Q, C, V, D, W, A>
-{
-    #[inline]
-    fn step_period(&mut self) {
+    fn step<const T: bool>(&mut self, tr: &mut Increments) {
         let start = self.st;
         // A diverged trajectory is frozen (never NaN); `diverged()` reports it.
         if !(start.x.abs() <= 1e150 && start.v.abs() <= 1e150) {
@@ -367,15 +385,15 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             let f2 = self.delayed(self.n);
             if self.split {
                 let f1 = self.delayed(self.n + 1);
-                self.seg(f1, &c1);
-                self.seg(f2, &c2);
+                self.seg::<T>(f1, &c1, tr);
+                self.seg::<T>(f2, &c2, tr);
                 f_last = if f1 == f2 { f2 } else { f64::NAN };
             } else {
-                self.seg(f2, &full);
+                self.seg::<T>(f2, &full, tr);
                 f_last = f2;
             }
         } else {
-            self.seg(fc, &full);
+            self.seg::<T>(fc, &full, tr);
             f_last = fc;
         }
         // Fixed-point detection: at rest over a whole period under one unchanged force.
@@ -400,6 +418,53 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
         self.h += 1;
     }
 
+    #[inline(always)]
+    fn delayed(&self, back: u64) -> f64 {
+        self.line[(self.h.wrapping_sub(back) & MASK) as usize]
+    }
+
+    /// Everything the following periods depend on apart from ξ and ξ̇. The constants
+    /// (parameters, coefficients, β_v) are the same for clones of one solver. The step at sample
+    /// h writes slot h and reads slots h − n and h − n − 1: the pending forces are the n + 1
+    /// slots before h. The audit fields are outputs of the last period, not state.
+    #[inline]
+    fn same_but_motion(&self, o: &Self) -> bool {
+        self.rest_periods == o.rest_periods
+            && self.last_force.to_bits() == o.last_force.to_bits()
+            && self.n_prev.to_bits() == o.n_prev.to_bits()
+            && self.beta_v.to_bits() == o.beta_v.to_bits()
+            && (!D || (1..=self.n + 1).all(|j| self.delayed(j).to_bits() == o.delayed(j).to_bits()))
+    }
+}
+
+impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, const A: bool>
+    ExactSim for Exact<Q, C, V, D, W, A>
+{
+    #[inline]
+    fn step_period(&mut self) {
+        self.step::<false>(&mut Increments::default());
+    }
+
+    fn step_period_traced(&mut self, tr: &mut Increments) {
+        tr.len = 0;
+        self.step::<true>(tr);
+    }
+
+    fn same_but_position(&self, o: &Self) -> bool {
+        // Only the quantized law reads ξ through its count alone.
+        Q && self.st.v.to_bits() == o.st.v.to_bits()
+            && Self::count(self.st.x).to_bits() == Self::count(o.st.x).to_bits()
+            && self.same_but_motion(o)
+    }
+
+    fn count_at(&self, x: f64) -> f64 {
+        Self::count(x)
+    }
+
+    fn set_position(&mut self, x: f64) {
+        self.st.x = x;
+    }
+
     fn state(&self) -> Motion {
         self.st
     }
@@ -418,6 +483,15 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
     fn params(&self) -> Params {
         self.params
     }
+    #[inline]
+    fn same_state(&self, o: &Self) -> bool {
+        // Position and velocity first: they differ at almost every compare (the cheap filter).
+        if self.st.x.to_bits() != o.st.x.to_bits() || self.st.v.to_bits() != o.st.v.to_bits() {
+            return false;
+        }
+        self.same_but_motion(o)
+    }
+
     fn applied_force(&self) -> f64 {
         // The force at the start of the next period; with no delay it is the sample about to
         // be taken (the delay line slot h is written by the next `step_period`).

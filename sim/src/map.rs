@@ -13,7 +13,7 @@
 //! (the exact solver's [`crate::exact::Exact::with_damping`]); 0 (the default) is the paper's
 //! spring-only wall, bit for bit, and is not serialised.
 
-use crate::classify::{classify, Class, Outcome, Thresholds};
+use crate::classify::{classify, Class, Cycle, Outcome, Thresholds};
 use crate::exact::{Full, History, NoDelay, MAX_BETA_V};
 use crate::params::Params;
 use crate::plant::Motion;
@@ -248,13 +248,39 @@ pub fn simulate_point_with(
     periods: u64,
     history: History,
 ) -> Outcome {
+    simulate_point_th(
+        mu,
+        beta,
+        sigma,
+        tau_d,
+        xidot0,
+        periods,
+        history,
+        &Thresholds::default(),
+    )
+}
+
+/// [`simulate_point_with`] with explicit classification thresholds and options (e.g.
+/// [`Thresholds::cycle_detection`] off).
+#[allow(clippy::too_many_arguments)]
+#[must_use]
+pub fn simulate_point_th(
+    mu: f64,
+    beta: f64,
+    sigma: f64,
+    tau_d: f64,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    th: &Thresholds,
+) -> Outcome {
     let p = Params {
         mu,
         beta,
         sigma,
         tau_d,
     };
-    simulate_point_damped(p, xidot0, periods, history, 0.0)
+    simulate_point_damped_th(p, xidot0, periods, history, 0.0, th)
 }
 
 /// Simulates and classifies one point of the paper's model `p` (all effects, two-sided wall,
@@ -269,16 +295,29 @@ pub fn simulate_point_damped(
     history: History,
     beta_v: f64,
 ) -> Outcome {
+    simulate_point_damped_th(p, xidot0, periods, history, beta_v, &Thresholds::default())
+}
+
+/// [`simulate_point_damped`] with explicit classification thresholds and options (e.g.
+/// [`Thresholds::cycle_detection`] off).
+#[must_use]
+pub fn simulate_point_damped_th(
+    p: Params,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    beta_v: f64,
+    th: &Thresholds,
+) -> Outcome {
     let init = Motion { x: 0.0, v: xidot0 };
-    let th = Thresholds::default();
     if p.tau_d == 0.0 {
         match NoDelay::new(p, init, history).and_then(|s| s.with_damping(beta_v)) {
-            Ok(mut s) => classify(&mut s, periods, &th),
+            Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
     } else {
         match Full::new(p, init, history).and_then(|s| s.with_damping(beta_v)) {
-            Ok(mut s) => classify(&mut s, periods, &th),
+            Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
     }
@@ -293,6 +332,53 @@ fn invalid() -> Outcome {
         h_max: f64::NAN,
         tail_amplitude: f64::NAN,
         tail_speed: f64::NAN,
+        cycle: None,
+    }
+}
+
+/// How [`run_with`] computes. Not part of the result: every choice gives the same points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Finish a point from its exactly repeating state ([`Thresholds::cycle_detection`], the
+    /// default); off: brute force over the whole horizon.
+    pub cycle_detection: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            cycle_detection: true,
+        }
+    }
+}
+
+/// What [`run_with`] returns, in the order of the points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOutput {
+    /// The classified points.
+    pub points: Vec<MapPoint>,
+    /// Each point's measured cost: ns of wall time on its worker thread per period of its
+    /// `periods_run` (skipped cycles included), at least one period.
+    pub ns_per_period: Vec<f64>,
+    /// Each point's [`Outcome::cycle`]: the repeating state that ended it early.
+    pub cycle: Vec<Option<Cycle>>,
+}
+
+impl RunOutput {
+    /// Number of points that ended by cycle detection (whole cycles skipped or the rest of
+    /// the horizon replayed).
+    #[must_use]
+    pub fn cycle_points(&self) -> usize {
+        self.cycle.iter().filter(|c| c.is_some()).count()
+    }
+
+    /// Of [`Self::cycle_points`], those whose state repeated bit for bit (cycles skipped).
+    #[must_use]
+    pub fn exact_cycle_points(&self) -> usize {
+        self.cycle
+            .iter()
+            .filter(|c| c.is_some_and(|c| c.exact))
+            .count()
     }
 }
 
@@ -309,7 +395,23 @@ pub fn run_with_cost(
     indices: &[usize],
     progress: &(dyn Fn() + Sync),
 ) -> (Vec<MapPoint>, Vec<f64>) {
-    let mut out: Vec<(MapPoint, f64)> = indices
+    let o = run_with(spec, indices, progress, RunOptions::default());
+    (o.points, o.ns_per_period)
+}
+
+/// [`run_with_cost`] with explicit [`RunOptions`], also reporting which points ended by cycle
+/// detection.
+pub fn run_with(
+    spec: &MapSpec,
+    indices: &[usize],
+    progress: &(dyn Fn() + Sync),
+    opts: RunOptions,
+) -> RunOutput {
+    let th = Thresholds {
+        cycle_detection: opts.cycle_detection,
+        ..Thresholds::default()
+    };
+    let mut out: Vec<(MapPoint, f64, Option<Cycle>)> = indices
         .par_iter()
         .with_max_len(1)
         .map(|&i| {
@@ -321,7 +423,14 @@ pub fn run_with_cost(
                 sigma,
                 tau_d: spec.tau_d,
             };
-            let o = simulate_point_damped(p, spec.xidot0, spec.periods, spec.history, spec.damping);
+            let o = simulate_point_damped_th(
+                p,
+                spec.xidot0,
+                spec.periods,
+                spec.history,
+                spec.damping,
+                &th,
+            );
             let ns = t0.elapsed().as_secs_f64() * 1e9;
             progress();
             let point = MapPoint {
@@ -334,11 +443,21 @@ pub fn run_with_cost(
                 h_end: o.h_end,
                 tail_amplitude: o.tail_amplitude,
             };
-            (point, ns / o.periods_run.max(1) as f64)
+            (point, ns / o.periods_run.max(1) as f64, o.cycle)
         })
         .collect();
-    out.sort_by_key(|(p, _)| p.index);
-    out.into_iter().unzip()
+    out.sort_by_key(|(p, _, _)| p.index);
+    let mut r = RunOutput {
+        points: Vec::with_capacity(out.len()),
+        ns_per_period: Vec::with_capacity(out.len()),
+        cycle: Vec::with_capacity(out.len()),
+    };
+    for (p, ns, c) in out {
+        r.points.push(p);
+        r.ns_per_period.push(ns);
+        r.cycle.push(c);
+    }
+    r
 }
 
 /// Indices of shard `k` of `n` (k in 0..n): every n-th point starting at k (empty for n = 0).

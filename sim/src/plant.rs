@@ -98,9 +98,50 @@ fn sign(v: f64) -> f64 {
     }
 }
 
+/// The position increments Δ of one sampling period, in the order a solver adds them
+/// (ξ ← ξ + Δ each): at most two per segment, two segments per period. No allocation.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Increments {
+    /// The increments (the first `len`).
+    pub dx: [f64; 4],
+    /// How many.
+    pub len: usize,
+}
+
+impl Increments {
+    /// Appends Δ (a fifth one is dropped: cannot happen, see the type).
+    #[inline]
+    pub fn push(&mut self, d: f64) {
+        if let Some(slot) = self.dx.get_mut(self.len) {
+            *slot = d;
+            self.len += 1;
+        }
+    }
+
+    /// The increments in order.
+    #[must_use]
+    pub fn as_slice(&self) -> &[f64] {
+        self.dx.get(..self.len).unwrap_or(&[])
+    }
+}
+
 /// Advances `m` by `t` under the constant force `f`, exactly, applying the stick–slip rule.
 /// With `AUDIT` the returned integrals hold ∫ẋ² and ∫|ẋ| (otherwise zeros and the flags).
+#[inline]
 pub fn advance<const AUDIT: bool>(body: &Body, m: &mut Motion, f: f64, t: f64) -> StepIntegrals {
+    advance_traced::<AUDIT, false>(body, m, f, t, &mut Increments::default())
+}
+
+/// [`advance`]; with `TRACE` it also appends to `trace` each increment Δ it adds to the
+/// position (`m.x += Δ`, at most two), in order. The arithmetic is the same either way.
+#[inline]
+pub fn advance_traced<const AUDIT: bool, const TRACE: bool>(
+    body: &Body,
+    m: &mut Motion,
+    f: f64,
+    t: f64,
+    trace: &mut Increments,
+) -> StepIntegrals {
     let mut out = StepIntegrals::default();
     let mut rem = t;
     let c = body.coulomb;
@@ -111,6 +152,9 @@ pub fn advance<const AUDIT: bool>(body: &Body, m: &mut Motion, f: f64, t: f64) -
         let (dx, v1, iv2) = free::<AUDIT>(body, m.v, acc, rem);
         if v1 * s > 0.0 || a * s >= 0.0 {
             m.x += dx;
+            if TRACE {
+                trace.push(dx);
+            }
             m.v = v1;
             if AUDIT {
                 out.int_v2 += iv2;
@@ -123,6 +167,9 @@ pub fn advance<const AUDIT: bool>(body: &Body, m: &mut Motion, f: f64, t: f64) -
         let tc = (t0 * log1p_over(body.rate * t0)).min(rem);
         let (dx, _, iv2) = free::<AUDIT>(body, m.v, acc, tc);
         m.x += dx;
+        if TRACE {
+            trace.push(dx);
+        }
         m.v = 0.0;
         rem -= tc;
         out.crossings = 1;
@@ -140,6 +187,9 @@ pub fn advance<const AUDIT: bool>(body: &Body, m: &mut Motion, f: f64, t: f64) -
     let acc = (f - c * s) * body.inv_mass;
     let (dx, v1, iv2) = free::<AUDIT>(body, 0.0, acc, rem);
     m.x += dx;
+    if TRACE {
+        trace.push(dx);
+    }
     m.v = v1;
     if AUDIT {
         out.int_v2 += iv2;

@@ -664,6 +664,27 @@ impl ExactSim for RefSim {
             tau_d: self.tau_d,
         }
     }
+    /// Always false: the reference integrators are never cut short by cycle detection (their
+    /// adaptive step-size controller carries state across periods), so they classify by brute
+    /// force.
+    fn same_state(&self, _other: &Self) -> bool {
+        false
+    }
+    /// Always false (see [`Self::same_state`]).
+    fn same_but_position(&self, _other: &Self) -> bool {
+        false
+    }
+    /// No trace: steps and leaves `tr` empty.
+    fn step_period_traced(&mut self, tr: &mut crate::plant::Increments) {
+        tr.len = 0;
+        self.step_period();
+    }
+    fn count_at(&self, x: f64) -> f64 {
+        self.count(x)
+    }
+    fn set_position(&mut self, x: f64) {
+        self.y[0] = x;
+    }
     fn applied_force(&self) -> f64 {
         // Same convention as the exact solver: the force at the start of the next period.
         if self.m.amp.is_some() || !self.m.zoh {

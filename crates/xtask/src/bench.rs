@@ -4,6 +4,11 @@
 //! `target/criterion/`), then the measurement program `sim/examples/bench_table.rs`, which
 //! prints and writes the Markdown table (default `docs/BENCHMARKS-sim.md`) and the Pareto plot
 //! `docs/figures/pareto-sim.png`.
+//! Its headline times the Fig. 6 set on the paper's grid (β 0–1.2 × 21, σ 0–2 × 34, ξ̇₀ ∈
+//! {1, 5, 10, 20}, μ = 100, τ_D = 0, 5·10⁴ periods) through `sim::map::run_with`, the code path of
+//! `hostctl map`, with and without cycle detection, and gives ns per period separately for
+//! decaying, growing and persistent points. `cargo xtask bench` then copies the tables into
+//! `docs/BENCHMARKS.md`.
 //!
 //! Options: `--quick` (skip criterion, short timing batches), `--no-criterion`,
 //! `--out FILE` (Markdown destination), `--figure FILE` (Pareto plot destination).

@@ -241,6 +241,13 @@ pub struct Cost {
     pub cpu_ns_per_period: Option<f64>,
     /// Per panel (in panel order), the ns per period of each point (in point order).
     pub ns_per_period: Vec<Vec<f64>>,
+    /// Number of points that ended by cycle detection (`stiffwall_sim::classify`): their
+    /// solver state repeated bit for bit (whole cycles skipped) or up to the position's
+    /// rounding drift (the rest replayed from one recorded cycle), with a result identical to
+    /// simulating every period. Their `periods_run` still counts every period of the horizon.
+    /// 0 in files from before the key.
+    #[serde(default)]
+    pub cycle_points: u64,
 }
 
 impl Cost {
@@ -266,7 +273,15 @@ impl Cost {
             cpu_seconds: None,
             cpu_ns_per_period: None,
             ns_per_period,
+            cycle_points: 0,
         }
+    }
+
+    /// Sets the number of points that ended by cycle detection.
+    #[must_use]
+    pub fn with_cycle_points(mut self, cycle_points: u64) -> Self {
+        self.cycle_points = cycle_points;
+        self
     }
 
     /// Sets the measured CPU time (and the CPU ns per period derived from it).
@@ -530,7 +545,9 @@ pub fn merge(files: &[(PathBuf, MapFile)]) -> Result<MapFile> {
         spec_crc64: spec.crc64(),
         spec,
         shard: None,
-        cost: Cost::of(&panels, ns).with_cpu_seconds(cpu.map(|c| c.iter().sum())),
+        cost: Cost::of(&panels, ns)
+            .with_cpu_seconds(cpu.map(|c| c.iter().sum()))
+            .with_cycle_points(ordered.iter().map(|f| f.cost.cycle_points).sum()),
         panels,
         seconds: ordered.iter().map(|f| f.seconds).sum(),
     })

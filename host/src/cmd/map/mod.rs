@@ -15,7 +15,10 @@
 //! JSON output: `{ "spec": {...}, "spec_crc64", "shard": [k, n] | null, "panels": [{ "mu",
 //! "tau_d", "xidot0", "points": [{ index, beta, sigma, class, periods_run, h0, h_end,
 //! tail_amplitude }] }], "cost": { periods_total, core_seconds, ns_per_period_mean,
-//! cpu_seconds, cpu_ns_per_period, ns_per_period: [[per point] per panel] }, "seconds" }`, written atomically ([`file::write`]). A run whose `--out` already holds the
+//! cpu_seconds, cpu_ns_per_period, ns_per_period: [[per point] per panel], cycle_points },
+//! "seconds" }` (`cycle_points`: how many points ended by cycle detection, their state having
+//! repeated exactly or up to the position's rounding drift; `--no-cycle-detection` simulates
+//! every period, with the same points), written atomically ([`file::write`]). A run whose `--out` already holds the
 //! complete, valid result of the same sweep and shard does nothing (resume after a pre-empted
 //! batch job); `--force` recomputes. Bounds: `--threads` in [1, [`THREADS_PER_CORE`] × cores].
 
@@ -91,6 +94,10 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Simulate every period even where a point's state repeats (same result, slower; for
+    /// checking and timing).
+    #[arg(long)]
+    pub no_cycle_detection: bool,
     /// Delay-line history before tau = 0: the spring force of the initial position, or zero.
     #[arg(long, value_enum, default_value = "hold-initial")]
     pub history: HistoryArg,
@@ -236,6 +243,19 @@ fn threads_of(a: &Args) -> Result<usize> {
 /// # Errors
 /// None today (the signature leaves room for a failing solver).
 pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Result<MapFile> {
+    compute_with(spec, shard, quiet, map::RunOptions::default())
+}
+
+/// [`compute`] with explicit [`map::RunOptions`] (cycle detection on or off: same points).
+///
+/// # Errors
+/// None today (the signature leaves room for a failing solver).
+pub fn compute_with(
+    spec: &Spec,
+    shard: Option<(usize, usize)>,
+    quiet: bool,
+    opts: map::RunOptions,
+) -> Result<MapFile> {
     let (k, n) = shard.unwrap_or((0, 1));
     let t0 = std::time::Instant::now();
     let cpu0 = file::process_cpu_seconds();
@@ -255,18 +275,20 @@ pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Resul
         pb
     };
     let tick = || pb.inc(1);
+    let mut cycle_points = 0;
     let (panels, ns): (Vec<Panel>, Vec<Vec<f64>>) = specs
         .iter()
         .zip(&per_panel)
         .map(|(ps, idx)| {
-            let (points, ns) = map::run_with_cost(ps, idx, &tick);
+            let o = map::run_with(ps, idx, &tick, opts);
+            cycle_points += o.cycle_points() as u64;
             let panel = Panel {
                 mu: ps.mu,
                 tau_d: ps.tau_d,
                 xidot0: ps.xidot0,
-                points,
+                points: o.points,
             };
-            (panel, ns)
+            (panel, o.ns_per_period)
         })
         .unzip();
     pb.finish_and_clear();
@@ -274,10 +296,12 @@ pub fn compute(spec: &Spec, shard: Option<(usize, usize)>, quiet: bool) -> Resul
         spec: spec.clone(),
         spec_crc64: spec.crc64(),
         shard,
-        cost: Cost::of(&panels, ns).with_cpu_seconds(
-            cpu0.zip(file::process_cpu_seconds())
-                .map(|(a, b)| (b - a).max(0.0)),
-        ),
+        cost: Cost::of(&panels, ns)
+            .with_cpu_seconds(
+                cpu0.zip(file::process_cpu_seconds())
+                    .map(|(a, b)| (b - a).max(0.0)),
+            )
+            .with_cycle_points(cycle_points),
         panels,
         seconds: t0.elapsed().as_secs_f64(),
     })
@@ -404,7 +428,10 @@ pub fn run(args: &Args) -> Result<()> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()?;
-        let m = pool.install(|| compute(&spec, shard, args.quiet))?;
+        let opts = map::RunOptions {
+            cycle_detection: !args.no_cycle_detection,
+        };
+        let m = pool.install(|| compute_with(&spec, shard, args.quiet, opts))?;
         let counts = |p: &Panel, c: Class| p.points.iter().filter(|q| q.class == c).count();
         for p in &m.panels {
             eprintln!(
@@ -421,9 +448,10 @@ pub fn run(args: &Args) -> Result<()> {
             );
         }
         eprintln!(
-            "computed in {:.2} s: {} periods, {:.1} ns/period (thread wall time), {} CPU",
+            "computed in {:.2} s: {} periods ({} points ended by cycle detection), {:.1} ns/period (thread wall time), {} CPU",
             m.seconds,
             m.cost.periods_total,
+            m.cost.cycle_points,
             m.cost.ns_per_period_mean,
             m.cost.cpu_seconds.map_or_else(
                 || "unknown".to_owned(),
