@@ -10,6 +10,7 @@
 //! field and its allowed range.
 
 pub mod damping;
+pub mod kb_plot;
 pub mod plot;
 
 use serde::Serialize;
