@@ -155,6 +155,20 @@ fn tune_plot_writes_the_frontier_with_verified_points_and_the_set_wall() {
             "set wall K = ",
         ],
     );
+    let lin = dir.join("l.svg");
+    ok(&[
+        "tune",
+        "--fast",
+        "--dry-run",
+        "--device",
+        "phantom-1.0",
+        "--plot",
+        lin.to_str().unwrap(),
+    ]);
+    svg_with(
+        &dir.join("l-kb.svg"),
+        &["B [N·s/m]", "K [N/m]", "set wall K = "],
+    );
     let png = dir.join("t.png");
     let v = ok(&[
         "tune",
@@ -201,5 +215,22 @@ fn tune_spring_only_writes_no_frontier_and_bad_extension_is_refused_before_conne
         "{err}"
     );
     assert!(!gif.exists() && !dir.join("s-kb.gif").exists());
+    let missing = dir.join("no/such/dir/s.svg");
+    let bad = hostctl(&[
+        "tune",
+        "--fast",
+        "--dry-run",
+        "--plot",
+        missing.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("cannot write the figure file"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("connecting"),
+        "refused before connecting: {err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

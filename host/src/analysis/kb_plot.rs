@@ -296,4 +296,60 @@ mod tests {
         assert_eq!(kb_path(Path::new("a.b.PNG")), PathBuf::from("a.b-kb.PNG"));
         assert_eq!(kb_path(Path::new("t")), PathBuf::from("t-kb"));
     }
+
+    fn frontier(verified: Vec<(f64, Option<f64>)>, boundary: Vec<(f64, f64)>) -> Frontier {
+        Frontier {
+            title: "t".into(),
+            units: Units::of(false),
+            boundary,
+            boundary_label: "boundary".into(),
+            verified,
+            spring_only: Some(100.0),
+            best: None,
+            chosen: Some(Mark {
+                b: 0.0,
+                k: 100.0,
+                label: "set wall".into(),
+            }),
+        }
+    }
+
+    #[test]
+    fn ranges_cover_everything_and_stay_positive_when_all_is_zero_or_not_finite() {
+        let f = frontier(vec![(2.0, Some(900.0))], vec![(0.0, 50.0), (3.0, f64::NAN)]);
+        let (b, k) = f.ranges();
+        assert!(b >= 3.0 && k > 900.0, "{b} {k}");
+        let mut empty = frontier(Vec::new(), Vec::new());
+        empty.spring_only = None;
+        empty.chosen = None;
+        assert_eq!(empty.ranges(), (1.0, 1.0));
+    }
+
+    #[test]
+    fn a_b_without_verified_k_is_drawn_on_the_b_axis_with_its_legend_note() {
+        let dir = std::env::temp_dir().join(format!("stiffwall-kb-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("f.svg");
+        let f = frontier(
+            vec![(0.0, Some(100.0)), (1.0, None), (2.0, Some(300.0))],
+            boundary(
+                &stiffwall_core::devices::find("phantom-1.0").unwrap().params,
+                3.0,
+            ),
+        );
+        write(&path, &f).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        for needle in [
+            "B [N·s/m]",
+            "K [N/m]",
+            "boundary",
+            "verified: largest settling K",
+            "no K at or above the best so far (on the B axis)",
+            "spring-only wall K = 1.0000e2",
+            "set wall",
+        ] {
+            assert!(svg.contains(needle), "lacks {needle}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

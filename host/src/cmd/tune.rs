@@ -88,7 +88,8 @@ pub fn settings(a: &Args) -> Result<Settings> {
 pub fn run(a: &Args) -> Result<()> {
     let s = settings(a)?;
     if let Some(path) = &a.plot {
-        crate::figure::format_of(path)?;
+        crate::figure::prepare(path)?;
+        crate::figure::prepare(&kb_plot::kb_path(path))?;
     }
     // Ctrl-C: finish the current experiment, restore the previous config, exit. A second
     // registration (tests calling run twice) is harmless.
