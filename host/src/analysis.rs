@@ -1,5 +1,6 @@
 //! The paper's analysis of one device (Diolaiti et al. 2006, Sec. III, VII), behind `hostctl
-//! analyze` and reused by `tune` and `experiment` for their reports and (β, σ) figures.
+//! analyze` and reused by `tune` and `experiment` for their reports and (β, σ) figures; the
+//! (K, B) plane of a device with a virtual damper is drawn by [`kb_plot`].
 //!
 //! Units: inputs are SI (kg, N·s/m, N, m, s, N/m, m/s, m/s²; with `--rotational`
 //! kg·m², N·m·s/rad, N·m, rad, N·m/rad, rad/s, rad/s²). The report gives the dimensionless
@@ -10,6 +11,7 @@
 //! field and its allowed range.
 
 pub mod damping;
+pub mod kb_plot;
 pub mod plot;
 
 use serde::Serialize;

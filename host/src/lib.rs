@@ -9,7 +9,7 @@
 //! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
 //! [`plant_args`] (the plant flags, checked by `stiffwall-core`), [`config_flags`] (servo
 //! configuration changes), [`session`] (the telemetry stream and recorder), [`analysis`] (the
-//! paper's analysis of one device and its (β, σ) figure), [`recording`] and [`tune`].
+//! paper's analysis of one device, its (β, σ) figure and the (K, B) frontier figure), [`recording`] and [`tune`].
 //!
 //! Units: as documented per module (SI on the command line, device integers on the wire).
 //! Errors: library modules return `thiserror` enums naming the field and its range; the

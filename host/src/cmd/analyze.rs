@@ -1,5 +1,6 @@
 //! `hostctl analyze`: the paper's analysis of one device ([`crate::analysis`]) from a preset
-//! and/or flags, as a table, JSON, and a (β, σ) figure.
+//! and/or flags, as a table, JSON, and a (β, σ) figure (with `--damping`, also the (K, B)
+//! frontier figure `<stem>-kb.<ext>`).
 //!
 //! Units: command-line values are SI (kg, N·s/m, N, m, s, N/m, m/s, m/s²; with `--rotational`
 //! kg·m², N·m·s/rad, N·m, rad, N·m/rad, rad/s, rad/s²).
@@ -8,8 +9,8 @@
 //! flags through [`PlantArgs`]); bad input is an error naming the field and its allowed range,
 //! and nothing is written.
 
-use crate::analysis::damping::damping_report;
-use crate::analysis::{analyze, list_devices, plot, render_table};
+use crate::analysis::damping::{self, damping_report};
+use crate::analysis::{analyze, kb_plot, list_devices, plot, render_table};
 use crate::output::{emit, emit_report};
 use crate::plant_args::PlantArgs;
 use anyhow::{anyhow, bail, Context};
@@ -61,7 +62,8 @@ pub struct Args {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
-    /// Write the (β, σ) plane with regions, operating point and K path (.svg or .png).
+    /// Write the (β, σ) plane with regions, operating point and K path (.svg or .png); with
+    /// `--damping`, also the (K, B) frontier beside it as `<stem>-kb.<ext>`.
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
 }
@@ -85,19 +87,33 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     if let Some(path) = &args.plot {
         crate::figure::prepare(path)?;
+        if args.damping.is_some() {
+            crate::figure::prepare(&kb_plot::kb_path(path))?;
+        }
     }
     let (name, p) = resolve_params(args)?;
     let mut report = analyze(name, &p, args.velocity, args.acceleration)?;
     if let Some(b) = args.damping {
         report.damping = Some(damping_report(&p, b)?);
     }
+    let mut kb = None;
     if let Some(path) = &args.plot {
         plot::write(path, &report).with_context(|| format!("writing plot {}", path.display()))?;
+        if let Some(d) = &report.damping {
+            let kb_file = kb_plot::kb_path(path);
+            let f = damping::figure(d, &p, report.device.as_deref());
+            kb_plot::write(&kb_file, &f)
+                .with_context(|| format!("writing plot {}", kb_file.display()))?;
+            kb = Some(kb_file);
+        }
     }
     Ok(emit_report(args.json, &report, |r| {
         let mut s = render_table(r);
         if let Some(path) = &args.plot {
             let _ = writeln!(s, "plot written to {}", path.display());
+        }
+        if let Some(path) = &kb {
+            let _ = writeln!(s, "(K, B) frontier plot written to {}", path.display());
         }
         s
     })?)

@@ -1,7 +1,7 @@
 //! `hostctl tune`: finds and sets the largest stable wall stiffness on a device, with evidence
 //! (see [`crate::tune::procedure`] for the method).
 
-use crate::analysis;
+use crate::analysis::{self, kb_plot};
 use crate::device::connect::ConnectArgs;
 use crate::output::{emit, emit_json};
 use crate::session;
@@ -9,7 +9,7 @@ use crate::tune::procedure::{self, Outcome, Settings};
 use anyhow::Result;
 use std::fmt::Write as _;
 use std::io::IsTerminal as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `hostctl tune`.
 #[derive(Debug, clap::Args)]
@@ -40,7 +40,8 @@ pub struct Args {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Write the (β, σ) plot of the tuned operating point (.svg or .png).
+    /// Write the (β, σ) plot of the tuned operating point (.svg or .png); when a damper is set or
+    /// several B were tried, also the (K, B) frontier beside it as `<stem>-kb.<ext>`.
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
 }
@@ -87,7 +88,8 @@ pub fn settings(a: &Args) -> Result<Settings> {
 pub fn run(a: &Args) -> Result<()> {
     let s = settings(a)?;
     if let Some(path) = &a.plot {
-        crate::figure::format_of(path)?;
+        crate::figure::prepare(path)?;
+        crate::figure::prepare(&kb_plot::kb_path(path))?;
     }
     // Ctrl-C: finish the current experiment, restore the previous config, exit. A second
     // registration (tests calling run twice) is harmless.
@@ -116,23 +118,72 @@ pub fn run(a: &Args) -> Result<()> {
         Err(e) => return Err(e.context("tune failed; the previous config was restored")),
     };
     let report = analysis::analyze(None, &o.params, Some(o.max_velocity), None)?;
+    let mut kb = None;
     if let Some(path) = &a.plot {
         analysis::plot::write(path, &report)?;
+        if wants_kb_figure(&o) {
+            let kb_file = kb_plot::kb_path(path);
+            kb_plot::write(&kb_file, &kb_figure(&o))?;
+            kb = Some(kb_file);
+        }
     }
     if a.json {
-        let j = serde_json::json!({
+        let mut j = serde_json::json!({
             "target": a.connect.describe(),
             "tune": o,
             "analysis": report,
         });
+        if let Some(path) = &kb {
+            j["plot_kb"] = serde_json::json!(path);
+        }
         emit_json(&j)?;
     } else {
-        emit(&render(a, &o, &report))?;
+        emit(&render(a, &o, &report, kb.as_deref()))?;
     }
     Ok(())
 }
 
-fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
+/// Whether `--plot` also draws the (K, B) frontier: a damper was set, or more than one B tried.
+fn wants_kb_figure(o: &Outcome) -> bool {
+    o.b_set > 0.0 || o.frontier.len() > 1
+}
+
+/// The (K, B) frontier figure of a tune: the exact linear K_max(B) of the identified model with
+/// Coulomb as describing-function damping at the max velocity (as [`procedure::predict`]),
+/// over 0 ..= 1.3 × the largest B tried; the verified points, the spring-only and the set wall.
+fn kb_figure(o: &Outcome) -> kb_plot::Frontier {
+    let u = kb_plot::Units::of(o.params.rotational);
+    let tried = o.frontier.iter().map(|f| f.b).fold(o.b_set, f64::max);
+    let b_max = if tried > 0.0 {
+        1.3 * tried
+    } else {
+        analysis::damping::FRONTIER_B_MAX_M_PER_T * o.params.mass / o.params.period_s
+    };
+    let eq = procedure::df_equivalent(&o.params, o.max_velocity);
+    kb_plot::Frontier {
+        title: "tune: (K, B) frontier of the identified model".to_string(),
+        units: u,
+        boundary: kb_plot::boundary(&eq, b_max),
+        boundary_label: format!(
+            "predicted K_max(B): exact linear, b + 4c/(πv), v = {:.3e} {}",
+            o.max_velocity,
+            if o.params.rotational { "rad/s" } else { "m/s" }
+        ),
+        verified: o.frontier.iter().map(|f| (f.b, f.k_verified)).collect(),
+        spring_only: Some(o.k_spring_only),
+        best: None,
+        chosen: Some(kb_plot::Mark {
+            b: o.b_set,
+            k: o.k_set,
+            label: format!(
+                "set wall K = {:.4e} {}, B = {:.4e} {}",
+                o.k_set, u.k, o.b_set, u.b
+            ),
+        }),
+    }
+}
+
+fn render(a: &Args, o: &Outcome, r: &analysis::Report, kb: Option<&Path>) -> String {
     let u = if o.params.rotational {
         ("N·m/rad", "kg·m²", "N·m·s/rad", "N·m", "rad/s")
     } else {
@@ -253,6 +304,9 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report) -> String {
     );
     if let Some(p) = &a.plot {
         let _ = writeln!(s, "plot: {}", p.display());
+    }
+    if let Some(p) = kb {
+        let _ = writeln!(s, "(K, B) frontier plot: {}", p.display());
     }
     s
 }

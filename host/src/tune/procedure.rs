@@ -266,8 +266,9 @@ pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
 }
 
 /// The linear device whose viscous damping adds Coulomb friction's describing-function damping
-/// 4c/(πv) at velocity amplitude v.
-fn df_equivalent(p: &PhysicalParams, v: f64) -> PhysicalParams {
+/// 4c/(πv) at velocity amplitude v (v in m/s or rad/s).
+#[must_use]
+pub fn df_equivalent(p: &PhysicalParams, v: f64) -> PhysicalParams {
     PhysicalParams {
         viscous: p.viscous + 4.0 * p.coulomb / (std::f64::consts::PI * v),
         ..*p

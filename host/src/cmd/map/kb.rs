@@ -19,6 +19,7 @@
 
 use super::file;
 use super::kb_args::{resolve_plant, Plant};
+pub use crate::analysis::kb_plot::Units;
 use anyhow::{ensure, Context, Result};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -114,33 +115,6 @@ pub struct KbFile {
     pub boundary: Vec<BoundaryPoint>,
     /// Wall time of the computation, s.
     pub seconds: f64,
-}
-
-/// Units of the axes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct Units {
-    /// Unit of K.
-    pub k: &'static str,
-    /// Unit of B.
-    pub b: &'static str,
-}
-
-impl Units {
-    /// SI units of K and B.
-    #[must_use]
-    pub fn of(rotational: bool) -> Self {
-        if rotational {
-            Self {
-                k: "N·m/rad",
-                b: "N·m·s/rad",
-            }
-        } else {
-            Self {
-                k: "N/m",
-                b: "N·s/m",
-            }
-        }
-    }
 }
 
 fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Result<Axis> {

@@ -1,11 +1,13 @@
 //! Figure of a (K, B) map: B on x, K on y (SI, the units of [`super::kb::Units`]), classes as
 //! the grey levels of the (β, σ) map, and core's predicted exact linear boundary K_max(B) in
-//! red (clamped to the plotted K range; K_max = 0 where no K is stable).
+//! red (clamped to the plotted K range; K_max = 0 where no K is stable). Axes and boundary are
+//! drawn by [`crate::analysis::kb_plot`], shared with the frontier figures of analyze and tune.
 //!
 //! Invariant: cells are centred on the grid points; drawn only from a computed [`KbFile`].
 
 use super::kb::KbFile;
 use super::plot::class_color;
+use crate::analysis::kb_plot;
 use crate::figure::{self, Figure, FigureError};
 use anyhow::Result;
 use plotters::coord::Shift;
@@ -47,12 +49,7 @@ impl Figure for KbFigure<'_> {
             .x_label_area_size(40)
             .y_label_area_size(70)
             .build_cartesian_2d(x0..x1, y0..y1)?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_desc(format!("B [{}]", u.b))
-            .y_desc(format!("K [{}]", u.k))
-            .draw()?;
+        kb_plot::axes(&mut chart, u)?;
         chart.draw_series(m.points.iter().map(|p| {
             Rectangle::new(
                 [
@@ -62,13 +59,8 @@ impl Figure for KbFigure<'_> {
                 class_color(p.class).filled(),
             )
         }))?;
-        let line: Vec<(f64, f64)> = m
-            .boundary
-            .iter()
-            .filter(|p| p.k_max.is_finite())
-            .map(|p| (p.b, p.k_max.clamp(y0, y1)))
-            .collect();
-        chart.draw_series(LineSeries::new(line, RED.stroke_width(2)))?;
+        let line: Vec<(f64, f64)> = m.boundary.iter().map(|p| (p.b, p.k_max)).collect();
+        kb_plot::draw_boundary(&mut chart, &line, (y0, y1), None)?;
         Ok(())
     }
 }
