@@ -361,3 +361,36 @@ hand = { kind = "none" }
     let e = Scene::from_toml(&dimless).unwrap_err().to_string();
     assert!(e.contains("virtual_damping_ns_per_m"), "{e}");
 }
+
+/// The reference integrators run a scene's virtual damper too: Dormand–Prince on the damped
+/// scene follows the exact solver on it (and not the undamped one).
+#[test]
+fn reference_solver_runs_the_scene_damper() {
+    let damped = PHYS
+        .replace(
+            "period_s = 1e-3\n",
+            "period_s = 1e-3\nvirtual_damping_ns_per_m = 1.2\n",
+        )
+        .replace("periods = 3000", "periods = 300");
+    let exact = rows(&Scene::from_toml(&damped).unwrap());
+    let dopri = rows(
+        &Scene::from_toml(&damped.replace(
+            "kind = \"exact\"",
+            "kind = \"dopri\", rtol = 1e-11, atol = 1e-11",
+        ))
+        .unwrap(),
+    );
+    let undamped =
+        rows(&Scene::from_toml(&PHYS.replace("periods = 3000", "periods = 300")).unwrap());
+    assert_eq!(exact.len(), dopri.len());
+    let worst = exact
+        .iter()
+        .zip(&dopri)
+        .map(|(a, b)| (a.xi - b.xi).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-5, "dopri vs exact, damped: {worst}");
+    assert!(exact
+        .iter()
+        .zip(&undamped)
+        .any(|(a, b)| (a.xi - b.xi).abs() > 1e-3));
+}
