@@ -192,3 +192,46 @@ fn record_and_replay_through_the_plant_file() {
         assert!(plant["rms_ticks"].as_f64().unwrap() <= 1.0, "{json}");
     }
 }
+
+/// `[controller] virtual_damping_ns_per_m` is the virtual device's boot `damping`; a B above
+/// the firmware's limit for the board (here 16384 codes·Δ⁻¹·T at 60 mN·m full scale, about
+/// 0.039 N·m·s/rad) or a negative B is refused naming the key and its range.
+#[test]
+fn virtual_damping_is_the_boot_damping_and_is_range_checked() {
+    let damped = |b: &str| {
+        PLANT.replace(
+            "period_s = 1e-3\n",
+            &format!("period_s = 1e-3\nvirtual_damping_ns_per_m = {b}\n"),
+        )
+    };
+    let p = file("rig-damped.toml", &damped("0.002"));
+    let cfg = ok(&[
+        "config",
+        "get",
+        "--plant",
+        p.to_str().unwrap(),
+        "--fast",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&cfg).unwrap();
+    let d = v["damping"]
+        .as_f64()
+        .or_else(|| v["config"]["damping"].as_f64())
+        .unwrap_or_else(|| panic!("no damping in {cfg}"));
+    assert!((d - 0.002).abs() < 1e-9, "{cfg}");
+    for (i, (bad, needle)) in [
+        ("0.5", "virtual board's range"),
+        ("-0.001", "[0, 1e9]"),
+        ("nan", "[0, 1e9]"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let p = file(&format!("rig-damped-bad{i}.toml"), &damped(bad));
+        let err = fails(&["info", "--plant", p.to_str().unwrap(), "--fast"]);
+        assert!(
+            err.contains("controller.virtual_damping_ns_per_m") && err.contains(needle),
+            "{bad}: {err}"
+        );
+    }
+}

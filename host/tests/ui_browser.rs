@@ -147,6 +147,39 @@ async fn set_stiffness(c: &Client, k: &str) {
     .await;
 }
 
+/// The (B, K) frontier's operating point: B, K and its pixel x.
+async fn kb_point(c: &Client) -> (Option<f64>, Option<f64>, Option<f64>) {
+    (
+        number(c, "kb", "data-b").await,
+        number(c, "kb", "data-k").await,
+        number(c, "kb", "data-px").await,
+    )
+}
+
+/// Sets the damping B from the config form and waits for the frontier's point to show it.
+async fn set_damping(c: &Client, b: &str) {
+    let input = c.find(Locator::Id("cfg-damping")).await.unwrap();
+    input.clear().await.unwrap();
+    input.send_keys(b).await.unwrap();
+    c.find(Locator::Id("cfg-apply"))
+        .await
+        .unwrap()
+        .click()
+        .await
+        .unwrap();
+    let want: f64 = b.parse().unwrap();
+    wait(
+        &format!("B = {b} in the frontier"),
+        Duration::from_secs(20),
+        || async {
+            let got = number(c, "kb", "data-b").await?;
+            // (B is the device's f32.)
+            ((got - want).abs() <= 1e-6 * want.max(1e-3)).then_some(())
+        },
+    )
+    .await;
+}
+
 async fn shot(c: &Client, name: &str) {
     if let Some(dir) = std::env::var_os("STIFFWALL_UI_SCREENSHOTS") {
         let png = c.screenshot().await.expect("screenshot");
@@ -270,6 +303,27 @@ fn the_page_in_chromium() {
             .unwrap());
 
         step("point moved");
+        // The (B, K) frontier: the point is at the configured (B, K) = (0, 1.6) and moves
+        // right when a damping is set in the form, then back.
+        let (b0, k0, px0) = kb_point(&c).await;
+        // (K is the device's f32.)
+        let k_is_1_6 = |k: Option<f64>| k.is_some_and(|k| (k - 1.6).abs() < 1e-6);
+        assert!(
+            b0 == Some(0.0) && k_is_1_6(k0),
+            "frontier point {b0:?} {k0:?}"
+        );
+        set_damping(&c, "0.003").await;
+        let (b3, k3, px3) = kb_point(&c).await;
+        assert!(
+            (b3.unwrap() - 0.003).abs() < 1e-9 && k_is_1_6(k3),
+            "{b3:?} {k3:?}"
+        );
+        assert!(
+            px3.unwrap() > px0.unwrap() + 10.0,
+            "B moves the point right: {px0:?} -> {px3:?}"
+        );
+        set_damping(&c, "0").await;
+        shot(&c, "ui-frontier.png").await;
         // K far above the limit (25× the guaranteed one): the supervisor trips.
         set_stiffness(&c, "20").await;
         let banner = c.find(Locator::Id("fault-banner")).await.unwrap();

@@ -285,3 +285,58 @@ fn tune_from_the_server_reports_and_keeps_the_stream() {
     assert_eq!(code, 422);
     assert_eq!(v["error"], "--margin must be in (0, 1] (got 1.5)");
 }
+
+/// The (B, K) frontier sent with the plane: core's K_max(B) for the device, and the operating
+/// point at the config's (K, B), which follows a damping set from the page. A B that is
+/// negative, not a number, infinite or above the device's limit is refused naming `--damping`
+/// and its range (the terminal's message for the host-side checks), and changes nothing.
+#[test]
+fn frontier_point_follows_damping_and_bad_b_changes_nothing() {
+    let s = Server::start(&[]);
+    let point = |s: &Server| {
+        let (code, g) = s.cmd(r#"{"cmd": "get"}"#);
+        assert_eq!(code, 200, "{g}");
+        let r = &g["result"];
+        let f = &r["plane"]["frontier"];
+        assert_eq!(f["b"].as_array().map(Vec::len), Some(33), "{g}");
+        assert!(f["k_max"][0].as_f64().unwrap() > 0.0, "{g}");
+        (
+            r["config"]["damping"].as_f64().unwrap(),
+            f["point"]["b"].as_f64().unwrap(),
+            f["point"]["k"].as_f64().unwrap(),
+        )
+    };
+    let (code, v) =
+        s.cmd(r#"{"id": 1, "cmd": "config", "set": {"stiffness": 1, "damping": 0.002}}"#);
+    assert_eq!(code, 200, "{v}");
+    let (d, b, k) = point(&s);
+    assert!(
+        (d - 0.002).abs() < 1e-9 && (b - d).abs() < 1e-12 && k == 1.0,
+        "{d} {b} {k}"
+    );
+    let (code, v) = s.cmd(r#"{"cmd": "config", "set": {"damping": 0.001}}"#);
+    assert_eq!(code, 200, "{v}");
+    let (d2, b2, _) = point(&s);
+    assert!(
+        (d2 - 0.001).abs() < 1e-9 && (b2 - d2).abs() < 1e-12,
+        "{d2} {b2}"
+    );
+    for (json, terminal) in [
+        ("-1", Some("-1")),
+        (r#""nan""#, Some("nan")),
+        (r#""inf""#, Some("inf")),
+        ("1e6", None),
+    ] {
+        let (code, v) = s.cmd(&format!(
+            r#"{{"cmd": "config", "set": {{"damping": {json}}}}}"#
+        ));
+        assert_eq!(code, 422, "{json}: {v}");
+        let e = v["error"].as_str().unwrap();
+        assert!(e.contains("--damping"), "{json}: {e}");
+        match terminal {
+            Some(t) => assert_eq!(e, terminal_message(&["--damping", t]), "{json}"),
+            None => assert!(e.contains('['), "{json}: the range in {e}"),
+        }
+        assert_eq!(point(&s), (d2, b2, 1.0), "{json} changed the config");
+    }
+}

@@ -85,7 +85,7 @@ function onJson(m) {
   switch (m.type) {
     case 'hello': onHello(m); break;
     case 'config': onConfig(m); break;
-    case 'plane': st.plane = m; drawPlane(); break;
+    case 'plane': st.plane = m; drawPlane(); drawFrontier(); break;
     case 'status': onStatus(m); break;
     case 'faults': onFaults(m); break;
     case 'release': onRelease(m); break;
@@ -320,6 +320,49 @@ function drawPlane() {
   cv.dataset.px = px.toFixed(1); cv.dataset.py = py.toFixed(1); cv.dataset.k = String(k);
   cv.dataset.region = p.region;
   op.textContent = `K = ${fmt(k)} ${st.hello ? st.hello.units.k : ''}: β = ${fmt(beta)}, σ = ${fmt(sigma)} — region ${p.region}: ${p.region_meaning}; critical line at ξ̇ = ${fmt(p.xidot)}`;
+}
+
+// ---------- (B, K) frontier ----------
+// K_max(B) from the server (core's exact sampled linear boundary) and the configured (B, K).
+function drawFrontier() {
+  const cv = $('kb'); const g = cv.getContext('2d');
+  const w = cv.width; const h = cv.height;
+  g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
+  const f = st.plane && st.plane.frontier; const info = $('kb-point');
+  for (const k of ['b', 'k', 'px', 'py', 'stable']) delete cv.dataset[k];
+  if (!f || !f.b) { info.textContent = f && f.note ? f.note : 'no (B, K) frontier (no device model)'; return; }
+  const pt = f.point;
+  const bmax = f.b_axis;
+  const kmax = 1.15 * Math.max(f.k_max_opt, pt ? pt.k : 0, 1e-300);
+  const L = 60; const B = 32; const T = 10; const R = 10;
+  const X = (b) => L + b / bmax * (w - L - R);
+  const Y = (k) => h - B - Math.min(k, kmax) / kmax * (h - B - T);
+  // Below the curve (K < K_max(B)): stable by the linear test, drawn like region A.
+  g.fillStyle = REGION_COLORS.A; g.globalAlpha = 0.45; g.beginPath(); g.moveTo(X(0), Y(0));
+  f.b.forEach((b, i) => g.lineTo(X(b), Y(f.k_max[i])));
+  g.lineTo(X(f.b[f.b.length - 1]), Y(0)); g.closePath(); g.fill(); g.globalAlpha = 1;
+  g.strokeStyle = '#000'; g.lineWidth = 2; g.beginPath();
+  f.b.forEach((b, i) => (i ? g.lineTo(X(b), Y(f.k_max[i])) : g.moveTo(X(b), Y(f.k_max[i]))));
+  g.stroke(); g.lineWidth = 1;
+  g.strokeStyle = '#333'; g.strokeRect(L, T, w - L - R, h - B - T);
+  g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
+  const u = st.hello ? st.hello.units : { b: '', k: '' };
+  g.fillText(`B [${u.b || ''}]`, w / 2 - 20, h - 4);
+  g.save(); g.translate(11, h / 2 + 20); g.rotate(-Math.PI / 2); g.fillText(`K [${u.k || ''}]`, 0, 0); g.restore();
+  for (let i = 0; i <= 4; i++) {
+    const lb = fmt(bmax * i / 4);
+    g.fillText(lb, Math.min(X(bmax * i / 4) - 8, w - R - g.measureText(lb).width), h - B + 14);
+    g.fillText(fmt(kmax * i / 4), 16, Y(kmax * i / 4) + 4);
+  }
+  const ox = X(f.b_opt); const oy = Y(f.k_max_opt);
+  g.strokeStyle = '#000'; g.beginPath(); g.moveTo(ox - 5, oy - 5); g.lineTo(ox + 5, oy + 5); g.moveTo(ox + 5, oy - 5); g.lineTo(ox - 5, oy + 5); g.stroke();
+  g.fillText(`max K_max = ${fmt(f.k_max_opt)} at B = ${fmt(f.b_opt)}`, Math.min(ox + 7, w - 230), Math.max(oy - 6, T + 12));
+  if (!pt) { info.textContent = 'the wall is off: set a stiffness to see the operating point'; return; }
+  const px = X(Math.min(pt.b, bmax)); const py = Y(pt.k);
+  g.fillStyle = pt.stable ? '#000' : '#b71c1c'; g.beginPath(); g.arc(px, py, 6, 0, 2 * Math.PI); g.fill();
+  cv.dataset.b = String(pt.b); cv.dataset.k = String(pt.k); cv.dataset.stable = String(pt.stable);
+  cv.dataset.px = px.toFixed(1); cv.dataset.py = py.toFixed(1);
+  info.textContent = `B = ${fmt(pt.b)} ${u.b || ''}, K = ${fmt(pt.k)} ${u.k || ''}: K_max(B) = ${fmt(pt.k_max)} — ${pt.stable ? 'inside' : 'outside'} the linear frontier (the friction-free loop; Coulomb friction is in the (β, σ) plane)`;
 }
 
 // ---------- release ----------

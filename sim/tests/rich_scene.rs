@@ -200,15 +200,22 @@ fn plant_files_need_no_initial_or_run_and_read_rotary_units() {
 }
 
 /// The sampled loop with the exact engine reproduces the exact solver (delay 1.25 periods,
-/// quantization, Coulomb, viscous) period by period: an independent check of its delay line.
+/// quantization, Coulomb, viscous; with and without the virtual damper) period by period: an
+/// independent check of its delay line and of the damper's backward difference.
 #[test]
 fn sampled_loop_matches_the_exact_solver() {
-    for one_sided in [false, true] {
-        let text = PHYS.replace(
-            "one_sided_wall = false",
-            &format!("one_sided_wall = {one_sided}"),
-        );
+    for (one_sided, damping) in [(false, 0.0), (true, 0.0), (false, 0.6), (true, 0.6)] {
+        let text = PHYS
+            .replace(
+                "one_sided_wall = false",
+                &format!("one_sided_wall = {one_sided}"),
+            )
+            .replace(
+                "period_s = 1e-3\n",
+                &format!("period_s = 1e-3\nvirtual_damping_ns_per_m = {damping:?}\n"),
+            );
         let s = Scene::from_toml(&text).unwrap();
+        assert!((s.beta_v - damping / 2.4).abs() < 1e-15);
         let reference = rows(&s);
         let rich = s.rich.unwrap();
         assert!(!rich.needs_rich_loop());
@@ -279,4 +286,111 @@ fn a_plant_file_without_controller_boots_a_passive_wall_at_1_khz() {
     // A file that states its controller keeps it.
     let (_, c2) = PlantModel::from_scene_toml(PHYS).unwrap();
     assert_ne!(c2.stiffness_n_per_m, c.stiffness_n_per_m);
+}
+
+/// `[controller] virtual_damping_ns_per_m` (issue 19): B of the wall, default 0, read as
+/// β_v = B/(K·T) by the solvers and as the plant file's boot damping; a negative, NaN,
+/// infinite or too large B is refused naming the key and its range.
+#[test]
+fn virtual_damping_is_read_and_checked() {
+    const SNIPPET: &str = r#"
+[device]
+mass_kg = 0.25
+viscous_ns_per_m = 0.01
+coulomb_n = 0.06
+resolution_m = 20e-6
+[controller]
+stiffness_n_per_m = 2400.0
+virtual_damping_ns_per_m = 1.2
+period_s = 1e-3
+[effects]
+zoh = true
+quantization = true
+coulomb = true
+viscous = true
+delay = false
+one_sided_wall = true
+amplifier = { kind = "none" }
+hand = { kind = "none" }
+"#;
+    let (_, c) = PlantModel::from_scene_toml(SNIPPET).unwrap();
+    assert_eq!(c.virtual_damping_ns_per_m, 1.2);
+    let (_, c0) = PlantModel::from_scene_toml(PHYS).unwrap();
+    assert_eq!(c0.virtual_damping_ns_per_m, 0.0);
+    assert_eq!(Scene::from_toml(PHYS).unwrap().beta_v, 0.0);
+    let damped = |b: &str| {
+        PHYS.replace(
+            "period_s = 1e-3\n",
+            &format!("period_s = 1e-3\nvirtual_damping_ns_per_m = {b}\n"),
+        )
+    };
+    let s = Scene::from_toml(&damped("1.2")).unwrap();
+    assert!((s.beta_v - 0.5).abs() < 1e-15, "{}", s.beta_v);
+    assert_eq!(s.rich.unwrap().controller.virtual_damping_ns_per_m, 1.2);
+    // The damper changes the trajectory and keeps it finite.
+    let (a, b) = (rows(&Scene::from_toml(PHYS).unwrap()), rows(&s));
+    assert!(b.iter().all(|r| r.xi.is_finite()));
+    assert!(a.iter().zip(&b).any(|(x, y)| x.xi != y.xi));
+    for (bad, range) in [
+        ("-0.1", "[0, 1e9]"),
+        ("nan", "[0, 1e9]"),
+        ("inf", "[0, 1e9]"),
+        ("-inf", "[0, 1e9]"),
+        ("2e9", "[0, 1e9]"),
+        ("2401.0", "[0, 1000 K T]"),
+    ] {
+        let e = Scene::from_toml(&damped(bad)).unwrap_err().to_string();
+        assert!(
+            e.contains("controller.virtual_damping_ns_per_m") && e.contains(range),
+            "{bad}: {e}"
+        );
+        let e = PlantModel::from_scene_toml(&SNIPPET.replace("= 1.2", &format!("= {bad}")))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("controller.virtual_damping_ns_per_m"),
+            "{bad}: {e}"
+        );
+    }
+    // A dimensionless scene has no B in N s/m.
+    let dimless = include_str!("../scenes/base.toml").replace(
+        "[controller]\n",
+        "[controller]\nvirtual_damping_ns_per_m = 1.0\n",
+    );
+    assert!(dimless.contains("virtual_damping"));
+    let e = Scene::from_toml(&dimless).unwrap_err().to_string();
+    assert!(e.contains("virtual_damping_ns_per_m"), "{e}");
+}
+
+/// The reference integrators run a scene's virtual damper too: Dormand–Prince on the damped
+/// scene follows the exact solver on it (and not the undamped one).
+#[test]
+fn reference_solver_runs_the_scene_damper() {
+    let damped = PHYS
+        .replace(
+            "period_s = 1e-3\n",
+            "period_s = 1e-3\nvirtual_damping_ns_per_m = 1.2\n",
+        )
+        .replace("periods = 3000", "periods = 300");
+    let exact = rows(&Scene::from_toml(&damped).unwrap());
+    let dopri = rows(
+        &Scene::from_toml(&damped.replace(
+            "kind = \"exact\"",
+            "kind = \"dopri\", rtol = 1e-11, atol = 1e-11",
+        ))
+        .unwrap(),
+    );
+    let undamped =
+        rows(&Scene::from_toml(&PHYS.replace("periods = 3000", "periods = 300")).unwrap());
+    assert_eq!(exact.len(), dopri.len());
+    let worst = exact
+        .iter()
+        .zip(&dopri)
+        .map(|(a, b)| (a.xi - b.xi).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-5, "dopri vs exact, damped: {worst}");
+    assert!(exact
+        .iter()
+        .zip(&undamped)
+        .any(|(a, b)| (a.xi - b.xi).abs() > 1e-3));
 }

@@ -109,6 +109,12 @@ impl Spec {
             let t = ctl.map_or(1e-3, |c| c.period_s);
             let (key, lo, hi, unit) = match e.field {
                 F::Stiffness => ("controller.stiffness_n_per_m", e.min, e.max, "N/m"),
+                F::Damping => (
+                    "controller.virtual_damping_ns_per_m",
+                    e.min,
+                    e.max,
+                    "N s/m (N m s/rad on a rotary device)",
+                ),
                 F::ServoRateHz => ("controller.period_s", 1.0 / e.max, 1.0 / e.min, "s"),
                 F::ExtraDelayTicks => ("controller.extra_delay_s", e.min * t, e.max * t, "s"),
                 _ => ("the boot configuration", e.min, e.max, ""),
@@ -151,7 +157,8 @@ impl Spec {
         }
     }
 
-    /// Boot configuration: wall off (a plant file: its controller's stiffness, extra delay in
+    /// Boot configuration: wall off (a plant file: its controller's stiffness, virtual damping
+    /// `controller.virtual_damping_ns_per_m`, extra delay in
     /// whole ticks and wall mode), the spec's servo rate, force limit at full scale. In fast
     /// mode the heartbeat watchdog is off: device time then runs many times faster than the
     /// host's clock, so a heartbeat timeout counted in servo ticks would trip spuriously.
@@ -170,6 +177,7 @@ impl Spec {
             None => base,
             Some(c) => ServoConfig {
                 stiffness: c.stiffness_n_per_m as f32,
+                damping: c.virtual_damping_ns_per_m as f32,
                 extra_delay_ticks: (c.extra_delay_s / c.period_s).round().clamp(0.0, 255.0) as u8,
                 wall: if c.one_sided {
                     WallMode::OneSided

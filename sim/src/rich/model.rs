@@ -78,6 +78,9 @@ pub struct HandSi {
 pub struct Controller {
     /// Wall stiffness K, N/m (N·m/rad).
     pub stiffness_n_per_m: f64,
+    /// Virtual damping B of the wall law's backward difference, N·s/m (N·m·s/rad), ≥ 0
+    /// (`controller.virtual_damping_ns_per_m`; 0: a spring-only wall).
+    pub virtual_damping_ns_per_m: f64,
     /// Sampling period T, s.
     pub period_s: f64,
     /// Total extra delay, s: `controller.extra_delay_s` plus an amplifier of kind `"delay"`

@@ -9,7 +9,8 @@
 //! [`attach`] is the one call `crate::scene` makes: it turns a resolved physical scene and the
 //! new keys into a [`RichScene`] (a [`PlantModel`] and its [`Controller`]). [`simulate`] runs it
 //! when a new effect is on: the controller of eq. (8) (quantised or ideal, one-sided or not) is
-//! sampled every period T, its force delayed by τ_D = n + f periods exactly as in
+//! sampled every period T (plus the virtual damper −β_v·(n_h − n_(h−1)) of `crate::exact`
+//! when the scene sets `controller.virtual_damping_ns_per_m`), its force delayed by τ_D = n + f periods exactly as in
 //! [`crate::exact`] (force F(h−n−1) over [h, h+f), F(h−n) over [h+f, h+1)), and held on a
 //! [`RichPlant`]. Rows are in the scene's dimensionless units (ξ = x₁/Δ, ξ̇ = v₁T/Δ,
 //! φ_A = F/(KΔ)); the energy audit columns `e_d`, `e_g`, `residual` are 0 (not audited).
@@ -237,6 +238,7 @@ pub fn attach(
         model,
         controller: Controller {
             stiffness_n_per_m: k,
+            virtual_damping_ns_per_m: scene.beta_v * k * t,
             period_s: t,
             extra_delay_s: p.tau_d * t,
             one_sided: e.one_sided,
@@ -316,6 +318,31 @@ fn spring(xi: f64, c: &Controller) -> f64 {
     }
 }
 
+/// The wall law of the module header in units of K·Δ at ξ ticks, with the virtual damper
+/// −β_v·(n_h − n_(h−1)) when β_v ≠ 0 (as [`crate::exact`]: n = ⌊ξ⌋, or ξ without
+/// quantization; on a one-sided wall the whole law acts only in contact, n ≥ 0).
+fn law(xi: f64, n_prev: f64, beta_v: f64, c: &Controller) -> f64 {
+    if beta_v == 0.0 {
+        return spring(xi, c);
+    }
+    let n = count(xi, c);
+    let f = if c.quantization { -n - 0.5 } else { -n } - beta_v * (n - n_prev);
+    if c.one_sided && n < 0.0 {
+        0.0
+    } else {
+        f
+    }
+}
+
+/// The count n_h of the damper's backward difference (ξ itself without quantization).
+fn count(xi: f64, c: &Controller) -> f64 {
+    if c.quantization {
+        crate::math::floor_fast(xi)
+    } else {
+        xi
+    }
+}
+
 /// Runs a scene with a [`RichScene`] in the sampled loop of the module header, calling `out`
 /// at τ = 0 and at every sample instant.
 pub fn simulate(
@@ -364,9 +391,12 @@ pub fn simulate(
             residual: 0.0,
         }
     };
+    let beta_v = scene.beta_v;
+    let mut n_prev = count(scene.init.x, &c);
     for h in 0..=scene.periods {
         let xi = plant.position_m() / delta;
-        line[(h as usize) % LINE] = spring(xi, &c);
+        line[(h as usize) % LINE] = law(xi, n_prev, beta_v, &c);
+        n_prev = count(xi, &c);
         let first = if frac > 0.0 {
             delayed(&line, h, n + 1)
         } else {

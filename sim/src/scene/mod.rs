@@ -3,7 +3,9 @@
 //! Units: a scene is either **dimensionless** (`device.mu/beta/sigma`, `controller.tau_d`,
 //! `initial.xi/xidot` in ticks and ticks per period) or **physical** (`device.mass_kg`,
 //! `viscous_ns_per_m`, `coulomb_n`, `resolution_m`, `controller.stiffness_n_per_m`, `period_s`,
-//! `extra_delay_s`, `initial.position_m/velocity_m_per_s`), converted once with Table I of
+//! `extra_delay_s`, the optional `controller.virtual_damping_ns_per_m` = B of the wall law
+//! F = −K·Δ·(n+½) − B·Δ·(n_h − n_(h−1))/T, default 0, solved as β_v = B/(K·T),
+//! `initial.position_m/velocity_m_per_s`), converted once with Table I of
 //! `stiffwall_core`. Every effect is stated explicitly in `[effects]` (all keys required).
 //! Unknown keys, missing keys, mixed unit systems and out-of-range values are [`SceneError`]s
 //! that name the key and the allowed range. The composition is resolved once in
@@ -18,7 +20,7 @@
 mod raw;
 mod resolve;
 
-use crate::exact::{dispatch, ExactSim, History, PeriodAudit, Visitor};
+use crate::exact::{dispatch_damped, ExactSim, History, PeriodAudit, Visitor};
 use crate::params::{Effects, ParamError, Params};
 use crate::plant::Motion;
 use crate::reference::{AmpFilter, Hand, Method, RefModel, RefSim};
@@ -82,6 +84,9 @@ pub enum Solver {
 pub struct Scene {
     /// μ, β, σ, τ_D (τ_D includes an amplifier modelled as a pure delay).
     pub params: Params,
+    /// Dimensionless virtual damping β_v = B/(K·T) of the wall law (0: spring only; a
+    /// physical scene's `controller.virtual_damping_ns_per_m`).
+    pub beta_v: f64,
     /// Effects shared with the exact solver.
     pub effects: Effects,
     /// Sample-and-hold (false: continuous spring, reference solvers only).
@@ -158,11 +163,12 @@ impl Scene {
         }
         match self.solver {
             Solver::Exact => {
-                dispatch::<_, true>(
+                dispatch_damped::<_, true>(
                     self.params,
                     self.effects,
                     self.init,
                     self.history,
+                    self.beta_v,
                     Drive {
                         periods: self.periods,
                         out,
@@ -179,7 +185,9 @@ impl Scene {
                     amp: self.amp,
                     history: self.history,
                 };
-                let sim = RefSim::new(model, method, self.init).map_err(SceneError::Solver)?;
+                let sim = RefSim::new(model, method, self.init)
+                    .and_then(|s| s.with_damping(self.beta_v))
+                    .map_err(SceneError::Solver)?;
                 Drive {
                     periods: self.periods,
                     out,

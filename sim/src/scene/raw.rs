@@ -36,6 +36,8 @@ pub(super) struct RawDevice {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawController {
     pub stiffness_n_per_m: Option<f64>,
+    /// Virtual damping B of the wall, N·s/m (N·m·s/rad for rotary files); default 0.
+    pub virtual_damping_ns_per_m: Option<f64>,
     pub period_s: Option<f64>,
     pub extra_delay_s: Option<f64>,
     pub tau_d: Option<f64>,

@@ -8,6 +8,7 @@
 
 use super::raw::{RawAmp, RawDevice, RawHand, RawInitial, RawRun, RawScene, RawSolver};
 use super::{Scene, SceneError, Solver};
+use crate::exact::MAX_BETA_V;
 use crate::params::{Effects, Params, MAX_TAU_D};
 use crate::plant::Motion;
 use crate::reference::{AmpFilter, Hand, Method};
@@ -54,11 +55,15 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
         let mu = need("device.mu", d.mu, "> 0")?;
         let beta = need("device.beta", d.beta, ">= 0")?;
         let sigma = need("device.sigma", d.sigma, ">= 0")?;
-        if c.stiffness_n_per_m.is_some() || c.period_s.is_some() || c.extra_delay_s.is_some() {
+        if c.stiffness_n_per_m.is_some()
+            || c.period_s.is_some()
+            || c.extra_delay_s.is_some()
+            || c.virtual_damping_ns_per_m.is_some()
+        {
             return conflict(
                 "controller",
-                "stiffness_n_per_m, period_s, extra_delay_s belong to physical scenes; \
-                 a dimensionless scene uses controller.tau_d",
+                "stiffness_n_per_m, virtual_damping_ns_per_m, period_s, extra_delay_s belong to \
+                 physical scenes; a dimensionless scene uses controller.tau_d",
             );
         }
         let params = Params {
@@ -131,6 +136,35 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
         rotational: d.counts_per_rev.is_some(),
     };
     Ok((p.to_dimensionless()?, Some(p.scale())))
+}
+
+/// `controller.virtual_damping_ns_per_m` (B, N·s/m or N·m·s/rad; default 0) of a physical
+/// scene as the dimensionless β_v = B/(K·T) of the solvers, checked against [0, 1e9] and
+/// β_v ≤ [`MAX_BETA_V`]. The firmware's own limit (which depends on the board) is checked where
+/// the virtual device builds its boot configuration.
+fn virtual_damping(raw: &RawScene, scale: Option<Scale>) -> Result<f64, SceneError> {
+    const KEY: &str = "controller.virtual_damping_ns_per_m";
+    let (Some(b), Some(s)) = (raw.controller.virtual_damping_ns_per_m, scale) else {
+        return Ok(0.0);
+    };
+    let b = range(
+        KEY,
+        b,
+        0.0,
+        false,
+        1e9,
+        "[0, 1e9] N s/m (N m s/rad on a rotary device)",
+    )?;
+    let kt = s.stiffness * s.period_s;
+    range(
+        KEY,
+        b,
+        0.0,
+        false,
+        MAX_BETA_V * kt,
+        "[0, 1000 K T] N s/m (beta_v = B/(K T) at most 1000)",
+    )?;
+    Ok(b / kt)
 }
 
 /// Largest amplifier bandwidth ω, rad per sampling period: the reference solvers resolve the
@@ -333,6 +367,7 @@ impl Scene {
     /// The scene and, for a physical scene, its Table I scale.
     pub(super) fn resolve(raw: RawScene) -> Result<(Self, Option<Scale>), SceneError> {
         let (mut params, scale) = device(&raw)?;
+        let beta_v = virtual_damping(&raw, scale)?;
         let e = &raw.effects;
         let amp = amplifier(&e.amplifier, e.delay, scale, &mut params.tau_d)?;
         if !e.delay && params.tau_d > 0.0 {
@@ -369,6 +404,7 @@ impl Scene {
         Ok((
             Self {
                 params,
+                beta_v,
                 effects: Effects {
                     quantization: e.quantization,
                     coulomb: e.coulomb,

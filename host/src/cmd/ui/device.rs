@@ -491,8 +491,16 @@ impl Dev {
             .client
             .faults()
             .map_err(|e| crate::cli_error::message(&e))?;
+        // The plane message the pages see now (with its (B, K) frontier).
+        let plane = self.shared.snapshot.lock().ok().and_then(|s| {
+            s.latest
+                .iter()
+                .find(|(k, _)| *k == "plane")
+                .map(|(_, v)| v.clone())
+        });
         Ok(json!({"config": cfg, "faults": f, "gaps": self.client.gaps,
-                  "release_running": self.release.is_some(), "recording": self.rec.is_some()}))
+                  "release_running": self.release.is_some(), "recording": self.rec.is_some(),
+                  "plane": plane}))
     }
 
     fn clear_faults(&mut self) -> Reply {

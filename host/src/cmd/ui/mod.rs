@@ -5,7 +5,8 @@
 //! Parts: [`security`] (who may talk to the server), [`server`] (HTTP, the WebSocket, the
 //! embedded page from `host/ui/`), [`device`] (the thread that owns the device connection),
 //! [`wire`] (commands, events and the binary telemetry frames), [`plane`] (the (β, σ) plane
-//! and the map overlay, computed with the same code as the figures), [`record`] (recording
+//! and the map overlay, computed with the same code as the figures), [`frontier`] (the (B, K)
+//! frontier K_max(B) beside it, with the configured (B, K)), [`record`] (recording
 //! from the page in `hostctl record`'s format).
 //!
 //! Unlike the other commands, this one imports its siblings' argument definitions and checks
@@ -19,6 +20,7 @@
 //! a warning); the URL with the token is printed on stdout before anything is served.
 
 pub mod device;
+pub mod frontier;
 pub mod plane;
 pub mod record;
 pub mod security;

@@ -3,6 +3,7 @@
 //! region polygons and the critical line of `stiffwall_core::regions` (as in
 //! [`crate::analysis::plot`]), and, for an opened `hostctl map` JSON, the file's validation
 //! ([`crate::cmd::map::file::validate`]) and the analytic boundaries of `hostctl map --overlay`.
+//! The (B, K) frontier beside it is [`super::frontier`].
 //!
 //! Units: β, σ, ξ̇ dimensionless (ξ̇ in encoder ticks per servo period); m, b, c, K SI (N/m or
 //! N·m/rad etc.). Invariants: nothing here restates a threshold; a missing model or a wall
@@ -57,9 +58,23 @@ pub fn params(model: &Model, info: &DeviceInfo, cfg: &ServoConfig) -> PhysicalPa
 
 /// The plane message: `{type: "plane", ...}` with the operating point (or `point: null` and a
 /// `note`), the regions as polygons, the critical line at `xidot` ticks per period, the window
-/// and the stiffness limits on the path of the point.
+/// and the stiffness limits on the path of the point; with a model also `frontier`, the
+/// (B, K) panel of [`super::frontier::frontier`] for the same [`params`] and the config's B.
 #[must_use]
 pub fn plane(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot: f64) -> Value {
+    let mut v = beta_sigma(model, info, cfg, xidot);
+    if let (Some(m), Some(obj)) = (model, v.as_object_mut()) {
+        let p = params(m, info, cfg);
+        obj.insert(
+            "frontier".into(),
+            super::frontier::frontier(&p, f64::from(cfg.damping)),
+        );
+    }
+    v
+}
+
+/// The (β, σ) part of [`plane`].
+fn beta_sigma(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot: f64) -> Value {
     let Some(model) = model else {
         return json!({"type": "plane", "point": null, "note":
             "no device model: give --model M B C, or run tune to identify m, b, c"});

@@ -69,7 +69,8 @@ pub enum Command {
     },
     /// Stop recording.
     RecordStop,
-    /// The active configuration, latched faults and counters (changes nothing).
+    /// The active configuration, latched faults, counters and the latest `plane` message
+    /// (with its (B, K) `frontier`); changes nothing.
     Get,
 }
 
