@@ -32,6 +32,13 @@ pub const DAMPER_V_MAX: i32 = 1 << 14;
 /// Dimensionless hold damping β of the release test's holding controller (see [`Gains`]).
 pub const HOLD_BETA: f32 = 2.0;
 
+/// Smallest β_v = B/(KT) of the wall's virtual damper at which the release hold (and the
+/// impact's hold before its launch) uses the wall's own damping instead of β = `HOLD_BETA`:
+/// with a damper of that size a β = 2 hold at a stiffness far above the spring-only limit
+/// buzzes (the damped frontier is not monotone in B), while a small damper (a hold of β_v
+/// 0.4 behind 2 ticks of delay diverged) is better held at β = 2.
+pub const HOLD_WALL_DAMPING: f64 = 0.5;
+
 /// Fixed facts about the board the firmware runs on.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoardInfo {
@@ -347,9 +354,12 @@ pub struct Gains<N: Numeric> {
     pub damp: N::Gain,
     /// `damp` is not zero.
     pub damping_on: bool,
-    /// Release-test hold damping (dimensionless β = `HOLD_BETA` = 2): 2·β·k_half, codes per effective count
-    /// per tick.
+    /// Release-test hold damping, codes per effective count per tick: β = `HOLD_BETA` = 2
+    /// (2·β·k_half), or the wall's own `damp` when its β_v = B/(KT) is at least
+    /// [`HOLD_WALL_DAMPING`] (the hold is then the wall under test centred on its target).
     pub hold_damp: N::Gain,
+    /// The impact launch's damping while its target moves: always β = `HOLD_BETA`.
+    pub launch_damp: N::Gain,
     /// Safe-mode damping B_safe·Δ·rate in codes per raw count per tick.
     pub safe_damp: N::Gain,
     /// Coarsening shift.
@@ -469,7 +479,12 @@ impl<N: Numeric> Gains<N> {
             wall_lo: if one_sided { 0 } else { spring_lo },
             damp,
             damping_on: damp != N::ZERO,
-            hold_damp: N::gain(2.0 * f64::from(HOLD_BETA) * kf),
+            hold_damp: if N::to_f64(damp) >= HOLD_WALL_DAMPING * 2.0 * kf && kf > 0.0 {
+                damp
+            } else {
+                N::gain(2.0 * f64::from(HOLD_BETA) * kf)
+            },
+            launch_damp: N::gain(2.0 * f64::from(HOLD_BETA) * kf),
             safe_damp: N::gain(
                 f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
             ),

@@ -419,32 +419,19 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// Hold and excitation forces (out of the wall's hot path).
     #[inline(never)]
     fn experiment_force(&mut self, n: i32, dn: i32) -> (i32, u16) {
-        // The hold's damping: β = `HOLD_BETA` for a spring-only wall; with a virtual damper
-        // the wall's own B, so the hold is the wall under test centred on its target (a hold
-        // at the test's K with β = 2 can buzz where the wall's (K, B) is stable: the damped
-        // frontier is not monotone in B).
+        let hold_damp = self.damper(self.g.hold_damp, dn);
         // The launch itself (the target moving toward the wall) keeps β = 2, whose lag behind
         // the target the launch's speed was tuned with.
-        let still_g = if self.g.damping_on {
-            self.g.damp
-        } else {
-            self.g.hold_damp
-        };
+        let launch_damp = self.damper(self.g.launch_damp, dn);
         match &mut self.exp {
             Experiment::None | Experiment::Released { .. } => (0, 0),
             Experiment::Hold(h) => {
                 let e = n.saturating_sub(h.target);
-                let d = self.damper(still_g, dn);
-                (self.spring_raw(e).saturating_add(d), flags::HOLD)
+                (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
             }
             Experiment::Launch(l) => {
                 let e = n.saturating_sub(l.target());
-                let g = if l.launched() {
-                    self.g.hold_damp
-                } else {
-                    still_g
-                };
-                let d = self.damper(g, dn);
+                let d = if l.launched() { launch_damp } else { hold_damp };
                 (self.spring_raw(e).saturating_add(d), flags::HOLD)
             }
             Experiment::Excite(x) => (

@@ -26,4 +26,5 @@ pub mod output;
 pub mod plant_args;
 pub use stiffwall_client::recording;
 pub mod session;
-pub mod tune;
+/// The tune procedure (the `stiffwall-tune` crate), re-exported under its old path.
+pub use stiffwall_tune as tune;

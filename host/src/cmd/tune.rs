@@ -48,31 +48,7 @@ pub struct Args {
 
 /// Validates the numeric arguments (before any device is touched).
 pub fn settings(a: &Args) -> Result<Settings> {
-    if let Some(v) = a.max_velocity {
-        if !(v.is_finite() && v > 0.0) {
-            anyhow::bail!("--max-velocity must be finite and > 0 (got {v})");
-        }
-    }
-    if !(a.margin.is_finite() && a.margin > 0.0 && a.margin <= 1.0) {
-        anyhow::bail!("--margin must be in (0, 1] (got {})", a.margin);
-    }
-    if !(a.excite_seconds.is_finite() && (0.5..=1000.0).contains(&a.excite_seconds)) {
-        anyhow::bail!(
-            "--excite-seconds must be within [0.5, 1000] (got {})",
-            a.excite_seconds
-        );
-    }
-    if let Some(t) = a.release_ticks {
-        if !(100..=10_000_000).contains(&t) {
-            anyhow::bail!("--release-ticks must be within [100, 10000000] (got {t})");
-        }
-    }
-    if let Some(b) = a.damping {
-        if !(b.is_finite() && b >= 0.0) {
-            anyhow::bail!("--damping must be finite and >= 0 N·s/m (N·m·s/rad) (got {b})");
-        }
-    }
-    Ok(Settings {
+    let s = Settings {
         damping: a
             .damping
             .map_or(procedure::Damping::Search, procedure::Damping::Fixed),
@@ -81,7 +57,9 @@ pub fn settings(a: &Args) -> Result<Settings> {
         release_ticks: a.release_ticks,
         excite_seconds: a.excite_seconds,
         ..Settings::default()
-    })
+    };
+    s.validate()?;
+    Ok(s)
 }
 
 /// Runs `hostctl tune`.

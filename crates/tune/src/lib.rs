@@ -4,8 +4,10 @@
 pub mod excite;
 pub mod ident;
 pub mod model_check;
+pub mod outcome;
 pub mod procedure;
 pub mod release;
 pub mod search;
+pub mod settings;
 pub mod verdict;
 pub mod verify;

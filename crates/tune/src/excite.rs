@@ -9,10 +9,10 @@
 
 use super::ident::{self, Identified};
 use super::model_check::{self, Evidence};
-use super::procedure::{check_interrupt, Settings, RAMP_SECONDS};
+use super::settings::{check_interrupt, Settings, RAMP_SECONDS};
 use super::verify::rest_position;
-use crate::device::client::Client;
 use anyhow::{bail, Context, Result};
+use stiffwall_client::Client;
 use stiffwall_proto::{flags, ExciteProfile, HostMsg, ServoConfig, TABLE_CHUNK};
 
 /// Raw-count resolution and servo period of the connected device.

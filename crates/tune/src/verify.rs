@@ -36,9 +36,9 @@
 //! decays, and a persistent buzz is still judged at the base length.
 
 use super::verdict::{classify, classify_impact, Verdict, Wall, EXIT_WINDOW, MIN_TAIL};
-use crate::device::client::Client;
 use anyhow::{bail, Result};
 use std::sync::atomic::Ordering;
+use stiffwall_client::Client;
 use stiffwall_proto::{flags, ServoConfig, WallMode};
 
 /// An impact that reaches the wall faster than this × the requested speed (+ one tick per
@@ -412,7 +412,7 @@ fn run_once(
     ticks: u32,
     min_run: usize,
 ) -> Result<(Verdict, Vec<i64>)> {
-    if super::procedure::INTERRUPTED.load(Ordering::Relaxed) {
+    if stiffwall_client::session::INTERRUPTED.load(Ordering::Relaxed) {
         bail!("interrupted");
     }
     // A reproducible start (see the module header), with the damper off too: a damper

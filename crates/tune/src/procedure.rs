@@ -37,209 +37,18 @@ use super::model_check::{self, Evidence};
 use super::release::Verdict;
 use super::search::{largest_settling_k, Found, Search};
 use super::verify::{min_settle_run, rest_position, run_test, test_set, Test, TestResult};
-use crate::device::client::Client;
 use anyhow::{bail, Context, Result};
+use stiffwall_client::Client;
 use stiffwall_core::criteria;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
 
-/// Default maximum velocity, in encoder ticks per servo period (ξ̇ of Table I; independent of K).
-pub const DEFAULT_XIDOT: f64 = 5.0;
-
-/// Factor applied to K when a test of the verification set fails.
-pub const CONFIRM_BACKOFF: f64 = 0.95;
-
-/// Factor applied to the margin when the model does not fit the device.
-pub const MISMATCH_MARGIN: f64 = 0.85;
-/// Factor applied to the margin instead of [`MISMATCH_MARGIN`] when the only mismatch is the
-/// friction (breakaway above sliding: static friction or a dead band) or the verified K below
-/// the prediction, the identified dynamics fitting ([`model_check::dynamics_fit`]) and every
-/// impact launched: static friction dissipates, and the release tests run at the energy asked
-/// for (re-aimed where the hold stuck off target), so the verified K is the device's own.
-pub const FRICTION_MISMATCH_MARGIN: f64 = 0.9;
-
-/// Duration of each breakaway ramp, s.
-pub const RAMP_SECONDS: f64 = 0.3;
-
 /// Step 1, identification with the wall off (in [`super::excite`]).
 pub use super::excite::identify;
+pub use super::outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
+pub use super::settings::*;
 /// Set by the Ctrl-C handler; checked between experiments (the one flag of every session).
-pub use crate::session::INTERRUPTED;
-
-/// Tune settings.
-#[derive(Debug, Clone)]
-pub struct Settings {
-    /// Expected maximum velocity, m/s (rad/s); None = [`DEFAULT_XIDOT`] ticks per period.
-    pub max_velocity: Option<f64>,
-    /// Fraction of the largest settling K that is set, in (0, 1].
-    pub margin: f64,
-    /// Ticks per release test; None = 60 natural periods (at least 1500, at most 30000).
-    pub release_ticks: Option<u32>,
-    /// Duration of the identification chirp, s.
-    pub excite_seconds: f64,
-    /// Relative tolerance of the K bisection.
-    pub rel_tol: f64,
-    /// Virtual damping B of the wall: searched (default) or fixed.
-    pub damping: Damping,
-}
-
-/// How `tune` chooses the virtual damping B.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub enum Damping {
-    /// Search the (K, B) frontier ([`DAMPING_BETAS`]) for the stiffest verified pair.
-    Search,
-    /// Fixed B, N·s/m (N·m·s/rad), ≥ 0; 0 is the spring-only tune.
-    Fixed(f64),
-}
-
-/// Damping levels of the predicted frontier, as β = B/(K₀·T) with K₀ the spring-only largest
-/// settling K: the brute-force frontiers of the repository's plants rise up to β ≈ 2–6
-/// (3–8 × K*(0)) where the damper itself stays stable, and fall where it does not.
-pub const DAMPING_BETAS: [f64; 5] = [1.0, 2.0, 3.0, 4.0, 6.0];
-
-/// Damping levels searched on the device, in the order of their predicted K: the second is
-/// searched only when the first held no K above the spring-only one.
-pub const FRONTIER_TRIES: usize = 2;
-
-/// Relative gain in verified K that a damping must bring over the spring alone to be kept:
-/// less is within the bisection's resolution.
-pub const DAMPING_MIN_GAIN: f64 = 0.1;
-
-/// The damped search starts at this fraction of the predicted K (the prediction is the exact
-/// linear boundary with Coulomb friction as describing-function damping, scaled by what the
-/// spring-only search measured against its own prediction).
-pub const FRONTIER_START: f64 = 0.85;
-
-/// Bracketing factor of the damped search (finer than the spring-only one: it starts near the
-/// predicted limit).
-pub const FRONTIER_STEP: f64 = 1.2;
-
-/// Largest fraction of the damped search's largest settling K that is set (the smaller of it
-/// and the margin in use): near its edge a damped wall's stable K are speckled with persistent
-/// limit cycles that only some starts reach (maxon-re35-amp-3khz at B = 4.4e-3 N·m·s/rad: a
-/// release from 4 counts buzzes at 0.96 K*(B), one from 6 at 0.90, none below 0.89), which a
-/// verification set of a few tests cannot rule out.
-pub const DAMPED_MARGIN: f64 = 0.8;
-
-/// Relative tolerance of the bisections at B > 0 (coarser than the spring-only one: the
-/// chosen pair is confirmed with the whole set).
-pub const FRONTIER_REL_TOL: f64 = 0.05;
-
-/// Natural periods per test (at least [`TEST_TICKS`].0, at most .1 ticks).
-pub const TEST_NATURAL_PERIODS: f64 = 60.0;
-/// Fewest / most ticks per test when `release_ticks` is not given.
-pub const TEST_TICKS: (f64, f64) = (1500.0, 30_000.0);
-/// Fewest ticks per test of a damped wall (when `release_ticks` is not given): its damper ends
-/// a transient within a few natural periods, so 60 natural periods suffice down to this floor;
-/// a persistent oscillation is judged (and fails) sooner.
-pub const DAMPED_TEST_MIN_TICKS: f64 = 400.0;
-/// Confirmation attempts, each [`CONFIRM_BACKOFF`] below the last.
-pub const CONFIRM_TRIES: usize = 8;
-
-impl Default for Settings {
-    fn default() -> Self {
-        Self {
-            max_velocity: None,
-            margin: 0.9,
-            release_ticks: None,
-            excite_seconds: 3.0,
-            rel_tol: 0.02,
-            damping: Damping::Search,
-        }
-    }
-}
-
-/// Predicted stiffness limits, N/m (N·m/rad).
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct Predicted {
-    /// Region A (passive) limit, (17)–(18).
-    pub passive: f64,
-    /// Worst-case guaranteed limit at v: (12), or (19) with delay.
-    pub guaranteed: f64,
-    /// Expected limit: exact sampled linear boundary with Coulomb as DF damping at v.
-    pub expected: f64,
-    /// The paper's describing-function approximation (74) at v (ZOH as a ½-period delay).
-    pub expected_paper_74: f64,
-}
-
-/// Everything `tune` found.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Outcome {
-    /// Identified parameters.
-    pub identified: IdentifiedReport,
-    /// Device model used for predictions (K = the set value).
-    pub params: PhysicalParams,
-    /// Maximum velocity used, m/s (rad/s).
-    pub max_velocity: f64,
-    /// Same, ticks per period.
-    pub xidot: f64,
-    /// Predictions.
-    pub predicted: Predicted,
-    /// The release-test search.
-    pub search: Found,
-    /// The stiffness set.
-    pub k_set: f64,
-    /// The virtual damping set, N·s/m (N·m·s/rad).
-    pub b_set: f64,
-    /// The spring-only stiffness of the same run: verified when it is the one set, otherwise
-    /// the one it would set (largest settling K at B = 0 × the margin).
-    pub k_spring_only: f64,
-    /// The B values tried with their largest verified (settling) K (None: none at or above
-    /// the best K so far), B = 0 first.
-    pub frontier: Vec<FrontierPoint>,
-    /// Verdicts of the verification set at `k_set` (in the order of `verification`).
-    pub confirmation: Vec<Verdict>,
-    /// The verification set at `k_set`, test by test.
-    pub verification: Vec<TestResult>,
-    /// Where the identified model does not describe the device (plain language; empty when
-    /// it does).
-    pub model_mismatch: Vec<String>,
-    /// What the model checks measured.
-    pub model_evidence: Evidence,
-    /// Margin applied to the set wall's largest settling K (the requested one, times
-    /// [`MISMATCH_MARGIN`] on a mismatch; at most [`DAMPED_MARGIN`] with a damper).
-    pub margin_used: f64,
-    /// Whether the config was saved.
-    pub saved: bool,
-}
-
-/// One point of the verified frontier.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct FrontierPoint {
-    /// Virtual damping B, N·s/m (N·m·s/rad).
-    pub b: f64,
-    /// Largest settling K found at B, N/m (N·m/rad).
-    pub k_verified: Option<f64>,
-}
-
-/// Identified parameters as reported.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct IdentifiedReport {
-    /// m and its standard error.
-    pub mass: [f64; 2],
-    /// b and its standard error.
-    pub viscous: [f64; 2],
-    /// Upper bound on b (estimate + 2 s.e.), meaningful when b is only bounded.
-    pub viscous_upper_bound: f64,
-    /// Whether b is indistinguishable from 0.
-    pub viscous_only_bounded: bool,
-    /// c and its standard error.
-    pub coulomb: [f64; 2],
-    /// Integrated equations used.
-    pub equations: usize,
-    /// Chirp amplitude used, output codes.
-    pub excite_amplitude_codes: i32,
-    /// Stiffness of a spring-like force beside the rigid model (a hand, a cable) and its
-    /// standard error, N/m (N·m/rad); None when none was resolved.
-    pub spring: Option<[f64; 2]>,
-}
-
-pub(super) fn check_interrupt() -> Result<()> {
-    if crate::session::interrupted() {
-        bail!("interrupted");
-    }
-    Ok(())
-}
+pub use stiffwall_client::session::INTERRUPTED;
 
 /// Step 2: predictions for the identified device.
 pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
@@ -289,19 +98,7 @@ pub fn tune(
     dry_run: bool,
     progress: &dyn Fn(&str),
 ) -> Result<Outcome> {
-    if !(s.margin.is_finite() && s.margin > 0.0 && s.margin <= 1.0) {
-        bail!("--margin must be in (0, 1] (got {})", s.margin);
-    }
-    if let Some(v) = s.max_velocity {
-        if !(v.is_finite() && v > 0.0) {
-            bail!("--max-velocity must be finite and > 0 (got {v})");
-        }
-    }
-    if let Damping::Fixed(b) = s.damping {
-        if !(b.is_finite() && b >= 0.0) {
-            bail!("--damping must be finite and >= 0 N·s/m (N·m·s/rad) (got {b})");
-        }
-    }
+    s.validate()?;
     let original = c.get_config()?;
     if let Damping::Fixed(b) = s.damping {
         // Checked before any test: the firmware's limit at the config's rate and coarsening.

@@ -1,0 +1,95 @@
+//! What a tune found: predictions, the identified device, the wall set and the frontier tried
+//! (plain data, serialised as `hostctl tune --json`'s `tune` object).
+//!
+//! Units: SI (N/m, N·s/m, kg, N; rotary devices N·m/rad, N·m·s/rad, kg·m², N·m).
+
+use super::model_check::Evidence;
+use super::release::Verdict;
+use super::search::Found;
+use super::verify::TestResult;
+use stiffwall_core::params::PhysicalParams;
+
+/// Predicted stiffness limits, N/m (N·m/rad).
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Predicted {
+    /// Region A (passive) limit, (17)–(18).
+    pub passive: f64,
+    /// Worst-case guaranteed limit at v: (12), or (19) with delay.
+    pub guaranteed: f64,
+    /// Expected limit: exact sampled linear boundary with Coulomb as DF damping at v.
+    pub expected: f64,
+    /// The paper's describing-function approximation (74) at v (ZOH as a ½-period delay).
+    pub expected_paper_74: f64,
+}
+
+/// Everything `tune` found.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Outcome {
+    /// Identified parameters.
+    pub identified: IdentifiedReport,
+    /// Device model used for predictions (K = the set value).
+    pub params: PhysicalParams,
+    /// Maximum velocity used, m/s (rad/s).
+    pub max_velocity: f64,
+    /// Same, ticks per period.
+    pub xidot: f64,
+    /// Predictions.
+    pub predicted: Predicted,
+    /// The release-test search.
+    pub search: Found,
+    /// The stiffness set.
+    pub k_set: f64,
+    /// The virtual damping set, N·s/m (N·m·s/rad).
+    pub b_set: f64,
+    /// The spring-only stiffness of the same run: verified when it is the one set, otherwise
+    /// the one it would set (largest settling K at B = 0 × the margin).
+    pub k_spring_only: f64,
+    /// The B values tried with their largest verified (settling) K (None: none at or above
+    /// the best K so far), B = 0 first.
+    pub frontier: Vec<FrontierPoint>,
+    /// Verdicts of the verification set at `k_set` (in the order of `verification`).
+    pub confirmation: Vec<Verdict>,
+    /// The verification set at `k_set`, test by test.
+    pub verification: Vec<TestResult>,
+    /// Where the identified model does not describe the device (plain language; empty when
+    /// it does).
+    pub model_mismatch: Vec<String>,
+    /// What the model checks measured.
+    pub model_evidence: Evidence,
+    /// Margin applied to the set wall's largest settling K (the requested one, times
+    /// [`MISMATCH_MARGIN`] on a mismatch; at most [`DAMPED_MARGIN`] with a damper).
+    pub margin_used: f64,
+    /// Whether the config was saved.
+    pub saved: bool,
+}
+
+/// One point of the verified frontier.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct FrontierPoint {
+    /// Virtual damping B, N·s/m (N·m·s/rad).
+    pub b: f64,
+    /// Largest settling K found at B, N/m (N·m/rad).
+    pub k_verified: Option<f64>,
+}
+
+/// Identified parameters as reported.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct IdentifiedReport {
+    /// m and its standard error.
+    pub mass: [f64; 2],
+    /// b and its standard error.
+    pub viscous: [f64; 2],
+    /// Upper bound on b (estimate + 2 s.e.), meaningful when b is only bounded.
+    pub viscous_upper_bound: f64,
+    /// Whether b is indistinguishable from 0.
+    pub viscous_only_bounded: bool,
+    /// c and its standard error.
+    pub coulomb: [f64; 2],
+    /// Integrated equations used.
+    pub equations: usize,
+    /// Chirp amplitude used, output codes.
+    pub excite_amplitude_codes: i32,
+    /// Stiffness of a spring-like force beside the rigid model (a hand, a cable) and its
+    /// standard error, N/m (N·m/rad); None when none was resolved.
+    pub spring: Option<[f64; 2]>,
+}
