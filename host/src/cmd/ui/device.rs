@@ -689,8 +689,18 @@ impl Dev {
                 "state": "done",
                 "guaranteed": o.predicted.guaranteed,
                 "expected": o.predicted.expected,
-                "verified": o.search.k_pass,
+                // The largest settling K at the damping set (the spring-only search's when
+                // B = 0), of which the set K is the margin's fraction.
+                "verified": o
+                    .frontier
+                    .iter()
+                    .find(|p| p.b == o.b_set)
+                    .and_then(|p| p.k_verified)
+                    .unwrap_or(o.search.k_pass),
                 "set": o.k_set,
+                "damping": o.b_set,
+                "spring_only": o.k_spring_only,
+                "frontier": o.frontier,
                 "saved": o.saved,
                 "trials": o.search.trials,
                 "verification": o.verification,
