@@ -225,7 +225,9 @@ fn tune_dry_run_on_the_qemu_image() {
     writeln!(
         t,
         "set K confirmed from both sides: {}",
-        o.confirmation.iter().all(|v| v.settled())
+        // Every test of the verification set passed (a damped wall may pass toggling within
+        // one count, `Verdict::LimitCycle`, rather than at rest).
+        o.confirmation.iter().all(|v| v.passes())
     )
     .unwrap();
     writeln!(
