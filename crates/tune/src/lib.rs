@@ -2,6 +2,7 @@
 //! search, and the procedure that runs them on a device.
 
 pub mod excite;
+pub mod frontier;
 pub mod ident;
 pub mod model_check;
 pub mod outcome;
@@ -9,5 +10,6 @@ pub mod procedure;
 pub mod release;
 pub mod search;
 pub mod settings;
+pub mod steps;
 pub mod verdict;
 pub mod verify;

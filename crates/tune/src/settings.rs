@@ -17,7 +17,7 @@ pub const CONFIRM_BACKOFF: f64 = 0.95;
 pub const MISMATCH_MARGIN: f64 = 0.85;
 /// Factor applied to the margin instead of [`MISMATCH_MARGIN`] when the only mismatch is the
 /// friction (breakaway above sliding: static friction or a dead band) or the verified K below
-/// the prediction, the identified dynamics fitting ([`model_check::dynamics_fit`]) and every
+/// the prediction, the identified dynamics fitting ([`crate::model_check::dynamics_fit`]) and every
 /// impact launched: static friction dissipates, and the release tests run at the energy asked
 /// for (re-aimed where the hold stuck off target), so the verified K is the device's own.
 pub const FRICTION_MISMATCH_MARGIN: f64 = 0.9;

@@ -1,0 +1,206 @@
+//! The (K, B) frontier search after the spring-only one: the predicted frontier (the exact
+//! linear boundary with the damper), the search at the stiffest predicted B, its confirmation,
+//! and the spring-only fallback (`choose_wall`).
+//!
+//! Units: K N/m (N·m/rad), B N·s/m (N·m·s/rad), T s.
+
+use super::outcome::FrontierPoint;
+use super::release::Verdict;
+use super::search::{largest_settling_k, Found, Search};
+use super::settings::*;
+use super::steps::{df_equivalent, Notes, Run};
+use super::verify::TestResult;
+use anyhow::{bail, Result};
+use stiffwall_client::Client;
+use stiffwall_core::criteria;
+use stiffwall_proto::ServoConfig;
+
+/// The wall chosen: stiffness, damping, the verification at it and the frontier tried.
+pub(crate) struct Wall {
+    pub(crate) k_set: f64,
+    pub(crate) b_set: f64,
+    /// The margin applied to the chosen wall's largest settling K.
+    pub(crate) margin: f64,
+    pub(crate) k_spring_only: f64,
+    pub(crate) verification: Vec<TestResult>,
+    pub(crate) frontier: Vec<FrontierPoint>,
+}
+
+/// Largest B the firmware accepts at the config's rate and coarsening, N·s/m: its limit
+/// K_max(shift)·T/2 (`Board::max_damping`), a little inside for the f32 round trip.
+pub(crate) fn b_cap(c: &Client, base: &ServoConfig, period_s: f64) -> f64 {
+    let k_cap = f64::from(c.info.limits.max_stiffness) / f64::from(1u32 << base.coarsen_shift);
+    0.999 * k_cap * period_s / 2.0
+}
+
+fn damped(base: &ServoConfig, b: f64) -> ServoConfig {
+    ServoConfig {
+        damping: b as f32,
+        ..*base
+    }
+}
+
+/// The largest settling K at damping `b`: from `start` down by [`FRONTIER_STEP`] until a step
+/// passes, then up and bisected ([`FRONTIER_REL_TOL`]); None when no K above `floor` passes.
+#[allow(clippy::too_many_arguments)]
+fn search_at(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    b: f64,
+    start: f64,
+    floor: f64,
+    search: &Search,
+    thorough: bool,
+    notes: &mut Notes,
+) -> Result<Option<Found>> {
+    let cfg = damped(base, b);
+    // Verdicts already measured, looked up by K (the bracketing revisits the K it came down
+    // from).
+    let mut seen: Vec<(f64, Verdict)> = Vec::new();
+    let mut k = start;
+    loop {
+        let v = run.step(c, &cfg, k, thorough, notes)?;
+        seen.push((k, v));
+        if v.passes() {
+            break;
+        }
+        k /= FRONTIER_STEP;
+        if k < floor {
+            return Ok(None);
+        }
+    }
+    let search = Search {
+        step: FRONTIER_STEP,
+        rel_tol: search.rel_tol.max(FRONTIER_REL_TOL),
+        ..*search
+    };
+    largest_settling_k(k, &search, |k| {
+        match seen.iter().find(|(k0, _)| (k / k0 - 1.0).abs() < 1e-9) {
+            Some(&(_, v)) => Ok(v),
+            None => run.step(c, &cfg, k, thorough, notes),
+        }
+    })
+    .map(Some)
+}
+
+/// The K predicted at damping `b` for a device whose spring-only search found `k0`: the exact
+/// linear boundary with the damper and Coulomb friction as describing-function damping at v,
+/// times what the spring-only search measured against the same prediction at B = 0.
+fn predicted_k(run: &Run<'_>, k0: f64, b: f64) -> Option<f64> {
+    let eq = df_equivalent(&run.p, run.v);
+    let at_0 = criteria::k_max_exact_linear(&eq, 0.0).ok()?;
+    let at_b = criteria::k_max_exact_linear(&eq, b).ok()?;
+    (at_0 > 0.0 && at_b > 0.0).then(|| k0 * at_b / at_0)
+}
+
+/// The damping levels of [`DAMPING_BETAS`] within the firmware's limit `cap`, with their
+/// predicted K, stiffest first; only those predicted to gain [`DAMPING_MIN_GAIN`] over `k0`.
+fn predicted_frontier(run: &Run<'_>, k0: f64, cap: f64) -> Vec<(f64, f64)> {
+    let mut levels: Vec<(f64, f64)> = DAMPING_BETAS
+        .iter()
+        .map(|beta| beta * k0 * run.period_s())
+        .filter(|&b| b <= cap)
+        .filter_map(|b| predicted_k(run, k0, b).map(|k| (b, k)))
+        .filter(|&(_, k)| k > k0 * (1.0 + DAMPING_MIN_GAIN))
+        .collect();
+    levels.sort_by(|a, b| b.1.total_cmp(&a.1));
+    levels
+}
+
+/// Chooses the wall after the spring-only search `found`: spring only, a fixed B, or the
+/// stiffest verified pair of the frontier ([`DAMPING_BETAS`]); the chosen pair is confirmed
+/// with the whole verification set, the spring only is the fallback of the search.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn choose_wall(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    found: &Found,
+    search: &Search,
+    thorough: bool,
+    margin: f64,
+    notes: &mut Notes,
+) -> Result<Wall> {
+    let k_spring = found.k_pass * margin;
+    let mut frontier = vec![FrontierPoint {
+        b: 0.0,
+        k_verified: Some(found.k_pass),
+    }];
+    let cap = b_cap(c, base, run.period_s());
+    let mut best = (0.0, found.k_pass);
+    match run.s.damping {
+        Damping::Fixed(b) if b > 0.0 => {
+            let start = predicted_k(run, found.k_pass, b).map_or(found.k_pass, |k| {
+                (k * FRONTIER_START).clamp(found.k_pass * 1e-3, search.k_cap)
+            });
+            let floor = found.k_pass * 1e-3;
+            let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
+            let Some(f) = f else {
+                bail!("no stiffness down to {floor:.4e} settles at the fixed damping B = {b:.4e}");
+            };
+            frontier.push(FrontierPoint {
+                b,
+                k_verified: Some(f.k_pass),
+            });
+            best = (b, f.k_pass);
+        }
+        Damping::Fixed(_) => {}
+        Damping::Search => {
+            let floor = found.k_pass * (1.0 + DAMPING_MIN_GAIN);
+            for (b, k_pred) in predicted_frontier(run, found.k_pass, cap)
+                .into_iter()
+                .take(FRONTIER_TRIES)
+            {
+                (run.progress)(&format!(
+                    "damping B = {b:.4e}: predicted K {k_pred:.4}, searching from {:.4}",
+                    (k_pred * FRONTIER_START).max(floor)
+                ));
+                let start = (k_pred * FRONTIER_START).clamp(floor, search.k_cap);
+                let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
+                let k = f.map(|f| f.k_pass).filter(|&k| k >= floor);
+                frontier.push(FrontierPoint { b, k_verified: k });
+                if let Some(k) = k {
+                    best = (b, k);
+                    break;
+                }
+            }
+        }
+    }
+    if best.0 > 0.0 {
+        let cfg = damped(base, best.0);
+        if let Some((k_set, verification)) =
+            run.confirm(c, &cfg, best.1 * margin.min(DAMPED_MARGIN), thorough, notes)?
+        {
+            return Ok(Wall {
+                k_set,
+                b_set: best.0,
+                margin: margin.min(DAMPED_MARGIN),
+                k_spring_only: k_spring,
+                verification,
+                frontier,
+            });
+        }
+        if let Damping::Fixed(b) = run.s.damping {
+            bail!("no stiffness passed the verification set at the fixed damping B = {b:.4e}");
+        }
+        (run.progress)(&format!(
+            "no K passed the verification set at B = {:.4e}; setting the spring-only wall",
+            best.0
+        ));
+    }
+    let Some((k_set, verification)) = run.confirm(c, base, k_spring, thorough, notes)? else {
+        bail!(
+            "no stiffness passed the verification set (last tried {:.4})",
+            k_spring * CONFIRM_BACKOFF.powi(CONFIRM_TRIES as i32)
+        );
+    };
+    Ok(Wall {
+        k_set,
+        b_set: 0.0,
+        margin,
+        k_spring_only: k_set,
+        verification,
+        frontier,
+    })
+}

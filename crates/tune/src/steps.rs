@@ -1,0 +1,242 @@
+//! One run's tests on the device: the identified device and the tune's targets (`Run`), a
+//! search step (the full-energy release, plus impacts at v above the force-saturation K or with
+//! a damper), the whole verification set and its confirmation with back-off.
+//!
+//! Units: SI (N/m, N·s/m, kg, m/s; rotary N·m/rad, N·m·s/rad, kg·m², rad/s), ticks.
+
+use super::release::Verdict;
+use super::settings::*;
+use super::verify::{min_settle_run, run_test, test_set, Test, TestResult};
+use anyhow::Result;
+use stiffwall_client::Client;
+use stiffwall_core::params::PhysicalParams;
+use stiffwall_proto::ServoConfig;
+
+/// The linear device whose viscous damping adds Coulomb friction's describing-function damping
+/// 4c/(πv) at velocity amplitude v (v in m/s or rad/s).
+#[must_use]
+pub fn df_equivalent(p: &PhysicalParams, v: f64) -> PhysicalParams {
+    PhysicalParams {
+        viscous: p.viscous + 4.0 * p.coulomb / (std::f64::consts::PI * v),
+        ..*p
+    }
+}
+
+/// Release deflection (effective ticks) whose spring energy equals the kinetic energy at v.
+#[must_use]
+pub fn deflection_for(p: &PhysicalParams, k: f64, v: f64) -> i32 {
+    let d = v * (p.mass / k).sqrt() / p.resolution;
+    d.round().clamp(2.0, 1e6) as i32
+}
+
+/// What every test of one run needs beyond the config: the identified device and the tune's
+/// targets.
+pub(crate) struct Run<'a> {
+    pub(crate) s: &'a Settings,
+    pub(crate) p: PhysicalParams,
+    /// Maximum velocity v, m/s (rad/s).
+    pub(crate) v: f64,
+    /// Above this K the wall's peak force at v saturates (see `procedure::tune_inner`).
+    pub(crate) k_force: f64,
+    pub(crate) one_sided_wall: bool,
+    pub(crate) progress: &'a dyn Fn(&str),
+}
+
+/// What the searches found beside their result.
+#[derive(Default)]
+pub(crate) struct Notes {
+    /// The smallest K at which an impact's launch failed (see `Verdict::NotLaunched`).
+    pub(crate) not_launched: Option<f64>,
+    /// The largest K whose release passed at B = 0, with its counts.
+    pub(crate) best: Option<(f64, Vec<i64>)>,
+}
+
+impl Run<'_> {
+    pub(crate) fn period_s(&self) -> f64 {
+        self.p.period_s
+    }
+
+    pub(crate) fn natural_ticks(&self, k: f64) -> f64 {
+        std::f64::consts::TAU * (self.p.mass / k).sqrt() / self.period_s()
+    }
+
+    pub(crate) fn ticks_for(&self, k: f64, thorough: bool, damped: bool) -> u32 {
+        let fewest = if damped {
+            DAMPED_TEST_MIN_TICKS
+        } else {
+            TEST_TICKS.0
+        };
+        let n = self.s.release_ticks.unwrap_or_else(|| {
+            (TEST_NATURAL_PERIODS * self.natural_ticks(k)).clamp(fewest, TEST_TICKS.1) as u32
+        });
+        if thorough {
+            n.saturating_mul(2)
+        } else {
+            n
+        }
+    }
+
+    pub(crate) fn test(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        k: f64,
+        test: Test,
+        thorough: bool,
+    ) -> Result<(Verdict, Vec<i64>)> {
+        run_test(
+            c,
+            base,
+            k,
+            test,
+            self.ticks_for(k, thorough, base.damping > 0.0),
+            min_settle_run(self.p.mass, k, self.period_s()),
+        )
+    }
+
+    /// One search step at `k`: the full-energy release, and above `k_force` the impacts at v.
+    pub(crate) fn step(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        k: f64,
+        thorough: bool,
+        notes: &mut Notes,
+    ) -> Result<Verdict> {
+        let d = deflection_for(&self.p, k, self.v);
+        let b = base.damping;
+        (self.progress)(&format!("release test K={k:.4} B={b:.4} from {d} ticks"));
+        let (verdict, counts) = self.test(
+            c,
+            base,
+            k,
+            Test::Release {
+                deflection_ticks: d,
+            },
+            thorough,
+        )?;
+        if !verdict.passes() {
+            return Ok(verdict);
+        }
+        // With a damper, every step also runs the impacts: the damper acts on the contact
+        // speed, which a release from rest does not reach at the same energy.
+        if k > self.k_force || base.damping > 0.0 {
+            // Below k_force a damped step runs one side (the confirmation runs both).
+            let dirs: &[f64] = if self.one_sided_wall || k <= self.k_force {
+                &[1.0]
+            } else {
+                &[1.0, -1.0]
+            };
+            for &dir in dirs {
+                let v_ticks = dir * self.v * self.period_s() / self.p.resolution;
+                let test =
+                    super::verify::impact(v_ticks, self.natural_ticks(k), self.one_sided_wall);
+                let why = if k > self.k_force {
+                    "force saturates"
+                } else {
+                    "damped wall"
+                };
+                (self.progress)(&format!("{} test K={k:.4} ({why})", test.describe()));
+                let (impact, _) = self.test(c, base, k, test, thorough)?;
+                if impact == Verdict::NotLaunched {
+                    notes.not_launched.get_or_insert(k);
+                } else if !impact.passes() {
+                    return Ok(impact);
+                }
+            }
+        }
+        if base.damping == 0.0 && notes.best.as_ref().is_none_or(|(kb, _)| k > *kb) {
+            notes.best = Some((k, counts));
+        }
+        Ok(verdict)
+    }
+
+    /// The whole verification set at `k` and the config `base` (its damping): whether every
+    /// test passed, and the results up to the first failure.
+    pub(crate) fn verify_set(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        k: f64,
+        thorough: bool,
+        notes: &mut Notes,
+    ) -> Result<(bool, Vec<TestResult>)> {
+        let d = deflection_for(&self.p, k, self.v);
+        (self.progress)(&format!(
+            "verifying K={k:.4} B={:.4}: releases from ±{d} ticks and below, impacts",
+            base.damping
+        ));
+        let v_ticks = self.v * self.period_s() / self.p.resolution;
+        let mut set = test_set(
+            d,
+            v_ticks,
+            self.natural_ticks(k),
+            thorough,
+            true,
+            self.one_sided_wall,
+        );
+        // The tests most likely to fail first (impacts at v, then the full-energy releases),
+        // so that a K that fails costs one or two tests, not the whole set.
+        set.sort_by_key(|test| match *test {
+            Test::Impact {
+                velocity_milliticks,
+                ..
+            } if velocity_milliticks.unsigned_abs() >= (1000.0 * v_ticks) as u32 => 0,
+            Test::Release { deflection_ticks } if deflection_ticks.abs() >= d.abs() => 1,
+            _ => 2,
+        });
+        let mut results = Vec::new();
+        for test in set {
+            let (verdict, counts) = self.test(c, base, k, test, thorough)?;
+            results.push(TestResult {
+                test,
+                k,
+                verdict,
+                ticks_judged: counts.len(),
+            });
+            if verdict == Verdict::NotLaunched {
+                // Judged by the releases of the set, which reach the same energy from both
+                // sides; reported by the caller.
+                notes.not_launched.get_or_insert(k);
+                continue;
+            }
+            if !verdict.passes() {
+                (self.progress)(&format!(
+                    "verification at K={k:.4}: {} {}; backing off ×{CONFIRM_BACKOFF}",
+                    test.describe(),
+                    verdict.describe()
+                ));
+                return Ok((false, results));
+            }
+        }
+        Ok((true, results))
+    }
+
+    /// Confirms `k` with the verification set, backing off in steps of [`CONFIRM_BACKOFF`].
+    /// After a confirmation failed, the first K that passes may sit right at the limit (it
+    /// only lies between that failure and it): the K set is one more step down. That step is
+    /// not verified again (it is 5 % below a K that passed the whole set; re-running the set
+    /// would cost the real-time budget a third of its time). None: no K passed.
+    pub(crate) fn confirm(
+        &self,
+        c: &mut Client,
+        base: &ServoConfig,
+        mut k: f64,
+        thorough: bool,
+        notes: &mut Notes,
+    ) -> Result<Option<(f64, Vec<TestResult>)>> {
+        let mut backed_off = false;
+        for _ in 0..CONFIRM_TRIES {
+            let (confirmed, results) = self.verify_set(c, base, k, thorough, notes)?;
+            if confirmed {
+                if backed_off {
+                    k *= CONFIRM_BACKOFF;
+                }
+                return Ok(Some((k, results)));
+            }
+            backed_off = true;
+            k *= CONFIRM_BACKOFF;
+        }
+        Ok(None)
+    }
+}
