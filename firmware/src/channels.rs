@@ -48,6 +48,8 @@ pub enum ServoCmd {
         deflection: i32,
         /// Ticks after release.
         ticks: u32,
+        /// How it ends besides its length (`HostMsg::EndWhenSettled`).
+        end: Option<SettledEnd>,
     },
     /// Start an impact test.
     Impact {
@@ -57,6 +59,8 @@ pub enum ServoCmd {
         velocity_milli: i32,
         /// Ticks after contact.
         ticks: u32,
+        /// How it ends besides its length (`HostMsg::EndWhenSettled`).
+        end: Option<SettledEnd>,
     },
     /// Start an excitation.
     Excite {
@@ -78,6 +82,19 @@ pub enum ServoCmd {
     Stop,
 }
 
+/// A release or impact test's end under `HostMsg::EndWhenSettled`: settled after a run of
+/// `min_run` counts (within one count with `one_count`), and parked in `park` (the config at
+/// the start with stiffness and damping 0) however it ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SettledEnd {
+    /// Shortest settled run, ticks (≥ 1).
+    pub min_run: u32,
+    /// A toggle between neighbouring counts counts as settled.
+    pub one_count: bool,
+    /// The config applied on the tick the test ends.
+    pub park: ServoConfig,
+}
+
 /// Events from the servo to the main loop.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ServoEvent {
@@ -89,6 +106,8 @@ pub enum ServoEvent {
         completed: bool,
         /// Latched faults at the end.
         faults: u32,
+        /// The test ended parked ([`SettledEnd::park`] applied).
+        parked: bool,
         /// Sample number the next telemetry sample will get (all the experiment's samples
         /// have smaller numbers): the main loop reports the end after sending them.
         next_seq: u32,

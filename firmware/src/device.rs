@@ -22,7 +22,7 @@
 //! - `ExperimentDone` is sent after the last telemetry sample of the experiment.
 //! - No allocation; bounded work per `poll`.
 
-use crate::channels::{HostPort, ServoCmd, ServoEvent};
+use crate::channels::{HostPort, ServoCmd, ServoEvent, SettledEnd};
 use crate::config::{validate, BoardInfo};
 use crate::hal::{ByteLink, ConfigStorage};
 use crate::store::ConfigStore;
@@ -83,6 +83,11 @@ pub struct Device<'a, S: ConfigStorage> {
     next_seq: u32,
     dropped: u32,
     pending_event: Option<ServoEvent>,
+    /// The `EndWhenSettled` rule for the next test: (min run, within one count).
+    settle_rule: Option<(u32, bool)>,
+    /// A config went to the servo since the last test started (a parked end then does not
+    /// change [`Device::config`]: the servo applied that config after parking).
+    config_sent: bool,
     rate_change: Option<u32>,
     shutdown: Option<u8>,
     stats: DeviceStats,
@@ -156,6 +161,8 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             next_seq: 0,
             dropped: 0,
             pending_event: None,
+            settle_rule: None,
+            config_sent: false,
             rate_change: None,
             shutdown: None,
             stats: DeviceStats::default(),
@@ -245,12 +252,20 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         // 3. Experiment end, after its samples.
         if self.pending_event.is_none() {
             self.pending_event = self.port.events.dequeue();
+            if let Some(ServoEvent::ExperimentDone { parked: true, .. }) = self.pending_event {
+                // The servo applied the test's park config (this one with K = B = 0).
+                if !self.config_sent {
+                    self.config.stiffness = 0.0;
+                    self.config.damping = 0.0;
+                }
+            }
         }
         if let Some(ServoEvent::ExperimentDone {
             kind,
             completed,
             faults,
             next_seq,
+            ..
         }) = self.pending_event
         {
             if seq_reached(self.next_seq, next_seq)
@@ -386,6 +401,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         if !self.send_servo(ServoCmd::Config(cfg)) {
             return busy("servo queue full");
         }
+        self.config_sent = true;
         if cfg.servo_rate_hz != self.config.servo_rate_hz {
             self.rate_change = Some(cfg.servo_rate_hz);
         }
@@ -490,83 +506,17 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             HostMsg::Release {
                 deflection_ticks,
                 ticks,
-            } => {
-                if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
-                    return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
-                }
-                if deflection_ticks.unsigned_abs() > MAX_DEFLECTION.unsigned_abs() {
-                    return invalid(
-                        ConfigField::Argument,
-                        -f64::from(MAX_DEFLECTION),
-                        f64::from(MAX_DEFLECTION),
-                    );
-                }
-                if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
-                    return busy("faults latched");
-                }
-                if self.config.stiffness <= 0.0 {
-                    return invalid(
-                        ConfigField::Stiffness,
-                        f64::from(f32::MIN_POSITIVE),
-                        f64::from(self.board.max_stiffness(self.config.coarsen_shift)),
-                    );
-                }
-                if self.send_servo(ServoCmd::Release {
-                    deflection: deflection_ticks,
-                    ticks,
-                }) {
-                    self.port.shared.experiment.store(true, Ordering::Relaxed);
-                    ack(Request::Release)
-                } else {
-                    busy("servo queue full")
-                }
-            }
+            } => self.start_test(Request::Release, deflection_ticks, None, ticks),
             HostMsg::Impact {
                 start_ticks,
                 velocity_milliticks,
                 ticks,
-            } => {
-                if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
-                    return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
-                }
-                if start_ticks == 0 || start_ticks.unsigned_abs() > MAX_DEFLECTION.unsigned_abs() {
-                    return invalid(
-                        ConfigField::Argument,
-                        -f64::from(MAX_DEFLECTION),
-                        f64::from(MAX_DEFLECTION),
-                    );
-                }
-                // Toward the wall: the velocity's sign is opposite to the start's.
-                let toward = -start_ticks.signum() * velocity_milliticks;
-                if !(1..=MAX_LAUNCH_MILLITICKS).contains(&toward) {
-                    let m = f64::from(MAX_LAUNCH_MILLITICKS);
-                    return if start_ticks < 0 {
-                        invalid(ConfigField::Argument, 1.0, m)
-                    } else {
-                        invalid(ConfigField::Argument, -m, -1.0)
-                    };
-                }
-                if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
-                    return busy("faults latched");
-                }
-                if self.config.stiffness <= 0.0 {
-                    return invalid(
-                        ConfigField::Stiffness,
-                        f64::from(f32::MIN_POSITIVE),
-                        f64::from(self.board.max_stiffness(self.config.coarsen_shift)),
-                    );
-                }
-                if self.send_servo(ServoCmd::Impact {
-                    start: start_ticks,
-                    velocity_milli: velocity_milliticks,
-                    ticks,
-                }) {
-                    self.port.shared.experiment.store(true, Ordering::Relaxed);
-                    ack(Request::Impact)
-                } else {
-                    busy("servo queue full")
-                }
-            }
+            } => self.start_test(
+                Request::Impact,
+                start_ticks,
+                Some(velocity_milliticks),
+                ticks,
+            ),
             HostMsg::Excite { profile, ticks } => {
                 if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
                     return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
@@ -632,7 +582,89 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
                 self.shutdown = Some(exit_code);
                 ack(Request::Shutdown)
             }
+            HostMsg::EndWhenSettled {
+                min_run_ticks,
+                within_one_count,
+            } => {
+                if min_run_ticks > MAX_EXPERIMENT_TICKS {
+                    return invalid(ConfigField::Argument, 0.0, f64::from(MAX_EXPERIMENT_TICKS));
+                }
+                self.settle_rule = (min_run_ticks > 0).then_some((min_run_ticks, within_one_count));
+                ack(Request::EndWhenSettled)
+            }
         }
+    }
+
+    /// Starts a release test (`velocity_milli` None: hold at `at`) or an impact test (launch
+    /// from `at` at `velocity_milli`), with the pending [`HostMsg::EndWhenSettled`] rule.
+    fn start_test(
+        &mut self,
+        request: Request,
+        at: i32,
+        velocity_milli: Option<i32>,
+        ticks: u32,
+    ) -> DeviceMsg {
+        if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
+            return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
+        }
+        // An impact starts off the wall (non-zero); a release may start on it.
+        let at_ok = at.unsigned_abs() <= MAX_DEFLECTION.unsigned_abs()
+            && (velocity_milli.is_none() || at != 0);
+        if !at_ok {
+            let m = f64::from(MAX_DEFLECTION);
+            return invalid(ConfigField::Argument, -m, m);
+        }
+        if let Some(v) = velocity_milli {
+            // Toward the wall: the velocity's sign is opposite to the start's.
+            let toward = -at.signum() * v;
+            if !(1..=MAX_LAUNCH_MILLITICKS).contains(&toward) {
+                let m = f64::from(MAX_LAUNCH_MILLITICKS);
+                return if at < 0 {
+                    invalid(ConfigField::Argument, 1.0, m)
+                } else {
+                    invalid(ConfigField::Argument, -m, -1.0)
+                };
+            }
+        }
+        if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
+            return busy("faults latched");
+        }
+        if self.config.stiffness <= 0.0 {
+            return invalid(
+                ConfigField::Stiffness,
+                f64::from(f32::MIN_POSITIVE),
+                f64::from(self.board.max_stiffness(self.config.coarsen_shift)),
+            );
+        }
+        let end = self.settle_rule.map(|(min_run, one_count)| SettledEnd {
+            min_run,
+            one_count,
+            park: ServoConfig {
+                stiffness: 0.0,
+                damping: 0.0,
+                ..self.config
+            },
+        });
+        let cmd = match velocity_milli {
+            None => ServoCmd::Release {
+                deflection: at,
+                ticks,
+                end,
+            },
+            Some(v) => ServoCmd::Impact {
+                start: at,
+                velocity_milli: v,
+                ticks,
+                end,
+            },
+        };
+        if !self.send_servo(cmd) {
+            return busy("servo queue full");
+        }
+        self.settle_rule = None;
+        self.config_sent = false;
+        self.port.shared.experiment.store(true, Ordering::Relaxed);
+        DeviceMsg::Ack(request)
     }
 }
 
@@ -743,6 +775,96 @@ mod tests {
             }
         );
         assert_eq!(f[3], DeviceMsg::Config(ServoConfig::default()));
+    }
+
+    /// `EndWhenSettled` out of range is refused naming the argument and its range and changes
+    /// nothing; in range, the next release ends settled and `GetConfig` then shows the parked
+    /// wall (K = B = 0, everything else as it was); the rule is used once.
+    #[test]
+    fn end_when_settled_parks_the_config_and_is_used_once() {
+        let mut ch = Channels::new();
+        let (sp, hp) = ch.split();
+        let b = BoardInfo::default();
+        let cfg = ServoConfig {
+            stiffness: 100.0,
+            damping: 0.5,
+            heartbeat_timeout_ms: 0,
+            ..ServoConfig::default()
+        };
+        let mut dev = Device::new(b, ConfigStore::new(MemStorage::default()), hp, cfg);
+        let mut servo: Servo<'_> = Servo::new(b, dev.config(), sp);
+        let mut link = Link::default();
+        let mut run = |link: &mut Link, dev: &mut Device<'_, MemStorage>, ticks: u32| {
+            for t in 0..ticks {
+                dev.poll(t, link);
+                servo.tick(t, &mut SampledCount(0), &mut HeldCode(0));
+            }
+            link.frames()
+                .into_iter()
+                .filter(|m| !matches!(m, DeviceMsg::Telemetry(_)))
+                .collect::<Vec<_>>()
+        };
+        link.send(&HostMsg::EndWhenSettled {
+            min_run_ticks: MAX_EXPERIMENT_TICKS + 1,
+            within_one_count: false,
+        });
+        link.send(&HostMsg::Release {
+            deflection_ticks: 0,
+            ticks: 5000,
+        });
+        link.send(&HostMsg::Stop);
+        link.send(&HostMsg::GetConfig);
+        let f = run(&mut link, &mut dev, 40);
+        assert_eq!(
+            f[0],
+            DeviceMsg::Error {
+                code: ErrorCode::InvalidArgument,
+                detail: ErrorDetail::Field {
+                    field: ConfigField::Argument,
+                    min: 0.0,
+                    max: 1e7
+                }
+            }
+        );
+        // No rule: stopped, the wall stays configured.
+        assert!(f.contains(&DeviceMsg::Config(cfg)), "{f:?}");
+        link.send(&HostMsg::EndWhenSettled {
+            min_run_ticks: 50,
+            within_one_count: false,
+        });
+        link.send(&HostMsg::Release {
+            deflection_ticks: 0,
+            ticks: 5000,
+        });
+        // Held at count 0 (its target) for the hold's settling time, then 50 ticks at rest.
+        let f = run(&mut link, &mut dev, 400);
+        assert!(
+            f.contains(&DeviceMsg::ExperimentDone {
+                kind: stiffwall_proto::ExperimentKind::Release,
+                completed: true,
+                faults: 0
+            }),
+            "{f:?}"
+        );
+        link.send(&HostMsg::GetConfig);
+        let parked = ServoConfig {
+            stiffness: 0.0,
+            damping: 0.0,
+            ..cfg
+        };
+        assert_eq!(run(&mut link, &mut dev, 5), [DeviceMsg::Config(parked)]);
+        // Used once: K back on, the next release runs until stopped.
+        link.send(&HostMsg::SetConfig(cfg));
+        link.send(&HostMsg::Release {
+            deflection_ticks: 0,
+            ticks: 5000,
+        });
+        let f = run(&mut link, &mut dev, 400);
+        assert!(
+            !f.iter()
+                .any(|m| matches!(m, DeviceMsg::ExperimentDone { .. })),
+            "{f:?}"
+        );
     }
 
     #[test]

@@ -189,6 +189,54 @@ impl Launch {
     }
 }
 
+/// The end rule of a released phase under `HostMsg::EndWhenSettled`: settled at the first
+/// count L of the phase at which the last max(`min_run`, ⌈L/3⌉) counts are all equal (or, with
+/// `one_count`, all within one count). The exact streaming form of the host's
+/// `settled_within` (stiffwall-tune's verify module): the longest runs ending at the latest
+/// count with values in {n − 1, n} (`below`) and {n, n + 1} (`above`), O(1) per tick.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct SettleWatch {
+    min_run: u32,
+    one_count: bool,
+    prev: i32,
+    len: u32,
+    below: u32,
+    above: u32,
+}
+
+impl SettleWatch {
+    /// A watch for runs of at least `min_run` counts (within one count with `one_count`).
+    pub(crate) fn new(min_run: u32, one_count: bool) -> Self {
+        Self {
+            min_run,
+            one_count,
+            prev: 0,
+            len: 0,
+            below: 0,
+            above: 0,
+        }
+    }
+
+    /// The released phase's next count `n`; true when the phase has settled with it.
+    pub(crate) fn push(&mut self, n: i32) -> bool {
+        let one = |a: i32, b: i32| self.one_count && a.checked_add(1) == Some(b);
+        (self.below, self.above) = if self.len == 0 {
+            (1, 1)
+        } else if self.prev == n {
+            (self.below.saturating_add(1), self.above.saturating_add(1))
+        } else if one(self.prev, n) {
+            (self.above.saturating_add(1), 1)
+        } else if one(n, self.prev) {
+            (1, self.below.saturating_add(1))
+        } else {
+            (1, 1)
+        };
+        self.prev = n;
+        self.len = self.len.saturating_add(1);
+        self.below.max(self.above) >= self.min_run.max(self.len.div_ceil(3))
+    }
+}
+
 /// An excitation: one code per tick from its profile, for `total` ticks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Excitation {
@@ -275,6 +323,52 @@ impl Excitation {
 mod tests {
     use super::*;
     use proptest::strategy::Just;
+
+    /// The host's rule, written as plainly as possible: the first L at which the last
+    /// max(min_run, ⌈L/3⌉) counts have max − min ≤ `band`.
+    fn settled_plain(counts: &[i32], min_run: u32, band: i32) -> Option<usize> {
+        (1..=counts.len()).find(|&l| {
+            let w = (min_run as usize).max(l.div_ceil(3));
+            w <= l && {
+                let tail = &counts[l - w..l];
+                tail.iter().max().unwrap() - tail.iter().min().unwrap() <= band
+            }
+        })
+    }
+
+    fn settled_watch(counts: &[i32], min_run: u32, one_count: bool) -> Option<usize> {
+        let mut w = SettleWatch::new(min_run, one_count);
+        counts.iter().position(|&n| w.push(n)).map(|i| i + 1)
+    }
+
+    #[test]
+    fn settle_watch_ends_a_toggle_only_within_one_count() {
+        let toggle = [9, 7, 5, 4, 5, 4, 5, 4, 5, 4, 5, 4];
+        assert_eq!(settled_watch(&toggle, 6, true), Some(8));
+        assert_eq!(settled_watch(&toggle, 6, false), None);
+        // A shift of the band: 5,4 then 5,6: the run {5,6} starts at the last 5 before the 6.
+        let shift = [4, 5, 4, 5, 6, 5, 6, 5, 6, 5];
+        assert_eq!(settled_watch(&shift, 6, true), Some(9));
+        assert_eq!(settled_watch(&[3, 3, 3], 3, false), Some(3));
+        assert_eq!(
+            settled_watch(&[i32::MAX, i32::MIN, i32::MAX], 1, true),
+            Some(1)
+        );
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn settle_watch_is_the_plain_rule(
+            counts in proptest::collection::vec(-3i32..=3, 0..120),
+            min_run in 0u32..40,
+            one_count: bool,
+        ) {
+            proptest::prop_assert_eq!(
+                settled_watch(&counts, min_run, one_count),
+                settled_plain(&counts, min_run, i32::from(one_count))
+            );
+        }
+    }
 
     #[test]
     fn hold_releases_after_settling_or_two_seconds() {

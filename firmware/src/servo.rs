@@ -24,9 +24,9 @@
 //! generators) [`crate::experiment`], the energy monitor `stiffwall_core::monitor` (the
 //! dissipation check shared with `hostctl replay`); this module is the tick that uses them.
 
-use crate::channels::{ServoCmd, ServoEvent, ServoPort, TelemetryItem};
+use crate::channels::{ServoCmd, ServoEvent, ServoPort, SettledEnd, TelemetryItem};
 use crate::config::{BoardInfo, Gains, Shift, DAMPER_V_MAX, VEL_WINDOW};
-use crate::experiment::{Excitation, Experiment, Hold, Launch, Mode};
+use crate::experiment::{Excitation, Experiment, Hold, Launch, Mode, SettleWatch};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric};
 use core::sync::atomic::Ordering;
@@ -71,6 +71,10 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     seq: u32,
     port: ServoPort<'a>,
     exp: Experiment,
+    /// The running test's end rule (`HostMsg::EndWhenSettled`), if it has one.
+    end: Option<SettledEnd>,
+    /// Its settle watch, from the release on.
+    settle: Option<SettleWatch>,
     board: BoardInfo,
     table: [i16; MAX_TABLE],
 }
@@ -96,6 +100,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
             hb_seen: 0,
             hb_tick: 0,
             exp: Experiment::None,
+            end: None,
+            settle: None,
             mode: Mode::Wall,
             table: [0; MAX_TABLE],
             decimation: 0,
@@ -467,7 +473,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
             }
             Experiment::Released { remaining, .. } => {
                 *remaining = remaining.saturating_sub(1);
-                done = *remaining == 0;
+                let settled = self.settle.as_mut().is_some_and(|w| w.push(n));
+                done = *remaining == 0 || settled;
             }
             Experiment::Excite(x) => done = x.advance(),
         }
@@ -476,6 +483,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 remaining: ticks,
                 kind,
             });
+            self.settle = self.end.map(|e| SettleWatch::new(e.min_run, e.one_count));
             self.monitor.reset();
         }
         if done {
@@ -483,11 +491,20 @@ impl<'a, N: Numeric> Servo<'a, N> {
         }
     }
 
+    /// Ends the running experiment (if any); a test with a settled end rule ends parked.
     fn end_experiment(&mut self, completed: bool) {
         let Some(kind) = self.exp.kind() else {
             return;
         };
         self.set_exp(Experiment::None);
+        self.settle = None;
+        let parked = match self.end.take() {
+            Some(e) => {
+                self.apply_config(&e.park);
+                true
+            }
+            None => false,
+        };
         self.monitor.reset();
         self.decimation = self.user_decimation;
         self.port.shared.experiment.store(false, Ordering::Relaxed);
@@ -495,8 +512,15 @@ impl<'a, N: Numeric> Servo<'a, N> {
             kind,
             completed,
             faults: self.faults,
+            parked,
             next_seq: self.seq,
         });
+    }
+
+    /// Ends the running experiment without its parking: another one replaces it.
+    fn replace_experiment(&mut self) {
+        self.end = None;
+        self.end_experiment(false);
     }
 
     #[inline]
@@ -536,11 +560,16 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 }
                 self.decim_cnt = 0;
             }
-            ServoCmd::Release { deflection, ticks } => {
+            ServoCmd::Release {
+                deflection,
+                ticks,
+                end,
+            } => {
                 if self.faults == 0 {
-                    self.end_experiment(false);
+                    self.replace_experiment();
                     let hold = Hold::new(deflection, ticks).toggle_settles(self.g.damping_on);
                     self.set_exp(Experiment::Hold(hold));
+                    self.end = end;
                     self.start_experiment(now);
                 } else {
                     self.refuse_experiment(ExperimentKind::Release);
@@ -550,12 +579,14 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 start,
                 velocity_milli,
                 ticks,
+                end,
             } => {
                 if self.faults == 0 {
-                    self.end_experiment(false);
+                    self.replace_experiment();
                     let launch =
                         Launch::new(start, velocity_milli, ticks).toggle_settles(self.g.damping_on);
                     self.set_exp(Experiment::Launch(launch));
+                    self.end = end;
                     self.start_experiment(now);
                 } else {
                     self.refuse_experiment(ExperimentKind::Impact);
@@ -563,7 +594,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             }
             ServoCmd::Excite { profile, ticks } => {
                 if self.faults == 0 {
-                    self.end_experiment(false);
+                    self.replace_experiment();
                     self.set_exp(Experiment::Excite(Excitation::new(profile, ticks)));
                     self.start_experiment(now);
                 } else {
@@ -596,6 +627,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             kind,
             completed: false,
             faults: self.faults,
+            parked: false,
             next_seq: self.seq,
         });
     }
@@ -1034,6 +1066,72 @@ mod tests {
         assert_eq!(s.faults() & fault::ENERGY_LIMIT, fault::ENERGY_LIMIT);
     }
 
+    /// `HostMsg::EndWhenSettled`: a release ends on the tick its released counts settle (a
+    /// toggle counts only within one count), and ends parked (K = B = 0) however it ends.
+    #[test]
+    fn a_settled_end_stops_the_test_on_the_device_and_parks_the_wall() {
+        let b = board();
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            force_limit: 20.0,
+            heartbeat_timeout_ms: 0, // no host here
+            ..ServoConfig::default()
+        };
+        let park = ServoConfig {
+            stiffness: 0.0,
+            ..cfg
+        };
+        // Ticks from the release to the end (None: still running after 2000 ticks), and the
+        // event's completed and parked flags.
+        let run = |end: Option<SettledEnd>, ticks: u32| {
+            let mut ch = Channels::new();
+            let (sp, mut hp) = ch.split();
+            let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
+            let mut out = Out(0);
+            s.command(
+                0,
+                ServoCmd::Release {
+                    deflection: 3,
+                    ticks,
+                    end,
+                },
+            );
+            let mut released = None;
+            for t in 1..2000u32 {
+                // At the target while held, then toggling between counts 0 and 1.
+                let c = if released.is_some() { t & 1 } else { 3 };
+                s.tick(t, &mut Enc(c), &mut out);
+                if released.is_none() && s.mode == Mode::Released {
+                    released = Some(t + 1); // the first released tick is the next
+                }
+                if let Some(ServoEvent::ExperimentDone {
+                    completed, parked, ..
+                }) = hp.events.dequeue()
+                {
+                    let wall_at_7 = s.tick(t + 1, &mut Enc(7), &mut out);
+                    return (
+                        Some(t - released.unwrap() + 1),
+                        completed,
+                        parked,
+                        wall_at_7,
+                    );
+                }
+            }
+            (None, false, false, 0)
+        };
+        let within = |one_count| SettledEnd {
+            min_run: 30,
+            one_count,
+            park,
+        };
+        // Settled at L = 30: the last max(30, ⌈30/3⌉) counts lie within one count.
+        assert_eq!(run(Some(within(true)), 1000), (Some(30), true, true, 0));
+        // A toggle is not "equal counts": it runs its length, and still ends parked.
+        assert_eq!(run(Some(within(false)), 200), (Some(200), true, true, 0));
+        // No rule: its length, then the wall again (⌊−15·0.5 + ½⌋ = −7 at count 7).
+        assert_eq!(run(None, 200), (Some(200), true, false, -7));
+    }
+
     #[test]
     fn excitation_profiles() {
         let b = board();
@@ -1126,6 +1224,7 @@ mod tests {
             ServoCmd::Release {
                 deflection: 3,
                 ticks: 10,
+                end: None,
             },
         );
         assert!(!s.experiment_running());

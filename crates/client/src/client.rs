@@ -430,6 +430,19 @@ impl Client {
         }
     }
 
+    /// Has the device end the next release or impact test itself as soon as its released
+    /// phase has settled, a run of at least `min_run_ticks` equal counts (within one count
+    /// with `within_one_count`; the rule of [`HostMsg::EndWhenSettled`]), and leave the wall
+    /// parked (stiffness and damping 0) however that test ends. Where a test ends then does not
+    /// depend on the link's latency. `min_run_ticks` 0 clears the rule.
+    pub fn end_when_settled(&mut self, min_run_ticks: u32, within_one_count: bool) -> Result<()> {
+        self.request(&HostMsg::EndWhenSettled {
+            min_run_ticks,
+            within_one_count,
+        })
+        .map(drop)
+    }
+
     /// Clears latched faults.
     pub fn clear_faults(&mut self) -> Result<()> {
         self.request(&HostMsg::ClearFaults).map(drop)
@@ -479,6 +492,7 @@ fn ack_kind(msg: &HostMsg) -> Option<Request> {
         HostMsg::Stop => Request::Stop,
         HostMsg::Shutdown { .. } => Request::Shutdown,
         HostMsg::Impact { .. } => Request::Impact,
+        HostMsg::EndWhenSettled { .. } => Request::EndWhenSettled,
         _ => return None,
     })
 }

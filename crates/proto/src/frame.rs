@@ -41,7 +41,7 @@ pub trait Message: Serialize + DeserializeOwned {
 }
 
 impl Message for HostMsg {
-    const VARIANTS: u32 = 16;
+    const VARIANTS: u32 = 17;
 }
 
 impl Message for DeviceMsg {
@@ -445,6 +445,22 @@ mod tests {
     }
 
     #[test]
+    fn end_when_settled_literal_bytes() {
+        // EndWhenSettled is tag 16 (appended after Impact, 15), min_run_ticks 300 = varint
+        // [0xac, 0x02], within_one_count true = 0x01; CRC = zlib.crc32(b'\x01\x10\xac\x02\x01').
+        let mut out = [0u8; 32];
+        let msg = HostMsg::EndWhenSettled {
+            min_run_ticks: 300,
+            within_one_count: true,
+        };
+        let f = encode(&msg, &mut out).unwrap();
+        assert_eq!(
+            f,
+            &[0x0a, 0x01, 0x10, 0xac, 0x02, 0x01, 0x22, 0x7f, 0x08, 0x3e, 0x00]
+        );
+    }
+
+    #[test]
     fn errors_are_distinct() {
         let mut d = FrameDecoder::new();
         // Bad CRC.
@@ -576,6 +592,10 @@ mod tests {
                 velocity_milliticks: 5000,
                 ticks: 3000,
             },
+            HostMsg::EndWhenSettled {
+                min_run_ticks: 300,
+                within_one_count: true,
+            },
         ]
     }
 
@@ -667,10 +687,9 @@ mod tests {
         let mut buf = [0u8; 8];
         assert_eq!(
             postcard::to_slice(
-                &HostMsg::Impact {
-                    start_ticks: 0,
-                    velocity_milliticks: 0,
-                    ticks: 0
+                &HostMsg::EndWhenSettled {
+                    min_run_ticks: 0,
+                    within_one_count: false
                 },
                 &mut buf
             )

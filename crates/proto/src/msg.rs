@@ -108,6 +108,23 @@ pub enum HostMsg {
         /// Servo ticks to run after contact, 1..=10⁷.
         ticks: u32,
     },
+    /// End the next `Release` or `Impact` as soon as its released phase has settled, on the
+    /// device, so that where the test ends (and the state the device is left in) does not
+    /// depend on when the host reacts: at the first tick L of the released phase at which the
+    /// last max(`min_run_ticks`, ⌈L/3⌉) effective counts are all equal (with
+    /// `within_one_count`: all within one count, max − min ≤ 1, a damped wall toggling between
+    /// two neighbouring counts). The test so started also ends *parked*, however it ends
+    /// (settled, its full length, `Stop`, a fault): the active config's stiffness and damping
+    /// become 0 on the tick it ends (the wall's force off; `GetConfig` shows it) until the next
+    /// `SetConfig`. The rule is used by the next release or impact test only; `min_run_ticks`
+    /// 0 clears it. Answer: `Ack`, or `Error(InvalidArgument)` naming `Argument` and 0..=10⁷.
+    EndWhenSettled {
+        /// Shortest constant (or within-one-count) run that ends the test, servo ticks,
+        /// 0..=10⁷ (0 = no rule).
+        min_run_ticks: u32,
+        /// Count a toggle between two neighbouring counts as settled.
+        within_one_count: bool,
+    },
 }
 
 /// Messages from the device to the host.
@@ -129,7 +146,7 @@ pub enum DeviceMsg {
     ExperimentDone {
         /// Which experiment.
         kind: ExperimentKind,
-        /// `true` when it ran its full tick count.
+        /// `true` when it ran its full tick count, or settled under [`HostMsg::EndWhenSettled`].
         completed: bool,
         /// Fault bits ([`fault`]) latched when it ended.
         faults: u32,
@@ -160,6 +177,7 @@ pub enum Request {
     Stop,
     Shutdown,
     Impact,
+    EndWhenSettled,
 }
 
 /// Experiment kinds.

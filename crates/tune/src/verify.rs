@@ -29,8 +29,10 @@
 //! Each test starts from a reproducible state: the wall off until the device has stopped, the
 //! wall position moved to where it stopped (so the wall's force while the hold starts is the
 //! smallest, KΔ/2), faults cleared, then the release. A test that has settled is ended early
-//! at a point computed from its counts alone ([`settled_at`]), so the verdict does not depend on
-//! how quickly the host reacts. A test still oscillating at its base length whose oscillation
+//! by the device itself, on the tick its counts meet [`settled_within`]'s rule
+//! ([`HostMsg::EndWhenSettled`](stiffwall_proto::HostMsg::EndWhenSettled), which also parks the
+//! wall until the next config), so neither the verdict nor the next test's start depends on how
+//! quickly the host reacts. A test still oscillating at its base length whose oscillation
 //! still shrinks runs on, up to [`DECAY_EXTENSION`] × (see [`judged_len`]): a slow mode the
 //! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
 //! decays, and a persistent buzz is still judged at the base length.
@@ -446,10 +448,12 @@ fn run_once(
     let shift = base.coarsen_shift;
     // A damped wall's test ends when it is within one count ([`settled_within`]): its damper
     // answers every count change, so it often toggles between two counts instead of resting.
-    // Known limit: the host's Stop then leaves a toggling device after a latency that differs
-    // between `--fast` and real time, and so does the next test's start (the spring-only
-    // tune stops only a device at rest, where the two agree to the bit).
+    // The device ends a settled test itself, on the tick the rule is met, and parks the wall
+    // (K = B = 0): where a test ends and the state it leaves for the next one do not depend on
+    // the link's latency, so `--fast` and real time run the same tests (a host `Stop`, sent
+    // only for a test that does not settle, still does).
     let one_count = base.damping > 0.0;
+    c.end_when_settled(u32::try_from(min_run).unwrap_or(u32::MAX), one_count)?;
     let mut seen = 0usize;
     let mut released: Vec<i64> = Vec::new();
     // The end of `judged_len`, asked incrementally while the test runs.
@@ -461,7 +465,7 @@ fn run_once(
             }
         }
         seen = s.len();
-        settled_within(&released, min_run, one_count).is_some() || watch.stop(&released).is_some()
+        watch.stop(&released).is_some()
     };
     let budget = u32::try_from(max_test_len(ticks as usize)).unwrap_or(u32::MAX);
     let rec = match test {
