@@ -48,8 +48,8 @@ pub enum ServoCmd {
         deflection: i32,
         /// Ticks after release.
         ticks: u32,
-        /// How it ends besides its length (`HostMsg::EndWhenSettled`).
-        end: Option<SettledEnd>,
+        /// How it ends besides its length (`HostMsg::PrepareTest`).
+        end: Option<DecidedEnd>,
     },
     /// Start an impact test.
     Impact {
@@ -59,8 +59,8 @@ pub enum ServoCmd {
         velocity_milli: i32,
         /// Ticks after contact.
         ticks: u32,
-        /// How it ends besides its length (`HostMsg::EndWhenSettled`).
-        end: Option<SettledEnd>,
+        /// How it ends besides its length (`HostMsg::PrepareTest`).
+        end: Option<DecidedEnd>,
     },
     /// Start an excitation.
     Excite {
@@ -82,16 +82,21 @@ pub enum ServoCmd {
     Stop,
 }
 
-/// A release or impact test's end under `HostMsg::EndWhenSettled`: settled after a run of
-/// `min_run` counts (within one count with `one_count`), and parked in `park` (the config at
-/// the start with stiffness and damping 0) however it ends.
+/// A release or impact test prepared by `HostMsg::PrepareTest`: run with `run` from its first
+/// tick, ended when settled after a run of `min_run` counts (within one count with
+/// `one_count`; 0: never) or decided at a decay checkpoint from `decay_base` (0: none), and
+/// back to `park` (the active config) on the tick it ends, however it ends.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SettledEnd {
-    /// Shortest settled run, ticks (≥ 1).
+pub struct DecidedEnd {
+    /// Shortest settled run, ticks (0: no settled end).
     pub min_run: u32,
     /// A toggle between neighbouring counts counts as settled.
     pub one_count: bool,
-    /// The config applied on the tick the test ends.
+    /// Base length of the decay checkpoints, ticks (0: none).
+    pub decay_base: u32,
+    /// The test's config, applied on the tick it starts.
+    pub run: ServoConfig,
+    /// The config applied on the tick the test ends (the active one).
     pub park: ServoConfig,
 }
 
@@ -106,8 +111,6 @@ pub enum ServoEvent {
         completed: bool,
         /// Latched faults at the end.
         faults: u32,
-        /// The test ended parked ([`SettledEnd::park`] applied).
-        parked: bool,
         /// Sample number the next telemetry sample will get (all the experiment's samples
         /// have smaller numbers): the main loop reports the end after sending them.
         next_seq: u32,

@@ -22,8 +22,8 @@
 //! - `ExperimentDone` is sent after the last telemetry sample of the experiment.
 //! - No allocation; bounded work per `poll`.
 
-use crate::channels::{HostPort, ServoCmd, ServoEvent, SettledEnd};
-use crate::config::{validate, BoardInfo};
+use crate::channels::{DecidedEnd, HostPort, ServoCmd, ServoEvent};
+use crate::config::{validate, BoardInfo, ConfigError};
 use crate::hal::{ByteLink, ConfigStorage};
 use crate::store::ConfigStore;
 use core::sync::atomic::Ordering;
@@ -83,11 +83,9 @@ pub struct Device<'a, S: ConfigStorage> {
     next_seq: u32,
     dropped: u32,
     pending_event: Option<ServoEvent>,
-    /// The `EndWhenSettled` rule for the next test: (min run, within one count).
-    settle_rule: Option<(u32, bool)>,
-    /// A config went to the servo since the last test started (a parked end then does not
-    /// change [`Device::config`]: the servo applied that config after parking).
-    config_sent: bool,
+    /// The next test as `PrepareTest` prepared it: (its config, min run, within one count,
+    /// decay base).
+    end_rule: Option<(ServoConfig, u32, bool, u32)>,
     rate_change: Option<u32>,
     shutdown: Option<u8>,
     stats: DeviceStats,
@@ -112,6 +110,18 @@ fn rejected_reply((code, detail, count): (ErrorCode, ErrorDetail, u32)) -> Devic
             ErrorDetail::Repeated { count }
         } else {
             detail
+        },
+    }
+}
+
+/// A config refused: the field and its range.
+fn invalid_config(e: ConfigError) -> DeviceMsg {
+    DeviceMsg::Error {
+        code: ErrorCode::InvalidConfig,
+        detail: ErrorDetail::Field {
+            field: e.field,
+            min: e.min,
+            max: e.max,
         },
     }
 }
@@ -161,8 +171,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             next_seq: 0,
             dropped: 0,
             pending_event: None,
-            settle_rule: None,
-            config_sent: false,
+            end_rule: None,
             rate_change: None,
             shutdown: None,
             stats: DeviceStats::default(),
@@ -252,20 +261,12 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         // 3. Experiment end, after its samples.
         if self.pending_event.is_none() {
             self.pending_event = self.port.events.dequeue();
-            if let Some(ServoEvent::ExperimentDone { parked: true, .. }) = self.pending_event {
-                // The servo applied the test's park config (this one with K = B = 0).
-                if !self.config_sent {
-                    self.config.stiffness = 0.0;
-                    self.config.damping = 0.0;
-                }
-            }
         }
         if let Some(ServoEvent::ExperimentDone {
             kind,
             completed,
             faults,
             next_seq,
-            ..
         }) = self.pending_event
         {
             if seq_reached(self.next_seq, next_seq)
@@ -386,14 +387,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
 
     fn apply(&mut self, cfg: ServoConfig, ok: DeviceMsg) -> DeviceMsg {
         if let Err(e) = validate(&cfg, &self.board) {
-            return DeviceMsg::Error {
-                code: ErrorCode::InvalidConfig,
-                detail: ErrorDetail::Field {
-                    field: e.field,
-                    min: e.min,
-                    max: e.max,
-                },
-            };
+            return invalid_config(e);
         }
         if self.experiment_running() {
             return busy("experiment running");
@@ -401,7 +395,6 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         if !self.send_servo(ServoCmd::Config(cfg)) {
             return busy("servo queue full");
         }
-        self.config_sent = true;
         if cfg.servo_rate_hz != self.config.servo_rate_hz {
             self.rate_change = Some(cfg.servo_rate_hz);
         }
@@ -582,21 +575,46 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
                 self.shutdown = Some(exit_code);
                 ack(Request::Shutdown)
             }
-            HostMsg::EndWhenSettled {
+            HostMsg::PrepareTest {
+                config,
                 min_run_ticks,
                 within_one_count,
-            } => {
-                if min_run_ticks > MAX_EXPERIMENT_TICKS {
-                    return invalid(ConfigField::Argument, 0.0, f64::from(MAX_EXPERIMENT_TICKS));
-                }
-                self.settle_rule = (min_run_ticks > 0).then_some((min_run_ticks, within_one_count));
-                ack(Request::EndWhenSettled)
-            }
+                decay_base_ticks,
+            } => self.prepare_test(config, min_run_ticks, within_one_count, decay_base_ticks),
         }
     }
 
+    /// `HostMsg::PrepareTest`: checks and keeps the next test's config and end rule.
+    fn prepare_test(
+        &mut self,
+        config: ServoConfig,
+        min_run: u32,
+        one_count: bool,
+        decay_base: u32,
+    ) -> DeviceMsg {
+        if let Err(e) = validate(&config, &self.board) {
+            return invalid_config(e);
+        }
+        if config.servo_rate_hz != self.config.servo_rate_hz {
+            let hz = f64::from(self.config.servo_rate_hz);
+            return invalid_config(ConfigError {
+                field: ConfigField::ServoRateHz,
+                min: hz,
+                max: hz,
+            });
+        }
+        if min_run.max(decay_base) > MAX_EXPERIMENT_TICKS {
+            return invalid(ConfigField::Argument, 0.0, f64::from(MAX_EXPERIMENT_TICKS));
+        }
+        if self.experiment_running() {
+            return busy("experiment running");
+        }
+        self.end_rule = Some((config, min_run, one_count, decay_base));
+        DeviceMsg::Ack(Request::PrepareTest)
+    }
+
     /// Starts a release test (`velocity_milli` None: hold at `at`) or an impact test (launch
-    /// from `at` at `velocity_milli`), with the pending [`HostMsg::EndWhenSettled`] rule.
+    /// from `at` at `velocity_milli`), with the pending [`HostMsg::PrepareTest`] rule.
     fn start_test(
         &mut self,
         request: Request,
@@ -629,22 +647,24 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
             return busy("faults latched");
         }
-        if self.config.stiffness <= 0.0 {
+        // The test's config: the prepared one, or the active one.
+        let cfg = self.end_rule.map_or(self.config, |r| r.0);
+        if cfg.stiffness <= 0.0 {
             return invalid(
                 ConfigField::Stiffness,
                 f64::from(f32::MIN_POSITIVE),
-                f64::from(self.board.max_stiffness(self.config.coarsen_shift)),
+                f64::from(self.board.max_stiffness(cfg.coarsen_shift)),
             );
         }
-        let end = self.settle_rule.map(|(min_run, one_count)| SettledEnd {
-            min_run,
-            one_count,
-            park: ServoConfig {
-                stiffness: 0.0,
-                damping: 0.0,
-                ..self.config
-            },
-        });
+        let end = self
+            .end_rule
+            .map(|(run, min_run, one_count, decay_base)| DecidedEnd {
+                min_run,
+                one_count,
+                decay_base,
+                run,
+                park: self.config,
+            });
         let cmd = match velocity_milli {
             None => ServoCmd::Release {
                 deflection: at,
@@ -661,8 +681,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         if !self.send_servo(cmd) {
             return busy("servo queue full");
         }
-        self.settle_rule = None;
-        self.config_sent = false;
+        self.end_rule = None;
         self.port.shared.experiment.store(true, Ordering::Relaxed);
         DeviceMsg::Ack(request)
     }
@@ -777,21 +796,25 @@ mod tests {
         assert_eq!(f[3], DeviceMsg::Config(ServoConfig::default()));
     }
 
-    /// `EndWhenSettled` out of range is refused naming the argument and its range and changes
-    /// nothing; in range, the next release ends settled and `GetConfig` then shows the parked
-    /// wall (K = B = 0, everything else as it was); the rule is used once.
+    /// `PrepareTest` with a bad rule or config is refused naming the field and its range and
+    /// changes nothing; a prepared release runs with its config while `GetConfig` shows the
+    /// active one, ends settled, and is used once.
     #[test]
-    fn end_when_settled_parks_the_config_and_is_used_once() {
+    fn a_prepared_test_is_checked_runs_its_config_and_is_used_once() {
         let mut ch = Channels::new();
         let (sp, hp) = ch.split();
         let b = BoardInfo::default();
-        let cfg = ServoConfig {
-            stiffness: 100.0,
-            damping: 0.5,
+        let active = ServoConfig {
+            stiffness: 0.0,
             heartbeat_timeout_ms: 0,
             ..ServoConfig::default()
         };
-        let mut dev = Device::new(b, ConfigStore::new(MemStorage::default()), hp, cfg);
+        let wall = ServoConfig {
+            stiffness: 100.0,
+            damping: 0.1,
+            ..active
+        };
+        let mut dev = Device::new(b, ConfigStore::new(MemStorage::default()), hp, active);
         let mut servo: Servo<'_> = Servo::new(b, dev.config(), sp);
         let mut link = Link::default();
         let mut run = |link: &mut Link, dev: &mut Device<'_, MemStorage>, ticks: u32| {
@@ -804,40 +827,64 @@ mod tests {
                 .filter(|m| !matches!(m, DeviceMsg::Telemetry(_)))
                 .collect::<Vec<_>>()
         };
-        link.send(&HostMsg::EndWhenSettled {
-            min_run_ticks: MAX_EXPERIMENT_TICKS + 1,
-            within_one_count: false,
-        });
-        link.send(&HostMsg::Release {
-            deflection_ticks: 0,
-            ticks: 5000,
-        });
-        link.send(&HostMsg::Stop);
-        link.send(&HostMsg::GetConfig);
-        let f = run(&mut link, &mut dev, 40);
-        assert_eq!(
-            f[0],
-            DeviceMsg::Error {
-                code: ErrorCode::InvalidArgument,
-                detail: ErrorDetail::Field {
-                    field: ConfigField::Argument,
-                    min: 0.0,
-                    max: 1e7
-                }
-            }
-        );
-        // No rule: stopped, the wall stays configured.
-        assert!(f.contains(&DeviceMsg::Config(cfg)), "{f:?}");
-        link.send(&HostMsg::EndWhenSettled {
+        let prepare = |config, decay_base_ticks| HostMsg::PrepareTest {
+            config,
             min_run_ticks: 50,
             within_one_count: false,
-        });
+            decay_base_ticks,
+        };
+        link.send(&prepare(wall, MAX_EXPERIMENT_TICKS + 1));
+        link.send(&prepare(
+            ServoConfig {
+                coarsen_shift: 40,
+                ..wall
+            },
+            0,
+        ));
+        // Nothing prepared: the active K = 0 wall cannot be tested.
         link.send(&HostMsg::Release {
             deflection_ticks: 0,
             ticks: 5000,
         });
+        let f = run(&mut link, &mut dev, 40);
+        let field = |code, field, min, max| DeviceMsg::Error {
+            code,
+            detail: ErrorDetail::Field { field, min, max },
+        };
+        assert_eq!(
+            f[..2],
+            [
+                field(ErrorCode::InvalidArgument, ConfigField::Argument, 0.0, 1e7),
+                field(
+                    ErrorCode::InvalidConfig,
+                    ConfigField::CoarsenShift,
+                    0.0,
+                    16.0
+                ),
+            ]
+        );
+        assert!(
+            matches!(
+                &f[2],
+                DeviceMsg::Error {
+                    code: ErrorCode::InvalidArgument,
+                    detail: ErrorDetail::Field {
+                        field: ConfigField::Stiffness,
+                        ..
+                    }
+                }
+            ),
+            "{f:?}"
+        );
+        link.send(&prepare(wall, 5000));
+        link.send(&HostMsg::Release {
+            deflection_ticks: 0,
+            ticks: 5000,
+        });
+        link.send(&HostMsg::GetConfig);
         // Held at count 0 (its target) for the hold's settling time, then 50 ticks at rest.
         let f = run(&mut link, &mut dev, 400);
+        assert!(f.contains(&DeviceMsg::Config(active)), "{f:?}");
         assert!(
             f.contains(&DeviceMsg::ExperimentDone {
                 kind: stiffwall_proto::ExperimentKind::Release,
@@ -846,23 +893,23 @@ mod tests {
             }),
             "{f:?}"
         );
-        link.send(&HostMsg::GetConfig);
-        let parked = ServoConfig {
-            stiffness: 0.0,
-            damping: 0.0,
-            ..cfg
-        };
-        assert_eq!(run(&mut link, &mut dev, 5), [DeviceMsg::Config(parked)]);
-        // Used once: K back on, the next release runs until stopped.
-        link.send(&HostMsg::SetConfig(cfg));
+        // Used once: the next release is tested with the active (K = 0) config: refused.
         link.send(&HostMsg::Release {
             deflection_ticks: 0,
             ticks: 5000,
         });
-        let f = run(&mut link, &mut dev, 400);
+        let f = run(&mut link, &mut dev, 10);
         assert!(
-            !f.iter()
-                .any(|m| matches!(m, DeviceMsg::ExperimentDone { .. })),
+            matches!(
+                &f[0],
+                DeviceMsg::Error {
+                    code: ErrorCode::InvalidArgument,
+                    detail: ErrorDetail::Field {
+                        field: ConfigField::Stiffness,
+                        ..
+                    }
+                }
+            ),
             "{f:?}"
         );
     }

@@ -10,7 +10,9 @@
 //! checked, counters saturate, divisions are by values ≥ 1 or checked). This module imports
 //! nothing else of the crate (the servo calls it; it never calls back).
 
-use stiffwall_proto::{ExciteProfile, ExperimentKind};
+use stiffwall_proto::{
+    ExciteProfile, ExperimentKind, DECAY_CHECKS_PER_BASE, DECAY_LAST_CHECK, DECAY_MIN_WINDOW,
+};
 
 /// What the force stage does this tick (a one-byte mirror of [`Experiment`] for the hot path).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -189,7 +191,7 @@ impl Launch {
     }
 }
 
-/// The end rule of a released phase under `HostMsg::EndWhenSettled`: settled at the first
+/// The settle rule of a released phase under `HostMsg::PrepareTest`: settled at the first
 /// count L of the phase at which the last max(`min_run`, ⌈L/3⌉) counts are all equal (or, with
 /// `one_count`, all within one count). The exact streaming form of the host's
 /// `settled_within` (stiffwall-tune's verify module): the longest runs ending at the latest
@@ -235,6 +237,123 @@ impl SettleWatch {
         self.len = self.len.saturating_add(1);
         self.below.max(self.above) >= self.min_run.max(self.len.div_ceil(3))
     }
+}
+
+/// Decay checkpoints a [`DecayWatch`] follows (j = 0..=`DECAY_LAST_CHECK`).
+const CHECKPOINTS: usize = DECAY_LAST_CHECK as usize + 1;
+
+/// The decay rule of `HostMsg::PrepareTest`: at checkpoint L_j = b + j·max(⌊b/8⌋, 1) the
+/// test ends unless its oscillation still shrinks (the range of the last w = max(⌊L/4⌋, 50)
+/// counts below that of the w before); at the last checkpoint it ends. The streaming form of
+/// the host's `judged_len` decay watch: the two windows of every checkpoint still ahead are
+/// tracked as (min, max) pairs, O(checkpoints) per tick and no record kept.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct DecayWatch {
+    base: u32,
+    step: u32,
+    /// The next checkpoint to decide.
+    next: u32,
+    len: u32,
+    /// Per checkpoint: (min, max) of its earlier window, then of its later window.
+    win: [[i32; 4]; CHECKPOINTS],
+}
+
+impl DecayWatch {
+    /// Checkpoints from base length `base` ticks (≥ 1).
+    pub(crate) fn new(base: u32) -> Self {
+        let base = base.max(1);
+        Self {
+            base,
+            step: (base / DECAY_CHECKS_PER_BASE).max(1),
+            next: 0,
+            len: 0,
+            win: [[i32::MAX, i32::MIN, i32::MAX, i32::MIN]; CHECKPOINTS],
+        }
+    }
+
+    /// Checkpoint j's length L and window w (None when 2w > L: nothing to compare).
+    fn checkpoint(&self, j: u32) -> (u32, Option<u32>) {
+        let l = self.base.saturating_add(j.saturating_mul(self.step));
+        let w = (l / 4).max(DECAY_MIN_WINDOW);
+        (l, (w.saturating_mul(2) <= l).then_some(w))
+    }
+
+    /// The released phase's next count `n`; true when a checkpoint ends the test with it.
+    pub(crate) fn push(&mut self, n: i32) -> bool {
+        let i = self.len;
+        self.len = self.len.saturating_add(1);
+        for j in self.next..=DECAY_LAST_CHECK {
+            let (l, w) = self.checkpoint(j);
+            let (Some(w), Some(m)) = (w, self.win.get_mut(j as usize)) else {
+                continue;
+            };
+            let slot = if i >= l - w && i < l {
+                2
+            } else if i >= l - 2 * w && i < l - w {
+                0
+            } else {
+                continue;
+            };
+            m[slot] = m[slot].min(n);
+            m[slot + 1] = m[slot + 1].max(n);
+        }
+        let (l, w) = self.checkpoint(self.next);
+        if self.len != l {
+            return false;
+        }
+        let range = |lo: i32, hi: i32| i64::from(hi) - i64::from(lo);
+        let decaying = match (w, self.win.get(self.next as usize)) {
+            (Some(_), Some(m)) => range(m[2], m[3]) < range(m[0], m[1]),
+            _ => false,
+        };
+        if self.next >= DECAY_LAST_CHECK || !decaying {
+            return true;
+        }
+        self.next += 1;
+        false
+    }
+}
+
+/// The whole end rule of `HostMsg::PrepareTest` on a released phase: settled, or decided
+/// by a decay checkpoint, whichever comes first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct EndWatch {
+    settle: SettleWatch,
+    decay: Option<DecayWatch>,
+}
+
+impl EndWatch {
+    /// Settled after `min_run` (within one count with `one_count`; 0: never); decay
+    /// checkpoints from `decay_base` ticks (0: none).
+    pub(crate) fn new(min_run: u32, one_count: bool, decay_base: u32) -> Self {
+        // No settled end: a run no record reaches.
+        let min_run = if min_run == 0 { u32::MAX } else { min_run };
+        Self {
+            settle: SettleWatch::new(min_run, one_count),
+            decay: (decay_base > 0).then(|| DecayWatch::new(decay_base)),
+        }
+    }
+
+    /// The released phase's next count; true when the test ends with it.
+    pub(crate) fn push(&mut self, n: i32) -> bool {
+        let settled = self.settle.push(n);
+        let decided = self.decay.as_mut().is_some_and(|d| d.push(n));
+        settled || decided
+    }
+}
+
+/// The length at which a test under `HostMsg::PrepareTest { min_run_ticks: min_run,
+/// within_one_count: one_count, decay_base_ticks: decay_base }` with released counts `counts`
+/// ends on the device (None: it has not ended within them). For hosts that check their own
+/// judgement against the device's.
+pub fn decided_len(
+    counts: impl IntoIterator<Item = i32>,
+    min_run: u32,
+    one_count: bool,
+    decay_base: u32,
+) -> Option<usize> {
+    let mut w = EndWatch::new(min_run, one_count, decay_base);
+    counts.into_iter().position(|n| w.push(n)).map(|i| i + 1)
 }
 
 /// An excitation: one code per tick from its profile, for `total` ticks.
@@ -336,6 +455,23 @@ mod tests {
         })
     }
 
+    /// The decay rule as the protocol states it, on the whole record.
+    fn decay_plain(counts: &[i32], base: u32) -> Option<usize> {
+        let base = base.max(1) as usize;
+        let step = (base / 8).max(1);
+        (0..=8).find_map(|j| {
+            let l = base + j * step;
+            if l > counts.len() {
+                return None;
+            }
+            let w = (l / 4).max(50);
+            let range = |s: &[i32]| s.iter().max().unwrap() - s.iter().min().unwrap();
+            let decaying =
+                2 * w <= l && range(&counts[l - w..l]) < range(&counts[l - 2 * w..l - w]);
+            (j == 8 || !decaying).then_some(l)
+        })
+    }
+
     fn settled_watch(counts: &[i32], min_run: u32, one_count: bool) -> Option<usize> {
         let mut w = SettleWatch::new(min_run, one_count);
         counts.iter().position(|&n| w.push(n)).map(|i| i + 1)
@@ -367,6 +503,35 @@ mod tests {
                 settled_watch(&counts, min_run, one_count),
                 settled_plain(&counts, min_run, i32::from(one_count))
             );
+        }
+    }
+
+    proptest::proptest! {
+        /// A shrinking, a steady and a growing oscillation (amplitude a0·r^k, r around 1),
+        /// against the protocol's rule; with the settle rule, the earlier of the two.
+        #[test]
+        fn decay_watch_is_the_plain_rule(
+            a0 in 1.0f64..40.0,
+            r in 0.995f64..1.003,
+            period in 2.0f64..40.0,
+            base in 1u32..400,
+            len in 0usize..1000,
+            min_run in 1u32..80,
+        ) {
+            let counts: std::vec::Vec<i32> = (0..len)
+                .map(|k| {
+                    let a = a0 * r.powi(k as i32);
+                    (a * (core::f64::consts::TAU * k as f64 / period).cos()).floor() as i32
+                })
+                .collect();
+            let decay = decay_plain(&counts, base);
+            proptest::prop_assert_eq!(decided_len(counts.iter().copied(), u32::MAX, false, base), decay);
+            let settle = settled_plain(&counts, min_run, 1);
+            let first = match (settle, decay) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            };
+            proptest::prop_assert_eq!(decided_len(counts.iter().copied(), min_run, true, base), first);
         }
     }
 

@@ -24,9 +24,9 @@
 //! generators) [`crate::experiment`], the energy monitor `stiffwall_core::monitor` (the
 //! dissipation check shared with `hostctl replay`); this module is the tick that uses them.
 
-use crate::channels::{ServoCmd, ServoEvent, ServoPort, SettledEnd, TelemetryItem};
+use crate::channels::{DecidedEnd, ServoCmd, ServoEvent, ServoPort, TelemetryItem};
 use crate::config::{BoardInfo, Gains, Shift, DAMPER_V_MAX, VEL_WINDOW};
-use crate::experiment::{Excitation, Experiment, Hold, Launch, Mode, SettleWatch};
+use crate::experiment::{EndWatch, Excitation, Experiment, Hold, Launch, Mode};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric};
 use core::sync::atomic::Ordering;
@@ -71,10 +71,10 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     seq: u32,
     port: ServoPort<'a>,
     exp: Experiment,
-    /// The running test's end rule (`HostMsg::EndWhenSettled`), if it has one.
-    end: Option<SettledEnd>,
-    /// Its settle watch, from the release on.
-    settle: Option<SettleWatch>,
+    /// The running test's end rule (`HostMsg::PrepareTest`), if it has one.
+    end: Option<DecidedEnd>,
+    /// Its end watch, from the release on.
+    settle: Option<EndWatch>,
     board: BoardInfo,
     table: [i16; MAX_TABLE],
 }
@@ -121,6 +121,11 @@ impl<'a, N: Numeric> Servo<'a, N> {
         self.g = Gains::from_config(cfg, &self.board);
         self.ring = [0; RING];
         self.monitor.reset();
+        // The backward difference is of the count from the wall: a new wall position (or
+        // coarsening) is not a motion, and must not kick the damper on the next tick.
+        if self.primed {
+            self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
+        }
     }
 
     /// The derived gains in use.
@@ -483,7 +488,9 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 remaining: ticks,
                 kind,
             });
-            self.settle = self.end.map(|e| SettleWatch::new(e.min_run, e.one_count));
+            self.settle = self
+                .end
+                .map(|e| EndWatch::new(e.min_run, e.one_count, e.decay_base));
             self.monitor.reset();
         }
         if done {
@@ -491,20 +498,16 @@ impl<'a, N: Numeric> Servo<'a, N> {
         }
     }
 
-    /// Ends the running experiment (if any); a test with a settled end rule ends parked.
+    /// Ends the running experiment (if any); a prepared test's active config is back.
     fn end_experiment(&mut self, completed: bool) {
         let Some(kind) = self.exp.kind() else {
             return;
         };
         self.set_exp(Experiment::None);
         self.settle = None;
-        let parked = match self.end.take() {
-            Some(e) => {
-                self.apply_config(&e.park);
-                true
-            }
-            None => false,
-        };
+        if let Some(e) = self.end.take() {
+            self.apply_config(&e.park);
+        }
         self.monitor.reset();
         self.decimation = self.user_decimation;
         self.port.shared.experiment.store(false, Ordering::Relaxed);
@@ -512,15 +515,16 @@ impl<'a, N: Numeric> Servo<'a, N> {
             kind,
             completed,
             faults: self.faults,
-            parked,
             next_seq: self.seq,
         });
     }
 
-    /// Ends the running experiment without its parking: another one replaces it.
-    fn replace_experiment(&mut self) {
-        self.end = None;
-        self.end_experiment(false);
+    /// A prepared test's config from its first tick on (see [`DecidedEnd`]).
+    fn prepare(&mut self, end: Option<DecidedEnd>) {
+        if let Some(e) = &end {
+            self.apply_config(&e.run);
+        }
+        self.end = end;
     }
 
     #[inline]
@@ -566,10 +570,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 end,
             } => {
                 if self.faults == 0 {
-                    self.replace_experiment();
+                    self.end_experiment(false);
+                    self.prepare(end);
                     let hold = Hold::new(deflection, ticks).toggle_settles(self.g.damping_on);
                     self.set_exp(Experiment::Hold(hold));
-                    self.end = end;
                     self.start_experiment(now);
                 } else {
                     self.refuse_experiment(ExperimentKind::Release);
@@ -582,11 +586,11 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 end,
             } => {
                 if self.faults == 0 {
-                    self.replace_experiment();
+                    self.end_experiment(false);
+                    self.prepare(end);
                     let launch =
                         Launch::new(start, velocity_milli, ticks).toggle_settles(self.g.damping_on);
                     self.set_exp(Experiment::Launch(launch));
-                    self.end = end;
                     self.start_experiment(now);
                 } else {
                     self.refuse_experiment(ExperimentKind::Impact);
@@ -594,7 +598,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             }
             ServoCmd::Excite { profile, ticks } => {
                 if self.faults == 0 {
-                    self.replace_experiment();
+                    self.end_experiment(false);
                     self.set_exp(Experiment::Excite(Excitation::new(profile, ticks)));
                     self.start_experiment(now);
                 } else {
@@ -627,7 +631,6 @@ impl<'a, N: Numeric> Servo<'a, N> {
             kind,
             completed: false,
             faults: self.faults,
-            parked: false,
             next_seq: self.seq,
         });
     }
@@ -1066,27 +1069,73 @@ mod tests {
         assert_eq!(s.faults() & fault::ENERGY_LIMIT, fault::ENERGY_LIMIT);
     }
 
-    /// `HostMsg::EndWhenSettled`: a release ends on the tick its released counts settle (a
-    /// toggle counts only within one count), and ends parked (K = B = 0) however it ends.
+    /// Moving the wall is not a motion: at rest, the tick after a config with a new wall
+    /// position outputs the spring alone (no damper kick from a jump of the count).
     #[test]
-    fn a_settled_end_stops_the_test_on_the_device_and_parks_the_wall() {
+    fn a_new_wall_position_does_not_kick_the_damper() {
         let b = board();
         let cfg = ServoConfig {
+            stiffness: 8.0,
+            damping: 0.05,
+            force_limit: 20.0,
+            heartbeat_timeout_ms: 0,
+            ..ServoConfig::default()
+        };
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
+        let mut out = Out(0);
+        for t in 0..5 {
+            s.tick(t, &mut Enc(7), &mut out);
+        }
+        s.apply_config(&ServoConfig {
+            wall_position: 5,
+            ..cfg
+        });
+        // The spring alone at count 2 from the new wall (the same config without the damper).
+        let spring_at_2 = {
+            s.apply_config(&ServoConfig {
+                wall_position: 5,
+                damping: 0.0,
+                ..cfg
+            });
+            s.tick(5, &mut Enc(7), &mut out)
+        };
+        s.apply_config(&ServoConfig {
+            wall_position: 0,
+            ..cfg
+        });
+        s.tick(6, &mut Enc(7), &mut out);
+        s.apply_config(&ServoConfig {
+            wall_position: 5,
+            ..cfg
+        });
+        assert_eq!(s.tick(7, &mut Enc(7), &mut out), spring_at_2);
+    }
+
+    /// `HostMsg::PrepareTest`: a release runs with the prepared config from its first tick,
+    /// ends on the tick its released counts settle (a toggle counts only within one count),
+    /// and the active config is back on that tick however it ends.
+    #[test]
+    fn a_prepared_test_runs_its_config_ends_when_settled_and_restores_the_active_one() {
+        let b = board();
+        let wall = ServoConfig {
             stiffness: 8.0,
             force_limit: 20.0,
             heartbeat_timeout_ms: 0, // no host here
             ..ServoConfig::default()
         };
-        let park = ServoConfig {
+        let off = ServoConfig {
             stiffness: 0.0,
-            ..cfg
+            ..wall
         };
-        // Ticks from the release to the end (None: still running after 2000 ticks), and the
-        // event's completed and parked flags.
-        let run = |end: Option<SettledEnd>, ticks: u32| {
+        // With `active` configured: ticks from the release to the end (None: still running
+        // after 2000 ticks), completed, the first hold tick's code at count 0 (target 3),
+        // and the wall's code at count 7 after the end.
+        let run = |active: &ServoConfig, end: Option<DecidedEnd>, ticks: u32| {
             let mut ch = Channels::new();
             let (sp, mut hp) = ch.split();
-            let mut s: Servo<'_> = Servo::new(b, &cfg, sp);
+            let mut s: Servo<'_> = Servo::new(b, active, sp);
             let mut out = Out(0);
             s.command(
                 0,
@@ -1096,40 +1145,51 @@ mod tests {
                     end,
                 },
             );
+            let first_hold = s.tick(1, &mut Enc(0), &mut out);
             let mut released = None;
-            for t in 1..2000u32 {
+            for t in 2..2000u32 {
                 // At the target while held, then toggling between counts 0 and 1.
                 let c = if released.is_some() { t & 1 } else { 3 };
                 s.tick(t, &mut Enc(c), &mut out);
                 if released.is_none() && s.mode == Mode::Released {
                     released = Some(t + 1); // the first released tick is the next
                 }
-                if let Some(ServoEvent::ExperimentDone {
-                    completed, parked, ..
-                }) = hp.events.dequeue()
-                {
+                if let Some(ServoEvent::ExperimentDone { completed, .. }) = hp.events.dequeue() {
                     let wall_at_7 = s.tick(t + 1, &mut Enc(7), &mut out);
-                    return (
-                        Some(t - released.unwrap() + 1),
-                        completed,
-                        parked,
-                        wall_at_7,
-                    );
+                    let len = t - released.unwrap() + 1;
+                    return (Some(len), completed, first_hold, wall_at_7);
                 }
             }
-            (None, false, false, 0)
+            (None, false, first_hold, 0)
         };
-        let within = |one_count| SettledEnd {
+        let prepared = |one_count| DecidedEnd {
             min_run: 30,
             one_count,
-            park,
+            decay_base: 0,
+            run: wall,
+            park: off,
         };
-        // Settled at L = 30: the last max(30, ⌈30/3⌉) counts lie within one count.
-        assert_eq!(run(Some(within(true)), 1000), (Some(30), true, true, 0));
-        // A toggle is not "equal counts": it runs its length, and still ends parked.
-        assert_eq!(run(Some(within(false)), 200), (Some(200), true, true, 0));
-        // No rule: its length, then the wall again (⌊−15·0.5 + ½⌋ = −7 at count 7).
-        assert_eq!(run(None, 200), (Some(200), true, false, -7));
+        // The hold spring at count 0 toward target 3 with K = 8: ⌊15·(3 − 0 − ½)…⌋ > 0.
+        let (_, _, hold_code, _) = run(&wall, None, 200);
+        assert!(hold_code > 0, "{hold_code}");
+        // Settled at L = 30: the last max(30, ⌈30/3⌉) counts lie within one count; the
+        // active wall (K = 0) is back: no force at count 7.
+        assert_eq!(
+            run(&off, Some(prepared(true)), 1000),
+            (Some(30), true, hold_code, 0)
+        );
+        // A toggle is not "equal counts": it runs its length, and the active config is back.
+        assert_eq!(
+            run(&off, Some(prepared(false)), 200),
+            (Some(200), true, hold_code, 0)
+        );
+        // Not prepared: the active config throughout (⌊−15·0.5 + ½⌋ = −7 at count 7).
+        assert_eq!(run(&wall, None, 200), (Some(200), true, hold_code, -7));
+        assert_eq!(
+            run(&off, None, 200).2,
+            0,
+            "the hold of a K = 0 wall pushes nothing"
+        );
     }
 
     #[test]

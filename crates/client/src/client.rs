@@ -430,15 +430,24 @@ impl Client {
         }
     }
 
-    /// Has the device end the next release or impact test itself as soon as its released
-    /// phase has settled, a run of at least `min_run_ticks` equal counts (within one count
-    /// with `within_one_count`; the rule of [`HostMsg::EndWhenSettled`]), and leave the wall
-    /// parked (stiffness and damping 0) however that test ends. Where a test ends then does not
-    /// depend on the link's latency. `min_run_ticks` 0 clears the rule.
-    pub fn end_when_settled(&mut self, min_run_ticks: u32, within_one_count: bool) -> Result<()> {
-        self.request(&HostMsg::EndWhenSettled {
+    /// Has the device run the next release or impact test with `config` (the active config
+    /// is back on the tick it ends) and end it itself as soon as its released counts decide
+    /// it (the rule of [`HostMsg::PrepareTest`]: settled after a run of at least
+    /// `min_run_ticks` equal counts, within one count with `within_one_count`, 0 for never;
+    /// or at a decay checkpoint from `decay_base_ticks`, 0 for none). Neither the test's start
+    /// nor its end then depends on the link's latency.
+    pub fn prepare_test(
+        &mut self,
+        config: &ServoConfig,
+        min_run_ticks: u32,
+        within_one_count: bool,
+        decay_base_ticks: u32,
+    ) -> Result<()> {
+        self.request(&HostMsg::PrepareTest {
+            config: *config,
             min_run_ticks,
             within_one_count,
+            decay_base_ticks,
         })
         .map(drop)
     }
@@ -492,7 +501,7 @@ fn ack_kind(msg: &HostMsg) -> Option<Request> {
         HostMsg::Stop => Request::Stop,
         HostMsg::Shutdown { .. } => Request::Shutdown,
         HostMsg::Impact { .. } => Request::Impact,
-        HostMsg::EndWhenSettled { .. } => Request::EndWhenSettled,
+        HostMsg::PrepareTest { .. } => Request::PrepareTest,
         _ => return None,
     })
 }

@@ -445,19 +445,27 @@ mod tests {
     }
 
     #[test]
-    fn end_when_settled_literal_bytes() {
-        // EndWhenSettled is tag 16 (appended after Impact, 15), min_run_ticks 300 = varint
-        // [0xac, 0x02], within_one_count true = 0x01; CRC = zlib.crc32(b'\x01\x10\xac\x02\x01').
-        let mut out = [0u8; 32];
-        let msg = HostMsg::EndWhenSettled {
-            min_run_ticks: 300,
-            within_one_count: true,
-        };
-        let f = encode(&msg, &mut out).unwrap();
-        assert_eq!(
-            f,
-            &[0x0a, 0x01, 0x10, 0xac, 0x02, 0x01, 0x22, 0x7f, 0x08, 0x3e, 0x00]
-        );
+    fn prepare_test_tag_and_rule_bytes() {
+        // PrepareTest is tag 16 (appended after Impact, 15); its ServoConfig, then
+        // min_run_ticks 300 = varint [0xac, 0x02], within_one_count true = 0x01,
+        // decay_base_ticks 2000 = [0xd0, 0x0f].
+        let config = ServoConfig::default();
+        let mut cfg_bytes = [0u8; 128];
+        let cfg_len = postcard::to_slice(&config, &mut cfg_bytes).unwrap().len();
+        let mut buf = [0u8; 160];
+        let body = postcard::to_slice(
+            &HostMsg::PrepareTest {
+                config,
+                min_run_ticks: 300,
+                within_one_count: true,
+                decay_base_ticks: 2000,
+            },
+            &mut buf,
+        )
+        .unwrap();
+        assert_eq!(body[0], 0x10);
+        assert_eq!(&body[1..=cfg_len], &cfg_bytes[..cfg_len]);
+        assert_eq!(&body[cfg_len + 1..], &[0xac, 0x02, 0x01, 0xd0, 0x0f]);
     }
 
     #[test]
@@ -592,9 +600,15 @@ mod tests {
                 velocity_milliticks: 5000,
                 ticks: 3000,
             },
-            HostMsg::EndWhenSettled {
+            HostMsg::PrepareTest {
+                config: ServoConfig {
+                    stiffness: 1500.0,
+                    damping: 2.5,
+                    ..ServoConfig::default()
+                },
                 min_run_ticks: 300,
                 within_one_count: true,
+                decay_base_ticks: 1200,
             },
         ]
     }
@@ -684,12 +698,14 @@ mod tests {
     #[test]
     fn tag_counts_match_enums() {
         // The last variant's tag is VARIANTS - 1.
-        let mut buf = [0u8; 8];
+        let mut buf = [0u8; 128];
         assert_eq!(
             postcard::to_slice(
-                &HostMsg::EndWhenSettled {
+                &HostMsg::PrepareTest {
+                    config: ServoConfig::default(),
                     min_run_ticks: 0,
-                    within_one_count: false
+                    within_one_count: false,
+                    decay_base_ticks: 0
                 },
                 &mut buf
             )

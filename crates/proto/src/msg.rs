@@ -26,6 +26,13 @@ pub const MAX_DELAY_TICKS: u8 = 31;
 pub const MAX_COARSEN_SHIFT: u8 = 16;
 /// Length of short text fields (names, versions).
 pub const NAME_LEN: usize = 24;
+/// Last decay checkpoint index of [`HostMsg::PrepareTest`] (checkpoints j = 0..=8: the
+/// test runs at most twice its base length).
+pub const DECAY_LAST_CHECK: u32 = 8;
+/// Checkpoints per base length of [`HostMsg::PrepareTest`] (step ⌊b/8⌋).
+pub const DECAY_CHECKS_PER_BASE: u32 = 8;
+/// Shortest window, counts, compared at a decay checkpoint of [`HostMsg::PrepareTest`].
+pub const DECAY_MIN_WINDOW: u32 = 50;
 
 /// Messages from the host to the device.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -108,22 +115,36 @@ pub enum HostMsg {
         /// Servo ticks to run after contact, 1..=10⁷.
         ticks: u32,
     },
-    /// End the next `Release` or `Impact` as soon as its released phase has settled, on the
-    /// device, so that where the test ends (and the state the device is left in) does not
-    /// depend on when the host reacts: at the first tick L of the released phase at which the
-    /// last max(`min_run_ticks`, ⌈L/3⌉) effective counts are all equal (with
-    /// `within_one_count`: all within one count, max − min ≤ 1, a damped wall toggling between
-    /// two neighbouring counts). The test so started also ends *parked*, however it ends
-    /// (settled, its full length, `Stop`, a fault): the active config's stiffness and damping
-    /// become 0 on the tick it ends (the wall's force off; `GetConfig` shows it) until the next
-    /// `SetConfig`. The rule is used by the next release or impact test only; `min_run_ticks`
-    /// 0 clears it. Answer: `Ack`, or `Error(InvalidArgument)` naming `Argument` and 0..=10⁷.
-    EndWhenSettled {
+    /// Run the next `Release` or `Impact` with `config` in place of the active configuration,
+    /// from its first tick to its last, and end it on the device as soon as its released
+    /// counts decide it: so that neither where the test ends nor the state the device is
+    /// left in depends on when the host reacts (a host that sets a stiff wall with
+    /// `SetConfig` and then starts a test lets the wall act for the link's latency first).
+    /// With L the released phase's length so far, the test ends at the first L at which
+    /// - it has *settled*: the last max(`min_run_ticks`, ⌈L/3⌉) effective counts are all
+    ///   equal (with `within_one_count`: all within one count, max − min ≤ 1, a damped wall
+    ///   toggling between two neighbouring counts); or
+    /// - with `decay_base_ticks` = b > 0, L is a *decay checkpoint* L_j = b + j·max(⌊b/8⌋, 1)
+    ///   (j = 0..=[`DECAY_LAST_CHECK`]) at which the oscillation no longer shrinks: with
+    ///   w = max(⌊L/4⌋, [`DECAY_MIN_WINDOW`]), 2w > L, or the range (max − min) of the last w
+    ///   counts is not smaller than that of the w before them; or L is the last checkpoint.
+    ///
+    /// However the test ends (decided, its full length, `Stop`, a fault), the active
+    /// configuration is back on the tick it ends (`GetConfig` shows the active one
+    /// throughout). Used by the next release or impact test only; a later `PrepareTest`
+    /// replaces it. Answer: `Ack`; `Error(InvalidConfig)` naming the field of `config` and its
+    /// range (as `SetConfig`; its servo rate must be the active one); `Error(InvalidArgument)`
+    /// naming `Argument` and 0..=10⁷; `Error(Busy)` while an experiment runs.
+    PrepareTest {
+        /// The test's configuration.
+        config: ServoConfig,
         /// Shortest constant (or within-one-count) run that ends the test, servo ticks,
-        /// 0..=10⁷ (0 = no rule).
+        /// 0..=10⁷ (0 = no settled end).
         min_run_ticks: u32,
         /// Count a toggle between two neighbouring counts as settled.
         within_one_count: bool,
+        /// Base length b of the decay checkpoints, servo ticks, 0..=10⁷ (0 = none).
+        decay_base_ticks: u32,
     },
 }
 
@@ -146,7 +167,7 @@ pub enum DeviceMsg {
     ExperimentDone {
         /// Which experiment.
         kind: ExperimentKind,
-        /// `true` when it ran its full tick count, or settled under [`HostMsg::EndWhenSettled`].
+        /// `true` when it ran its full tick count, or settled under [`HostMsg::PrepareTest`].
         completed: bool,
         /// Fault bits ([`fault`]) latched when it ended.
         faults: u32,
@@ -177,7 +198,7 @@ pub enum Request {
     Stop,
     Shutdown,
     Impact,
-    EndWhenSettled,
+    PrepareTest,
 }
 
 /// Experiment kinds.

@@ -28,11 +28,12 @@
 //!
 //! Each test starts from a reproducible state: the wall off until the device has stopped, the
 //! wall position moved to where it stopped (so the wall's force while the hold starts is the
-//! smallest, KΔ/2), faults cleared, then the release. A test that has settled is ended early
-//! by the device itself, on the tick its counts meet [`settled_within`]'s rule
-//! ([`HostMsg::EndWhenSettled`](stiffwall_proto::HostMsg::EndWhenSettled), which also parks the
-//! wall until the next config), so neither the verdict nor the next test's start depends on how
-//! quickly the host reacts. A test still oscillating at its base length whose oscillation
+//! smallest, KΔ/2), faults cleared, then the release. The device runs the test with the wall
+//! under test from its first tick only and ends it itself, on the tick its counts decide it
+//! ([`judged_len_within`]'s rule, sent as
+//! [`HostMsg::PrepareTest`](stiffwall_proto::HostMsg::PrepareTest)), back at the wall-off
+//! config on that tick: neither the verdict nor the next test's start depends on how quickly
+//! the host reacts. A test still oscillating at its base length whose oscillation
 //! still shrinks runs on, up to [`DECAY_EXTENSION`] × (see [`judged_len`]): a slow mode the
 //! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
 //! decays, and a persistent buzz is still judged at the base length.
@@ -259,6 +260,12 @@ struct DecayWatch {
 
 impl DecayWatch {
     const LAST: usize = DECAY_CHECKS * (DECAY_EXTENSION - 1);
+    // The device's rule (`HostMsg::PrepareTest`) is this one.
+    const _SAME_AS_DEVICE: () = assert!(
+        Self::LAST == stiffwall_proto::DECAY_LAST_CHECK as usize
+            && DECAY_CHECKS == stiffwall_proto::DECAY_CHECKS_PER_BASE as usize
+            && MIN_TAIL == stiffwall_proto::DECAY_MIN_WINDOW as usize
+    );
 
     fn new(ticks: usize) -> Self {
         let ticks = ticks.max(1);
@@ -444,29 +451,22 @@ fn run_once(
         ..*base
     };
     clear_faults(c)?;
-    c.set_config(&cfg)?;
     let shift = base.coarsen_shift;
     // A damped wall's test ends when it is within one count ([`settled_within`]): its damper
     // answers every count change, so it often toggles between two counts instead of resting.
-    // The device ends a settled test itself, on the tick the rule is met, and parks the wall
-    // (K = B = 0): where a test ends and the state it leaves for the next one do not depend on
-    // the link's latency, so `--fast` and real time run the same tests (a host `Stop`, sent
-    // only for a test that does not settle, still does).
+    // The device runs the test with the wall under test from its first tick, ends it on the
+    // tick its counts decide it ([`judged_len_within`]'s rule, `PrepareTest`), and is back at
+    // the wall-off config on that tick: neither where a test starts or ends nor the state it
+    // leaves for the next one depends on the link's latency, so `--fast` and real time run
+    // the same tests, count for count. The host never stops a test.
     let one_count = base.damping > 0.0;
-    c.end_when_settled(u32::try_from(min_run).unwrap_or(u32::MAX), one_count)?;
-    let mut seen = 0usize;
-    let mut released: Vec<i64> = Vec::new();
-    // The end of `judged_len`, asked incrementally while the test runs.
-    let mut watch = DecayWatch::new(ticks as usize);
-    let mut enough = |s: &[stiffwall_proto::Sample]| {
-        for x in &s[seen..] {
-            if x.flags & flags::RELEASED != 0 {
-                released.push(i64::from(x.count) >> shift);
-            }
-        }
-        seen = s.len();
-        watch.stop(&released).is_some()
-    };
+    c.prepare_test(
+        &cfg,
+        u32::try_from(min_run).unwrap_or(u32::MAX),
+        one_count,
+        ticks.max(1),
+    )?;
+    let mut enough = |_: &[stiffwall_proto::Sample]| false;
     let budget = u32::try_from(max_test_len(ticks as usize)).unwrap_or(u32::MAX);
     let rec = match test {
         Test::Release { deflection_ticks } => {
@@ -714,6 +714,35 @@ mod tests {
         assert_eq!(settled_at(&c[..400], 100), None);
         let toggling: Vec<i64> = (0..2000).map(|k| k % 2).collect();
         assert_eq!(settled_at(&toggling, 100), None);
+    }
+
+    proptest::proptest! {
+        /// The device ends a test where the host judges it: `judged_len_within` and the
+        /// firmware's `PrepareTest` rule agree on every record.
+        #[test]
+        fn the_device_ends_a_test_where_the_host_judges_it(
+            a0 in 1.0f64..40.0,
+            r in 0.995f64..1.003,
+            period in 2.0f64..40.0,
+            ticks in 1usize..400,
+            len in 0usize..1000,
+            min_run in 1usize..80,
+            one_count: bool,
+        ) {
+            let counts: Vec<i64> = (0..len)
+                .map(|k| {
+                    let a = a0 * r.powi(k as i32);
+                    (a * (std::f64::consts::TAU * k as f64 / period).cos()).floor() as i64
+                })
+                .collect();
+            let device = stiffwall_firmware::experiment::decided_len(
+                counts.iter().map(|&n| n as i32),
+                min_run as u32,
+                one_count,
+                ticks as u32,
+            );
+            proptest::prop_assert_eq!(device, judged_len_within(&counts, ticks, min_run, one_count));
+        }
     }
 
     #[test]
