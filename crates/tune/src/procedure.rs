@@ -32,6 +32,7 @@
 //! wall off and end at points computed from their counts), not on when the host's messages
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
+use super::launch::Delivered;
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
 use super::model_check::{self, Evidence};
@@ -174,6 +175,8 @@ fn tune_inner(
         k_force: (f_lim / (v * id.mass.sqrt())).powi(2),
         one_sided_wall: original.wall == stiffwall_proto::WallMode::OneSided,
         progress,
+        slow_launch: std::cell::Cell::new(None),
+        missed_launch: std::cell::Cell::new(None),
     };
     let search = Search {
         k_cap: f64::from(c.info.limits.max_stiffness),
@@ -226,8 +229,13 @@ fn tune_inner(
         margin_used,
         &mut notes,
     )?;
-    if let Some(k) = notes.not_launched {
-        let finding = not_launched_finding(k, id.mass, t);
+    let launch_findings = [
+        notes
+            .not_launched
+            .map(|k| not_launched_finding(k, id.mass, t, run.missed_launch.get())),
+        run.slow_launch.get().map(|d| slow_launch_finding(&d)),
+    ];
+    for finding in launch_findings.into_iter().flatten() {
         progress(&format!("model mismatch: {finding}"));
         model_mismatch.push(finding);
     }
@@ -272,15 +280,32 @@ fn tune_inner(
     })
 }
 
-fn not_launched_finding(k: f64, mass: f64, t: f64) -> String {
+fn not_launched_finding(k: f64, mass: f64, t: f64, missed: Option<Delivered>) -> String {
     let mu = mass / (k * t * t);
+    let what = missed.map_or(String::new(), |d| {
+        format!(
+            " (it arrived at {:.1} ticks/tick, fastest step {:.0}, for {:.2} asked, also after \
+             re-aiming)",
+            d.contact, d.fastest, d.asked
+        )
+    });
     format!(
         "at K = {k:.4} the firmware's impact launch (a hold moving at the requested speed, with \
-         damping β = {}) did not \
-         bring the device to the wall at the requested speed (μ = m/(KT²) = {mu:.3}; the \
-         hold oscillates when μ is small, e.g. a light device on a slow servo), and the \
-         impact failed; those impacts were judged by the releases of the same energy \
-         from both sides",
+         damping β = {}) did not bring the device to the wall at the requested speed{what}, \
+         and the impact failed: that says nothing about the wall at that speed (μ = m/(KT²) = \
+         {mu:.3}; the hold lags and catches up, or oscillates, when μ is small, behind a slow \
+         amplifier or extra delay); those impacts were judged by the releases of the same \
+         energy from both sides",
         stiffwall_firmware::config::HOLD_BETA
+    )
+}
+
+fn slow_launch_finding(d: &Delivered) -> String {
+    format!(
+        "the firmware's impact launch reached the wall at only {:.1} ticks/tick of the {:.2} \
+         asked (its hold could not accelerate the device: a force limit or friction); those \
+         impacts passed at the speed they reached, and the full energy was verified by \
+         releases from both sides",
+        d.contact, d.asked
     )
 }

@@ -4,9 +4,10 @@
 //!
 //! Units: SI (N/m, N·s/m, kg, m/s; rotary N·m/rad, N·m·s/rad, kg·m², rad/s), ticks.
 
+use super::launch::Delivered;
 use super::release::Verdict;
 use super::settings::*;
-use super::verify::{min_settle_run, run_test, test_set, Test, TestResult};
+use super::verify::{min_settle_run, run_test, test_set, Test, TestResult, TestRun};
 use anyhow::Result;
 use stiffwall_client::Client;
 use stiffwall_core::params::PhysicalParams;
@@ -40,6 +41,10 @@ pub(crate) struct Run<'a> {
     pub(crate) k_force: f64,
     pub(crate) one_sided_wall: bool,
     pub(crate) progress: &'a dyn Fn(&str),
+    /// The slowest impact launch that passed below its asked speed (see [`Delivered::slow`]).
+    pub(crate) slow_launch: std::cell::Cell<Option<Delivered>>,
+    /// The last impact launch that failed off its asked speed ([`Verdict::NotLaunched`]).
+    pub(crate) missed_launch: std::cell::Cell<Option<Delivered>>,
 }
 
 /// What the searches found beside their result.
@@ -83,15 +88,27 @@ impl Run<'_> {
         k: f64,
         test: Test,
         thorough: bool,
-    ) -> Result<(Verdict, Vec<i64>)> {
-        run_test(
+    ) -> Result<TestRun> {
+        let run = run_test(
             c,
             base,
             k,
             test,
             self.ticks_for(k, thorough, base.damping > 0.0),
             min_settle_run(self.p.mass, k, self.period_s()),
-        )
+        )?;
+        if let Some(d) = run.delivered {
+            // The slowest launch that passed (as the slower impact it was) and the last one
+            // that failed off its speed: reported with the findings.
+            if d.slow() && run.verdict.passes() {
+                let slowest = self.slow_launch.get().filter(|s| s.contact <= d.contact);
+                self.slow_launch.set(Some(slowest.unwrap_or(d)));
+            }
+            if run.verdict == Verdict::NotLaunched {
+                self.missed_launch.set(Some(d));
+            }
+        }
+        Ok(run)
     }
 
     /// One search step at `k`: the full-energy release, and above `k_force` the impacts at v.
@@ -106,7 +123,9 @@ impl Run<'_> {
         let d = deflection_for(&self.p, k, self.v);
         let b = base.damping;
         (self.progress)(&format!("release test K={k:.4} B={b:.4} from {d} ticks"));
-        let (verdict, counts) = self.test(
+        let TestRun {
+            verdict, counts, ..
+        } = self.test(
             c,
             base,
             k,
@@ -137,7 +156,7 @@ impl Run<'_> {
                     "damped wall"
                 };
                 (self.progress)(&format!("{} test K={k:.4} ({why})", test.describe()));
-                let (impact, _) = self.test(c, base, k, test, thorough)?;
+                let impact = self.test(c, base, k, test, thorough)?.verdict;
                 if impact == Verdict::NotLaunched {
                     notes.not_launched.get_or_insert(k);
                 } else if !impact.passes() {
@@ -187,7 +206,9 @@ impl Run<'_> {
         });
         let mut results = Vec::new();
         for test in set {
-            let (verdict, counts) = self.test(c, base, k, test, thorough)?;
+            let TestRun {
+                verdict, counts, ..
+            } = self.test(c, base, k, test, thorough)?;
             results.push(TestResult {
                 test,
                 k,

@@ -38,15 +38,13 @@
 //! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
 //! decays, and a persistent buzz is still judged at the base length.
 
-use super::verdict::{classify, classify_impact, Verdict, Wall, EXIT_WINDOW, MIN_TAIL};
+use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
+use super::verdict::{classify, Verdict, Wall, MIN_TAIL};
 use anyhow::{bail, Result};
 use std::sync::atomic::Ordering;
 use stiffwall_client::Client;
-use stiffwall_proto::{flags, ServoConfig, WallMode};
+use stiffwall_proto::{ServoConfig, WallMode};
 
-/// An impact that reaches the wall faster than this × the requested speed (+ one tick per
-/// tick) was not launched as asked ([`Verdict::NotLaunched`]).
-pub const LAUNCH_SPEED_TOLERANCE: f64 = 2.0;
 
 /// One test of the verification set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -379,11 +377,25 @@ pub fn reaim(requested: i32, target: i32, start: i64, passes: bool) -> Option<i3
     (next != target && next != 0).then_some(next)
 }
 
+/// One test's outcome: the verdict, the counts judged and, for an impact, what its launch
+/// delivered.
+#[derive(Debug, Clone)]
+pub struct TestRun {
+    /// Verdict.
+    pub verdict: Verdict,
+    /// Counts judged (after the release or from contact).
+    pub counts: Vec<i64>,
+    /// An impact's launch at contact (None for a release, or an impact that never arrived).
+    pub delivered: Option<Delivered>,
+}
+
 /// Runs one test at stiffness `k` (config `base` with that K) for a base length of `ticks`
 /// ticks after the release, longer while its oscillation still decays (at most
-/// [`max_test_len`]); the record ends at [`judged_len`] (settled: run `min_run`). Returns the
-/// verdict and the counts judged. A release whose hold stopped off target is re-aimed
-/// ([`reaim`], at most [`HOLD_REAIMS`] times), and the last attempt's verdict is the test's.
+/// [`max_test_len`]); the record ends at [`judged_len`] (settled: run `min_run`). A release
+/// whose hold stopped off target is re-aimed ([`reaim`], at most [`HOLD_REAIMS`] times); an
+/// impact whose launch arrived too fast and failed is re-aimed at a launch speed that should
+/// deliver the asked one ([`Delivered::reaimed`], at most [`LAUNCH_REAIMS`] times). The last
+/// attempt's outcome is the test's.
 pub fn run_test(
     c: &mut Client,
     base: &ServoConfig,
@@ -391,26 +403,55 @@ pub fn run_test(
     test: Test,
     ticks: u32,
     min_run: usize,
-) -> Result<(Verdict, Vec<i64>)> {
-    let Test::Release { deflection_ticks } = test else {
-        return run_once(c, base, k, test, ticks, min_run);
-    };
-    let mut target = deflection_ticks;
-    let mut result = run_once(c, base, k, test, ticks, min_run)?;
-    for _ in 0..HOLD_REAIMS {
-        let Some(start) = result.1.first().copied() else {
-            break;
-        };
-        let Some(next) = reaim(deflection_ticks, target, start, result.0.passes()) else {
-            break;
-        };
-        target = next;
-        let aimed = Test::Release {
-            deflection_ticks: target,
-        };
-        result = run_once(c, base, k, aimed, ticks, min_run)?;
+) -> Result<TestRun> {
+    match test {
+        Test::Release { deflection_ticks } => {
+            let mut target = deflection_ticks;
+            let mut result = run_once(c, base, k, test, ticks, min_run)?;
+            for _ in 0..HOLD_REAIMS {
+                let Some(start) = result.counts.first().copied() else {
+                    break;
+                };
+                let passes = result.verdict.passes();
+                let Some(next) = reaim(deflection_ticks, target, start, passes) else {
+                    break;
+                };
+                target = next;
+                let aimed = Test::Release {
+                    deflection_ticks: target,
+                };
+                result = run_once(c, base, k, aimed, ticks, min_run)?;
+            }
+            Ok(result)
+        }
+        Test::Impact {
+            start_ticks,
+            velocity_milliticks,
+            one_sided,
+        } => {
+            let mut result = run_once(c, base, k, test, ticks, min_run)?;
+            let mut milli = velocity_milliticks;
+            for _ in 0..LAUNCH_REAIMS {
+                if result.verdict != Verdict::NotLaunched {
+                    break;
+                }
+                let Some(next) = result.delivered.and_then(|d| d.reaimed(milli)) else {
+                    break;
+                };
+                milli = next;
+                let aimed = Test::Impact {
+                    start_ticks,
+                    velocity_milliticks: milli,
+                    one_sided,
+                };
+                // Judged against the speed the test asks for, not the re-aimed launch's.
+                let asked = f64::from(velocity_milliticks).abs() / 1000.0;
+                let again = run_aimed(c, base, k, aimed, ticks, min_run, Some(asked))?;
+                result = again;
+            }
+            Ok(result)
+        }
     }
-    Ok(result)
 }
 
 fn run_once(
@@ -420,7 +461,20 @@ fn run_once(
     test: Test,
     ticks: u32,
     min_run: usize,
-) -> Result<(Verdict, Vec<i64>)> {
+) -> Result<TestRun> {
+    run_aimed(c, base, k, test, ticks, min_run, None)
+}
+
+/// [`run_once`], an impact judged against the speed `asked` (counts per tick; None: its own).
+fn run_aimed(
+    c: &mut Client,
+    base: &ServoConfig,
+    k: f64,
+    test: Test,
+    ticks: u32,
+    min_run: usize,
+    asked: Option<f64>,
+) -> Result<TestRun> {
     if stiffwall_client::session::INTERRUPTED.load(Ordering::Relaxed) {
         bail!("interrupted");
     }
@@ -484,7 +538,11 @@ fn run_once(
         // damper too strong for the device's mass: B·T/m large): the wall is not stable, which
         // is this test's verdict; the next test clears the faults.
         Err(_) if c.faults().is_ok_and(|f| f.latched != 0) => {
-            return Ok((Verdict::Growing, Vec::new()));
+            return Ok(TestRun {
+                verdict: Verdict::Growing,
+                counts: Vec::new(),
+                delivered: None,
+            });
         }
         Err(e) => return Err(e.into()),
     };
@@ -502,57 +560,29 @@ fn run_once(
     } else if !tripped {
         counts.truncate(budget as usize);
     }
-    let verdict = match test {
-        Test::Release { .. } => classify(&counts, tripped),
-        // The launch never reached contact: nothing was recorded with the wall on.
-        Test::Impact { .. } if counts.is_empty() => Verdict::NotLaunched,
+    let (verdict, delivered) = match test {
+        Test::Release { .. } => (classify(&counts, tripped), None),
         Test::Impact {
             one_sided,
             velocity_milliticks,
             ..
         } => {
-            // Speed at contact: the launch's last EXIT_WINDOW ticks before the release.
-            let launch: Vec<i64> = rec
-                .samples
-                .iter()
-                .filter(|x| x.flags & flags::HOLD != 0)
-                .map(|x| i64::from(x.count) >> shift)
-                .collect();
-            let w = EXIT_WINDOW.min(launch.len().saturating_sub(1));
-            let first = counts.first().copied().unwrap_or(0);
-            let entry = if w > 0 {
-                (first - launch[launch.len() - w]) as f64 / (w as f64 + 1.0)
-            } else {
-                0.0
-            };
+            let asked = asked.unwrap_or(f64::from(velocity_milliticks).abs() / 1000.0);
+            let delivered = Delivered::from_record(&rec.samples, &counts, shift, asked);
             let wall = if one_sided {
                 Wall::OneSided
             } else {
                 Wall::Bidirectional
             };
-            // The fastest step of the launch's last window into contact: a hold that
-            // oscillates (a limit cycle near the Nyquist rate averages to no speed at all)
-            // shows here.
-            let tail = &launch[launch.len().saturating_sub(EXIT_WINDOW + 1)..];
-            let fastest = tail
-                .iter()
-                .chain(std::iter::once(&first))
-                .collect::<Vec<_>>()
-                .windows(2)
-                .map(|p| (p[1] - p[0]).unsigned_abs() as f64)
-                .fold(entry.abs(), f64::max);
-            let requested = f64::from(velocity_milliticks).abs() / 1000.0;
-            let verdict = classify_impact(&counts, wall, entry.abs(), tripped);
-            // A harder impact than asked that passes still passes; a failure after a launch
-            // that was not the one asked for says nothing about the wall.
-            if !verdict.passes() && fastest > LAUNCH_SPEED_TOLERANCE * requested + 1.0 {
-                Verdict::NotLaunched
-            } else {
-                verdict
-            }
+            let verdict = judge_impact(&counts, wall, delivered.as_ref(), tripped);
+            (verdict, delivered)
         }
     };
-    Ok((verdict, counts))
+    Ok(TestRun {
+        verdict,
+        counts,
+        delivered,
+    })
 }
 
 /// Minimum constant run for [`settled_at`]: three natural periods 2π√(m/K)/T, at least
