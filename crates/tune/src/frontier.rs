@@ -9,7 +9,7 @@ use super::release::Verdict;
 use super::search::{largest_settling_k, Found, Search};
 use super::settings::*;
 use super::steps::{df_equivalent, Notes, Run};
-use super::verify::TestResult;
+use super::verify::{Test, TestResult};
 use anyhow::{bail, Result};
 use stiffwall_client::Client;
 use stiffwall_core::criteria;
@@ -189,12 +189,7 @@ pub(crate) fn choose_wall(
             best.0
         ));
     }
-    let Some((k_set, verification)) = run.confirm(c, base, k_spring, thorough, notes)? else {
-        bail!(
-            "no stiffness passed the verification set (last tried {:.4})",
-            k_spring * CONFIRM_BACKOFF.powi(CONFIRM_TRIES as i32)
-        );
-    };
+    let (k_set, verification) = confirm_spring(run, c, base, k_spring, thorough, notes)?;
     Ok(Wall {
         k_set,
         b_set: 0.0,
@@ -203,4 +198,46 @@ pub(crate) fn choose_wall(
         verification,
         frontier,
     })
+}
+
+/// Confirms the spring-only wall from `k`. When no K passes and the last failure was an
+/// impact at v, the releases passed: the wall is then confirmed without the impacts at v (the
+/// releases at full energy from both sides and the slower impacts), and reported
+/// (`notes.impacts_capped`). Only when a release fails at every K does it end with an error,
+/// naming the test that failed and what to try.
+fn confirm_spring(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    k: f64,
+    thorough: bool,
+    notes: &mut Notes,
+) -> Result<(f64, Vec<TestResult>)> {
+    if let Some(found) = run.confirm(c, base, k, thorough, notes)? {
+        return Ok(found);
+    }
+    let last = k * CONFIRM_BACKOFF.powi(CONFIRM_TRIES as i32 - 1);
+    let impact_failed = notes
+        .last_failure
+        .is_some_and(|r| matches!(r.test, Test::Impact { .. }));
+    if impact_failed {
+        (run.progress)(&format!(
+            "impacts at v failed at every K from {k:.4} down to {last:.4}; verifying without \
+             them (releases at full energy from both sides, slower impacts)"
+        ));
+        notes.impacts_capped = true;
+        if let Some(found) = run.confirm(c, base, k, thorough, notes)? {
+            return Ok(found);
+        }
+    }
+    let what = notes.last_failure.map_or_else(
+        || "no test ran".to_string(),
+        |r| format!("at K = {:.4} the {} was {}", r.k, r.test.describe(), r.verdict.describe()),
+    );
+    bail!(
+        "no stiffness passed the verification set from {k:.4} down to {last:.4}: {what}. Try a \
+         lower --max-velocity (the impacts and releases reach v), a smaller --margin, or check \
+         the device: the force output's sign and scale (`hostctl experiment` runs one release \
+         test), the encoder, and the amplifier's limit"
+    )
 }

@@ -234,6 +234,15 @@ fn tune_inner(
             .not_launched
             .map(|k| not_launched_finding(k, id.mass, t, run.missed_launch.get())),
         run.slow_launch.get().map(|d| slow_launch_finding(&d)),
+        notes.impacts_capped.then(|| {
+            format!(
+                "impacts at the maximum velocity ({v:.4} {}) failed at every stiffness tried: \
+                 the wall set is verified by releases of the same energy from both sides and by \
+                 impacts at half that speed and below only; a hit faster than v/2 is not tested \
+                 on this device",
+                if rotational { "rad/s" } else { "m/s" }
+            )
+        }),
     ];
     for finding in launch_findings.into_iter().flatten() {
         progress(&format!("model mismatch: {finding}"));
