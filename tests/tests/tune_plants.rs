@@ -137,3 +137,51 @@ fn tune_is_safe_and_near_optimal_on_the_holdout_plants() {
         .collect();
     check_all(&cases);
 }
+
+/// A rotary plant of the launch family of issue 21 (static friction above Coulomb, a current
+/// amplifier of finite bandwidth with a force limit a few times the wall's peak force, extra
+/// delay, light rotors), drawn from `rng`: the scene file's text.
+fn random_launch_plant(rng: &mut proptest::test_runner::TestRng) -> String {
+    use proptest::prelude::RngExt;
+    let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.random::<f64>();
+    let mass = u(1.5e-6, 8e-6);
+    let coulomb = u(0.8e-3, 2.5e-3);
+    let cpr = [2048u32, 4096, 8192][(u(0.0, 3.0) as usize).min(2)];
+    let stiction = coulomb * u(1.2, 2.0);
+    let stribeck = u(0.01, 0.1);
+    let cutoff = u(600.0, 2000.0);
+    let limit = coulomb * u(8.0, 20.0);
+    let delay_ticks = (u(0.0, 3.0) as u32).min(2);
+    let v_max = 5.0 * std::f64::consts::TAU / f64::from(cpr) / 1e-3;
+    format!(
+        "[device]\nmass_kg = {mass:e}\nviscous_ns_per_m = {:e}\ncoulomb_n = {coulomb:e}\n\
+         counts_per_rev = {cpr}\n\n[controller]\nstiffness_n_per_m = 0.2\nperiod_s = 0.001\n\
+         extra_delay_s = {:e}\n\n[effects]\nzoh = true\nquantization = true\ncoulomb = true\n\
+         viscous = true\ndelay = {}\none_sided_wall = false\namplifier = {{ kind = \
+         \"second_order\", cutoff_hz = {cutoff}, damping = 0.7, force_limit_n = {limit:e} }}\n\
+         hand = {{ kind = \"none\" }}\nstiction = {{ static_n = {stiction:e}, stribeck_m_per_s = \
+         {stribeck} }}\n\n[initial]\nposition_m = 0.0\nvelocity_m_per_s = {v_max}\n\n[run]\n\
+         periods = 3000\nsolver = {{ kind = \"dopri\", rtol = 1e-9, atol = 1e-12 }}\n",
+        1.5 * mass,
+        f64::from(delay_ticks) * 1e-3,
+        delay_ticks > 0,
+    )
+}
+
+#[test]
+#[ignore = "six random plants of the launch family (stiction, amplifier limit, delay): minutes"]
+fn tune_is_safe_and_near_optimal_on_random_launch_plants() {
+    let mut rng = proptest::test_runner::TestRng::deterministic_rng(
+        proptest::test_runner::RngAlgorithm::ChaCha,
+    );
+    let dir = std::env::temp_dir().join(format!("stiffwall-launch-plants-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases: Vec<PlantCase> = (0..6)
+        .map(|i| {
+            let path = dir.join(format!("random-launch-{i}.toml"));
+            std::fs::write(&path, random_launch_plant(&mut rng)).unwrap();
+            PlantCase::load(&path).unwrap_or_else(|e| panic!("{e}"))
+        })
+        .collect();
+    check_all(&cases);
+}

@@ -232,7 +232,14 @@ fn confirm_spring(
     }
     let what = notes.last_failure.map_or_else(
         || "no test ran".to_string(),
-        |r| format!("at K = {:.4} the {} was {}", r.k, r.test.describe(), r.verdict.describe()),
+        |r| {
+            format!(
+                "at K = {:.4} the {} was {}",
+                r.k,
+                r.test.describe(),
+                r.verdict.describe()
+            )
+        },
     );
     bail!(
         "no stiffness passed the verification set from {k:.4} down to {last:.4}: {what}. Try a \

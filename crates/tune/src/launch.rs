@@ -8,7 +8,8 @@
 //! or, behind a tight force limit, slower. This module measures what the launch delivered,
 //! from the samples alone, so that a failure after a launch that was not the one asked for is
 //! not taken for the wall's:
-//! - the *contact speed*: the count step into contact (last launched count to first count in
+//! - the *contact speed*: the larger of the last two count steps into contact (the launch
+//!   releases on the tick it reads a count in the wall, so its last count is already in
 //!   contact), counts per tick;
 //! - the *fastest step* of the launch's last [`EXIT_WINDOW`] ticks into contact (a hold that
 //!   oscillates near the Nyquist rate moves fast but averages to no speed);
@@ -38,7 +39,7 @@ pub const LAUNCH_REAIMS: usize = 2;
 pub struct Delivered {
     /// The asked speed, counts per tick (magnitude).
     pub asked: f64,
-    /// The count step into contact, counts per tick (magnitude).
+    /// The speed into contact (the larger of the last two steps), counts per tick (magnitude).
     pub contact: f64,
     /// The fastest step of the launch's last ticks into contact (magnitude).
     pub fastest: f64,
@@ -50,14 +51,22 @@ impl Delivered {
     /// From an impact record: its samples (launch flagged `HOLD`) and the counts in contact
     /// (`in_contact`, effective counts), with the asked speed. None without contact.
     #[must_use]
-    pub fn from_record(samples: &[Sample], in_contact: &[i64], shift: u8, asked: f64) -> Option<Self> {
+    pub fn from_record(
+        samples: &[Sample],
+        in_contact: &[i64],
+        shift: u8,
+        asked: f64,
+    ) -> Option<Self> {
         let first = *in_contact.first()?;
         let launch: Vec<i64> = samples
             .iter()
             .filter(|x| x.flags & flags::HOLD != 0)
             .map(|x| i64::from(x.count) >> shift)
             .collect();
+        // Contact is seen on the last launched count (the hold releases on the tick it reads
+        // a count in the wall): the speed into contact is the larger of the last two steps.
         let last = *launch.last()?;
+        let before = launch.len().checked_sub(2).map_or(last, |i| launch[i]);
         let w = EXIT_WINDOW.min(launch.len().saturating_sub(1));
         let mean = if w > 0 {
             ((first - launch[launch.len() - w]) as f64 / (w as f64 + 1.0)).abs()
@@ -74,7 +83,9 @@ impl Delivered {
             .fold(0.0, f64::max);
         Some(Self {
             asked: asked.abs(),
-            contact: (first - last).unsigned_abs() as f64,
+            contact: (first - last)
+                .unsigned_abs()
+                .max((last - before).unsigned_abs()) as f64,
             fastest,
             mean,
         })
@@ -187,7 +198,9 @@ mod tests {
     #[test]
     fn a_failure_says_nothing_about_the_wall_only_after_a_launch_not_as_asked() {
         // Growing swings in contact (the tail reaches as far as the head).
-        let growing: Vec<i64> = (0..400).map(|k| ((k % 20) as i64 - 10) * (1 + k / 100)).collect();
+        let growing: Vec<i64> = (0..400)
+            .map(|k| ((k % 20) as i64 - 10) * (1 + k / 100))
+            .collect();
         let (s, c) = record(&[5; 12]);
         let asked = Delivered::from_record(&s, &c, 0, 5.0).unwrap();
         assert_eq!(

@@ -32,9 +32,9 @@
 //! wall off and end at points computed from their counts), not on when the host's messages
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
-use super::launch::Delivered;
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
+use super::launch::Delivered;
 use super::model_check::{self, Evidence};
 use super::search::{largest_settling_k, Search};
 use super::steps::{Notes, Run};
@@ -50,6 +50,7 @@ pub use super::excite::identify;
 pub use super::outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
 pub use super::settings::*;
 pub use super::steps::{deflection_for, df_equivalent};
+pub use super::verify::Test;
 /// Set by the Ctrl-C handler; checked between experiments (the one flag of every session).
 pub use stiffwall_client::session::INTERRUPTED;
 

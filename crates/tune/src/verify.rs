@@ -45,7 +45,6 @@ use std::sync::atomic::Ordering;
 use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
 
-
 /// One test of the verification set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
