@@ -199,7 +199,7 @@ mod tests {
     fn a_failure_says_nothing_about_the_wall_only_after_a_launch_not_as_asked() {
         // Growing swings in contact (the tail reaches as far as the head).
         let growing: Vec<i64> = (0..400)
-            .map(|k| ((k % 20) as i64 - 10) * (1 + k / 100))
+            .map(|k: i64| ((k % 20) - 10) * (1 + k / 100))
             .collect();
         let (s, c) = record(&[5; 12]);
         let asked = Delivered::from_record(&s, &c, 0, 5.0).unwrap();

@@ -4,6 +4,7 @@
 pub mod excite;
 pub mod frontier;
 pub mod ident;
+pub mod judged;
 pub mod launch;
 pub mod model_check;
 pub mod outcome;
