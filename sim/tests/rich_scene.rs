@@ -236,8 +236,9 @@ fn sampled_loop_matches_the_exact_solver() {
     }
 }
 
-/// With the hand of Table II and a 3 kHz filter, the loop on `RichPlant` (Dormand–Prince of
-/// `rich::ode`) follows the reference integrator of `reference.rs` (a different code base).
+/// With the hand of Table II and a 3 kHz filter, the loop on `RichPlant` (its own state, field
+/// and bisecting driver of `dopri`) follows the reference integrator of `reference.rs` (its own
+/// state, field and Illinois driver on the same Dormand–Prince kernel).
 #[test]
 fn sampled_loop_matches_the_reference_integrator_with_hand_and_filter() {
     let text = include_str!("../scenes/phantom-physical.toml")

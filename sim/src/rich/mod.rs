@@ -15,10 +15,11 @@
 //!   fields), `set_state(x, v)`, `advance(force_cmd_n, dt_s)`, `encoder_count()`,
 //!   `position_m()`, `velocity_m_per_s()`, plus `link_position_m()`, `actuator_force_n()`,
 //!   `is_stuck()`, `is_exact()`;
-//! - [`RichPlant::with_method`] picks the engine (exact or [`ode::OdeMethod`]).
+//! - [`RichPlant::with_method`] picks the engine (exact or [`OdeMethod`], the stepper of
+//!   [`crate::dopri`]).
 //!
 //! Modules: [`model`] (parameters and validation), [`friction`] (Stribeck curve, stick rule,
-//! closed-form static/dynamic switch), [`linear`] (the exact engine between events), [`ode`] (RK4 / Dormand–Prince 5(4) with event location),
+//! closed-form static/dynamic switch), [`linear`] (the exact engine between events),
 //! [`plant`] ([`RichPlant`]), [`scene`] (std: scene keys, sampled loop of `Scene::simulate`).
 //!
 //! Exactness: a rigid plant with a static/dynamic switch (`stribeck_m_per_s = 0`), dead band
@@ -32,16 +33,15 @@
 pub mod friction;
 pub mod linear;
 pub mod model;
-pub mod ode;
 pub mod plant;
 #[cfg(feature = "std")]
 pub mod scene;
 
+pub use crate::dopri::{OdeMethod, OdeStats};
 pub use model::{
     Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission,
 };
-pub use ode::OdeMethod;
-pub use plant::RichPlant;
+pub use plant::{RichPlant, State, NS};
 
 #[cfg(feature = "std")]
 impl PlantModel {

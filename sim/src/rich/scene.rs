@@ -18,8 +18,8 @@
 //! Invariant: a [`RichScene`] holds a validated model; [`simulate`] never panics.
 
 use super::model::{Amplifier, Cogging, Controller, HandSi, PlantModel, Stiction, Transmission};
-use super::ode::OdeMethod;
 use super::plant::RichPlant;
+use crate::dopri::OdeMethod;
 use crate::exact::History;
 use crate::scene::{Row, Scene, SceneError, Solver};
 use serde::Deserialize;
