@@ -151,51 +151,66 @@ pub struct RefSim {
     n_prev: f64,
 }
 
+/// The method's parameters: RK4 steps ≥ 1, Dormand–Prince tolerances > 0.
+fn check_method(method: Method) -> Result<(), ParamError> {
+    match method {
+        Method::Rk4 { steps_per_period } => {
+            check_range(
+                "steps_per_period",
+                f64::from(steps_per_period),
+                1.0,
+                false,
+                f64::from(u32::MAX),
+                ">= 1",
+            )?;
+        }
+        Method::Dopri { rtol, atol } => {
+            check_positive("rtol", rtol)?;
+            check_positive("atol", atol)?;
+        }
+    }
+    Ok(())
+}
+
+/// The effects beyond the exact solver, in this order: no delay without the sample-and-hold,
+/// hand coefficients ≥ 0, amplifier filter cut-off and damping > 0.
+fn check_model(model: &RefModel, tau_d: f64) -> Result<(), ParamError> {
+    if !model.zoh {
+        check_range(
+            "tau_d",
+            tau_d,
+            0.0,
+            false,
+            0.0,
+            "0 without the sample-and-hold (zoh = false)",
+        )?;
+    }
+    if let Some(hand) = model.hand {
+        check_non_negative("hand.mu", hand.mu)?;
+        check_non_negative("hand.beta", hand.beta)?;
+        check_non_negative("hand.kappa", hand.kappa)?;
+    }
+    if let Some(a) = model.amp {
+        check_positive("amplifier.omega", a.omega)?;
+        check_positive("amplifier.zeta", a.zeta)?;
+    }
+    Ok(())
+}
+
 impl RefSim {
     /// A reference simulation starting at τ = 0 in `init`.
     pub fn new(model: RefModel, method: Method, init: Motion) -> Result<Self, ParamError> {
         let p = model.params;
         validate(&p)?;
-        match method {
-            Method::Rk4 { steps_per_period } => {
-                check_range(
-                    "steps_per_period",
-                    f64::from(steps_per_period),
-                    1.0,
-                    false,
-                    f64::from(u32::MAX),
-                    ">= 1",
-                )?;
-            }
-            Method::Dopri { rtol, atol } => {
-                check_positive("rtol", rtol)?;
-                check_positive("atol", atol)?;
-            }
-        }
+        check_method(method)?;
         let e = model.effects;
         let tau_d = if e.delay { p.tau_d } else { 0.0 };
-        if !model.zoh {
-            check_range(
-                "tau_d",
-                tau_d,
-                0.0,
-                false,
-                0.0,
-                "0 without the sample-and-hold (zoh = false)",
-            )?;
-        }
+        check_model(&model, tau_d)?;
         let mut mass = p.mu;
         let mut beta = if e.viscous { p.beta } else { 0.0 };
         if let Some(hand) = model.hand {
-            check_non_negative("hand.mu", hand.mu)?;
-            check_non_negative("hand.beta", hand.beta)?;
-            check_non_negative("hand.kappa", hand.kappa)?;
             mass += hand.mu;
             beta += hand.beta;
-        }
-        if let Some(a) = model.amp {
-            check_positive("amplifier.omega", a.omega)?;
-            check_positive("amplifier.zeta", a.zeta)?;
         }
         let n = libm::floor(tau_d);
         let mut s = Self {
@@ -426,6 +441,35 @@ impl RefSim {
         })
     }
 
+    /// One accepted step at most `rem` (and `cap`) long: its length and end state (RK4: the
+    /// fixed steps evenly spread over the rest; Dormand–Prince: rejected and shrunk until the
+    /// error norm is ≤ 1 or the step ≤ 1e-12, then the step-size memory `dt` updated).
+    fn trial_step(&mut self, rem: f64, cap: f64, fixed: Option<f64>) -> (f64, Y) {
+        let y0 = self.y;
+        if let Some(hf) = fixed {
+            let n = libm::ceil(rem / hf - 1e-9).max(1.0);
+            let h = (rem / n).min(cap);
+            let (y1, _) = self.step(&y0, h, self.mode, false);
+            return (h, y1);
+        }
+        let mut h = self.dt.min(rem).min(cap);
+        loop {
+            let (y1, err) = self.step(&y0, h, self.mode, true);
+            if err <= 1.0 || h <= 1e-12 {
+                let fac = step_factor(err);
+                if h < rem {
+                    self.dt = h * fac;
+                } else {
+                    self.dt = self.dt.max(h * fac);
+                }
+                return (h, y1);
+            }
+            self.stats.rejected += 1;
+            // err > 1: the factor is below 0.9.
+            h *= step_factor(err);
+        }
+    }
+
     /// Integrates one segment of length `len` with constant held input.
     fn segment(&mut self, len: f64) {
         let mut t = 0.0;
@@ -450,33 +494,7 @@ impl RefSim {
             if self.mode == Mode::Stuck && self.m.amp.is_none() {
                 break;
             }
-            let rem = len - t;
-            let (h, y1) = match fixed {
-                Some(hf) => {
-                    let n = libm::ceil(rem / hf - 1e-9).max(1.0);
-                    let h = (rem / n).min(cap);
-                    let (y1, _) = self.step(&self.y.clone(), h, self.mode, false);
-                    (h, y1)
-                }
-                None => {
-                    let mut h = self.dt.min(rem).min(cap);
-                    loop {
-                        let (y1, err) = self.step(&self.y.clone(), h, self.mode, true);
-                        if err <= 1.0 || h <= 1e-12 {
-                            let fac = step_factor(err);
-                            if h < rem {
-                                self.dt = h * fac;
-                            } else {
-                                self.dt = self.dt.max(h * fac);
-                            }
-                            break (h, y1);
-                        }
-                        self.stats.rejected += 1;
-                        // err > 1: the factor is below 0.9.
-                        h *= step_factor(err);
-                    }
-                }
-            };
+            let (h, y1) = self.trial_step(len - t, cap, fixed);
             self.stats.steps += 1;
             if self.triggered(&y1, self.mode) {
                 let y0 = self.y;
