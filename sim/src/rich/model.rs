@@ -117,8 +117,11 @@ pub struct PlantModel {
     pub hand: Option<HandSi>,
 }
 
-/// An invalid model value (names the field and the allowed range).
+/// An invalid model value (names the field and the allowed range): the rich physics' own
+/// error. With `std` it is a `thiserror` error; the no_std build formats the same message.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "std", derive(thiserror::Error))]
+#[cfg_attr(feature = "std", error("{key}: allowed range is {allowed}"))]
 pub struct ModelError {
     /// Field, as the scene key (e.g. `effects.stiction.static_n`).
     pub key: &'static str,
@@ -126,6 +129,7 @@ pub struct ModelError {
     pub allowed: &'static str,
 }
 
+#[cfg(not(feature = "std"))]
 impl core::fmt::Display for ModelError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(f, "{}: allowed range is {}", self.key, self.allowed)
