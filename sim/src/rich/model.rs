@@ -152,6 +152,37 @@ fn nonneg(v: f64) -> bool {
     v.is_finite() && v >= 0.0
 }
 
+/// The amplifier's filter, saturation and dead band (part of [`PlantModel::validate`]).
+fn validate_amplifier(a: &Amplifier) -> Result<(), ModelError> {
+    if let Some(f) = a.cutoff_hz {
+        chk(
+            pos(f) && f <= 1e7,
+            "effects.amplifier.cutoff_hz",
+            "(0, 1e7] Hz",
+        )?;
+        chk(
+            pos(a.damping) && a.damping <= 100.0,
+            "effects.amplifier.damping",
+            "(0, 100]",
+        )?;
+    }
+    if let Some(l) = a.force_limit_n {
+        chk(
+            pos(l) && l <= 1e9,
+            "effects.amplifier.force_limit_n",
+            "(0, 1e9] N",
+        )?;
+    }
+    if let Some(d) = a.deadband_n {
+        chk(
+            nonneg(d) && d <= 1e9,
+            "effects.amplifier.deadband_n",
+            "[0, 1e9] N",
+        )?;
+    }
+    Ok(())
+}
+
 impl PlantModel {
     /// The paper's plant: rigid mass, viscous and dynamic Coulomb friction, no optional effect.
     pub fn rigid(
@@ -228,32 +259,7 @@ impl PlantModel {
             )?;
         }
         if let Some(a) = self.amplifier {
-            if let Some(f) = a.cutoff_hz {
-                chk(
-                    pos(f) && f <= 1e7,
-                    "effects.amplifier.cutoff_hz",
-                    "(0, 1e7] Hz",
-                )?;
-                chk(
-                    pos(a.damping) && a.damping <= 100.0,
-                    "effects.amplifier.damping",
-                    "(0, 100]",
-                )?;
-            }
-            if let Some(l) = a.force_limit_n {
-                chk(
-                    pos(l) && l <= 1e9,
-                    "effects.amplifier.force_limit_n",
-                    "(0, 1e9] N",
-                )?;
-            }
-            if let Some(d) = a.deadband_n {
-                chk(
-                    nonneg(d) && d <= 1e9,
-                    "effects.amplifier.deadband_n",
-                    "[0, 1e9] N",
-                )?;
-            }
+            validate_amplifier(&a)?;
         }
         if let Some(h) = self.hand {
             chk(nonneg(h.mass_kg), "effects.hand.mass_kg", "[0, 1e6] kg")?;
