@@ -1,6 +1,7 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
 //! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
+//!   module cycles,
 //!   host tests, the real-browser test of `hostctl ui`, no_std checks for the Cortex-M target, firmware cross-builds with the size
 //!   report, QEMU scenarios.
 //! - `unused-deps`: every declared dependency of the root workspace is used (also in `ci`).
@@ -135,6 +136,8 @@ fn ci() -> Result<()> {
     ]))?;
     step("every declared dependency is used");
     unused_deps::unused_deps()?;
+    step("no import cycle between the files of sim/src and host/src/cmd/map");
+    module_cycles::module_cycles(&[])?;
     if cross == toolchain::Cross::Rustup {
         step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {

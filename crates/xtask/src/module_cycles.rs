@@ -440,3 +440,53 @@ fn sccs(g: &BTreeMap<String, BTreeSet<String>>) -> Vec<Vec<String>> {
     }
     t.out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn files(src: &str, me: &[&str], mods: &[&[&str]]) -> BTreeSet<String> {
+        let modules: BTreeMap<Vec<String>, String> = mods
+            .iter()
+            .map(|m| {
+                let v: Vec<String> = m.iter().map(|s| s.to_string()).collect();
+                let name = if v.is_empty() {
+                    "lib".to_string()
+                } else {
+                    v.join("/")
+                };
+                (v, name)
+            })
+            .collect();
+        let me: Vec<String> = me.iter().map(|s| s.to_string()).collect();
+        paths(&strip(src), &me, &modules)
+            .iter()
+            .filter_map(|p| resolve(p, &modules))
+            .collect()
+    }
+
+    #[test]
+    fn groups_super_children_and_inline_modules_resolve_to_files() {
+        let mods: &[&[&str]] = &[&[], &["x"], &["x", "y"], &["x", "a"], &["x", "c"], &["z"]];
+        let src = "use super::{a::B, c};\nuse crate::z::{self, W};\n\
+                   pub(super) fn f() { self.g(); }\n// crate::nope\nconst S: &str = \"crate::q\";\n\
+                   #[cfg(test)]\nmod tests {\n    use super::*;\n}\n";
+        let got = files(src, &["x", "y"], mods);
+        let want: BTreeSet<String> = ["x/a", "x/c", "z", "x/y"].map(String::from).into();
+        assert_eq!(got, want);
+        // A parent naming its child module by its bare name.
+        let got = files("pub use y::T;\nfn f() { let y = 1; }\n", &["x"], mods);
+        assert_eq!(got, ["x/y".to_string()].into());
+    }
+
+    #[test]
+    fn a_two_file_cycle_is_one_component() {
+        let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        g.insert("a".into(), ["b".to_string()].into());
+        g.insert("b".into(), ["a".to_string(), "c".to_string()].into());
+        g.insert("c".into(), BTreeSet::new());
+        assert_eq!(sccs(&g), vec![vec!["a".to_string(), "b".to_string()]]);
+        g.get_mut("b").unwrap().remove("a");
+        assert!(sccs(&g).is_empty());
+    }
+}
