@@ -8,6 +8,8 @@
 //!   by [`exact::dispatch`]); ≥ 20 M periods/s on one core.
 //! - [`mod@reference`]: fixed-step RK4 and adaptive Dormand–Prince 5(4) with event location, for
 //!   comparison and for effects outside the exact solver's reach (amplifier filter, hand).
+//! - [`dopri`]: the one Dormand–Prince 5(4) / RK4 stepper (generic over the state dimension,
+//!   event location) under both reference integrators.
 //! - [`classify`]: growing / persistent / non-monotonically / monotonically decaying.
 //! - [`bounds`]: the paper's per-period energy bounds (47), (58) and the tight ones.
 //!
@@ -38,6 +40,7 @@
 
 pub mod bounds;
 pub mod classify;
+pub mod dopri;
 pub mod exact;
 pub mod math;
 pub mod params;

@@ -1,5 +1,7 @@
 //! Reference integrators: fixed-step classical RK4 and adaptive Dormand–Prince 5(4), with event
-//! location by a bracketing root finder (Illinois regula falsi on re-taken partial steps).
+//! location by a bracketing root finder (Illinois regula falsi on re-taken partial steps). The
+//! steps, the error norm (scale 1: `atol` is absolute) and the step-size law are those of
+//! [`crate::dopri`]; this module keeps the segment driver (modes, events, step cap).
 //!
 //! Units: dimensionless (Table I). State y = [ξ, ξ̇, p, q, E_d, W_A, W_H]: position, velocity,
 //! amplifier filter output p = φ_A and its derivative q, and three energy quadratures (dissipated
@@ -18,6 +20,7 @@
 //! Invariants: every step is finite-length (≥ 1e-14 periods or the segment end), the root
 //! finder is bounded to 100 iterations, so the run always terminates; no allocation.
 
+use crate::dopri::{dopri_step, rk4_step, step_factor, Rk4Form, Tolerance};
 use crate::exact::{potential, ExactSim, History, PeriodAudit};
 use crate::math::floor_fast;
 use crate::params::{validate, Effects, ParamError, Params};
@@ -148,47 +151,50 @@ pub struct RefSim {
     n_prev: f64,
 }
 
-// Dormand–Prince 5(4) tableau (the nodes c_i are not needed: within a segment the system is
-// autonomous, the held force being constant).
-const A21: f64 = 1.0 / 5.0;
-const A31: f64 = 3.0 / 40.0;
-const A32: f64 = 9.0 / 40.0;
-const A41: f64 = 44.0 / 45.0;
-const A42: f64 = -56.0 / 15.0;
-const A43: f64 = 32.0 / 9.0;
-const A51: f64 = 19372.0 / 6561.0;
-const A52: f64 = -25360.0 / 2187.0;
-const A53: f64 = 64448.0 / 6561.0;
-const A54: f64 = -212.0 / 729.0;
-const A61: f64 = 9017.0 / 3168.0;
-const A62: f64 = -355.0 / 33.0;
-const A63: f64 = 46732.0 / 5247.0;
-const A64: f64 = 49.0 / 176.0;
-const A65: f64 = -5103.0 / 18656.0;
-const B1: f64 = 35.0 / 384.0;
-const B3: f64 = 500.0 / 1113.0;
-const B4: f64 = 125.0 / 192.0;
-const B5: f64 = -2187.0 / 6784.0;
-const B6: f64 = 11.0 / 84.0;
-const E1: f64 = 71.0 / 57600.0;
-const E3: f64 = -71.0 / 16695.0;
-const E4: f64 = 71.0 / 1920.0;
-const E5: f64 = -17253.0 / 339200.0;
-const E6: f64 = 22.0 / 525.0;
-const E7: f64 = -1.0 / 40.0;
-
-/// y + h·Σ c_j k_j, with the number of terms a compile-time constant (fully unrolled).
-#[inline(always)]
-fn axpy<const K: usize>(y: &Y, c: [f64; K], k: [&Y; K], h: f64) -> Y {
-    let mut out = *y;
-    for i in 0..N {
-        let mut s = 0.0;
-        for j in 0..K {
-            s += c[j] * k[j][i];
+/// The method's parameters: RK4 steps ≥ 1, Dormand–Prince tolerances > 0.
+fn check_method(method: Method) -> Result<(), ParamError> {
+    match method {
+        Method::Rk4 { steps_per_period } => {
+            check_range(
+                "steps_per_period",
+                f64::from(steps_per_period),
+                1.0,
+                false,
+                f64::from(u32::MAX),
+                ">= 1",
+            )?;
         }
-        out[i] += h * s;
+        Method::Dopri { rtol, atol } => {
+            check_positive("rtol", rtol)?;
+            check_positive("atol", atol)?;
+        }
     }
-    out
+    Ok(())
+}
+
+/// The effects beyond the exact solver, in this order: no delay without the sample-and-hold,
+/// hand coefficients ≥ 0, amplifier filter cut-off and damping > 0.
+fn check_model(model: &RefModel, tau_d: f64) -> Result<(), ParamError> {
+    if !model.zoh {
+        check_range(
+            "tau_d",
+            tau_d,
+            0.0,
+            false,
+            0.0,
+            "0 without the sample-and-hold (zoh = false)",
+        )?;
+    }
+    if let Some(hand) = model.hand {
+        check_non_negative("hand.mu", hand.mu)?;
+        check_non_negative("hand.beta", hand.beta)?;
+        check_non_negative("hand.kappa", hand.kappa)?;
+    }
+    if let Some(a) = model.amp {
+        check_positive("amplifier.omega", a.omega)?;
+        check_positive("amplifier.zeta", a.zeta)?;
+    }
+    Ok(())
 }
 
 impl RefSim {
@@ -196,46 +202,15 @@ impl RefSim {
     pub fn new(model: RefModel, method: Method, init: Motion) -> Result<Self, ParamError> {
         let p = model.params;
         validate(&p)?;
-        match method {
-            Method::Rk4 { steps_per_period } => {
-                check_range(
-                    "steps_per_period",
-                    f64::from(steps_per_period),
-                    1.0,
-                    false,
-                    f64::from(u32::MAX),
-                    ">= 1",
-                )?;
-            }
-            Method::Dopri { rtol, atol } => {
-                check_positive("rtol", rtol)?;
-                check_positive("atol", atol)?;
-            }
-        }
+        check_method(method)?;
         let e = model.effects;
         let tau_d = if e.delay { p.tau_d } else { 0.0 };
-        if !model.zoh {
-            check_range(
-                "tau_d",
-                tau_d,
-                0.0,
-                false,
-                0.0,
-                "0 without the sample-and-hold (zoh = false)",
-            )?;
-        }
+        check_model(&model, tau_d)?;
         let mut mass = p.mu;
         let mut beta = if e.viscous { p.beta } else { 0.0 };
         if let Some(hand) = model.hand {
-            check_non_negative("hand.mu", hand.mu)?;
-            check_non_negative("hand.beta", hand.beta)?;
-            check_non_negative("hand.kappa", hand.kappa)?;
             mass += hand.mu;
             beta += hand.beta;
-        }
-        if let Some(a) = model.amp {
-            check_positive("amplifier.omega", a.omega)?;
-            check_positive("amplifier.zeta", a.zeta)?;
         }
         let n = libm::floor(tau_d);
         let mut s = Self {
@@ -373,8 +348,7 @@ impl RefSim {
     }
 
     #[inline]
-    fn rhs(&mut self, y: &Y, mode: Mode) -> Y {
-        self.stats.rhs_evals += 1;
+    fn rhs(&self, y: &Y, mode: Mode) -> Y {
         let fa = self.phi_a(y);
         let fh = self.phi_h(y);
         let mut d = [0.0; N];
@@ -396,55 +370,27 @@ impl RefSim {
         d
     }
 
-    /// One explicit step of size h from y; returns (y1, error estimate or 0).
+    /// One explicit step of size h from y ([`crate::dopri`]); returns (y1, error norm or 0).
     fn step(&mut self, y: &Y, h: f64, mode: Mode, want_err: bool) -> (Y, f64) {
-        match self.method {
-            Method::Rk4 { .. } => {
-                let k1 = self.rhs(y, mode);
-                let k2 = self.rhs(&axpy(y, [0.5], [&k1], h), mode);
-                let k3 = self.rhs(&axpy(y, [0.5], [&k2], h), mode);
-                let k4 = self.rhs(&axpy(y, [1.0], [&k3], h), mode);
-                let y1 = axpy(
-                    y,
-                    [1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0],
-                    [&k1, &k2, &k3, &k4],
-                    h,
-                );
-                (y1, 0.0)
-            }
+        let mut evals = 0;
+        let me = &*self;
+        let mut f = |y: &Y| {
+            evals += 1;
+            me.rhs(y, mode)
+        };
+        let out = match self.method {
+            Method::Rk4 { .. } => (rk4_step(&mut f, y, h, Rk4Form::Fractions), 0.0),
             Method::Dopri { rtol, atol } => {
-                let k1 = self.rhs(y, mode);
-                let k2 = self.rhs(&axpy(y, [A21], [&k1], h), mode);
-                let k3 = self.rhs(&axpy(y, [A31, A32], [&k1, &k2], h), mode);
-                let k4 = self.rhs(&axpy(y, [A41, A42, A43], [&k1, &k2, &k3], h), mode);
-                let k5 = self.rhs(
-                    &axpy(y, [A51, A52, A53, A54], [&k1, &k2, &k3, &k4], h),
-                    mode,
-                );
-                let k6 = self.rhs(
-                    &axpy(y, [A61, A62, A63, A64, A65], [&k1, &k2, &k3, &k4, &k5], h),
-                    mode,
-                );
-                let y1 = axpy(y, [B1, B3, B4, B5, B6], [&k1, &k3, &k4, &k5, &k6], h);
-                if !want_err {
-                    return (y1, 0.0);
-                }
-                let k7 = self.rhs(&y1, mode);
-                let mut err: f64 = 0.0;
-                for i in 0..N {
-                    let e = h
-                        * (E1 * k1[i]
-                            + E3 * k3[i]
-                            + E4 * k4[i]
-                            + E5 * k5[i]
-                            + E6 * k6[i]
-                            + E7 * k7[i]);
-                    let sc = atol + rtol * y[i].abs().max(y1[i].abs());
-                    err = err.max((e / sc).abs());
-                }
-                (y1, err)
+                let tol = Tolerance {
+                    rtol,
+                    atol,
+                    scale: [1.0; N],
+                };
+                dopri_step(&mut f, y, h, want_err.then_some(&tol))
             }
-        }
+        };
+        self.stats.rhs_evals += evals;
+        out
     }
 
     /// Event function: ≤ 0 (moving) / > 0 (stuck) means the event happened.
@@ -495,6 +441,35 @@ impl RefSim {
         })
     }
 
+    /// One accepted step at most `rem` (and `cap`) long: its length and end state (RK4: the
+    /// fixed steps evenly spread over the rest; Dormand–Prince: rejected and shrunk until the
+    /// error norm is ≤ 1 or the step ≤ 1e-12, then the step-size memory `dt` updated).
+    fn trial_step(&mut self, rem: f64, cap: f64, fixed: Option<f64>) -> (f64, Y) {
+        let y0 = self.y;
+        if let Some(hf) = fixed {
+            let n = libm::ceil(rem / hf - 1e-9).max(1.0);
+            let h = (rem / n).min(cap);
+            let (y1, _) = self.step(&y0, h, self.mode, false);
+            return (h, y1);
+        }
+        let mut h = self.dt.min(rem).min(cap);
+        loop {
+            let (y1, err) = self.step(&y0, h, self.mode, true);
+            if err <= 1.0 || h <= 1e-12 {
+                let fac = step_factor(err);
+                if h < rem {
+                    self.dt = h * fac;
+                } else {
+                    self.dt = self.dt.max(h * fac);
+                }
+                return (h, y1);
+            }
+            self.stats.rejected += 1;
+            // err > 1: the factor is below 0.9.
+            h *= step_factor(err);
+        }
+    }
+
     /// Integrates one segment of length `len` with constant held input.
     fn segment(&mut self, len: f64) {
         let mut t = 0.0;
@@ -519,36 +494,7 @@ impl RefSim {
             if self.mode == Mode::Stuck && self.m.amp.is_none() {
                 break;
             }
-            let rem = len - t;
-            let (h, y1) = match fixed {
-                Some(hf) => {
-                    let n = libm::ceil(rem / hf - 1e-9).max(1.0);
-                    let h = (rem / n).min(cap);
-                    let (y1, _) = self.step(&self.y.clone(), h, self.mode, false);
-                    (h, y1)
-                }
-                None => {
-                    let mut h = self.dt.min(rem).min(cap);
-                    loop {
-                        let (y1, err) = self.step(&self.y.clone(), h, self.mode, true);
-                        if err <= 1.0 || h <= 1e-12 {
-                            let fac = if err == 0.0 {
-                                5.0
-                            } else {
-                                (0.9 * libm::pow(err, -0.2)).clamp(0.2, 5.0)
-                            };
-                            if h < rem {
-                                self.dt = h * fac;
-                            } else {
-                                self.dt = self.dt.max(h * fac);
-                            }
-                            break (h, y1);
-                        }
-                        self.stats.rejected += 1;
-                        h *= (0.9 * libm::pow(err, -0.2)).clamp(0.2, 1.0);
-                    }
-                }
-            };
+            let (h, y1) = self.trial_step(len - t, cap, fixed);
             self.stats.steps += 1;
             if self.triggered(&y1, self.mode) {
                 let y0 = self.y;

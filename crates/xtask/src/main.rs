@@ -1,6 +1,7 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
 //! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
+//!   module cycles,
 //!   host tests, the real-browser test of `hostctl ui`, no_std checks for the Cortex-M target, firmware cross-builds with the size
 //!   report, QEMU scenarios.
 //! - `unused-deps`: every declared dependency of the root workspace is used (also in `ci`).
@@ -19,6 +20,8 @@
 //!   (installs Debian's chromium and chromium-driver if missing, as `ci` does).
 //! - `cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node cluster
 //!   (installs slurm-wlm and munge; opt-in, not in `ci`; docs/cluster.md).
+//! - `module-cycles [--edges]`: no import cycle between the files of `sim/src` and
+//!   `host/src/cmd/map` (the graph of `crate::`/`super::`/child paths; `--edges` prints it).
 //! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
 //!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
@@ -31,6 +34,7 @@ mod cluster;
 mod firmware;
 mod flash;
 mod fuzz;
+mod module_cycles;
 mod qemu;
 mod toolchain;
 mod tune_table;
@@ -132,6 +136,8 @@ fn ci() -> Result<()> {
     ]))?;
     step("every declared dependency is used");
     unused_deps::unused_deps()?;
+    step("no import cycle between the files of sim/src and host/src/cmd/map");
+    module_cycles::module_cycles(&[])?;
     if cross == toolchain::Cross::Rustup {
         step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {
@@ -174,6 +180,7 @@ fn main() -> Result<()> {
         Some("ui-screenshots") => ui::screenshots(),
         Some("cluster-test") => cluster::cluster_test(&args[1..]),
         Some("atlas") => atlas::atlas(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas"),
+        Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges]"),
     }
 }

@@ -8,7 +8,7 @@
 //! force f_ext is at most the breakaway force F_s. Here the window has zero width: a moving mass
 //! slides with friction −F(|v|)·sgn(v) − b·v, where
 //! F(|v|) = c + (F_s − c)·exp(−(v/v_s)²) (v_s = 0: F = c); the instant v reaches zero is located
-//! (analytically in [`advance_switch`], by the event locator of [`crate::rich::ode`] otherwise)
+//! (analytically in [`advance_switch`], by the event locator of [`crate::dopri`] otherwise)
 //! and the rule picks the next mode: **stuck** while |f_ext| ≤ F_s (the friction then balances
 //! f_ext exactly and v stays 0), otherwise **sliding** in the direction of f_ext. A stuck mass
 //! breaks away when |f_ext| exceeds F_s (an event too). F_s ≥ c, so a mass that breaks away

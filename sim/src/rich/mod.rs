@@ -10,16 +10,20 @@
 //!   [`Controller`] (stiffness_n_per_m, period_s, extra_delay_s — includes an amplifier of kind
 //!   `"delay"` —, one_sided, quantization);
 //! - [`PlantModel::from_scene_toml`]`(text) -> Result<(PlantModel, Controller), SceneError>`
-//!   (std): a physical scene, `[initial]` and `[run]` optional;
+//!   (std): a physical scene, `[initial]` and `[run]` optional — the scene format, its parsing
+//!   and its errors live in [`crate::scene`] (which implements this method), not here;
 //! - [`RichPlant::new`]`(&model) -> Result<RichPlant, ModelError>` (it validates the public
 //!   fields), `set_state(x, v)`, `advance(force_cmd_n, dt_s)`, `encoder_count()`,
 //!   `position_m()`, `velocity_m_per_s()`, plus `link_position_m()`, `actuator_force_n()`,
 //!   `is_stuck()`, `is_exact()`;
-//! - [`RichPlant::with_method`] picks the engine (exact or [`ode::OdeMethod`]).
+//! - [`RichPlant::with_method`] picks the engine (exact or [`OdeMethod`], the stepper of
+//!   [`crate::dopri`]).
 //!
 //! Modules: [`model`] (parameters and validation), [`friction`] (Stribeck curve, stick rule,
-//! closed-form static/dynamic switch), [`linear`] (the exact engine between events), [`ode`] (RK4 / Dormand–Prince 5(4) with event location),
-//! [`plant`] ([`RichPlant`]), [`scene`] (std: scene keys, sampled loop of `Scene::simulate`).
+//! closed-form static/dynamic switch), [`linear`] (the exact engine between events),
+//! [`plant`] ([`RichPlant`]). The stepper is [`crate::dopri`]. Physical failures (a model
+//! value out of range, an engine the model cannot use) are [`ModelError`]s naming the field and
+//! the range.
 //!
 //! Exactness: a rigid plant with a static/dynamic switch (`stribeck_m_per_s = 0`), dead band
 //! and saturation is stepped in closed form ([`friction::advance_switch`]); with a
@@ -27,29 +31,15 @@
 //! between events and stepped exactly by [`linear`] (matrix exponential, events located on the
 //! closed form); only cogging (sin x₁) and Stribeck decay (exp(−v²)) are nonlinear between
 //! events and use the reference integrator. Invariant: no allocation in the stepping plant;
-//! the no_std build contains everything except [`scene`].
+//! the no_std build contains everything; nothing here imports [`crate::scene`].
 
 pub mod friction;
 pub mod linear;
 pub mod model;
-pub mod ode;
 pub mod plant;
-#[cfg(feature = "std")]
-pub mod scene;
 
+pub use crate::dopri::{OdeMethod, OdeStats};
 pub use model::{
     Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission,
 };
-pub use ode::OdeMethod;
-pub use plant::RichPlant;
-
-#[cfg(feature = "std")]
-impl PlantModel {
-    /// Parses a plant file (a physical scene; `[initial]` and `[run]` optional): see
-    /// [`scene::from_scene_toml`].
-    pub fn from_scene_toml(
-        text: &str,
-    ) -> Result<(PlantModel, Controller), crate::scene::SceneError> {
-        scene::from_scene_toml(text)
-    }
-}
+pub use plant::{RichPlant, State, NS};

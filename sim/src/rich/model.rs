@@ -117,8 +117,11 @@ pub struct PlantModel {
     pub hand: Option<HandSi>,
 }
 
-/// An invalid model value (names the field and the allowed range).
+/// An invalid model value (names the field and the allowed range): the rich physics' own
+/// error. With `std` it is a `thiserror` error; the no_std build formats the same message.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "std", derive(thiserror::Error))]
+#[cfg_attr(feature = "std", error("{key}: allowed range is {allowed}"))]
 pub struct ModelError {
     /// Field, as the scene key (e.g. `effects.stiction.static_n`).
     pub key: &'static str,
@@ -126,6 +129,7 @@ pub struct ModelError {
     pub allowed: &'static str,
 }
 
+#[cfg(not(feature = "std"))]
 impl core::fmt::Display for ModelError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(f, "{}: allowed range is {}", self.key, self.allowed)
@@ -146,6 +150,37 @@ fn pos(v: f64) -> bool {
 
 fn nonneg(v: f64) -> bool {
     v.is_finite() && v >= 0.0
+}
+
+/// The amplifier's filter, saturation and dead band (part of [`PlantModel::validate`]).
+fn validate_amplifier(a: &Amplifier) -> Result<(), ModelError> {
+    if let Some(f) = a.cutoff_hz {
+        chk(
+            pos(f) && f <= 1e7,
+            "effects.amplifier.cutoff_hz",
+            "(0, 1e7] Hz",
+        )?;
+        chk(
+            pos(a.damping) && a.damping <= 100.0,
+            "effects.amplifier.damping",
+            "(0, 100]",
+        )?;
+    }
+    if let Some(l) = a.force_limit_n {
+        chk(
+            pos(l) && l <= 1e9,
+            "effects.amplifier.force_limit_n",
+            "(0, 1e9] N",
+        )?;
+    }
+    if let Some(d) = a.deadband_n {
+        chk(
+            nonneg(d) && d <= 1e9,
+            "effects.amplifier.deadband_n",
+            "[0, 1e9] N",
+        )?;
+    }
+    Ok(())
 }
 
 impl PlantModel {
@@ -224,32 +259,7 @@ impl PlantModel {
             )?;
         }
         if let Some(a) = self.amplifier {
-            if let Some(f) = a.cutoff_hz {
-                chk(
-                    pos(f) && f <= 1e7,
-                    "effects.amplifier.cutoff_hz",
-                    "(0, 1e7] Hz",
-                )?;
-                chk(
-                    pos(a.damping) && a.damping <= 100.0,
-                    "effects.amplifier.damping",
-                    "(0, 100]",
-                )?;
-            }
-            if let Some(l) = a.force_limit_n {
-                chk(
-                    pos(l) && l <= 1e9,
-                    "effects.amplifier.force_limit_n",
-                    "(0, 1e9] N",
-                )?;
-            }
-            if let Some(d) = a.deadband_n {
-                chk(
-                    nonneg(d) && d <= 1e9,
-                    "effects.amplifier.deadband_n",
-                    "[0, 1e9] N",
-                )?;
-            }
+            validate_amplifier(&a)?;
         }
         if let Some(h) = self.hand {
             chk(nonneg(h.mass_kg), "effects.hand.mass_kg", "[0, 1e6] kg")?;

@@ -18,7 +18,7 @@
 //! Engines: [`PlantModel::is_exact`] models step in closed form: rigid ones by
 //! [`crate::rich::friction::advance_switch`], those with a transmission, hand or filter by the
 //! matrix exponential of [`crate::rich::linear`]; the others (cogging, Stribeck decay) with
-//! Dormand–Prince 5(4) (rtol 1e-9,
+//! Dormand–Prince 5(4) of [`crate::dopri`] (rtol 1e-9,
 //! atol 1e-6 in units of Δ, Δ/ms, max(F_s, 1 mN), per ms) or the method given to
 //! [`RichPlant::with_method`].
 //!
@@ -29,8 +29,13 @@
 use super::friction::{advance_switch, sliding_n, stick_rule};
 use super::linear::{Linear, LinearPlant};
 use super::model::{ModelError, PlantModel};
-use super::ode::{Field, OdeMethod, OdeStats, State, Stepper, NS};
+use crate::dopri::{Field, OdeMethod, OdeStats, Stepper};
 use crate::plant::{Body, Motion};
+
+/// Dimension of the state (motor x, v; link x, v; amplifier p, ṗ).
+pub const NS: usize = 6;
+/// A state vector [x₁, v₁, x₂, v₂, p, ṗ].
+pub type State = [f64; NS];
 
 /// Mode switches handled by one [`RichPlant::advance`] call at most.
 pub const MAX_EVENTS: u32 = 10_000;
@@ -151,7 +156,7 @@ struct Dyn<'a> {
     slide: f64,
 }
 
-impl Field for Dyn<'_> {
+impl Field<NS> for Dyn<'_> {
     fn rhs(&self, y: &State, dy: &mut State) {
         let d = self.d;
         *dy = [0.0; NS];
@@ -192,7 +197,7 @@ enum Engine {
     /// Linear between events (transmission, hand, filter): [`Linear`].
     Linear(Linear),
     /// Reference integrator.
-    Ode(Stepper),
+    Ode(Stepper<NS>),
 }
 
 /// The plant of a scene, stepped one held command at a time.

@@ -12,122 +12,31 @@
 //! [`Scene::simulate`]: the exact solver is monomorphised for the effect set
 //! ([`crate::exact::dispatch`]).
 //!
-//! Layout: `raw` holds the serde structs of the TOML format, `resolve` the checks and unit
-//! conversion, this module the validated [`Scene`] and its runner.
+//! Layout (each file imports only those above it; this module sits on top): `error`
+//! ([`SceneError`]), `raw` (the serde structs of the whole TOML format, plant effects
+//! included), `spec` (the validated [`Scene`], [`Solver`], [`RichScene`], [`Row`] as data),
+//! `plant_keys` (the plant-effect keys of issue 10 → [`RichScene`]), `resolve` (checks and unit
+//! conversion of the paper's keys), `sampled` (the sampled loop on [`crate::rich::RichPlant`]
+//! for scenes with a plant effect), `plant_file` ([`crate::rich::PlantModel::from_scene_toml`]:
+//! plant files with defaults), and here [`Scene::from_toml`] and [`Scene::simulate`]. The
+//! rich physics ([`crate::rich`]) knows nothing of scenes.
 //!
 //! Invariant: a [`Scene`] returned by [`Scene::from_toml`] is valid for its solver.
 
+mod error;
+mod plant_file;
+mod plant_keys;
 mod raw;
 mod resolve;
+mod sampled;
+mod spec;
 
-use crate::exact::{dispatch_damped, ExactSim, History, PeriodAudit, Visitor};
-use crate::params::{Effects, ParamError, Params};
-use crate::plant::Motion;
-use crate::reference::{AmpFilter, Hand, Method, RefModel, RefSim};
+pub use error::SceneError;
+pub use sampled::simulate as simulate_sampled;
+pub use spec::{RichScene, Row, Scene, Solver};
 
-/// Why a scene was rejected. Every variant names the TOML key; range errors also the range.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum SceneError {
-    /// Not a scene in TOML: syntax, an unknown key, a missing table or a wrong type.
-    #[error(transparent)]
-    Toml(#[from] toml::de::Error),
-    /// A value outside its allowed range (the name is the TOML key, e.g. `device.sigma`).
-    #[error("{} = {}: allowed range is {}", .0.name(), .0.value(), .0.allowed())]
-    Param(#[from] ParamError),
-    /// A key the scene's unit system requires is missing.
-    #[error("{key} is missing ({allowed})")]
-    Missing {
-        /// The TOML key, e.g. `device.mu`.
-        key: &'static str,
-        /// What the key must hold.
-        allowed: &'static str,
-    },
-    /// An integer key outside its range.
-    #[error("{key} = {value}: allowed range is {allowed}")]
-    Count {
-        /// The TOML key, e.g. `run.periods`.
-        key: &'static str,
-        /// The value given.
-        value: u64,
-        /// The allowed range.
-        allowed: &'static str,
-    },
-    /// Keys that do not fit together (mixed unit systems, a solver that cannot run the effects).
-    #[error("{key}: {reason}")]
-    Conflict {
-        /// The TOML key or table.
-        key: &'static str,
-        /// What is required instead.
-        reason: &'static str,
-    },
-    /// The solver rejected the scene's parameters (never for a scene from [`Scene::from_toml`]).
-    #[error("solver: {0}")]
-    Solver(ParamError),
-    /// A plant-effect key beyond the paper (stiction, cogging, transmission, amplifier limits,
-    /// `counts_per_rev`: [`crate::rich`]) refused; the message names the key and the range.
-    #[error("{0}")]
-    Effect(String),
-}
-
-/// Which solver runs a scene.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Solver {
-    /// The exact event-driven solver.
-    Exact,
-    /// A reference integrator.
-    Reference(Method),
-}
-
-/// A validated scene in dimensionless units.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Scene {
-    /// μ, β, σ, τ_D (τ_D includes an amplifier modelled as a pure delay).
-    pub params: Params,
-    /// Dimensionless virtual damping β_v = B/(K·T) of the wall law (0: spring only; a
-    /// physical scene's `controller.virtual_damping_ns_per_m`).
-    pub beta_v: f64,
-    /// Effects shared with the exact solver.
-    pub effects: Effects,
-    /// Sample-and-hold (false: continuous spring, reference solvers only).
-    pub zoh: bool,
-    /// Amplifier filter (reference solvers only).
-    pub amp: Option<AmpFilter>,
-    /// Hand (reference solvers only).
-    pub hand: Option<Hand>,
-    /// Initial state.
-    pub init: Motion,
-    /// Number of sampling periods to simulate.
-    pub periods: u64,
-    /// Solver.
-    pub solver: Solver,
-    /// Delay-line history.
-    pub history: History,
-    /// The physical plant and controller with the effects beyond the paper (physical scenes
-    /// only; [`crate::rich`]).
-    pub rich: Option<crate::rich::scene::RichScene>,
-}
-
-/// One output row, at a sample instant.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Row {
-    /// Sample index h (τ = h).
-    pub period: u64,
-    /// ξ(h).
-    pub xi: f64,
-    /// ξ̇(h).
-    pub xidot: f64,
-    /// Force applied at the start of the next period.
-    pub phi_a: f64,
-    /// H_T(h) (35).
-    pub h_t: f64,
-    /// E_d over the previous period (28).
-    pub e_d: f64,
-    /// E_g over the previous period (29).
-    pub e_g: f64,
-    /// Residual of (26) over the previous period.
-    pub residual: f64,
-}
+use crate::exact::{dispatch_damped, ExactSim, PeriodAudit, Visitor};
+use crate::reference::{RefModel, RefSim};
 
 impl Scene {
     /// Parses and validates a TOML scene.
@@ -138,7 +47,7 @@ impl Scene {
         let raw: raw::RawScene = toml::from_str(text)?;
         let e = &raw.effects;
         let (force_limit_n, deadband_n) = e.amplifier.limits();
-        let keys = crate::rich::scene::RichKeys {
+        let keys = plant_keys::RichKeys {
             counts_per_rev: raw.device.counts_per_rev,
             stiction: e.stiction,
             cogging: e.cogging,
@@ -146,9 +55,9 @@ impl Scene {
             force_limit_n,
             deadband_n,
         };
-        let (mut scene, scale) = Self::resolve(raw)?;
+        let (mut scene, scale) = resolve::resolve(raw)?;
         let scale = scale.map(|s| (s.stiffness, s.period_s, s.resolution));
-        scene.rich = crate::rich::scene::attach(&scene, scale, keys)?;
+        scene.rich = plant_keys::attach(&scene, scale, keys)?;
         Ok(scene)
     }
 
@@ -159,7 +68,7 @@ impl Scene {
     /// by hand, not through [`Scene::from_toml`]).
     pub fn simulate(&self, out: &mut dyn FnMut(&Row)) -> Result<(), SceneError> {
         if let Some(rich) = self.rich.as_ref().filter(|r| r.needs_rich_loop()) {
-            return crate::rich::scene::simulate(self, rich, out);
+            return sampled::simulate(self, rich, out);
         }
         match self.solver {
             Solver::Exact => {
@@ -235,6 +144,7 @@ impl Visitor for Drive<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params::Params;
 
     const BASE: &str = r#"
 [device]

@@ -1,7 +1,8 @@
 //! The TOML layout of a scene, as read by serde: every table and key of the format, unchecked.
 //!
 //! Units are in the key names (`mass_kg`, `period_s`, …); dimensionless keys (`mu`, `beta`,
-//! `sigma`, `tau_d`, `xi`, `xidot`) are in Table I units. Invariant: unknown keys are rejected
+//! `sigma`, `tau_d`, `xi`, `xidot`) are in Table I units; the plant-effect tables of issue 10
+//! (`stiction`, `cogging`, `transmission`) are SI. Invariant: unknown keys are rejected
 //! (`deny_unknown_fields`); ranges and unit-system consistency are checked in `resolve`.
 
 use crate::exact::History;
@@ -54,9 +55,9 @@ pub(super) struct RawEffects {
     pub one_sided_wall: bool,
     pub amplifier: RawAmp,
     pub hand: RawHand,
-    pub stiction: Option<crate::rich::scene::RawStiction>,
-    pub cogging: Option<crate::rich::scene::RawCogging>,
-    pub transmission: Option<crate::rich::scene::RawTransmission>,
+    pub stiction: Option<RawStiction>,
+    pub cogging: Option<RawCogging>,
+    pub transmission: Option<RawTransmission>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -149,4 +150,36 @@ pub(super) enum RawSolver {
     Exact,
     Rk4 { steps_per_period: u32 },
     Dopri { rtol: f64, atol: f64 },
+}
+
+/// `effects.stiction` as written.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawStiction {
+    /// Breakaway force, N.
+    pub static_n: f64,
+    /// Stribeck velocity, m/s.
+    pub stribeck_m_per_s: f64,
+}
+
+/// `effects.cogging` as written.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawCogging {
+    /// Amplitude, N.
+    pub amplitude_n: f64,
+    /// Period, m.
+    pub period_m: f64,
+}
+
+/// `effects.transmission` as written.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawTransmission {
+    /// Link-side mass, kg.
+    pub link_mass_kg: f64,
+    /// Spring, N/m.
+    pub stiffness_n_per_m: f64,
+    /// Damper, N·s/m.
+    pub damping_ns_per_m: f64,
 }

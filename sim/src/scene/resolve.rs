@@ -6,8 +6,12 @@
 //! error names the TOML key and the allowed range. Invariant: the returned scene passes the
 //! solver's own validation (μ > 0, β, σ ≥ 0, 0 ≤ τ_D ≤ [`MAX_TAU_D`]).
 
-use super::raw::{RawAmp, RawDevice, RawHand, RawInitial, RawRun, RawScene, RawSolver};
-use super::{Scene, SceneError, Solver};
+use super::error::SceneError;
+use super::plant_keys::rotary_resolution;
+use super::raw::{
+    RawAmp, RawController, RawDevice, RawHand, RawInitial, RawRun, RawScene, RawSolver,
+};
+use super::spec::{Scene, Solver};
 use crate::exact::MAX_BETA_V;
 use crate::params::{Effects, Params, MAX_TAU_D};
 use crate::plant::Motion;
@@ -39,12 +43,12 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
     let d: &RawDevice = &raw.device;
     let c = &raw.controller;
     let dimless = d.mu.is_some() || d.beta.is_some() || d.sigma.is_some();
-    let physical = d.mass_kg.is_some()
+    let phys = d.mass_kg.is_some()
         || d.viscous_ns_per_m.is_some()
         || d.coulomb_n.is_some()
         || d.resolution_m.is_some()
         || d.counts_per_rev.is_some();
-    if dimless == physical {
+    if dimless == phys {
         return conflict(
             "device",
             "give either mu, beta, sigma (dimensionless) or mass_kg, viscous_ns_per_m, \
@@ -52,35 +56,46 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
         );
     }
     if dimless {
-        let mu = need("device.mu", d.mu, "> 0")?;
-        let beta = need("device.beta", d.beta, ">= 0")?;
-        let sigma = need("device.sigma", d.sigma, ">= 0")?;
-        if c.stiffness_n_per_m.is_some()
-            || c.period_s.is_some()
-            || c.extra_delay_s.is_some()
-            || c.virtual_damping_ns_per_m.is_some()
-        {
-            return conflict(
-                "controller",
-                "stiffness_n_per_m, virtual_damping_ns_per_m, period_s, extra_delay_s belong to \
-                 physical scenes; a dimensionless scene uses controller.tau_d",
-            );
-        }
-        let params = Params {
-            mu: range("device.mu", mu, 0.0, true, 1e12, "(0, 1e12]")?,
-            beta: range("device.beta", beta, 0.0, false, 1e6, "[0, 1e6]")?,
-            sigma: range("device.sigma", sigma, 0.0, false, 1e6, "[0, 1e6]")?,
-            tau_d: range(
-                "controller.tau_d",
-                c.tau_d.unwrap_or(0.0),
-                0.0,
-                false,
-                MAX_TAU_D,
-                "[0, 250] periods",
-            )?,
-        };
-        return Ok((params, None));
+        dimensionless(d, c)
+    } else {
+        physical(d, c)
     }
+}
+
+/// The device of a dimensionless scene (μ, β, σ; τ_D from `controller.tau_d`).
+fn dimensionless(d: &RawDevice, c: &RawController) -> Result<(Params, Option<Scale>), SceneError> {
+    let mu = need("device.mu", d.mu, "> 0")?;
+    let beta = need("device.beta", d.beta, ">= 0")?;
+    let sigma = need("device.sigma", d.sigma, ">= 0")?;
+    if c.stiffness_n_per_m.is_some()
+        || c.period_s.is_some()
+        || c.extra_delay_s.is_some()
+        || c.virtual_damping_ns_per_m.is_some()
+    {
+        return conflict(
+            "controller",
+            "stiffness_n_per_m, virtual_damping_ns_per_m, period_s, extra_delay_s belong to \
+             physical scenes; a dimensionless scene uses controller.tau_d",
+        );
+    }
+    let params = Params {
+        mu: range("device.mu", mu, 0.0, true, 1e12, "(0, 1e12]")?,
+        beta: range("device.beta", beta, 0.0, false, 1e6, "[0, 1e6]")?,
+        sigma: range("device.sigma", sigma, 0.0, false, 1e6, "[0, 1e6]")?,
+        tau_d: range(
+            "controller.tau_d",
+            c.tau_d.unwrap_or(0.0),
+            0.0,
+            false,
+            MAX_TAU_D,
+            "[0, 250] periods",
+        )?,
+    };
+    Ok((params, None))
+}
+
+/// The device and controller of a physical scene, converted through Table I.
+fn physical(d: &RawDevice, c: &RawController) -> Result<(Params, Option<Scale>), SceneError> {
     let m = need("device.mass_kg", d.mass_kg, "kg, > 0")?;
     let b = need("device.viscous_ns_per_m", d.viscous_ns_per_m, "N s/m, >= 0")?;
     let cc = need("device.coulomb_n", d.coulomb_n, "N, >= 0")?;
@@ -88,7 +103,7 @@ fn device(raw: &RawScene) -> Result<(Params, Option<Scale>), SceneError> {
         (Some(_), Some(_)) => {
             return conflict("device", "give resolution_m or counts_per_rev, not both")
         }
-        (None, Some(n)) => crate::rich::scene::rotary_resolution(n)?,
+        (None, Some(n)) => rotary_resolution(n)?,
         (r, None) => need("device.resolution_m", r, "m, > 0")?,
     };
     let k = need(
@@ -363,65 +378,63 @@ fn solver(r: &RawRun) -> Result<Solver, SceneError> {
     })
 }
 
-impl Scene {
-    /// The scene and, for a physical scene, its Table I scale.
-    pub(super) fn resolve(raw: RawScene) -> Result<(Self, Option<Scale>), SceneError> {
-        let (mut params, scale) = device(&raw)?;
-        let beta_v = virtual_damping(&raw, scale)?;
-        let e = &raw.effects;
-        let amp = amplifier(&e.amplifier, e.delay, scale, &mut params.tau_d)?;
-        if !e.delay && params.tau_d > 0.0 {
-            range(
-                "controller.tau_d",
-                params.tau_d,
-                0.0,
-                false,
-                0.0,
-                "0 when effects.delay = false",
-            )?;
-        }
+/// The scene and, for a physical scene, its Table I scale.
+pub(super) fn resolve(raw: RawScene) -> Result<(Scene, Option<Scale>), SceneError> {
+    let (mut params, scale) = device(&raw)?;
+    let beta_v = virtual_damping(&raw, scale)?;
+    let e = &raw.effects;
+    let amp = amplifier(&e.amplifier, e.delay, scale, &mut params.tau_d)?;
+    if !e.delay && params.tau_d > 0.0 {
         range(
             "controller.tau_d",
             params.tau_d,
             0.0,
             false,
-            MAX_TAU_D,
-            "total delay in [0, 250] periods",
+            0.0,
+            "0 when effects.delay = false",
         )?;
-        let hand = hand(&e.hand, scale)?;
-        let init = initial(&raw.initial, scale)?;
-        let solver = solver(&raw.run)?;
-        if solver == Solver::Exact && (amp.is_some() || hand.is_some() || !e.zoh) {
-            return conflict(
-                "run.solver",
-                "kind = \"exact\" needs effects.zoh = true, amplifier kind \"none\" or \"delay\" \
-                 and hand kind \"none\"; use rk4 or dopri",
-            );
-        }
-        if !e.zoh && params.tau_d > 0.0 {
-            return conflict("effects.zoh", "true when a delay is simulated");
-        }
-        Ok((
-            Self {
-                params,
-                beta_v,
-                effects: Effects {
-                    quantization: e.quantization,
-                    coulomb: e.coulomb,
-                    viscous: e.viscous,
-                    delay: e.delay,
-                    one_sided: e.one_sided_wall,
-                },
-                zoh: e.zoh,
-                amp,
-                hand,
-                init,
-                periods: raw.run.periods,
-                solver,
-                history: raw.run.history,
-                rich: None,
-            },
-            scale,
-        ))
     }
+    range(
+        "controller.tau_d",
+        params.tau_d,
+        0.0,
+        false,
+        MAX_TAU_D,
+        "total delay in [0, 250] periods",
+    )?;
+    let hand = hand(&e.hand, scale)?;
+    let init = initial(&raw.initial, scale)?;
+    let solver = solver(&raw.run)?;
+    if solver == Solver::Exact && (amp.is_some() || hand.is_some() || !e.zoh) {
+        return conflict(
+            "run.solver",
+            "kind = \"exact\" needs effects.zoh = true, amplifier kind \"none\" or \"delay\" \
+             and hand kind \"none\"; use rk4 or dopri",
+        );
+    }
+    if !e.zoh && params.tau_d > 0.0 {
+        return conflict("effects.zoh", "true when a delay is simulated");
+    }
+    Ok((
+        Scene {
+            params,
+            beta_v,
+            effects: Effects {
+                quantization: e.quantization,
+                coulomb: e.coulomb,
+                viscous: e.viscous,
+                delay: e.delay,
+                one_sided: e.one_sided_wall,
+            },
+            zoh: e.zoh,
+            amp,
+            hand,
+            init,
+            periods: raw.run.periods,
+            solver,
+            history: raw.run.history,
+            rich: None,
+        },
+        scale,
+    ))
 }

@@ -4,7 +4,7 @@
 //! Units: dimensionless (β, σ, μ on the axes; fractions in [0, 1]). Invariant: drawn only from a
 //! complete, validated map and the atlas computed from it; lines are clipped to the plot.
 
-use super::atlas::{Atlas, Line, Slice};
+use super::atlas_model::{Atlas, Line, Slice};
 use super::file::{MapFile, Panel};
 use super::plot::draw_cells;
 use crate::figure::{self, Figure};
@@ -104,23 +104,15 @@ fn linear_flips(slice: &Slice, b0: f64, b1: f64) -> Result<Vec<f64>> {
     Ok(flips)
 }
 
-fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &PanelFigure) -> Result<()>
+/// The title, the agreement of each line (in its colour) and the cell legend of a panel.
+fn draw_panel_header<DB: DrawingBackend>(
+    top: &DrawingArea<DB, Shift>,
+    f: &PanelFigure,
+) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE)?;
-    let s = &f.map.spec;
-    let p = f.panel;
-    let slice = Slice {
-        mu: p.mu,
-        tau_d: p.tau_d,
-        xidot0: p.xidot0,
-    };
-    let db = step(s.beta.lo, s.beta.hi, s.beta.n);
-    let ds = step(s.sigma.lo, s.sigma.hi, s.sigma.n);
-    let (bx0, bx1) = (s.beta.lo - db / 2.0, s.beta.hi + db / 2.0);
-    let (sy0, sy1) = (s.sigma.lo - ds / 2.0, s.sigma.hi + ds / 2.0);
-    let (top, body) = root.split_vertically(86);
+    let (s, p) = (&f.map.spec, f.panel);
     let legend: Vec<String> = Line::ALL
         .iter()
         .zip(f.fractions)
@@ -153,6 +145,27 @@ where
         (8, 68),
         ("sans-serif", 12),
     ))?;
+    Ok(())
+}
+
+fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &PanelFigure) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let s = &f.map.spec;
+    let p = f.panel;
+    let slice = Slice {
+        mu: p.mu,
+        tau_d: p.tau_d,
+        xidot0: p.xidot0,
+    };
+    let db = step(s.beta.lo, s.beta.hi, s.beta.n);
+    let ds = step(s.sigma.lo, s.sigma.hi, s.sigma.n);
+    let (bx0, bx1) = (s.beta.lo - db / 2.0, s.beta.hi + db / 2.0);
+    let (sy0, sy1) = (s.sigma.lo - ds / 2.0, s.sigma.hi + ds / 2.0);
+    let (top, body) = root.split_vertically(86);
+    draw_panel_header(&top, f)?;
     let mut chart = ChartBuilder::on(&body)
         .margin(8)
         .x_label_area_size(35)

@@ -14,108 +14,25 @@
 //! core's exact sampled linear K_max(B) (`criteria::k_max_exact_linear`: ZOH, backward
 //! difference, b, T_D; no quantization or Coulomb).
 //!
+//! Layout: the JSON document is plain data in `kb_file` (re-exported here), drawn by `kb_plot`;
+//! this module computes, renders and runs on top of both.
+//!
 //! Invariants: every flag is checked before anything is computed or written; β_v ≤ 1000 and
 //! τ_D ≤ 250 at every point; the result is deterministic and independent of thread count.
 
+use super::args::{history_of, Args};
 use super::file;
 use super::kb_args::{resolve_plant, Plant};
+pub use super::kb_file::{BoundaryPoint, KbFile, KbPoint, KbSpec, BOUNDARY_POINTS, MODEL_NOTE};
+use super::kb_plot;
 pub use crate::analysis::kb_plot::Units;
 use anyhow::{ensure, Context, Result};
 use rayon::prelude::*;
-use serde::Serialize;
 use std::fmt::Write as _;
 use stiffwall_core::criteria;
 use stiffwall_sim::classify::Class;
-use stiffwall_sim::exact::{History, MAX_BETA_V};
+use stiffwall_sim::exact::MAX_BETA_V;
 use stiffwall_sim::map::{self as smap, Axis};
-
-/// Number of B values of the predicted boundary curve.
-pub const BOUNDARY_POINTS: usize = 101;
-
-/// What the (K, B) map simulates (stated in the JSON `model` key).
-pub const MODEL_NOTE: &str = "rigid plant m, b, c, resolution, T, T_D of the device mapped by \
-Table I to (mu, beta, sigma, tau_d, beta_v = B/(K*T)) and simulated by the exact solver of the \
-(beta, sigma) map (quantization, Coulomb, viscous, delay, two-sided wall); a plant file's \
-stiction, cogging, transmission, amplifier, hand and one-sided wall are not simulated; boundary: \
-exact sampled linear K_max(B) (no quantization, no Coulomb)";
-
-/// The (K, B) sweep.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct KbSpec {
-    /// K axis [N/m or N·m/rad], lo > 0.
-    pub k: Axis,
-    /// B axis [N·s/m or N·m·s/rad], lo ≥ 0.
-    pub b: Axis,
-    /// ξ̇₀ [counts per period], ξ₀ = 0.
-    pub xidot0: f64,
-    /// ξ̇₀ as a physical velocity ξ̇₀·Δ/T [m/s or rad/s].
-    pub velocity: f64,
-    /// Horizon in periods.
-    pub periods: u64,
-    /// Delay-line history before τ = 0.
-    pub history: History,
-}
-
-/// One classified (K, B) point.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct KbPoint {
-    /// Index, row-major (K outer, B inner).
-    pub index: usize,
-    /// K.
-    pub k: f64,
-    /// B.
-    pub b: f64,
-    /// μ = m/(KT²).
-    pub mu: f64,
-    /// β = b/(KT).
-    pub beta: f64,
-    /// σ = c/(KΔ).
-    pub sigma: f64,
-    /// β_v = B/(KT).
-    pub beta_v: f64,
-    /// Class of the simulation.
-    pub class: Class,
-    /// Periods simulated.
-    pub periods_run: u64,
-    /// H_T(0).
-    pub h0: f64,
-    /// H_T at the end.
-    pub h_end: f64,
-    /// Largest |ξ| over the tail.
-    pub tail_amplitude: f64,
-    /// Stable by core's exact sampled linear test (`criteria::exact_linear_stable`).
-    pub linear_stable: bool,
-}
-
-/// One point of the predicted boundary.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct BoundaryPoint {
-    /// B.
-    pub b: f64,
-    /// Exact linear K_max(B) (0: no stable K).
-    pub k_max: f64,
-}
-
-/// The JSON document of `hostctl map --k-b`.
-#[derive(Debug, Clone, Serialize)]
-pub struct KbFile {
-    /// Always `"k-b"`.
-    pub kind: &'static str,
-    /// [`MODEL_NOTE`].
-    pub model: &'static str,
-    /// Units of K and B.
-    pub units: Units,
-    /// The device.
-    pub plant: Plant,
-    /// The sweep.
-    pub spec: KbSpec,
-    /// Points, by index.
-    pub points: Vec<KbPoint>,
-    /// K_max(B) on [`BOUNDARY_POINTS`] B values spanning the B axis.
-    pub boundary: Vec<BoundaryPoint>,
-    /// Wall time of the computation, s.
-    pub seconds: f64,
-}
 
 fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Result<Axis> {
     let s = s.with_context(|| format!("--k-b needs {flag} LO:HI:N [{unit}]"))?;
@@ -134,7 +51,7 @@ fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Resu
 ///
 /// # Errors
 /// A flag out of range, naming it and its allowed range.
-pub fn spec_of(a: &super::Args) -> Result<(Plant, KbSpec)> {
+pub fn spec_of(a: &Args) -> Result<(Plant, KbSpec)> {
     let plant = resolve_plant(&a.kb)?;
     let tau_d = plant.delay_s / plant.period_s;
     ensure!(
@@ -185,7 +102,7 @@ pub fn spec_of(a: &super::Args) -> Result<(Plant, KbSpec)> {
         xidot0: a.xidot0[0],
         velocity: a.xidot0[0] * plant.resolution / plant.period_s,
         periods: a.periods,
-        history: super::history_of(a.history),
+        history: history_of(a.history),
     };
     for kk in [k.lo, k.hi] {
         plant
@@ -317,7 +234,7 @@ pub fn render(m: &KbFile) -> String {
 ///
 /// # Errors
 /// A flag out of range or a file error, before anything is written.
-pub fn run(a: &super::Args, threads: usize) -> Result<()> {
+pub fn run(a: &Args, threads: usize) -> Result<()> {
     let (plant, spec) = spec_of(a)?;
     if let Some(img) = &a.plot {
         crate::figure::prepare(img)?;
@@ -347,7 +264,7 @@ pub fn run(a: &super::Args, threads: usize) -> Result<()> {
         None => {}
     }
     if let Some(img) = &a.plot {
-        super::kb_plot::plot(&m, img)?;
+        kb_plot::plot(&m, img)?;
     }
     Ok(())
 }

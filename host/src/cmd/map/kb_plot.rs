@@ -1,11 +1,11 @@
-//! Figure of a (K, B) map: B on x, K on y (SI, the units of [`super::kb::Units`]), classes as
+//! Figure of a (K, B) map: B on x, K on y (SI, the units of [`super::kb_file::Units`]), classes as
 //! the grey levels of the (β, σ) map, and core's predicted exact linear boundary K_max(B) in
 //! red (clamped to the plotted K range; K_max = 0 where no K is stable). Axes and boundary are
 //! drawn by [`crate::analysis::kb_plot`], shared with the frontier figures of analyze and tune.
 //!
 //! Invariant: cells are centred on the grid points; drawn only from a computed [`KbFile`].
 
-use super::kb::KbFile;
+use super::kb_file::KbFile;
 use super::plot::class_color;
 use crate::analysis::kb_plot;
 use crate::figure::{self, Figure, FigureError};

@@ -22,11 +22,14 @@
 //! complete, valid result of the same sweep and shard does nothing (resume after a pre-empted
 //! batch job); `--force` recomputes. Bounds: `--threads` in [1, [`THREADS_PER_CORE`] × cores].
 
+pub mod args;
 pub mod atlas;
+pub mod atlas_model;
 pub mod atlas_plot;
 pub mod file;
 pub mod kb;
 pub mod kb_args;
+pub mod kb_file;
 pub mod kb_plot;
 pub mod plot;
 pub mod values;
@@ -34,112 +37,17 @@ pub mod values;
 use crate::figure;
 use crate::output::emit_json;
 use anyhow::{bail, ensure, Context, Result};
+pub use args::{history_of, Args, HistoryArg, Sub};
 use file::{Cost, MapFile, Panel, Spec, Values};
 use indicatif::{ProgressBar, ProgressStyle};
+use plot::damping_label;
 use std::path::PathBuf;
 use stiffwall_sim::classify::Class;
-use stiffwall_sim::exact::{History, MAX_BETA_V};
+use stiffwall_sim::exact::MAX_BETA_V;
 use stiffwall_sim::map::{self, Axis};
 
 /// Largest `--threads` per available core.
 pub const THREADS_PER_CORE: usize = 4;
-
-/// Arguments of `hostctl map`.
-#[derive(Debug, clap::Args)]
-pub struct Args {
-    /// Sub-commands (`merge`).
-    #[command(subcommand)]
-    pub cmd: Option<Sub>,
-    /// Dimensionless mass μ: a value, a list v1,v2,… or a range lo:hi:n[:log] (one slice each).
-    #[arg(long, default_value = "100", allow_hyphen_values = true)]
-    pub mu: String,
-    /// Delay τ_D in sampling periods: a value, a list or a range lo:hi:n[:log] (one slice each).
-    #[arg(long, default_value = "0", allow_hyphen_values = true)]
-    pub tau_d: String,
-    /// Initial velocities ξ̇₀ (comma separated, one panel each).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "5",
-        allow_hyphen_values = true
-    )]
-    pub xidot0: Vec<f64>,
-    /// β axis lo:hi:n.
-    #[arg(long, default_value = "0:1:34", allow_hyphen_values = true)]
-    pub beta: String,
-    /// σ axis lo:hi:n.
-    #[arg(long, default_value = "0:2:21", allow_hyphen_values = true)]
-    pub sigma: String,
-    /// Horizon in sampling periods.
-    #[arg(long, default_value_t = 50_000)]
-    pub periods: u64,
-    /// JSON output file.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Image of the map (.svg or .png).
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// Draw the analytic region boundaries of Fig. 3/5 over the map.
-    #[arg(long)]
-    pub overlay: bool,
-    /// Compute only shard k of n (k/n, 0-based).
-    #[arg(long)]
-    pub shard: Option<String>,
-    /// Worker threads (default: all cores; at most 4 per core).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Recompute even when `--out` already holds this sweep's complete result.
-    #[arg(long)]
-    pub force: bool,
-    /// No progress bar.
-    #[arg(long)]
-    pub quiet: bool,
-    /// Simulate every period even where a point's state repeats (same result, slower; for
-    /// checking and timing).
-    #[arg(long)]
-    pub no_cycle_detection: bool,
-    /// Delay-line history before tau = 0: the spring force of the initial position, or zero.
-    #[arg(long, value_enum, default_value = "hold-initial")]
-    pub history: HistoryArg,
-    /// Virtual damping beta_v = B/(K*T) of the wall at every point, dimensionless, in [0, 1000]
-    /// (0: the paper's spring-only wall; the JSON records it only when nonzero).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub damping: f64,
-    /// The (K, B) map of one device (`--k-b`, [`kb`]).
-    #[command(flatten)]
-    pub kb: kb_args::KbArgs,
-}
-
-/// `--history` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum HistoryArg {
-    /// phi_A = phi_C(xi0) before the first delayed sample.
-    HoldInitial,
-    /// phi_A = 0 before the first delayed sample.
-    Zero,
-}
-
-/// `hostctl map merge`.
-#[derive(Debug, clap::Subcommand)]
-pub enum Sub {
-    /// Merge shard JSON files of one sweep into one complete map.
-    Merge {
-        /// Shard files.
-        #[arg(required = true)]
-        inputs: Vec<PathBuf>,
-        /// Merged JSON output.
-        #[arg(long)]
-        out: PathBuf,
-        /// Image of the merged map (.svg or .png).
-        #[arg(long)]
-        plot: Option<PathBuf>,
-        /// Draw the analytic region boundaries.
-        #[arg(long)]
-        overlay: bool,
-    },
-    /// Compare a complete map with the analytic growth boundaries, slice by slice.
-    Atlas(atlas::Args),
-}
 
 fn parse_shard(s: &str) -> Result<(usize, usize)> {
     let (k, n) = s
@@ -211,15 +119,6 @@ fn spec_of(a: &Args) -> Result<Spec> {
     spec.validate()
         .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --damping")?;
     Ok(spec)
-}
-
-/// The delay-line history of `--history`.
-#[must_use]
-pub fn history_of(h: HistoryArg) -> History {
-    match h {
-        HistoryArg::HoldInitial => History::HoldInitial,
-        HistoryArg::Zero => History::Zero,
-    }
 }
 
 /// Largest `--threads`: [`THREADS_PER_CORE`] × the available cores.
@@ -357,15 +256,6 @@ fn run_merge(
     Ok(())
 }
 
-/// `, beta_v = X` for a damped map, nothing for the spring-only wall.
-pub(crate) fn damping_label(beta_v: f64) -> String {
-    if beta_v == 0.0 {
-        String::new()
-    } else {
-        format!(", beta_v = {beta_v}")
-    }
-}
-
 /// `--overlay` draws the paper's spring-only boundaries: refused on a damped map.
 fn check_overlay(spec: &Spec, overlay: bool) -> Result<()> {
     ensure!(
@@ -375,6 +265,39 @@ fn check_overlay(spec: &Spec, overlay: bool) -> Result<()> {
         spec.damping
     );
     Ok(())
+}
+
+/// The per-panel class counts and the cost of a computed map, on standard error.
+fn report(m: &MapFile) {
+    let counts = |p: &Panel, c: Class| p.points.iter().filter(|q| q.class == c).count();
+    for p in &m.panels {
+        eprintln!(
+            "mu = {}, tau_d = {}, xidot0 = {}{}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
+            p.mu,
+            p.tau_d,
+            p.xidot0,
+            damping_label(m.spec.damping),
+            p.points.len(),
+            counts(p, Class::Growing),
+            counts(p, Class::Persistent),
+            counts(p, Class::NonMonotoneDecay),
+            counts(p, Class::MonotoneDecay)
+        );
+    }
+    eprintln!(
+        "computed in {:.2} s: {} periods ({} points ended by cycle detection), {:.1} ns/period (thread wall time), {} CPU",
+        m.seconds,
+        m.cost.periods_total,
+        m.cost.cycle_points,
+        m.cost.ns_per_period_mean,
+        m.cost.cpu_seconds.map_or_else(
+            || "unknown".to_owned(),
+            |c| format!(
+                "{c:.2} s = {:.1} ns/period",
+                m.cost.cpu_ns_per_period.unwrap_or(f64::NAN)
+            )
+        )
+    );
 }
 
 /// Runs `hostctl map`.
@@ -432,35 +355,7 @@ pub fn run(args: &Args) -> Result<()> {
             cycle_detection: !args.no_cycle_detection,
         };
         let m = pool.install(|| compute_with(&spec, shard, args.quiet, opts))?;
-        let counts = |p: &Panel, c: Class| p.points.iter().filter(|q| q.class == c).count();
-        for p in &m.panels {
-            eprintln!(
-                "mu = {}, tau_d = {}, xidot0 = {}{}: {} points: growing {}, persistent {}, non-monotone decay {}, monotone decay {}",
-                p.mu,
-                p.tau_d,
-                p.xidot0,
-                damping_label(m.spec.damping),
-                p.points.len(),
-                counts(p, Class::Growing),
-                counts(p, Class::Persistent),
-                counts(p, Class::NonMonotoneDecay),
-                counts(p, Class::MonotoneDecay)
-            );
-        }
-        eprintln!(
-            "computed in {:.2} s: {} periods ({} points ended by cycle detection), {:.1} ns/period (thread wall time), {} CPU",
-            m.seconds,
-            m.cost.periods_total,
-            m.cost.cycle_points,
-            m.cost.ns_per_period_mean,
-            m.cost.cpu_seconds.map_or_else(
-                || "unknown".to_owned(),
-                |c| format!(
-                    "{c:.2} s = {:.1} ns/period",
-                    m.cost.cpu_ns_per_period.unwrap_or(f64::NAN)
-                )
-            )
-        );
+        report(&m);
         match &args.out {
             Some(out) => file::write(out, &m)?,
             None if args.plot.is_none() => emit_json(&m)?,

@@ -135,7 +135,7 @@ where
                     panel.mu,
                     panel.tau_d,
                     panel.xidot0,
-                    super::damping_label(s.damping)
+                    damping_label(s.damping)
                 ),
                 ("sans-serif", 16),
             )
@@ -163,4 +163,13 @@ where
         }
     }
     Ok(())
+}
+
+/// `, beta_v = X` for a damped map, nothing for the spring-only wall.
+pub(crate) fn damping_label(beta_v: f64) -> String {
+    if beta_v == 0.0 {
+        String::new()
+    } else {
+        format!(", beta_v = {beta_v}")
+    }
 }
