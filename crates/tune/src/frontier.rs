@@ -147,7 +147,10 @@ pub(crate) fn choose_wall(
         }
         Damping::Fixed(_) => {}
         Damping::Search => {
-            let floor = found.k_pass * (1.0 + DAMPING_MIN_GAIN);
+            // The damper must buy DAMPING_MIN_GAIN of the stiffness *set*: its wall is set at
+            // DAMPED_MARGIN of its largest settling K, the spring-only one at `margin`.
+            let floor =
+                found.k_pass * (1.0 + DAMPING_MIN_GAIN) * margin / margin.min(DAMPED_MARGIN);
             for (b, k_pred) in predicted_frontier(run, found.k_pass, cap)
                 .into_iter()
                 .take(FRONTIER_TRIES)

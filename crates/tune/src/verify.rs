@@ -305,7 +305,7 @@ pub fn run_test(
             let mut result = run_once(c, base, k, test, ticks, min_run)?;
             let mut milli = velocity_milliticks;
             for _ in 0..LAUNCH_REAIMS {
-                if result.verdict != Verdict::NotLaunched {
+                if result.verdict.passes() {
                     break;
                 }
                 let Some(next) = result.delivered.and_then(|d| d.reaimed(milli)) else {
