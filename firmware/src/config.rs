@@ -344,6 +344,41 @@ impl Shift {
     }
 }
 
+/// The test `|x| > t` for every `i32` x as one unsigned compare,
+/// `(x as u32).wrapping_add(bias) > span`: for t < 2^31, bias = t and span = 2t (x + t lands in
+/// 0..=2t exactly when −t ≤ x ≤ t, and wraps above 2t when x < −t); for t ≥ 2^31 no |x|
+/// exceeds t, and span = `u32::MAX` is never exceeded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AbsBound {
+    bias: u32,
+    span: u32,
+}
+
+impl AbsBound {
+    /// The bound for threshold `t`.
+    #[must_use]
+    pub const fn new(t: u32) -> Self {
+        if t < 1 << 31 {
+            Self {
+                bias: t,
+                span: 2 * t,
+            }
+        } else {
+            Self {
+                bias: 0,
+                span: u32::MAX,
+            }
+        }
+    }
+
+    /// `|x| > t`.
+    #[inline(always)]
+    #[must_use]
+    pub fn exceeded(self, x: i32) -> bool {
+        (x as u32).wrapping_add(self.bias) > self.span
+    }
+}
+
 /// Integer / fixed-point servo parameters derived from a valid config.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Gains<N: Numeric> {
@@ -391,8 +426,13 @@ pub struct Gains<N: Numeric> {
     pub wall_lo: i32,
     /// Over-velocity threshold in raw counts per [`VEL_WINDOW`] ticks; 0 = off.
     pub vel_window_counts: u32,
+    /// The over-velocity test, `vel_window_counts` as an [`AbsBound`] (never exceeded when
+    /// the test is off), so the tick needs no separate on/off test.
+    pub vel_bound: AbsBound,
     /// Encoder-jump threshold, raw counts per tick.
     pub jump: u32,
+    /// `jump` as an [`AbsBound`].
+    pub jump_bound: AbsBound,
     /// Energy monitor on (and K > 0).
     pub energy_monitor: bool,
     /// Energy limit in units of K·Δ_eff²/8.
@@ -465,6 +505,11 @@ impl<N: Numeric> Gains<N> {
         let spring_hi =
             N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1).wrapping_neg());
         let spring_lo = N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1));
+        let vel_window_counts = if vel.is_finite() && vel > 0.0 {
+            libm::ceil(vel) as u32
+        } else {
+            0
+        };
         Self {
             k_half,
             n_sat,
@@ -494,12 +539,14 @@ impl<N: Numeric> Gains<N> {
             one_sided,
             delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
             limit,
-            vel_window_counts: if vel.is_finite() && vel > 0.0 {
-                libm::ceil(vel) as u32
+            vel_window_counts,
+            vel_bound: AbsBound::new(if vel_window_counts > 0 {
+                vel_window_counts
             } else {
-                0
-            },
+                u32::MAX
+            }),
             jump: cfg.encoder_jump_counts.max(1),
+            jump_bound: AbsBound::new(cfg.encoder_jump_counts.max(1)),
             energy_monitor: cfg.energy_monitor && kd2 > 0.0,
             energy_limit_e8: e8_limit,
             energy_limit_m: limit_m,
@@ -516,6 +563,55 @@ impl<N: Numeric> Gains<N> {
 mod tests {
     use super::*;
     use crate::numeric::Fx64;
+    use proptest::prelude::*;
+
+    fn check_abs_bound(x: i32, t: u32) -> Result<(), TestCaseError> {
+        prop_assert_eq!(
+            AbsBound::new(t).exceeded(x),
+            x.unsigned_abs() > t,
+            "x = {}, t = {}",
+            x,
+            t
+        );
+        Ok(())
+    }
+
+    #[test]
+    fn abs_bound_at_the_edges() {
+        let edges = [
+            0u32,
+            1,
+            2,
+            (1 << 30) - 1,
+            1 << 30,
+            (1 << 31) - 1,
+            1 << 31,
+            u32::MAX,
+        ];
+        for &t in &edges {
+            for x in [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX - 1, i32::MAX] {
+                check_abs_bound(x, t).unwrap();
+            }
+            for dx in [-1i64, 0, 1] {
+                for x in [i64::from(t) + dx, -i64::from(t) + dx] {
+                    if let Ok(x) = i32::try_from(x) {
+                        check_abs_bound(x, t).unwrap();
+                    }
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn abs_bound_is_the_abs_test(x in any::<i32>(), t in any::<u32>(), small in 0u32..1000, near in -1000i32..1000) {
+            for t in [t, small] {
+                for x in [x, near] {
+                    check_abs_bound(x, t)?;
+                }
+            }
+        }
+    }
 
     #[test]
     fn default_config_is_valid_and_each_field_is_checked() {

@@ -203,16 +203,23 @@ impl<'a, N: Numeric> Servo<'a, N> {
         d
     }
 
+    /// The output clamp to ±`limit`, with the [`flags::CLAMPED`] flag when it acts.
     #[inline]
     fn clamp(&self, code: i32) -> (i32, u16) {
         let l = self.g.limit;
-        if code > l {
-            (l, flags::CLAMPED)
-        } else if code < -l {
-            (-l, flags::CLAMPED)
+        // 0 ≤ limit ≤ 2^24: |code| > limit as one unsigned compare (as `AbsBound`).
+        if (code as u32).wrapping_add(l as u32) > (2 * l) as u32 {
+            Self::clamped(code, l)
         } else {
             (code, 0)
         }
+    }
+
+    /// `code` beyond ±`l`: the bound it passed.
+    #[cold]
+    #[inline(never)]
+    fn clamped(code: i32, l: i32) -> (i32, u16) {
+        (if code > l { l } else { -l }, flags::CLAMPED)
     }
 
     #[inline]
@@ -255,10 +262,22 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// The full servo tick: one pending command, spring, damping, delay, supervisor,
     /// experiments, clamp, output, telemetry push. (Stage 4; what the board calls.)
     pub fn tick(&mut self, now: u32, enc: &mut impl Encoder, out: &mut impl ForceOutput) -> i32 {
+        // Commands are rare: only the emptiness test (two relaxed loads) is on the tick's path;
+        // the dequeue and the handler are out of line, so their stack frame and registers do
+        // not weigh on the tick.
+        if self.port.commands.ready() {
+            self.next_command(now);
+        }
+        self.step::<true>(now, enc, out)
+    }
+
+    /// Dequeues and handles one pending command (out of the tick's hot path).
+    #[cold]
+    #[inline(never)]
+    fn next_command(&mut self, now: u32) {
         if let Some(cmd) = self.port.commands.dequeue() {
             self.command(now, cmd);
         }
-        self.step::<true>(now, enc, out)
     }
 
     #[inline(always)]
@@ -270,14 +289,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     ) -> i32 {
         let d = self.read(enc);
         // First reading: the position is absolute, not a motion; seed the supervisor's history.
-        let d = if self.primed {
-            d
-        } else {
-            self.primed = true;
-            self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
-            self.vel_hist = [self.pos; VEL_WINDOW];
-            0
-        };
+        let d = if self.primed { d } else { self.prime() };
         let rel = self.pos.saturating_sub(self.g.wall);
         let n = rel >> self.g.coarsen.get();
         let dn = n.saturating_sub(self.prev_n);
@@ -285,15 +297,12 @@ impl<'a, N: Numeric> Servo<'a, N> {
 
         // Supervisor.
         let mut new_faults = 0u32;
-        if d.unsigned_abs() > self.g.jump {
+        if self.g.jump_bound.exceeded(d) {
             new_faults |= fault::ENCODER_JUMP;
         }
         let vi = (now & VEL_MASK) as usize;
-        let old = self.vel_hist[vi];
-        self.vel_hist[vi] = self.pos;
-        if self.g.vel_window_counts > 0
-            && self.pos.saturating_sub(old).unsigned_abs() > self.g.vel_window_counts
-        {
+        let old = core::mem::replace(&mut self.vel_hist[vi], self.pos);
+        if self.g.vel_bound.exceeded(self.pos.saturating_sub(old)) {
             new_faults |= fault::OVER_VELOCITY;
         }
         let mut fl = 0u16;
@@ -323,17 +332,14 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 new_faults |= fault::HEARTBEAT;
             }
         }
-        if new_faults & !self.faults != 0 {
-            self.latch(now, new_faults);
-        }
 
-        // Force.
-        let (code, ff) = if self.faults != 0 {
-            // Safe mode bypasses the delay line.
-            (self.safe_code(d), flags::SAFE_MODE)
-        } else {
+        // Force. One test of the latched and the new fault bits keeps the fault handling (the
+        // latch, safe mode) out of the normal path.
+        let (code, ff) = if (self.faults | new_faults) == 0 {
             let (c, f) = self.force(n, dn);
             (self.delay(c), f)
+        } else {
+            self.faulted(now, new_faults, d)
         };
         let (code, cf) = self.clamp(code);
         out.write(code);
@@ -345,6 +351,27 @@ impl<'a, N: Numeric> Servo<'a, N> {
         }
         self.advance(n, dn);
         code
+    }
+
+    /// The first reading: seeds the supervisor's history; returns the motion it counts as (0).
+    #[cold]
+    #[inline(never)]
+    fn prime(&mut self) -> i32 {
+        self.primed = true;
+        self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
+        self.vel_hist = [self.pos; VEL_WINDOW];
+        0
+    }
+
+    /// A tick with fault bits latched or new: latches the new ones, then the safe-mode output
+    /// and its flag (safe mode bypasses the delay line).
+    #[cold]
+    #[inline(never)]
+    fn faulted(&mut self, now: u32, new_faults: u32, d: i32) -> (i32, u16) {
+        if new_faults & !self.faults != 0 {
+            self.latch(now, new_faults);
+        }
+        (self.safe_code(d), flags::SAFE_MODE)
     }
 
     fn latch(&mut self, now: u32, bits: u32) {
@@ -412,8 +439,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     /// Safe-mode output: zero or the safe damping on the raw count delta.
-    #[cold]
-    #[inline(never)]
+    #[inline]
     fn safe_code(&self, d: i32) -> i32 {
         if self.g.safe_damping {
             self.damper(self.g.safe_damp, d)
@@ -528,8 +554,11 @@ impl<'a, N: Numeric> Servo<'a, N> {
         if self.decimation == 0 {
             return;
         }
-        self.decim_cnt = self.decim_cnt.saturating_add(1);
-        if self.decim_cnt < self.decimation {
+        // In u32: the count stays below its u16 decimation (it is reset when it reaches it),
+        // so the truncation below is exact and no increment can wrap or saturate.
+        let cnt = u32::from(self.decim_cnt) + 1;
+        if cnt < u32::from(self.decimation) {
+            self.decim_cnt = cnt as u16;
             return;
         }
         self.decim_cnt = 0;

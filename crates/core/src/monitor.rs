@@ -147,7 +147,12 @@ pub fn energy_e8(n: i32) -> u64 {
 #[must_use]
 pub fn energy_e8_u32(n: i32) -> u32 {
     let m = odd_abs(n);
-    m.checked_mul(m).map_or(u32::MAX, |p| p.saturating_add(1))
+    // m is odd: m² + 1 fits exactly when m ≤ 0xffff (0xffff² + 1 < 2^32 < 0x1_0001²).
+    if m <= 0xffff {
+        m * m + 1
+    } else {
+        u32::MAX
+    }
 }
 
 /// |2n+1| as `u32`, exact for every `i32` n (≤ 2^32 − 1): 2·(n or !n) + 1, three instructions.
@@ -229,23 +234,27 @@ impl EnergyMonitor {
     /// [`GROWTH`] and [`LIMIT`], turning point seen).
     #[inline]
     pub fn update(&mut self, n: i32, trip: i32, limit_m: u32) -> (u32, bool) {
-        let mut faults = 0;
-        if odd_abs(n) > limit_m {
-            faults |= LIMIT;
-        }
+        let faults = if odd_abs(n) > limit_m { LIMIT } else { 0 };
         if !self.primed {
-            self.primed = true;
-            self.prev_n = n;
-            self.peak = n;
+            self.prime(n);
             return (faults, false);
         }
         let dn = n.saturating_sub(self.prev_n);
         self.prev_n = n;
+        // The direction of this tick's motion, 0 for none (a saturating difference is 0 only
+        // for equal counts). The common tick, moving on in the direction of the half-cycle (or
+        // still at rest before the first motion), takes this first test alone. Once primed,
+        // `peak` is always the previous count (every motion stores it), so storing it when
+        // both directions are 0 changes nothing.
+        let s = dn.signum() as i8;
+        if s == self.dir {
+            self.peak = n;
+            return (faults, false);
+        }
         if dn == 0 {
             return (faults, false);
         }
-        let s: i8 = if dn > 0 { 1 } else { -1 };
-        if self.dir == 0 || s == self.dir {
+        if self.dir == 0 {
             self.peak = n;
             self.dir = s;
             return (faults, false);
@@ -253,7 +262,17 @@ impl EnergyMonitor {
         (faults | self.turn(n, s, trip), true)
     }
 
+    /// The first update after a reset: starts at count `n`, no motion yet.
+    #[cold]
+    #[inline(never)]
+    fn prime(&mut self, n: i32) {
+        self.primed = true;
+        self.prev_n = n;
+        self.peak = n;
+    }
+
     /// A reversal at count `n` (new direction `s`): scores the peak just passed.
+    #[cold]
     #[inline(never)]
     fn turn(&mut self, n: i32, s: i8, trip: i32) -> u32 {
         let mut faults = 0;
