@@ -380,15 +380,61 @@ impl AbsBound {
 }
 
 /// Integer / fixed-point servo parameters derived from a valid config.
+///
+/// `repr(C)`, the wall tick's fields first (as [`crate::Servo`], whose first field this is):
+/// the tick's loads then use small offsets and paired loads whatever the back-end's gain sizes.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
 pub struct Gains<N: Numeric> {
+    /// `k_half` precomputed for [`Numeric::spring`].
+    pub spring: N::Spring,
+    /// `damp` in the form [`Numeric::damper`] uses.
+    pub damp_s: N::Spring,
+    /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit + the largest
+    /// damper code (0 without a damper). Clamping n to [−n_sat−1, n_sat] leaves the clamped
+    /// force of spring + damper unchanged and keeps the product in range.
+    pub n_sat: i32,
+    /// The wall's lower count bound: −1 for a one-sided wall (the force is 0 for n < 0), else
+    /// −`n_sat`−1. At or below it the wall's code is `wall_lo`.
+    pub wall_n_lo: i32,
+    /// The wall's code for n ≤ `wall_n_lo`: 0 (one-sided) or `spring_lo`.
+    pub wall_lo: i32,
+    /// The spring code at n = `n_sat` (before the output clamp): the code for every n ≥ `n_sat`.
+    pub spring_hi: i32,
+    /// Output clamp, codes (≤ board max and ≤ [`MAX_LIMIT_CODES`]).
+    pub limit: i32,
+    /// Wall position, raw counts.
+    pub wall: i32,
+    /// Extra delay, ticks.
+    pub delay: u32,
+    /// `jump` as an [`AbsBound`].
+    pub jump_bound: AbsBound,
+    /// The over-velocity test, `vel_window_counts` as an [`AbsBound`] (never exceeded when
+    /// the test is off), so the tick needs no separate on/off test.
+    pub vel_bound: AbsBound,
+    /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋
+    /// ([`stiffwall_core::monitor::limit_m`], `u64::isqrt`), so that |2n+1| > this ⟺
+    /// e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
+    pub energy_limit_m: u32,
+    /// Growth score that trips the energy monitor.
+    pub growth_trip: i32,
+    /// Heartbeat timeout, ticks; 0 = off.
+    pub heartbeat_ticks: u32,
+    /// `shift` as a [`Shift`] (for the servo path).
+    pub coarsen: Shift,
+    /// `damp` is not zero.
+    pub damping_on: bool,
+    /// One-sided wall.
+    pub one_sided: bool,
+    /// Energy monitor on (and K > 0).
+    pub energy_monitor: bool,
+    /// Safe mode outputs damping (else zero).
+    pub safe_damping: bool,
     /// K·Δ_eff/2 in output codes: the force code for effective count n is
     /// `-mul(k_half, 2n+1)`.
     pub k_half: N::Gain,
     /// Virtual damping B·Δ_eff·rate in codes per effective count per tick.
     pub damp: N::Gain,
-    /// `damp` is not zero.
-    pub damping_on: bool,
     /// Release-test hold damping, codes per effective count per tick: β = `HOLD_BETA` = 2
     /// (2·β·k_half), or the wall's own `damp` when its β_v = B/(KT) is at least
     /// [`HOLD_WALL_DAMPING`] (the hold is then the wall under test centred on its target).
@@ -399,56 +445,16 @@ pub struct Gains<N: Numeric> {
     pub safe_damp: N::Gain,
     /// Coarsening shift.
     pub shift: u32,
-    /// `shift` as a [`Shift`] (for the servo path).
-    pub coarsen: Shift,
-    /// Wall position, raw counts.
-    pub wall: i32,
-    /// One-sided wall.
-    pub one_sided: bool,
-    /// Extra delay, ticks.
-    pub delay: u32,
-    /// Output clamp, codes (≤ board max and ≤ [`MAX_LIMIT_CODES`]).
-    pub limit: i32,
-    /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit + the largest
-    /// damper code (0 without a damper). Clamping n to [−n_sat−1, n_sat] leaves the clamped
-    /// force of spring + damper unchanged and keeps the product in range.
-    pub n_sat: i32,
-    /// `k_half` precomputed for [`Numeric::spring`].
-    pub spring: N::Spring,
-    /// The spring code at n = `n_sat` (before the output clamp): the code for every n ≥ `n_sat`.
-    pub spring_hi: i32,
     /// The spring code at n = −`n_sat`−1: the code for every n ≤ −`n_sat`−1.
     pub spring_lo: i32,
-    /// The wall's lower count bound: −1 for a one-sided wall (the force is 0 for n < 0), else
-    /// −`n_sat`−1. At or below it the wall's code is `wall_lo`.
-    pub wall_n_lo: i32,
-    /// The wall's code for n ≤ `wall_n_lo`: 0 (one-sided) or `spring_lo`.
-    pub wall_lo: i32,
     /// Over-velocity threshold in raw counts per [`VEL_WINDOW`] ticks; 0 = off.
     pub vel_window_counts: u32,
-    /// The over-velocity test, `vel_window_counts` as an [`AbsBound`] (never exceeded when
-    /// the test is off), so the tick needs no separate on/off test.
-    pub vel_bound: AbsBound,
     /// Encoder-jump threshold, raw counts per tick.
     pub jump: u32,
-    /// `jump` as an [`AbsBound`].
-    pub jump_bound: AbsBound,
-    /// Energy monitor on (and K > 0).
-    pub energy_monitor: bool,
     /// Energy limit in units of K·Δ_eff²/8.
     pub energy_limit_e8: u64,
-    /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋
-    /// ([`stiffwall_core::monitor::limit_m`], `u64::isqrt`), so that |2n+1| > this ⟺
-    /// e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
-    pub energy_limit_m: u32,
-    /// Growth score that trips the energy monitor.
-    pub growth_trip: i32,
     /// Longest buzz window, ticks ([`stiffwall_core::monitor::buzz_window_ticks`]).
     pub buzz_window_ticks: u32,
-    /// Heartbeat timeout, ticks; 0 = off.
-    pub heartbeat_ticks: u32,
-    /// Safe mode outputs damping (else zero).
-    pub safe_damping: bool,
     /// Servo rate, Hz.
     pub rate_hz: u32,
 }
@@ -523,6 +529,7 @@ impl<N: Numeric> Gains<N> {
             },
             wall_lo: if one_sided { 0 } else { spring_lo },
             damp,
+            damp_s: N::damper_gain(damp),
             damping_on: damp != N::ZERO,
             hold_damp: if N::to_f64(damp) >= HOLD_WALL_DAMPING * 2.0 * kf && kf > 0.0 {
                 damp

@@ -25,7 +25,7 @@
 //! dissipation check shared with `hostctl replay`); this module is the tick that uses them.
 
 use crate::channels::{ServoCmd, ServoEvent, ServoPort, SettledEnd, TelemetryItem};
-use crate::config::{BoardInfo, Gains, Shift, DAMPER_V_MAX, VEL_WINDOW};
+use crate::config::{AbsBound, BoardInfo, Gains, Shift, DAMPER_V_MAX, VEL_WINDOW};
 use crate::experiment::{Excitation, Experiment, Hold, Launch, Mode, SettleWatch};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric};
@@ -41,6 +41,8 @@ const _: () = assert!(monitor::BUZZ == fault::BUZZ);
 const RING: usize = 32;
 const RING_MASK: u32 = RING as u32 - 1;
 const VEL_MASK: u32 = VEL_WINDOW as u32 - 1;
+/// |v| > [`DAMPER_V_MAX`].
+const DAMPER_V: AbsBound = AbsBound::new(DAMPER_V_MAX.unsigned_abs());
 
 /// The servo: owns the loop state; call one `tick*` per servo period.
 ///
@@ -256,7 +258,11 @@ impl<'a, N: Numeric> Servo<'a, N> {
         enc: &mut impl Encoder,
         out: &mut impl ForceOutput,
     ) -> i32 {
-        self.step::<false>(now, enc, out)
+        if self.mode == Mode::Wall {
+            self.step::<false, true>(now, enc, out)
+        } else {
+            self.step_experiment::<false>(now, enc, out)
+        }
     }
 
     /// The full servo tick: one pending command, spring, damping, delay, supervisor,
@@ -268,7 +274,23 @@ impl<'a, N: Numeric> Servo<'a, N> {
         if self.port.commands.ready() {
             self.next_command(now);
         }
-        self.step::<true>(now, enc, out)
+        if self.mode == Mode::Wall {
+            self.step::<true, true>(now, enc, out)
+        } else {
+            self.step_experiment::<true>(now, enc, out)
+        }
+    }
+
+    /// The tick while an experiment runs: [`Self::step`] for every mode but the wall's, out of
+    /// line so the wall's tick is compiled for the wall alone.
+    #[inline(never)]
+    fn step_experiment<const TEL: bool>(
+        &mut self,
+        now: u32,
+        enc: &mut impl Encoder,
+        out: &mut impl ForceOutput,
+    ) -> i32 {
+        self.step::<TEL, false>(now, enc, out)
     }
 
     /// Dequeues and handles one pending command (out of the tick's hot path).
@@ -280,8 +302,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
         }
     }
 
+    /// One tick. `WALL`: the mode is [`Mode::Wall`] (the caller tested it; no experiment runs,
+    /// so nothing in the tick changes the mode), which leaves out the experiments' tests.
     #[inline(always)]
-    fn step<const TEL: bool>(
+    fn step<const TEL: bool, const WALL: bool>(
         &mut self,
         now: u32,
         enc: &mut impl Encoder,
@@ -306,7 +330,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             new_faults |= fault::OVER_VELOCITY;
         }
         let mut fl = 0u16;
-        let monitoring = self.g.energy_monitor && self.mode != Mode::Other;
+        let monitoring = self.g.energy_monitor && (WALL || self.mode != Mode::Other);
         if monitoring {
             if self.g.one_sided && n < 0 {
                 // Outside a one-sided wall the spring stores nothing: free motion (the user
@@ -323,7 +347,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 }
             }
         }
-        if self.mode != Mode::Wall && self.g.heartbeat_ticks > 0 {
+        if !WALL && self.g.heartbeat_ticks > 0 {
             let hb = self.port.shared.heartbeat.load(Ordering::Relaxed);
             if hb != self.hb_seen {
                 self.hb_seen = hb;
@@ -336,7 +360,11 @@ impl<'a, N: Numeric> Servo<'a, N> {
         // Force. One test of the latched and the new fault bits keeps the fault handling (the
         // latch, safe mode) out of the normal path.
         let (code, ff) = if (self.faults | new_faults) == 0 {
-            let (c, f) = self.force(n, dn);
+            let (c, f) = if WALL {
+                self.wall_force(n, dn)
+            } else {
+                self.force(n, dn)
+            };
             (self.delay(c), f)
         } else {
             self.faulted(now, new_faults, d)
@@ -349,7 +377,9 @@ impl<'a, N: Numeric> Servo<'a, N> {
             self.telemetry(now, rel, n, code, fl);
             self.port.shared.tick.store(now, Ordering::Relaxed);
         }
-        self.advance(n, dn);
+        if !WALL {
+            self.advance(n, dn);
+        }
         code
     }
 
@@ -393,11 +423,20 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline(always)]
     fn force(&mut self, n: i32, dn: i32) -> (i32, u16) {
         match self.mode {
-            // One test of the contact condition serves both the flag and the law.
-            Mode::Wall if self.g.one_sided && n < 0 => (0, flags::WALL_OFF),
-            Mode::Wall => (self.contact_code(n, dn), 0),
+            Mode::Wall => self.wall_force(n, dn),
             Mode::Released => (self.wall_code(n, dn), flags::RELEASED),
             Mode::Other => self.experiment_force(n, dn),
+        }
+    }
+
+    /// [`Mode::Wall`]'s code and flags.
+    #[inline(always)]
+    fn wall_force(&self, n: i32, dn: i32) -> (i32, u16) {
+        // One test of the contact condition serves both the flag and the law.
+        if self.g.one_sided && n < 0 {
+            (0, flags::WALL_OFF)
+        } else {
+            (self.contact_code(n, dn), 0)
         }
     }
 
@@ -425,10 +464,24 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline(always)]
     fn damping(&self, dn: i32) -> i32 {
         if self.g.damping_on {
-            self.damper(self.g.damp, dn)
+            // `damper(damp, dn)` with the gain's precomputed form; the velocity clamp, which
+            // acts only beyond any encoder-jump limit a device would set, out of line.
+            let v = if DAMPER_V.exceeded(dn) {
+                Self::clamp_velocity(dn)
+            } else {
+                dn
+            };
+            N::damper(self.g.damp_s, v)
         } else {
             0
         }
+    }
+
+    /// `v` clamped to ±[`DAMPER_V_MAX`].
+    #[cold]
+    #[inline(never)]
+    fn clamp_velocity(v: i32) -> i32 {
+        v.clamp(-DAMPER_V_MAX, DAMPER_V_MAX)
     }
 
     /// `−g·v` for a damping gain g ≤ 2^16 codes per count per tick, with v clamped to
