@@ -177,10 +177,11 @@ pub fn limit_m(e8_limit: u64) -> u32 {
 /// the second peak of a side), and keeps a growth score (+1 peak energy grew, −1 shrank,
 /// clamped to ±trip). Score ≥ trip → [`GROWTH`]; energy above
 /// the limit on any tick → [`LIMIT`].
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EnergyMonitor {
-    primed: bool,
     prev_n: i32,
+    /// Direction of the current half-cycle (−1, 1; 0 before the first motion), or
+    /// [`UNPRIMED`] before the first update.
     dir: i8,
     peak: i32,
     /// Last scored peak count per side (0: a maximum, after rising; 1: a minimum).
@@ -190,6 +191,25 @@ pub struct EnergyMonitor {
     have: [bool; 2],
     score: i32,
     buzz: BuzzDetector,
+}
+
+/// [`EnergyMonitor`]'s direction before its first update: no direction of motion equals it,
+/// so the update's common test also catches the first update.
+const UNPRIMED: i8 = 2;
+
+impl Default for EnergyMonitor {
+    fn default() -> Self {
+        Self {
+            prev_n: 0,
+            dir: UNPRIMED,
+            peak: 0,
+            last: [0; 2],
+            before_m: [0; 2],
+            have: [false; 2],
+            score: 0,
+            buzz: BuzzDetector::default(),
+        }
+    }
 }
 
 impl EnergyMonitor {
@@ -235,45 +255,45 @@ impl EnergyMonitor {
     #[inline]
     pub fn update(&mut self, n: i32, trip: i32, limit_m: u32) -> (u32, bool) {
         let faults = if odd_abs(n) > limit_m { LIMIT } else { 0 };
-        if !self.primed {
-            self.prime(n);
-            return (faults, false);
-        }
         let dn = n.saturating_sub(self.prev_n);
         self.prev_n = n;
         // The direction of this tick's motion, 0 for none (a saturating difference is 0 only
         // for equal counts). The common tick, moving on in the direction of the half-cycle (or
-        // still at rest before the first motion), takes this first test alone. Once primed,
-        // `peak` is always the previous count (every motion stores it), so storing it when
-        // both directions are 0 changes nothing.
+        // still at rest before the first motion), takes this first test alone. After the first
+        // update `peak` is always the previous count (every motion stores it), so storing it
+        // when both directions are 0 changes nothing.
         let s = dn.signum() as i8;
         if s == self.dir {
             self.peak = n;
             return (faults, false);
         }
-        if dn == 0 {
+        if dn == 0 && self.dir != UNPRIMED {
             return (faults, false);
         }
-        if self.dir == 0 {
-            self.peak = n;
-            self.dir = s;
-            return (faults, false);
-        }
-        (faults | self.turn(n, s, trip), true)
+        let (f, turn) = self.change(n, s, trip);
+        (faults | f, turn)
     }
 
-    /// The first update after a reset: starts at count `n`, no motion yet.
+    /// The rare updates: the first after a reset (`prev_n` is `n` already), the first motion,
+    /// a reversal.
     #[cold]
     #[inline(never)]
-    fn prime(&mut self, n: i32) {
-        self.primed = true;
-        self.prev_n = n;
-        self.peak = n;
+    fn change(&mut self, n: i32, s: i8, trip: i32) -> (u32, bool) {
+        if self.dir == UNPRIMED {
+            // The start at count `n`, no motion yet.
+            self.dir = 0;
+            self.peak = n;
+            (0, false)
+        } else if self.dir == 0 {
+            self.peak = n;
+            self.dir = s;
+            (0, false)
+        } else {
+            (self.turn(n, s, trip), true)
+        }
     }
 
     /// A reversal at count `n` (new direction `s`): scores the peak just passed.
-    #[cold]
-    #[inline(never)]
     fn turn(&mut self, n: i32, s: i8, trip: i32) -> u32 {
         let mut faults = 0;
         let side = usize::from(self.dir < 0);
@@ -622,5 +642,70 @@ mod tests {
             fire |= b.turn(t, if t % 20 == 0 { 5 } else { -5 }, u32::MAX);
         }
         assert_eq!(fire, BUZZ);
+    }
+
+    /// The update as first written (a `primed` flag, the tests in order), for the
+    /// equivalence test below.
+    fn update_as_written(
+        m: &mut EnergyMonitor,
+        primed: &mut bool,
+        n: i32,
+        trip: i32,
+        limit_m: u32,
+    ) -> (u32, bool) {
+        let mut faults = 0;
+        if odd_abs(n) > limit_m {
+            faults |= LIMIT;
+        }
+        if !*primed {
+            *primed = true;
+            m.prev_n = n;
+            m.peak = n;
+            m.dir = 0;
+            return (faults, false);
+        }
+        let dn = n.saturating_sub(m.prev_n);
+        m.prev_n = n;
+        if dn == 0 {
+            return (faults, false);
+        }
+        let s: i8 = if dn > 0 { 1 } else { -1 };
+        if m.dir == 0 || s == m.dir {
+            m.peak = n;
+            m.dir = s;
+            return (faults, false);
+        }
+        (faults | m.turn(n, s, trip), true)
+    }
+
+    proptest! {
+        /// The update (common test first, the first update folded into the direction) is the
+        /// update as first written: same results, same state, through resets and saturation.
+        #[test]
+        fn update_is_the_update_as_written(
+            start in any::<i32>(),
+            steps in proptest::collection::vec((-3i32..=3, 0u8..40), 1..400),
+            trip in 1i32..5,
+            limit_m in prop_oneof![Just(u32::MAX), 0u32..200],
+        ) {
+            let (mut a, mut b, mut primed) = (EnergyMonitor::default(), EnergyMonitor::default(), false);
+            let mut n = start;
+            for (dn, op) in steps {
+                match op {
+                    0 => {
+                        a.reset();
+                        b.reset();
+                        primed = false;
+                    }
+                    1 => n = i32::MAX,
+                    2 => n = i32::MIN,
+                    _ => n = n.saturating_add(dn),
+                }
+                let got = a.update(n, trip, limit_m);
+                let want = update_as_written(&mut b, &mut primed, n, trip, limit_m);
+                prop_assert_eq!(got, want, "n = {}", n);
+                prop_assert_eq!(a, b);
+            }
+        }
     }
 }
