@@ -177,11 +177,11 @@ pub fn limit_m(e8_limit: u64) -> u32 {
 /// the second peak of a side), and keeps a growth score (+1 peak energy grew, −1 shrank,
 /// clamped to ±trip). Score ≥ trip → [`GROWTH`]; energy above
 /// the limit on any tick → [`LIMIT`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct EnergyMonitor {
+    primed: bool,
     prev_n: i32,
-    /// Direction of the current half-cycle (−1, 1; 0 before the first motion), or
-    /// [`UNPRIMED`] before the first update.
+    /// Direction of the current half-cycle (−1, 1; 0 before the first motion).
     dir: i8,
     peak: i32,
     /// Last scored peak count per side (0: a maximum, after rising; 1: a minimum).
@@ -191,25 +191,6 @@ pub struct EnergyMonitor {
     have: [bool; 2],
     score: i32,
     buzz: BuzzDetector,
-}
-
-/// [`EnergyMonitor`]'s direction before its first update: no direction of motion equals it,
-/// so the update's common test also catches the first update.
-const UNPRIMED: i8 = 2;
-
-impl Default for EnergyMonitor {
-    fn default() -> Self {
-        Self {
-            prev_n: 0,
-            dir: UNPRIMED,
-            peak: 0,
-            last: [0; 2],
-            before_m: [0; 2],
-            have: [false; 2],
-            score: 0,
-            buzz: BuzzDetector::default(),
-        }
-    }
 }
 
 impl EnergyMonitor {
@@ -257,40 +238,39 @@ impl EnergyMonitor {
         let faults = if odd_abs(n) > limit_m { LIMIT } else { 0 };
         let dn = n.saturating_sub(self.prev_n);
         self.prev_n = n;
-        // The direction of this tick's motion, 0 for none (a saturating difference is 0 only
-        // for equal counts). The common tick, moving on in the direction of the half-cycle (or
-        // still at rest before the first motion), takes this first test alone. After the first
-        // update `peak` is always the previous count (every motion stores it), so storing it
-        // when both directions are 0 changes nothing.
-        let s = dn.signum() as i8;
-        if s == self.dir {
+        // The common tick, moving on in the direction of the half-cycle, takes this one test
+        // (dn·dir > 0; it misses only dn = i32::MIN, which wraps, and the rare updates below
+        // handle that one exactly).
+        if dn.wrapping_mul(i32::from(self.dir)) > 0 {
             self.peak = n;
             return (faults, false);
         }
-        if dn == 0 && self.dir != UNPRIMED {
+        if dn == 0 && self.primed {
             return (faults, false);
         }
-        let (f, turn) = self.change(n, s, trip);
+        let (f, turn) = self.change(n, dn, trip);
         (faults | f, turn)
     }
 
     /// The rare updates: the first after a reset (`prev_n` is `n` already), the first motion,
-    /// a reversal.
+    /// a reversal (and a motion by `i32::MIN` in the half-cycle's direction).
     #[cold]
     #[inline(never)]
-    fn change(&mut self, n: i32, s: i8, trip: i32) -> (u32, bool) {
-        if self.dir == UNPRIMED {
+    fn change(&mut self, n: i32, dn: i32, trip: i32) -> (u32, bool) {
+        if !self.primed {
             // The start at count `n`, no motion yet.
-            self.dir = 0;
+            self.primed = true;
             self.peak = n;
-            (0, false)
-        } else if self.dir == 0 {
+            return (0, false);
+        }
+        // dn ≠ 0 here (a saturating difference is 0 only for equal counts).
+        let s: i8 = if dn > 0 { 1 } else { -1 };
+        if self.dir == 0 || s == self.dir {
             self.peak = n;
             self.dir = s;
-            (0, false)
-        } else {
-            (self.turn(n, s, trip), true)
+            return (0, false);
         }
+        (self.turn(n, s, trip), true)
     }
 
     /// A reversal at count `n` (new direction `s`): scores the peak just passed.
@@ -644,24 +624,16 @@ mod tests {
         assert_eq!(fire, BUZZ);
     }
 
-    /// The update as first written (a `primed` flag, the tests in order), for the
-    /// equivalence test below.
-    fn update_as_written(
-        m: &mut EnergyMonitor,
-        primed: &mut bool,
-        n: i32,
-        trip: i32,
-        limit_m: u32,
-    ) -> (u32, bool) {
+    /// The update as first written (the tests in order), for the equivalence test below.
+    fn update_as_written(m: &mut EnergyMonitor, n: i32, trip: i32, limit_m: u32) -> (u32, bool) {
         let mut faults = 0;
         if odd_abs(n) > limit_m {
             faults |= LIMIT;
         }
-        if !*primed {
-            *primed = true;
+        if !m.primed {
+            m.primed = true;
             m.prev_n = n;
             m.peak = n;
-            m.dir = 0;
             return (faults, false);
         }
         let dn = n.saturating_sub(m.prev_n);
@@ -679,8 +651,8 @@ mod tests {
     }
 
     proptest! {
-        /// The update (common test first, the first update folded into the direction) is the
-        /// update as first written: same results, same state, through resets and saturation.
+        /// The update (the common tick's one test first, the rest out of line) is the update
+        /// as first written: same results, same state, through resets and saturation.
         #[test]
         fn update_is_the_update_as_written(
             start in any::<i32>(),
@@ -688,21 +660,20 @@ mod tests {
             trip in 1i32..5,
             limit_m in prop_oneof![Just(u32::MAX), 0u32..200],
         ) {
-            let (mut a, mut b, mut primed) = (EnergyMonitor::default(), EnergyMonitor::default(), false);
+            let (mut a, mut b) = (EnergyMonitor::default(), EnergyMonitor::default());
             let mut n = start;
             for (dn, op) in steps {
                 match op {
                     0 => {
                         a.reset();
                         b.reset();
-                        primed = false;
                     }
                     1 => n = i32::MAX,
                     2 => n = i32::MIN,
                     _ => n = n.saturating_add(dn),
                 }
                 let got = a.update(n, trip, limit_m);
-                let want = update_as_written(&mut b, &mut primed, n, trip, limit_m);
+                let want = update_as_written(&mut b, n, trip, limit_m);
                 prop_assert_eq!(got, want, "n = {}", n);
                 prop_assert_eq!(a, b);
             }
