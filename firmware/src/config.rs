@@ -403,6 +403,9 @@ pub struct Gains<N: Numeric> {
     pub spring_hi: i32,
     /// Output clamp, codes (≤ board max and ≤ [`MAX_LIMIT_CODES`]).
     pub limit: i32,
+    /// The lowest effective count in contact: 0 for a one-sided wall (n < 0 is free space),
+    /// `i32::MIN` for a two-sided one. "Outside a one-sided wall" is `n < contact_n`.
+    pub contact_n: i32,
     /// Wall position, raw counts.
     pub wall: i32,
     /// Extra delay, ticks.
@@ -544,6 +547,7 @@ impl<N: Numeric> Gains<N> {
             coarsen: Shift::new(u32::from(cfg.coarsen_shift.min(MAX_COARSEN_SHIFT))),
             wall: cfg.wall_position,
             one_sided,
+            contact_n: if one_sided { 0 } else { i32::MIN },
             delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
             limit,
             vel_window_counts,

@@ -69,7 +69,10 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     hb_tick: u32,
     decimation: u16,
     user_decimation: u16,
-    decim_cnt: u16,
+    /// Ticks to the next telemetry push, counting down (1: this tick), set to `decimation`
+    /// whenever it changes and after each push. With `decimation` 0 it keeps counting (down
+    /// from 0, wrapping) and the tick it reaches 0 pushes nothing.
+    decim_left: u32,
     seq: u32,
     port: ServoPort<'a>,
     exp: Experiment,
@@ -108,7 +111,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             table: [0; MAX_TABLE],
             decimation: 0,
             user_decimation: 0,
-            decim_cnt: 0,
+            decim_left: 0,
             seq: 0,
         }
     }
@@ -316,8 +319,6 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let d = if self.primed { d } else { self.prime() };
         let rel = self.pos.saturating_sub(self.g.wall);
         let n = rel >> self.g.coarsen.get();
-        let dn = n.saturating_sub(self.prev_n);
-        self.prev_n = n;
 
         // Supervisor.
         let mut new_faults = 0u32;
@@ -332,7 +333,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let mut fl = 0u16;
         let monitoring = self.g.energy_monitor && (WALL || self.mode != Mode::Other);
         if monitoring {
-            if self.g.one_sided && n < 0 {
+            if n < self.g.contact_n {
                 // Outside a one-sided wall the spring stores nothing: free motion (the user
                 // moving the device around) must not count; start afresh on the next contact.
                 self.monitor.reset();
@@ -356,6 +357,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 new_faults |= fault::HEARTBEAT;
             }
         }
+        // The count's backward difference (for the dampers), taken here, where the force
+        // needs it, so it is not held through the supervisor.
+        let dn = n.saturating_sub(self.prev_n);
+        self.prev_n = n;
 
         // Force. One test of the latched and the new fault bits keeps the fault handling (the
         // latch, safe mode) out of the normal path.
@@ -433,7 +438,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline(always)]
     fn wall_force(&self, n: i32, dn: i32) -> (i32, u16) {
         // One test of the contact condition serves both the flag and the law.
-        if self.g.one_sided && n < 0 {
+        if n < self.g.contact_n {
             (0, flags::WALL_OFF)
         } else {
             (self.contact_code(n, dn), 0)
@@ -447,7 +452,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// space (n < 0) the code is 0, so moving the device around outside the wall feels no drag.
     #[inline(always)]
     fn wall_code(&self, n: i32, dn: i32) -> i32 {
-        if self.g.one_sided && n < 0 {
+        if n < self.g.contact_n {
             0
         } else {
             self.contact_code(n, dn)
@@ -586,6 +591,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
         };
         self.monitor.reset();
         self.decimation = self.user_decimation;
+        // An experiment streams every tick (`decimation` 1), so its count was at the start.
+        self.decim_left = u32::from(self.decimation);
         self.port.shared.experiment.store(false, Ordering::Relaxed);
         let _ = self.port.events.enqueue(ServoEvent::ExperimentDone {
             kind,
@@ -604,17 +611,16 @@ impl<'a, N: Numeric> Servo<'a, N> {
 
     #[inline]
     fn telemetry(&mut self, now: u32, rel: i32, n: i32, code: i32, fl: u16) {
+        let left = self.decim_left.wrapping_sub(1);
+        if left != 0 {
+            self.decim_left = left;
+            return;
+        }
+        // A push, or a stopped stream's count passing 0 (once every 2^32 ticks).
+        self.decim_left = u32::from(self.decimation);
         if self.decimation == 0 {
             return;
         }
-        // In u32: the count stays below its u16 decimation (it is reset when it reaches it),
-        // so the truncation below is exact and no increment can wrap or saturate.
-        let cnt = u32::from(self.decim_cnt) + 1;
-        if cnt < u32::from(self.decimation) {
-            self.decim_cnt = cnt as u16;
-            return;
-        }
-        self.decim_cnt = 0;
         let item = TelemetryItem {
             seq: self.seq,
             sample: Sample {
@@ -640,7 +646,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 if self.mode == Mode::Wall {
                     self.decimation = decimation;
                 }
-                self.decim_cnt = 0;
+                self.decim_left = u32::from(self.decimation);
             }
             ServoCmd::Release {
                 deflection,
@@ -717,7 +723,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     fn start_experiment(&mut self, now: u32) {
         self.monitor.reset();
         self.decimation = 1;
-        self.decim_cnt = 0;
+        self.decim_left = 1;
         self.hb_seen = self.port.shared.heartbeat.load(Ordering::Relaxed);
         self.hb_tick = now;
         self.port.shared.experiment.store(true, Ordering::Relaxed);
