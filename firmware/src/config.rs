@@ -390,6 +390,12 @@ pub struct Gains<N: Numeric> {
     pub spring: N::Spring,
     /// `damp` in the form [`Numeric::damper`] uses.
     pub damp_s: N::Spring,
+    /// The wall's counts strictly between `wall_n_lo` and `n_sat`, where the spring is
+    /// computed: n with `(n − wall_in) as u32 < wall_span` (one unsigned compare; see
+    /// `Servo::spring_code`). `wall_in` = `wall_n_lo` + 1.
+    pub wall_in: i32,
+    /// `n_sat` − `wall_in`: how many counts that is.
+    pub wall_span: u32,
     /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit + the largest
     /// damper code (0 without a damper). Clamping n to [−n_sat−1, n_sat] leaves the clamped
     /// force of spring + damper unchanged and keeps the product in range.
@@ -519,17 +525,22 @@ impl<N: Numeric> Gains<N> {
         } else {
             0
         };
+        let wall_n_lo = if one_sided {
+            -1
+        } else {
+            n_sat.wrapping_neg().wrapping_sub(1)
+        };
+        // n_sat ≤ 2^29: no overflow.
+        let wall_in = wall_n_lo + 1;
         Self {
             k_half,
             n_sat,
+            wall_in,
+            wall_span: (n_sat - wall_in) as u32,
             spring: N::spring_gain(k_half),
             spring_hi,
             spring_lo,
-            wall_n_lo: if one_sided {
-                -1
-            } else {
-                n_sat.wrapping_neg().wrapping_sub(1)
-            },
+            wall_n_lo,
             wall_lo: if one_sided { 0 } else { spring_lo },
             damp,
             damp_s: N::damper_gain(damp),

@@ -165,7 +165,17 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline]
     #[must_use]
     pub fn spring_code(&self, n: i32) -> i32 {
-        self.spring_between(n, self.g.wall_n_lo, self.g.wall_lo)
+        // `spring_between(n, wall_n_lo, wall_lo)` with its two bound tests as one: `wall_n_lo`
+        // < n < `n_sat` exactly when n − `wall_in` (as u32, wrapping) < `wall_span` (the
+        // difference is below 2^31 + 2^29 in magnitude: a negative one wraps above 2^31 and
+        // `wall_span` ≤ 2^30).
+        if (n as u32).wrapping_sub(self.g.wall_in as u32) < self.g.wall_span {
+            N::spring(self.g.spring, n)
+        } else if n >= self.g.n_sat {
+            self.g.spring_hi
+        } else {
+            self.g.wall_lo
+        }
     }
 
     /// The two-sided spring (release-test hold).
