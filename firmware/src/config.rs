@@ -390,6 +390,9 @@ pub struct Gains<N: Numeric> {
     pub spring: N::Spring,
     /// `damp` in the form [`Numeric::damper`] uses.
     pub damp_s: N::Spring,
+    /// |v| > [`DAMPER_V_MAX`] (a constant, kept here so the tick loads it with one paired
+    /// load instead of building it).
+    pub damper_v: AbsBound,
     /// The wall's counts strictly between `wall_n_lo` and `n_sat`, where the spring is
     /// computed: n with `(n − wall_in) as u32 < wall_span` (one unsigned compare; see
     /// `Servo::spring_code`). `wall_in` = `wall_n_lo` + 1.
@@ -544,6 +547,7 @@ impl<N: Numeric> Gains<N> {
             wall_lo: if one_sided { 0 } else { spring_lo },
             damp,
             damp_s: N::damper_gain(damp),
+            damper_v: AbsBound::new(DAMPER_V_MAX.unsigned_abs()),
             damping_on: damp != N::ZERO,
             hold_damp: if N::to_f64(damp) >= HOLD_WALL_DAMPING * 2.0 * kf && kf > 0.0 {
                 damp

@@ -25,7 +25,7 @@
 //! dissipation check shared with `hostctl replay`); this module is the tick that uses them.
 
 use crate::channels::{ServoCmd, ServoEvent, ServoPort, SettledEnd, TelemetryItem};
-use crate::config::{AbsBound, BoardInfo, Gains, Shift, DAMPER_V_MAX, VEL_WINDOW};
+use crate::config::{BoardInfo, Gains, Shift, DAMPER_V_MAX, VEL_WINDOW};
 use crate::experiment::{Excitation, Experiment, Hold, Launch, Mode, SettleWatch};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric};
@@ -41,8 +41,6 @@ const _: () = assert!(monitor::BUZZ == fault::BUZZ);
 const RING: usize = 32;
 const RING_MASK: u32 = RING as u32 - 1;
 const VEL_MASK: u32 = VEL_WINDOW as u32 - 1;
-/// |v| > [`DAMPER_V_MAX`].
-const DAMPER_V: AbsBound = AbsBound::new(DAMPER_V_MAX.unsigned_abs());
 
 /// The servo: owns the loop state; call one `tick*` per servo period.
 ///
@@ -481,7 +479,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
         if self.g.damping_on {
             // `damper(damp, dn)` with the gain's precomputed form; the velocity clamp, which
             // acts only beyond any encoder-jump limit a device would set, out of line.
-            let v = if DAMPER_V.exceeded(dn) {
+            let v = if self.g.damper_v.exceeded(dn) {
                 Self::clamp_velocity(dn)
             } else {
                 dn
