@@ -327,6 +327,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let d = if self.primed { d } else { self.prime() };
         let rel = self.pos.saturating_sub(self.g.wall);
         let n = rel >> self.g.coarsen.get();
+        // Outside a one-sided wall (one test for the monitor and the force).
+        let free = n < self.g.contact_n;
 
         // Supervisor.
         let mut new_faults = 0u32;
@@ -341,7 +343,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let mut fl = 0u16;
         let monitoring = self.g.energy_monitor && (WALL || self.mode != Mode::Other);
         if monitoring {
-            if n < self.g.contact_n {
+            if free {
                 // Outside a one-sided wall the spring stores nothing: free motion (the user
                 // moving the device around) must not count; start afresh on the next contact.
                 self.monitor.reset();
@@ -374,7 +376,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
         // latch, safe mode) out of the normal path.
         let (code, ff) = if (self.faults | new_faults) == 0 {
             let (c, f) = if WALL {
-                self.wall_force(n, dn)
+                self.wall_force(n, dn, free)
             } else {
                 self.force(n, dn)
             };
@@ -436,7 +438,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline(always)]
     fn force(&mut self, n: i32, dn: i32) -> (i32, u16) {
         match self.mode {
-            Mode::Wall => self.wall_force(n, dn),
+            Mode::Wall => self.wall_force(n, dn, n < self.g.contact_n),
             Mode::Released => (self.wall_code(n, dn), flags::RELEASED),
             Mode::Other => self.experiment_force(n, dn),
         }
@@ -444,9 +446,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
 
     /// [`Mode::Wall`]'s code and flags.
     #[inline(always)]
-    fn wall_force(&self, n: i32, dn: i32) -> (i32, u16) {
-        // One test of the contact condition serves both the flag and the law.
-        if n < self.g.contact_n {
+    fn wall_force(&self, n: i32, dn: i32, free: bool) -> (i32, u16) {
+        // One test of the contact condition (`free`: n < `contact_n`) serves both the flag
+        // and the law.
+        if free {
             (0, flags::WALL_OFF)
         } else {
             (self.contact_code(n, dn), 0)
