@@ -348,9 +348,12 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 // moving the device around) must not count; start afresh on the next contact.
                 self.monitor.reset();
             } else {
-                let (f, turn) = self
-                    .monitor
-                    .update(n, self.g.growth_trip, self.g.energy_limit_m);
+                // `update`, its two parts written out (the limit test then compiles to one
+                // conditional or).
+                if monitor::odd_abs(n) > self.g.energy_limit_m {
+                    new_faults |= fault::ENERGY_LIMIT;
+                }
+                let (f, turn) = self.monitor.track(n, self.g.growth_trip);
                 new_faults |= f;
                 if turn {
                     fl |= flags::TURN;

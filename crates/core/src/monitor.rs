@@ -171,6 +171,18 @@ pub fn limit_m(e8_limit: u64) -> u32 {
     u32::try_from(e8_limit.saturating_sub(1).isqrt()).unwrap_or(u32::MAX)
 }
 
+/// [`LIMIT`] if the energy at effective count `n` is above the limit whose [`limit_m`] is
+/// `limit_m`, else 0.
+#[inline]
+#[must_use]
+pub fn limit_fault(n: i32, limit_m: u32) -> u32 {
+    if odd_abs(n) > limit_m {
+        LIMIT
+    } else {
+        0
+    }
+}
+
 /// The energy monitor (see `docs/model-notes-firmware.md`): tracks turning points of the
 /// effective count (where ξ̇ = 0, so H_T (35) equals its potential part and needs no mass),
 /// compares each peak with the larger of the previous two peaks on the same side (one, for
@@ -235,7 +247,14 @@ impl EnergyMonitor {
     /// [`GROWTH`] and [`LIMIT`], turning point seen).
     #[inline]
     pub fn update(&mut self, n: i32, trip: i32, limit_m: u32) -> (u32, bool) {
-        let faults = if odd_abs(n) > limit_m { LIMIT } else { 0 };
+        let (f, turn) = self.track(n, trip);
+        (limit_fault(n, limit_m) | f, turn)
+    }
+
+    /// [`EnergyMonitor::update`] without the energy-limit test ([`limit_fault`]): the growth
+    /// bits and whether `n` is a turning point.
+    #[inline]
+    pub fn track(&mut self, n: i32, trip: i32) -> (u32, bool) {
         let dn = n.saturating_sub(self.prev_n);
         self.prev_n = n;
         // The common tick, moving on in the direction of the half-cycle, takes this one test
@@ -243,13 +262,12 @@ impl EnergyMonitor {
         // handle that one exactly).
         if dn.wrapping_mul(i32::from(self.dir)) > 0 {
             self.peak = n;
-            return (faults, false);
+            return (0, false);
         }
         if dn == 0 && self.primed {
-            return (faults, false);
+            return (0, false);
         }
-        let (f, turn) = self.change(n, dn, trip);
-        (faults | f, turn)
+        self.change(n, dn, trip)
     }
 
     /// The rare updates: the first after a reset (`prev_n` is `n` already), the first motion,
