@@ -344,16 +344,109 @@ impl Shift {
     }
 }
 
+/// The test `|x| > t` for every `i32` x as one unsigned compare,
+/// `(x as u32).wrapping_add(bias) > span`: for t < 2^31, bias = t and span = 2t (x + t lands in
+/// 0..=2t exactly when −t ≤ x ≤ t, and wraps above 2t when x < −t); for t ≥ 2^31 no |x|
+/// exceeds t, and span = `u32::MAX` is never exceeded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AbsBound {
+    bias: u32,
+    span: u32,
+}
+
+impl AbsBound {
+    /// The bound for threshold `t`.
+    #[must_use]
+    pub const fn new(t: u32) -> Self {
+        if t < 1 << 31 {
+            Self {
+                bias: t,
+                span: 2 * t,
+            }
+        } else {
+            Self {
+                bias: 0,
+                span: u32::MAX,
+            }
+        }
+    }
+
+    /// `|x| > t`.
+    #[inline(always)]
+    #[must_use]
+    pub fn exceeded(self, x: i32) -> bool {
+        (x as u32).wrapping_add(self.bias) > self.span
+    }
+}
+
 /// Integer / fixed-point servo parameters derived from a valid config.
+///
+/// `repr(C)`, the wall tick's fields first (as [`crate::Servo`], whose first field this is):
+/// the tick's loads then use small offsets and paired loads whatever the back-end's gain sizes.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
 pub struct Gains<N: Numeric> {
+    /// `k_half` precomputed for [`Numeric::spring`].
+    pub spring: N::Spring,
+    /// `damp` in the form [`Numeric::damper`] uses.
+    pub damp_s: N::Spring,
+    /// |v| > [`DAMPER_V_MAX`] (a constant, kept here so the tick loads it with one paired
+    /// load instead of building it).
+    pub damper_v: AbsBound,
+    /// The wall's counts strictly between `wall_n_lo` and `n_sat`, where the spring is
+    /// computed: n with `(n − wall_in) as u32 < wall_span` (one unsigned compare; see
+    /// `Servo::spring_code`). `wall_in` = `wall_n_lo` + 1.
+    pub wall_in: i32,
+    /// `n_sat` − `wall_in`: how many counts that is.
+    pub wall_span: u32,
+    /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit + the largest
+    /// damper code (0 without a damper). Clamping n to [−n_sat−1, n_sat] leaves the clamped
+    /// force of spring + damper unchanged and keeps the product in range.
+    pub n_sat: i32,
+    /// The wall's lower count bound: −1 for a one-sided wall (the force is 0 for n < 0), else
+    /// −`n_sat`−1. At or below it the wall's code is `wall_lo`.
+    pub wall_n_lo: i32,
+    /// The wall's code for n ≤ `wall_n_lo`: 0 (one-sided) or `spring_lo`.
+    pub wall_lo: i32,
+    /// The spring code at n = `n_sat` (before the output clamp): the code for every n ≥ `n_sat`.
+    pub spring_hi: i32,
+    /// Output clamp, codes (≤ board max and ≤ [`MAX_LIMIT_CODES`]).
+    pub limit: i32,
+    /// The lowest effective count in contact: 0 for a one-sided wall (n < 0 is free space),
+    /// `i32::MIN` for a two-sided one. "Outside a one-sided wall" is `n < contact_n`.
+    pub contact_n: i32,
+    /// Wall position, raw counts.
+    pub wall: i32,
+    /// Extra delay, ticks.
+    pub delay: u32,
+    /// `jump` as an [`AbsBound`].
+    pub jump_bound: AbsBound,
+    /// The over-velocity test, `vel_window_counts` as an [`AbsBound`] (never exceeded when
+    /// the test is off), so the tick needs no separate on/off test.
+    pub vel_bound: AbsBound,
+    /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋
+    /// ([`stiffwall_core::monitor::limit_m`], `u64::isqrt`), so that |2n+1| > this ⟺
+    /// e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
+    pub energy_limit_m: u32,
+    /// Growth score that trips the energy monitor.
+    pub growth_trip: i32,
+    /// Heartbeat timeout, ticks; 0 = off.
+    pub heartbeat_ticks: u32,
+    /// `shift` as a [`Shift`] (for the servo path).
+    pub coarsen: Shift,
+    /// `damp` is not zero.
+    pub damping_on: bool,
+    /// One-sided wall.
+    pub one_sided: bool,
+    /// Energy monitor on (and K > 0).
+    pub energy_monitor: bool,
+    /// Safe mode outputs damping (else zero).
+    pub safe_damping: bool,
     /// K·Δ_eff/2 in output codes: the force code for effective count n is
     /// `-mul(k_half, 2n+1)`.
     pub k_half: N::Gain,
     /// Virtual damping B·Δ_eff·rate in codes per effective count per tick.
     pub damp: N::Gain,
-    /// `damp` is not zero.
-    pub damping_on: bool,
     /// Release-test hold damping, codes per effective count per tick: β = `HOLD_BETA` = 2
     /// (2·β·k_half), or the wall's own `damp` when its β_v = B/(KT) is at least
     /// [`HOLD_WALL_DAMPING`] (the hold is then the wall under test centred on its target).
@@ -364,51 +457,16 @@ pub struct Gains<N: Numeric> {
     pub safe_damp: N::Gain,
     /// Coarsening shift.
     pub shift: u32,
-    /// `shift` as a [`Shift`] (for the servo path).
-    pub coarsen: Shift,
-    /// Wall position, raw counts.
-    pub wall: i32,
-    /// One-sided wall.
-    pub one_sided: bool,
-    /// Extra delay, ticks.
-    pub delay: u32,
-    /// Output clamp, codes (≤ board max and ≤ [`MAX_LIMIT_CODES`]).
-    pub limit: i32,
-    /// Count clamp of the spring: the smallest n ≥ 0 with (2n+1)·k_half ≥ limit + the largest
-    /// damper code (0 without a damper). Clamping n to [−n_sat−1, n_sat] leaves the clamped
-    /// force of spring + damper unchanged and keeps the product in range.
-    pub n_sat: i32,
-    /// `k_half` precomputed for [`Numeric::spring`].
-    pub spring: N::Spring,
-    /// The spring code at n = `n_sat` (before the output clamp): the code for every n ≥ `n_sat`.
-    pub spring_hi: i32,
     /// The spring code at n = −`n_sat`−1: the code for every n ≤ −`n_sat`−1.
     pub spring_lo: i32,
-    /// The wall's lower count bound: −1 for a one-sided wall (the force is 0 for n < 0), else
-    /// −`n_sat`−1. At or below it the wall's code is `wall_lo`.
-    pub wall_n_lo: i32,
-    /// The wall's code for n ≤ `wall_n_lo`: 0 (one-sided) or `spring_lo`.
-    pub wall_lo: i32,
     /// Over-velocity threshold in raw counts per [`VEL_WINDOW`] ticks; 0 = off.
     pub vel_window_counts: u32,
     /// Encoder-jump threshold, raw counts per tick.
     pub jump: u32,
-    /// Energy monitor on (and K > 0).
-    pub energy_monitor: bool,
     /// Energy limit in units of K·Δ_eff²/8.
     pub energy_limit_e8: u64,
-    /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋
-    /// ([`stiffwall_core::monitor::limit_m`], `u64::isqrt`), so that |2n+1| > this ⟺
-    /// e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
-    pub energy_limit_m: u32,
-    /// Growth score that trips the energy monitor.
-    pub growth_trip: i32,
     /// Longest buzz window, ticks ([`stiffwall_core::monitor::buzz_window_ticks`]).
     pub buzz_window_ticks: u32,
-    /// Heartbeat timeout, ticks; 0 = off.
-    pub heartbeat_ticks: u32,
-    /// Safe mode outputs damping (else zero).
-    pub safe_damping: bool,
     /// Servo rate, Hz.
     pub rate_hz: u32,
 }
@@ -465,19 +523,31 @@ impl<N: Numeric> Gains<N> {
         let spring_hi =
             N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1).wrapping_neg());
         let spring_lo = N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1));
+        let vel_window_counts = if vel.is_finite() && vel > 0.0 {
+            libm::ceil(vel) as u32
+        } else {
+            0
+        };
+        let wall_n_lo = if one_sided {
+            -1
+        } else {
+            n_sat.wrapping_neg().wrapping_sub(1)
+        };
+        // n_sat ≤ 2^29: no overflow.
+        let wall_in = wall_n_lo + 1;
         Self {
             k_half,
             n_sat,
+            wall_in,
+            wall_span: (n_sat - wall_in) as u32,
             spring: N::spring_gain(k_half),
             spring_hi,
             spring_lo,
-            wall_n_lo: if one_sided {
-                -1
-            } else {
-                n_sat.wrapping_neg().wrapping_sub(1)
-            },
+            wall_n_lo,
             wall_lo: if one_sided { 0 } else { spring_lo },
             damp,
+            damp_s: N::damper_gain(damp),
+            damper_v: AbsBound::new(DAMPER_V_MAX.unsigned_abs()),
             damping_on: damp != N::ZERO,
             hold_damp: if N::to_f64(damp) >= HOLD_WALL_DAMPING * 2.0 * kf && kf > 0.0 {
                 damp
@@ -492,14 +562,17 @@ impl<N: Numeric> Gains<N> {
             coarsen: Shift::new(u32::from(cfg.coarsen_shift.min(MAX_COARSEN_SHIFT))),
             wall: cfg.wall_position,
             one_sided,
+            contact_n: if one_sided { 0 } else { i32::MIN },
             delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
             limit,
-            vel_window_counts: if vel.is_finite() && vel > 0.0 {
-                libm::ceil(vel) as u32
+            vel_window_counts,
+            vel_bound: AbsBound::new(if vel_window_counts > 0 {
+                vel_window_counts
             } else {
-                0
-            },
+                u32::MAX
+            }),
             jump: cfg.encoder_jump_counts.max(1),
+            jump_bound: AbsBound::new(cfg.encoder_jump_counts.max(1)),
             energy_monitor: cfg.energy_monitor && kd2 > 0.0,
             energy_limit_e8: e8_limit,
             energy_limit_m: limit_m,
@@ -516,6 +589,55 @@ impl<N: Numeric> Gains<N> {
 mod tests {
     use super::*;
     use crate::numeric::Fx64;
+    use proptest::prelude::*;
+
+    fn check_abs_bound(x: i32, t: u32) -> Result<(), TestCaseError> {
+        prop_assert_eq!(
+            AbsBound::new(t).exceeded(x),
+            x.unsigned_abs() > t,
+            "x = {}, t = {}",
+            x,
+            t
+        );
+        Ok(())
+    }
+
+    #[test]
+    fn abs_bound_at_the_edges() {
+        let edges = [
+            0u32,
+            1,
+            2,
+            (1 << 30) - 1,
+            1 << 30,
+            (1 << 31) - 1,
+            1 << 31,
+            u32::MAX,
+        ];
+        for &t in &edges {
+            for x in [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX - 1, i32::MAX] {
+                check_abs_bound(x, t).unwrap();
+            }
+            for dx in [-1i64, 0, 1] {
+                for x in [i64::from(t) + dx, -i64::from(t) + dx] {
+                    if let Ok(x) = i32::try_from(x) {
+                        check_abs_bound(x, t).unwrap();
+                    }
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn abs_bound_is_the_abs_test(x in any::<i32>(), t in any::<u32>(), small in 0u32..1000, near in -1000i32..1000) {
+            for t in [t, small] {
+                for x in [x, near] {
+                    check_abs_bound(x, t)?;
+                }
+            }
+        }
+    }
 
     #[test]
     fn default_config_is_valid_and_each_field_is_checked() {

@@ -110,7 +110,7 @@ pub use channels::{
     Channels, HostPort, ServoCmd, ServoEvent, ServoPort, Shared, TelemetryItem, COMMAND_QUEUE,
     EVENT_QUEUE, TELEMETRY_QUEUE,
 };
-pub use config::{validate, BoardInfo, ConfigError, Gains};
+pub use config::{validate, AbsBound, BoardInfo, ConfigError, Gains};
 pub use device::Device;
 pub use hal::{
     ByteLink, ConfigStorage, Encoder, ForceOutput, HeldCode, NoStorage, SampledCount, StorageError,

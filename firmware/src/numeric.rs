@@ -44,12 +44,18 @@ pub trait Numeric: Copy + core::fmt::Debug + 'static {
     /// The spring of eq. (2) at effective count `n`: `⌊−(2n+1)·k_half + ½⌋`, exactly
     /// `mul_bounded(k_half, −(2n+1))`, for a caller that keeps `|(2n+1)·k_half| < 2^30` codes.
     fn spring(s: Self::Spring, n: i32) -> i32;
+    /// The damping gain g in the form [`Numeric::damper`] uses (precomputed at config time).
+    fn damper_gain(g: Self::Gain) -> Self::Spring;
+    /// The damper at velocity `v`: `⌊−g·v + ½⌋`, exactly `mul_bounded(g, −v)`, for a caller that
+    /// keeps `|g·v| < 2^30` codes and |v| ≤ 2^14.
+    fn damper(s: Self::Spring, v: i32) -> i32;
 }
 
 /// [`Fx64`]'s precomputed spring gain: with g the `I32F32` bits of `k_half`,
 /// `−(2n+1)·g + 2^31 = n·h + c` where h = −2g = `hi`·2^32 + `lo` (`lo` signed) and
 /// c = 2^31 − g. So `⌊(n·h + c) / 2^32⌋ = n·hi + ⌊(n·lo + c) / 2^32⌋`: one 32×32→64
 /// multiply-accumulate (`smlal`) and one 32-bit multiply-add (`mla`), no 64×32 product.
+/// The damper's form is the same with h = −g and c = 2^31 (`−g·v + 2^31 = v·h + c`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Fx64Spring {
     /// 2^31 − g.
@@ -121,6 +127,20 @@ impl Numeric for Fx64 {
         let low = ((i64::from(n) * i64::from(s.lo)).wrapping_add(s.c) >> 32) as i32;
         n.wrapping_mul(s.hi).wrapping_add(low)
     }
+    fn damper_gain(g: I32F32) -> Fx64Spring {
+        let h = g.to_bits().wrapping_neg();
+        let lo = h as i32;
+        Fx64Spring {
+            c: 1i64 << 31,
+            lo,
+            hi: (h.wrapping_sub(i64::from(lo)) >> 32) as i32,
+        }
+    }
+    #[inline]
+    fn damper(s: Fx64Spring, v: i32) -> i32 {
+        // The spring's evaluation of n·h + c (|v·lo| ≤ 2^45, c = 2^31: no overflow).
+        Self::spring(s, v)
+    }
 }
 
 impl Numeric for Fx32 {
@@ -148,6 +168,13 @@ impl Numeric for Fx32 {
     type Spring = I16F16;
     fn spring_gain(k_half: I16F16) -> I16F16 {
         k_half
+    }
+    fn damper_gain(g: I16F16) -> I16F16 {
+        g
+    }
+    #[inline]
+    fn damper(g: I16F16, v: i32) -> i32 {
+        Self::mul_bounded(g, v.wrapping_neg())
     }
     #[inline]
     fn spring(g: I16F16, n: i32) -> i32 {
@@ -190,6 +217,13 @@ impl Numeric for F32 {
     fn spring_gain(k_half: f32) -> f32 {
         k_half
     }
+    fn damper_gain(g: f32) -> f32 {
+        g
+    }
+    #[inline]
+    fn damper(g: f32, v: i32) -> i32 {
+        Self::mul_bounded(g, v.wrapping_neg())
+    }
     #[inline]
     fn spring(g: f32, n: i32) -> i32 {
         Self::mul_bounded(g, n.wrapping_mul(2).wrapping_add(1).wrapping_neg())
@@ -228,6 +262,39 @@ mod tests {
                 if k * f64::from(m).abs() < f64::from(1 << 30) {
                     assert_eq!(Fx64::spring(s, n), Fx64::mul_bounded(g, -m), "k {k} n {n}");
                 }
+            }
+        }
+    }
+
+    fn check_damper<N: Numeric>(b: f64) {
+        let g = N::gain(b);
+        let s = N::damper_gain(g);
+        let vmax = crate::config::DAMPER_V_MAX;
+        for v in (-vmax..=vmax).step_by(7).chain([-vmax, -1, 0, 1, vmax]) {
+            if b * f64::from(v).abs() < f64::from(1 << 30) {
+                assert_eq!(N::damper(s, v), N::mul_bounded(g, -v), "b {b} v {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn damper_is_mul_bounded_of_minus_v() {
+        for b in [
+            0.0,
+            1e-7,
+            0.3757,
+            0.5,
+            1.0,
+            2.5,
+            0.5 + 1e-9,
+            1234.567,
+            16383.99,
+            65536.0,
+        ] {
+            for b in [b, -b] {
+                check_damper::<Fx64>(b);
+                check_damper::<Fx32>(b);
+                check_damper::<F32>(b);
             }
         }
     }

@@ -67,7 +67,10 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     hb_tick: u32,
     decimation: u16,
     user_decimation: u16,
-    decim_cnt: u16,
+    /// Ticks to the next telemetry push, counting down (1: this tick), set to `decimation`
+    /// whenever it changes and after each push. With `decimation` 0 it keeps counting (down
+    /// from 0, wrapping) and the tick it reaches 0 pushes nothing.
+    decim_left: u32,
     seq: u32,
     port: ServoPort<'a>,
     exp: Experiment,
@@ -106,7 +109,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             table: [0; MAX_TABLE],
             decimation: 0,
             user_decimation: 0,
-            decim_cnt: 0,
+            decim_left: 0,
             seq: 0,
         }
     }
@@ -165,7 +168,17 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline]
     #[must_use]
     pub fn spring_code(&self, n: i32) -> i32 {
-        self.spring_between(n, self.g.wall_n_lo, self.g.wall_lo)
+        // `spring_between(n, wall_n_lo, wall_lo)` with its two bound tests as one: `wall_n_lo`
+        // < n < `n_sat` exactly when n − `wall_in` (as u32, wrapping) < `wall_span` (the
+        // difference is below 2^31 + 2^29 in magnitude: a negative one wraps above 2^31 and
+        // `wall_span` ≤ 2^30).
+        if (n as u32).wrapping_sub(self.g.wall_in as u32) < self.g.wall_span {
+            N::spring(self.g.spring, n)
+        } else if n >= self.g.n_sat {
+            self.g.spring_hi
+        } else {
+            self.g.wall_lo
+        }
     }
 
     /// The two-sided spring (release-test hold).
@@ -208,16 +221,23 @@ impl<'a, N: Numeric> Servo<'a, N> {
         d
     }
 
+    /// The output clamp to ±`limit`, with the [`flags::CLAMPED`] flag when it acts.
     #[inline]
     fn clamp(&self, code: i32) -> (i32, u16) {
         let l = self.g.limit;
-        if code > l {
-            (l, flags::CLAMPED)
-        } else if code < -l {
-            (-l, flags::CLAMPED)
+        // 0 ≤ limit ≤ 2^24: |code| > limit as one unsigned compare (as `AbsBound`).
+        if (code as u32).wrapping_add(l as u32) > (2 * l) as u32 {
+            Self::clamped(code, l)
         } else {
             (code, 0)
         }
+    }
+
+    /// `code` beyond ±`l`: the bound it passed.
+    #[cold]
+    #[inline(never)]
+    fn clamped(code: i32, l: i32) -> (i32, u16) {
+        (if code > l { l } else { -l }, flags::CLAMPED)
     }
 
     #[inline]
@@ -254,20 +274,54 @@ impl<'a, N: Numeric> Servo<'a, N> {
         enc: &mut impl Encoder,
         out: &mut impl ForceOutput,
     ) -> i32 {
-        self.step::<false>(now, enc, out)
+        if self.mode == Mode::Wall {
+            self.step::<false, true>(now, enc, out)
+        } else {
+            self.step_experiment::<false>(now, enc, out)
+        }
     }
 
     /// The full servo tick: one pending command, spring, damping, delay, supervisor,
     /// experiments, clamp, output, telemetry push. (Stage 4; what the board calls.)
     pub fn tick(&mut self, now: u32, enc: &mut impl Encoder, out: &mut impl ForceOutput) -> i32 {
+        // Commands are rare: only the emptiness test (two relaxed loads) is on the tick's path;
+        // the dequeue and the handler are out of line, so their stack frame and registers do
+        // not weigh on the tick.
+        if self.port.commands.ready() {
+            self.next_command(now);
+        }
+        if self.mode == Mode::Wall {
+            self.step::<true, true>(now, enc, out)
+        } else {
+            self.step_experiment::<true>(now, enc, out)
+        }
+    }
+
+    /// The tick while an experiment runs: [`Self::step`] for every mode but the wall's, out of
+    /// line so the wall's tick is compiled for the wall alone.
+    #[inline(never)]
+    fn step_experiment<const TEL: bool>(
+        &mut self,
+        now: u32,
+        enc: &mut impl Encoder,
+        out: &mut impl ForceOutput,
+    ) -> i32 {
+        self.step::<TEL, false>(now, enc, out)
+    }
+
+    /// Dequeues and handles one pending command (out of the tick's hot path).
+    #[cold]
+    #[inline(never)]
+    fn next_command(&mut self, now: u32) {
         if let Some(cmd) = self.port.commands.dequeue() {
             self.command(now, cmd);
         }
-        self.step::<true>(now, enc, out)
     }
 
+    /// One tick. `WALL`: the mode is [`Mode::Wall`] (the caller tested it; no experiment runs,
+    /// so nothing in the tick changes the mode), which leaves out the experiments' tests.
     #[inline(always)]
-    fn step<const TEL: bool>(
+    fn step<const TEL: bool, const WALL: bool>(
         &mut self,
         now: u32,
         enc: &mut impl Encoder,
@@ -275,43 +329,36 @@ impl<'a, N: Numeric> Servo<'a, N> {
     ) -> i32 {
         let d = self.read(enc);
         // First reading: the position is absolute, not a motion; seed the supervisor's history.
-        let d = if self.primed {
-            d
-        } else {
-            self.primed = true;
-            self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
-            self.vel_hist = [self.pos; VEL_WINDOW];
-            0
-        };
+        let d = if self.primed { d } else { self.prime() };
         let rel = self.pos.saturating_sub(self.g.wall);
         let n = rel >> self.g.coarsen.get();
-        let dn = n.saturating_sub(self.prev_n);
-        self.prev_n = n;
+        // Outside a one-sided wall (one test for the monitor and the force).
+        let free = n < self.g.contact_n;
 
         // Supervisor.
         let mut new_faults = 0u32;
-        if d.unsigned_abs() > self.g.jump {
+        if self.g.jump_bound.exceeded(d) {
             new_faults |= fault::ENCODER_JUMP;
         }
         let vi = (now & VEL_MASK) as usize;
-        let old = self.vel_hist[vi];
-        self.vel_hist[vi] = self.pos;
-        if self.g.vel_window_counts > 0
-            && self.pos.saturating_sub(old).unsigned_abs() > self.g.vel_window_counts
-        {
+        let old = core::mem::replace(&mut self.vel_hist[vi], self.pos);
+        if self.g.vel_bound.exceeded(self.pos.saturating_sub(old)) {
             new_faults |= fault::OVER_VELOCITY;
         }
         let mut fl = 0u16;
-        let monitoring = self.g.energy_monitor && self.mode != Mode::Other;
+        let monitoring = self.g.energy_monitor && (WALL || self.mode != Mode::Other);
         if monitoring {
-            if self.g.one_sided && n < 0 {
+            if free {
                 // Outside a one-sided wall the spring stores nothing: free motion (the user
                 // moving the device around) must not count; start afresh on the next contact.
                 self.monitor.reset();
             } else {
-                let (f, turn) = self
-                    .monitor
-                    .update(n, self.g.growth_trip, self.g.energy_limit_m);
+                // `update`, its two parts written out (the limit test then compiles to one
+                // conditional or).
+                if monitor::odd_abs(n) > self.g.energy_limit_m {
+                    new_faults |= fault::ENERGY_LIMIT;
+                }
+                let (f, turn) = self.monitor.track(n, self.g.growth_trip);
                 new_faults |= f;
                 if turn {
                     fl |= flags::TURN;
@@ -319,7 +366,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 }
             }
         }
-        if self.mode != Mode::Wall && self.g.heartbeat_ticks > 0 {
+        if !WALL && self.g.heartbeat_ticks > 0 {
             let hb = self.port.shared.heartbeat.load(Ordering::Relaxed);
             if hb != self.hb_seen {
                 self.hb_seen = hb;
@@ -328,17 +375,22 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 new_faults |= fault::HEARTBEAT;
             }
         }
-        if new_faults & !self.faults != 0 {
-            self.latch(now, new_faults);
-        }
+        // The count's backward difference (for the dampers), taken here, where the force
+        // needs it, so it is not held through the supervisor.
+        let dn = n.saturating_sub(self.prev_n);
+        self.prev_n = n;
 
-        // Force.
-        let (code, ff) = if self.faults != 0 {
-            // Safe mode bypasses the delay line.
-            (self.safe_code(d), flags::SAFE_MODE)
-        } else {
-            let (c, f) = self.force(n, dn);
+        // Force. One test of the latched and the new fault bits keeps the fault handling (the
+        // latch, safe mode) out of the normal path.
+        let (code, ff) = if (self.faults | new_faults) == 0 {
+            let (c, f) = if WALL {
+                self.wall_force(n, dn, free)
+            } else {
+                self.force(n, dn)
+            };
             (self.delay(c), f)
+        } else {
+            self.faulted(now, new_faults, d)
         };
         let (code, cf) = self.clamp(code);
         out.write(code);
@@ -348,8 +400,31 @@ impl<'a, N: Numeric> Servo<'a, N> {
             self.telemetry(now, rel, n, code, fl);
             self.port.shared.tick.store(now, Ordering::Relaxed);
         }
-        self.advance(n, dn);
+        if !WALL {
+            self.advance(n, dn);
+        }
         code
+    }
+
+    /// The first reading: seeds the supervisor's history; returns the motion it counts as (0).
+    #[cold]
+    #[inline(never)]
+    fn prime(&mut self) -> i32 {
+        self.primed = true;
+        self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
+        self.vel_hist = [self.pos; VEL_WINDOW];
+        0
+    }
+
+    /// A tick with fault bits latched or new: latches the new ones, then the safe-mode output
+    /// and its flag (safe mode bypasses the delay line).
+    #[cold]
+    #[inline(never)]
+    fn faulted(&mut self, now: u32, new_faults: u32, d: i32) -> (i32, u16) {
+        if new_faults & !self.faults != 0 {
+            self.latch(now, new_faults);
+        }
+        (self.safe_code(d), flags::SAFE_MODE)
     }
 
     fn latch(&mut self, now: u32, bits: u32) {
@@ -371,11 +446,21 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline(always)]
     fn force(&mut self, n: i32, dn: i32) -> (i32, u16) {
         match self.mode {
-            // One test of the contact condition serves both the flag and the law.
-            Mode::Wall if self.g.one_sided && n < 0 => (0, flags::WALL_OFF),
-            Mode::Wall => (self.contact_code(n, dn), 0),
+            Mode::Wall => self.wall_force(n, dn, n < self.g.contact_n),
             Mode::Released => (self.wall_code(n, dn), flags::RELEASED),
             Mode::Other => self.experiment_force(n, dn),
+        }
+    }
+
+    /// [`Mode::Wall`]'s code and flags.
+    #[inline(always)]
+    fn wall_force(&self, n: i32, dn: i32, free: bool) -> (i32, u16) {
+        // One test of the contact condition (`free`: n < `contact_n`) serves both the flag
+        // and the law.
+        if free {
+            (0, flags::WALL_OFF)
+        } else {
+            (self.contact_code(n, dn), 0)
         }
     }
 
@@ -386,7 +471,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// space (n < 0) the code is 0, so moving the device around outside the wall feels no drag.
     #[inline(always)]
     fn wall_code(&self, n: i32, dn: i32) -> i32 {
-        if self.g.one_sided && n < 0 {
+        if n < self.g.contact_n {
             0
         } else {
             self.contact_code(n, dn)
@@ -403,10 +488,24 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[inline(always)]
     fn damping(&self, dn: i32) -> i32 {
         if self.g.damping_on {
-            self.damper(self.g.damp, dn)
+            // `damper(damp, dn)` with the gain's precomputed form; the velocity clamp, which
+            // acts only beyond any encoder-jump limit a device would set, out of line.
+            let v = if self.g.damper_v.exceeded(dn) {
+                Self::clamp_velocity(dn)
+            } else {
+                dn
+            };
+            N::damper(self.g.damp_s, v)
         } else {
             0
         }
+    }
+
+    /// `v` clamped to ±[`DAMPER_V_MAX`].
+    #[cold]
+    #[inline(never)]
+    fn clamp_velocity(v: i32) -> i32 {
+        v.clamp(-DAMPER_V_MAX, DAMPER_V_MAX)
     }
 
     /// `−g·v` for a damping gain g ≤ 2^16 codes per count per tick, with v clamped to
@@ -417,8 +516,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     /// Safe-mode output: zero or the safe damping on the raw count delta.
-    #[cold]
-    #[inline(never)]
+    #[inline]
     fn safe_code(&self, d: i32) -> i32 {
         if self.g.safe_damping {
             self.damper(self.g.safe_damp, d)
@@ -510,6 +608,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
         }
         self.monitor.reset();
         self.decimation = self.user_decimation;
+        // An experiment streams every tick (`decimation` 1), so its count was at the start.
+        self.decim_left = u32::from(self.decimation);
         self.port.shared.experiment.store(false, Ordering::Relaxed);
         let _ = self.port.events.enqueue(ServoEvent::ExperimentDone {
             kind,
@@ -529,14 +629,16 @@ impl<'a, N: Numeric> Servo<'a, N> {
 
     #[inline]
     fn telemetry(&mut self, now: u32, rel: i32, n: i32, code: i32, fl: u16) {
+        let left = self.decim_left.wrapping_sub(1);
+        if left != 0 {
+            self.decim_left = left;
+            return;
+        }
+        // A push, or a stopped stream's count passing 0 (once every 2^32 ticks).
+        self.decim_left = u32::from(self.decimation);
         if self.decimation == 0 {
             return;
         }
-        self.decim_cnt = self.decim_cnt.saturating_add(1);
-        if self.decim_cnt < self.decimation {
-            return;
-        }
-        self.decim_cnt = 0;
         let item = TelemetryItem {
             seq: self.seq,
             sample: Sample {
@@ -562,7 +664,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 if self.mode == Mode::Wall {
                     self.decimation = decimation;
                 }
-                self.decim_cnt = 0;
+                self.decim_left = u32::from(self.decimation);
             }
             ServoCmd::Release {
                 deflection,
@@ -638,7 +740,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
     fn start_experiment(&mut self, now: u32) {
         self.monitor.reset();
         self.decimation = 1;
-        self.decim_cnt = 0;
+        self.decim_left = 1;
         self.hb_seen = self.port.shared.heartbeat.load(Ordering::Relaxed);
         self.hb_tick = now;
         self.port.shared.experiment.store(true, Ordering::Relaxed);

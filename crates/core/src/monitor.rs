@@ -147,7 +147,12 @@ pub fn energy_e8(n: i32) -> u64 {
 #[must_use]
 pub fn energy_e8_u32(n: i32) -> u32 {
     let m = odd_abs(n);
-    m.checked_mul(m).map_or(u32::MAX, |p| p.saturating_add(1))
+    // m is odd: m² + 1 fits exactly when m ≤ 0xffff (0xffff² + 1 < 2^32 < 0x1_0001²).
+    if m <= 0xffff {
+        m * m + 1
+    } else {
+        u32::MAX
+    }
 }
 
 /// |2n+1| as `u32`, exact for every `i32` n (≤ 2^32 − 1): 2·(n or !n) + 1, three instructions.
@@ -166,6 +171,18 @@ pub fn limit_m(e8_limit: u64) -> u32 {
     u32::try_from(e8_limit.saturating_sub(1).isqrt()).unwrap_or(u32::MAX)
 }
 
+/// [`LIMIT`] if the energy at effective count `n` is above the limit whose [`limit_m`] is
+/// `limit_m`, else 0.
+#[inline]
+#[must_use]
+pub fn limit_fault(n: i32, limit_m: u32) -> u32 {
+    if odd_abs(n) > limit_m {
+        LIMIT
+    } else {
+        0
+    }
+}
+
 /// The energy monitor (see `docs/model-notes-firmware.md`): tracks turning points of the
 /// effective count (where ξ̇ = 0, so H_T (35) equals its potential part and needs no mass),
 /// compares each peak with the larger of the previous two peaks on the same side (one, for
@@ -176,6 +193,7 @@ pub fn limit_m(e8_limit: u64) -> u32 {
 pub struct EnergyMonitor {
     primed: bool,
     prev_n: i32,
+    /// Direction of the current half-cycle (−1, 1; 0 before the first motion).
     dir: i8,
     peak: i32,
     /// Last scored peak count per side (0: a maximum, after rising; 1: a minimum).
@@ -229,32 +247,51 @@ impl EnergyMonitor {
     /// [`GROWTH`] and [`LIMIT`], turning point seen).
     #[inline]
     pub fn update(&mut self, n: i32, trip: i32, limit_m: u32) -> (u32, bool) {
-        let mut faults = 0;
-        if odd_abs(n) > limit_m {
-            faults |= LIMIT;
-        }
-        if !self.primed {
-            self.primed = true;
-            self.prev_n = n;
-            self.peak = n;
-            return (faults, false);
-        }
+        let (f, turn) = self.track(n, trip);
+        (limit_fault(n, limit_m) | f, turn)
+    }
+
+    /// [`EnergyMonitor::update`] without the energy-limit test ([`limit_fault`]): the growth
+    /// bits and whether `n` is a turning point.
+    #[inline]
+    pub fn track(&mut self, n: i32, trip: i32) -> (u32, bool) {
         let dn = n.saturating_sub(self.prev_n);
         self.prev_n = n;
-        if dn == 0 {
-            return (faults, false);
+        // The common tick, moving on in the direction of the half-cycle, takes this one test
+        // (dn·dir > 0; it misses only dn = i32::MIN, which wraps, and the rare updates below
+        // handle that one exactly).
+        if dn.wrapping_mul(i32::from(self.dir)) > 0 {
+            self.peak = n;
+            return (0, false);
         }
+        if dn == 0 && self.primed {
+            return (0, false);
+        }
+        self.change(n, dn, trip)
+    }
+
+    /// The rare updates: the first after a reset (`prev_n` is `n` already), the first motion,
+    /// a reversal (and a motion by `i32::MIN` in the half-cycle's direction).
+    #[cold]
+    #[inline(never)]
+    fn change(&mut self, n: i32, dn: i32, trip: i32) -> (u32, bool) {
+        if !self.primed {
+            // The start at count `n`, no motion yet.
+            self.primed = true;
+            self.peak = n;
+            return (0, false);
+        }
+        // dn ≠ 0 here (a saturating difference is 0 only for equal counts).
         let s: i8 = if dn > 0 { 1 } else { -1 };
         if self.dir == 0 || s == self.dir {
             self.peak = n;
             self.dir = s;
-            return (faults, false);
+            return (0, false);
         }
-        (faults | self.turn(n, s, trip), true)
+        (self.turn(n, s, trip), true)
     }
 
     /// A reversal at count `n` (new direction `s`): scores the peak just passed.
-    #[inline(never)]
     fn turn(&mut self, n: i32, s: i8, trip: i32) -> u32 {
         let mut faults = 0;
         let side = usize::from(self.dir < 0);
@@ -603,5 +640,61 @@ mod tests {
             fire |= b.turn(t, if t % 20 == 0 { 5 } else { -5 }, u32::MAX);
         }
         assert_eq!(fire, BUZZ);
+    }
+
+    /// The update as first written (the tests in order), for the equivalence test below.
+    fn update_as_written(m: &mut EnergyMonitor, n: i32, trip: i32, limit_m: u32) -> (u32, bool) {
+        let mut faults = 0;
+        if odd_abs(n) > limit_m {
+            faults |= LIMIT;
+        }
+        if !m.primed {
+            m.primed = true;
+            m.prev_n = n;
+            m.peak = n;
+            return (faults, false);
+        }
+        let dn = n.saturating_sub(m.prev_n);
+        m.prev_n = n;
+        if dn == 0 {
+            return (faults, false);
+        }
+        let s: i8 = if dn > 0 { 1 } else { -1 };
+        if m.dir == 0 || s == m.dir {
+            m.peak = n;
+            m.dir = s;
+            return (faults, false);
+        }
+        (faults | m.turn(n, s, trip), true)
+    }
+
+    proptest! {
+        /// The update (the common tick's one test first, the rest out of line) is the update
+        /// as first written: same results, same state, through resets and saturation.
+        #[test]
+        fn update_is_the_update_as_written(
+            start in any::<i32>(),
+            steps in proptest::collection::vec((-3i32..=3, 0u8..40), 1..400),
+            trip in 1i32..5,
+            limit_m in prop_oneof![Just(u32::MAX), 0u32..200],
+        ) {
+            let (mut a, mut b) = (EnergyMonitor::default(), EnergyMonitor::default());
+            let mut n = start;
+            for (dn, op) in steps {
+                match op {
+                    0 => {
+                        a.reset();
+                        b.reset();
+                    }
+                    1 => n = i32::MAX,
+                    2 => n = i32::MIN,
+                    _ => n = n.saturating_add(dn),
+                }
+                let got = a.update(n, trip, limit_m);
+                let want = update_as_written(&mut b, n, trip, limit_m);
+                prop_assert_eq!(got, want, "n = {}", n);
+                prop_assert_eq!(a, b);
+            }
+        }
     }
 }
