@@ -467,6 +467,9 @@ function drawMap(m) {
 }
 
 // ---------- controls ----------
+// Commands are typed: a number field takes a JSON number. Text that is not a finite number
+// is sent as it is, and the server refuses it naming the field.
+function num(text) { const x = Number(text); return text !== '' && Number.isFinite(x) ? x : text; }
 function flash(el, ok, text) { el.className = 'msg ' + (ok ? 'ok' : 'err'); el.textContent = text; }
 
 $('cfg-form').addEventListener('submit', async (e) => {
@@ -474,7 +477,7 @@ $('cfg-form').addEventListener('submit', async (e) => {
   const set = {};
   for (const el of $('cfg-form').querySelectorAll('input, select')) {
     const v = el.value.trim();
-    if (v !== '') set[el.name] = v;
+    if (v !== '') set[el.name] = el.tagName === 'SELECT' ? v : num(v);
   }
   const r = await send({ cmd: 'config', set });
   flash($('cfg-msg'), r.ok, r.ok ? 'applied' : r.error);
@@ -485,15 +488,15 @@ $('clear-faults').onclick = $('banner-clear').onclick = async () => {
   if (!r.ok) showLog(r.error);
 };
 $('rel-run').onclick = async () => {
-  const args = { deflection: $('rel-deflection').value.trim(), ticks: $('rel-ticks').value.trim() };
-  const k = $('rel-stiffness').value.trim(); if (k !== '') args.stiffness = k;
+  const args = { deflection: num($('rel-deflection').value.trim()), ticks: num($('rel-ticks').value.trim()) };
+  const k = $('rel-stiffness').value.trim(); if (k !== '') args.stiffness = num(k);
   const v = $('rel-verdict'); v.dataset.state = 'running'; v.textContent = 'starting…';
   const r = await send({ cmd: 'release', args });
   if (!r.ok) { v.dataset.state = 'fail'; v.textContent = r.error; }
 };
 $('tune-run').onclick = async () => {
-  const args = { margin: $('tune-margin').value.trim(), 'dry-run': $('tune-dry-run').checked };
-  const mv = $('tune-max-velocity').value.trim(); if (mv !== '') args['max-velocity'] = mv;
+  const args = { margin: num($('tune-margin').value.trim()), 'dry-run': $('tune-dry-run').checked };
+  const mv = $('tune-max-velocity').value.trim(); if (mv !== '') args['max-velocity'] = num(mv);
   $('tune-log').textContent = ''; $('tune-result').hidden = true;
   const r = await send({ cmd: 'tune', args });
   if (!r.ok && !/tune failed/.test(r.error)) onTune({ state: 'error', error: r.error });

@@ -17,9 +17,9 @@
 
 use super::plane::{self, Model};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
-use super::wire::{self, Command, Reply};
-use crate::cmd::experiment::{check_release, release_config};
-use crate::cmd::tune as tune_cmd;
+use super::wire::{self, Command, ReleaseTest, Reply, TuneTest};
+use crate::cmd::experiment::{check_release_values, release_config};
+use crate::config_flags::Overrides;
 use crate::device::client::{Client, HEARTBEAT_PERIOD};
 use crate::device::connect::ConnectArgs;
 use crate::recording::Writer;
@@ -421,14 +421,14 @@ impl Dev {
     /// Runs one command and answers it (a release test answers when it ends).
     fn command(&mut self, cmd: Command, reply: tokio::sync::oneshot::Sender<Reply>) {
         let r = match cmd {
-            Command::Config { set } => self.config(&set),
+            Command::Config(set) => self.config(&set),
             Command::ClearFaults => self.clear_faults(),
-            Command::Velocity { xidot } => self.velocity(xidot),
-            Command::RecordStart { file } => self.record_start(&file),
+            Command::Velocity(xidot) => self.velocity(xidot),
+            Command::RecordStart(file) => self.record_start(&file),
             Command::RecordStop => self.record_stop(),
             Command::Get => self.get(),
-            Command::Tune { args } => self.tune(&args),
-            Command::Release { args } => match self.release_start(&args) {
+            Command::Tune(args) => self.tune(&args),
+            Command::Release(args) => match self.release_start(&args) {
                 Ok(()) => {
                     if let Some(rel) = &mut self.release {
                         rel.reply = Some(reply);
@@ -448,11 +448,9 @@ impl Dev {
         Ok(())
     }
 
-    fn config(&mut self, set: &serde_json::Map<String, Value>) -> Reply {
+    fn config(&mut self, o: &Overrides) -> Reply {
         let mut run = || -> Result<Value> {
             self.busy_check("config set")?;
-            let argv = wire::argv("config set", set)?;
-            let o = wire::ConfigCli::parse_argv(&argv)?;
             // As `hostctl config set`: bad numbers are refused before the device is asked.
             o.apply(&ServoConfig::default())?;
             if o.is_empty() {
@@ -558,11 +556,9 @@ impl Dev {
         out
     }
 
-    fn release_start(&mut self, args: &serde_json::Map<String, Value>) -> Result<()> {
+    fn release_start(&mut self, a: &ReleaseTest) -> Result<()> {
         self.busy_check("release")?;
-        let argv = wire::argv("release", args)?;
-        let a = wire::ReleaseCli::parse_argv(&argv)?;
-        check_release(&a)?;
+        check_release_values(a.deflection, a.ticks, a.stiffness)?;
         let original = self.client.get_config()?;
         let test = release_config(
             &original,
@@ -646,7 +642,7 @@ impl Dev {
         }
     }
 
-    fn tune(&mut self, args: &serde_json::Map<String, Value>) -> Reply {
+    fn tune(&mut self, a: &TuneTest) -> Reply {
         let mut run = || -> Result<Value> {
             self.busy_check("tune")?;
             if let Some(r) = &self.rec {
@@ -655,9 +651,7 @@ impl Dev {
                     r.path.display()
                 );
             }
-            let argv = wire::argv("tune", args)?;
-            let a = wire::TuneCli::parse_argv(&argv)?;
-            let s = tune_cmd::settings(&a)?;
+            let s = a.settings()?;
             // Flush what the page has, then give the link to tune.
             self.client.stream_stop()?;
             self.streaming = false;

@@ -12,7 +12,7 @@
 use super::device::{Request, Shared};
 use super::plane;
 use super::security::{token_from_query, Guard, TOKEN_HEADER};
-use super::wire::{Envelope, Reply};
+use super::wire::{parse_command, Envelope, Reply};
 use axum::body::Bytes;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{DefaultBodyLimit, Request as HttpRequest, State};
@@ -155,7 +155,7 @@ fn reply_json(id: &Value, r: Reply) -> Value {
 }
 
 async fn api_cmd(State(app): State<App>, body: Bytes) -> Response {
-    match serde_json::from_slice::<Envelope>(&body) {
+    match parse_command(&body) {
         Ok(env) => {
             let id = env.id.clone();
             let r = submit(&app, env).await;
@@ -166,11 +166,9 @@ async fn api_cmd(State(app): State<App>, body: Bytes) -> Response {
             };
             (status, axum::Json(reply_json(&id, r))).into_response()
         }
-        Err(e) => (
-            StatusCode::BAD_REQUEST,
-            axum::Json(reply_json(&Value::Null, Err(format!("bad command: {e}")))),
-        )
-            .into_response(),
+        Err((id, e)) => {
+            (StatusCode::BAD_REQUEST, axum::Json(reply_json(&id, Err(e)))).into_response()
+        }
     }
 }
 
@@ -228,7 +226,7 @@ async fn session(app: App, mut socket: WebSocket) {
             },
             m = socket.recv() => match m {
                 Some(Ok(Message::Text(t))) => {
-                    match serde_json::from_str::<Envelope>(t.as_str()) {
+                    match parse_command(t.as_bytes()) {
                         Ok(env) => {
                             let app = app.clone();
                             let tx = reply_tx.clone();
@@ -238,8 +236,8 @@ async fn session(app: App, mut socket: WebSocket) {
                                 let _ = tx.send(reply_json(&id, r));
                             });
                         }
-                        Err(e) => {
-                            let v = reply_json(&Value::Null, Err(format!("bad command: {e}")));
+                        Err((id, e)) => {
+                            let v = reply_json(&id, Err(e));
                             if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
                         }
                     }
