@@ -48,3 +48,50 @@ fn array_values_cannot_smuggle_flags() {
         }
     }
 }
+
+/// A 10⁶-tick release: the message the page gets (and a page that opens later is sent) stays
+/// bounded, with the trace decimated to at most 4000 points that keep its extremes.
+#[test]
+fn a_million_tick_release_reaches_the_page_bounded() {
+    let s = Server::start(&[]);
+    let (code, v) = s.cmd(r#"{"cmd": "config", "set": {"stiffness": 0.8}}"#);
+    assert_eq!(code, 200, "{v}");
+    let (code, v) = s.cmd(r#"{"cmd": "release", "args": {"deflection": 20, "ticks": 1000000}}"#);
+    assert_eq!(code, 200, "{v}");
+    let tr = &v["result"]["trace"];
+    assert!(
+        tr["samples"].as_u64().unwrap() >= 999_000,
+        "{}",
+        tr["samples"]
+    );
+    let counts = tr["counts"].as_array().unwrap();
+    assert!(counts.len() <= 4000, "{} points", counts.len());
+    let top = counts.iter().filter_map(serde_json::Value::as_i64).max();
+    assert!(
+        top.is_some_and(|x| (x - 20).abs() <= 2),
+        "the release's peak kept: {top:?}"
+    );
+    let reply_bytes = v.to_string().len();
+    assert!(reply_bytes < 100_000, "reply: {reply_bytes} bytes");
+    // A page opening now is sent the snapshot: hello and the latest of each kind.
+    let mut ws = s.ws();
+    let mut snapshot = 0;
+    loop {
+        let (op, p) = read_frame(&mut ws).unwrap();
+        if op != 1 {
+            break;
+        }
+        snapshot += p.len();
+    }
+    assert!(snapshot < 150_000, "snapshot: {snapshot} bytes");
+    let rss_kb = std::fs::read_to_string(format!("/proc/{}/status", s.pid()))
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        });
+    if let Some(kb) = rss_kb {
+        assert!(kb < 64 << 10, "RSS {kb} kB after the release");
+    }
+}

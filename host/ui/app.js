@@ -385,19 +385,20 @@ function drawRelease(m) {
   const g = cv.getContext('2d');
   const w = cv.width; const h = cv.height;
   g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
-  const c = m.counts; if (!c.length) return;
+  // The server sends at most a few thousand points: each bucket's min and max, at their ticks.
+  const t = m.trace; const c = t.counts; const n = Math.max(t.samples, 1); if (!c.length) return;
   let lo = -2; let hi = 2; for (const x of c) { if (x < lo) lo = x; if (x > hi) hi = x; }
   lo -= 0.5; hi += 1.5;
-  const L = 40; const X = (i) => L + i / c.length * (w - L - 6); const Y = (v) => h - 18 - (v - lo) / (hi - lo) * (h - 28);
+  const L = 40; const X = (i) => L + i / n * (w - L - 6); const Y = (v) => h - 18 - (v - lo) / (hi - lo) * (h - 28);
   g.strokeStyle = '#999'; g.setLineDash([6, 4]);
   for (const lv of [-1, 1]) { g.beginPath(); g.moveTo(L, Y(lv)); g.lineTo(w - 6, Y(lv)); g.stroke(); }
   g.setLineDash([]);
   g.strokeStyle = '#1f5fbf'; g.beginPath();
-  c.forEach((x, i) => (i ? g.lineTo(X(i), Y(x)) : g.moveTo(X(i), Y(x))));
+  c.forEach((x, k) => (k ? g.lineTo(X(t.index[k]), Y(x)) : g.moveTo(X(t.index[k]), Y(x))));
   g.stroke();
   g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
   g.fillText(fmt(hi), 2, 14); g.fillText(fmt(lo), 2, h - 18);
-  g.fillText(`x [ticks] over ${(c.length / m.rate_hz).toFixed(2)} s after the release`, L + 4, h - 4);
+  g.fillText(`x [ticks] over ${(t.samples / m.rate_hz).toFixed(2)} s after the release${c.length < t.samples ? ` (${c.length} of ${t.samples} points: min/max per bucket)` : ''}`, L + 4, h - 4);
 }
 
 // ---------- tune ----------

@@ -17,6 +17,7 @@
 
 use super::plane::{self, Model};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
+use super::trace;
 use super::wire::{self, Command, ReleaseTest, Reply, TuneTest};
 use crate::cmd::experiment::{check_release_values, release_config};
 use crate::config_flags::Overrides;
@@ -25,7 +26,7 @@ use crate::device::connect::ConnectArgs;
 use crate::recording::Writer;
 use crate::session::{self, Stats};
 use crate::tune::procedure;
-use crate::tune::release::{classify, released_counts};
+use crate::tune::release::classify;
 use anyhow::{bail, Context, Result};
 use axum::extract::ws::Message;
 use serde_json::{json, Value};
@@ -127,7 +128,11 @@ struct Release {
     original: ServoConfig,
     test: ServoConfig,
     deflection: i32,
-    samples: Vec<Sample>,
+    /// Released counts (effective ticks, as `released_counts`): 8 bytes per tick while the
+    /// test runs; only their decimated trace is kept afterwards.
+    counts: Vec<i64>,
+    /// Tick of the first hold or released sample.
+    first_tick: Option<u32>,
     start: Instant,
     limit: Duration,
     last_hb: Instant,
@@ -300,11 +305,15 @@ impl Dev {
             }
         }
         if let Some(rel) = &mut self.release {
-            rel.samples.extend(
-                samples
-                    .iter()
-                    .filter(|s| s.flags & (flags::HOLD | flags::RELEASED) != 0),
-            );
+            let shift = rel.test.coarsen_shift;
+            for s in samples {
+                if s.flags & (flags::HOLD | flags::RELEASED) != 0 && rel.first_tick.is_none() {
+                    rel.first_tick = Some(s.tick);
+                }
+                if s.flags & flags::RELEASED != 0 {
+                    rel.counts.push(i64::from(s.count) >> shift);
+                }
+            }
         }
         if let Some(last) = samples.last() {
             self.last_sample = Some(*last);
@@ -586,7 +595,8 @@ impl Dev {
             original,
             test,
             deflection: a.deflection,
-            samples: Vec::with_capacity(a.ticks as usize + 1024),
+            counts: Vec::with_capacity(a.ticks as usize),
+            first_tick: None,
             start: Instant::now(),
             limit: Duration::from_secs_f64(f64::from(a.ticks) / rate * 20.0 + 10.0),
             last_hb: Instant::now(),
@@ -601,15 +611,12 @@ impl Dev {
         };
         // The experiment's stiffness is not kept.
         let restored = self.client.set_config(&rel.original);
-        let rel_samples: Vec<Sample> = rel
-            .samples
-            .iter()
-            .copied()
-            .filter(|s| s.flags & flags::RELEASED != 0)
-            .collect();
-        let counts = released_counts(&rel_samples, rel.test.coarsen_shift);
+        let counts = std::mem::take(&mut rel.counts);
         let verdict = classify(&counts, faults != 0);
-        let first = rel.samples.first().map_or(0, |s| s.tick);
+        let first = rel.first_tick.unwrap_or(0);
+        // The page gets a bounded trace; the full one is in a recording.
+        let trace = trace::decimate(&counts, trace::TRACE_POINTS);
+        drop(counts);
         let v = json!({
             "type": "release",
             "state": "done",
@@ -621,7 +628,7 @@ impl Dev {
             "completed": completed,
             "faults": faults,
             "fault_names": wire::fault_names(faults),
-            "counts": counts,
+            "trace": trace,
             "first_tick": first,
             "rate_hz": rel.test.servo_rate_hz,
         });

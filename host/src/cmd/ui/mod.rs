@@ -7,7 +7,8 @@
 //! [`wire`] (commands, events and the binary telemetry frames), [`plane`] (the (β, σ) plane
 //! and the map overlay, computed with the same code as the figures), [`frontier`] (the (B, K)
 //! frontier K_max(B) beside it, with the configured (B, K)), [`record`] (recording
-//! from the page in `hostctl record`'s format).
+//! from the page in `hostctl record`'s format), [`trace`] (a release test's trace, decimated
+//! for the page).
 //!
 //! Unlike the other commands, this one imports its siblings' argument definitions and checks
 //! (config set, experiment release, tune, map files): it is a front end over them, so that the
@@ -25,6 +26,7 @@ pub mod plane;
 pub mod record;
 pub mod security;
 pub mod server;
+pub mod trace;
 pub mod wire;
 
 use crate::config_flags::Overrides;
