@@ -5,7 +5,30 @@
 
 mod ui_support;
 
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::time::{Duration, Instant};
 use ui_support::{read_frame, send_frame, Server};
+
+/// The header-read timeout (docs/UI.md).
+const HEADER_TIMEOUT: Duration = Duration::from_secs(5);
+/// The connection limit (docs/UI.md).
+const MAX_CONNECTIONS: usize = 64;
+
+/// Reads until the server closes (or `limit` passes); returns what arrived and when it ended.
+fn read_to_close(s: &mut TcpStream, limit: Duration) -> (String, Duration) {
+    let t0 = Instant::now();
+    s.set_read_timeout(Some(limit)).unwrap();
+    let mut out = Vec::new();
+    let mut buf = [0u8; 4096];
+    loop {
+        match s.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => out.extend_from_slice(&buf[..n]),
+        }
+    }
+    (String::from_utf8_lossy(&out).into_owned(), t0.elapsed())
+}
 
 #[test]
 fn array_values_cannot_smuggle_flags() {
@@ -94,4 +117,44 @@ fn a_million_tick_release_reaches_the_page_bounded() {
     if let Some(kb) = rss_kb {
         assert!(kb < 64 << 10, "RSS {kb} kB after the release");
     }
+}
+
+#[test]
+fn a_client_that_never_finishes_its_headers_is_dropped() {
+    let s = Server::start(&[]);
+    let mut c = TcpStream::connect(s.addr).unwrap();
+    c.write_all(format!("GET / HTTP/1.1\r\nHost: {}\r\nX-Slow: ", s.host()).as_bytes())
+        .unwrap();
+    let (_, t) = read_to_close(&mut c, Duration::from_secs(30));
+    assert!(
+        t >= HEADER_TIMEOUT - Duration::from_millis(500)
+            && t < HEADER_TIMEOUT + Duration::from_secs(2),
+        "dropped after {t:?}"
+    );
+}
+
+#[test]
+fn connections_beyond_the_limit_are_refused_and_slots_come_back() {
+    let s = Server::start(&[]);
+    let partial = format!("GET / HTTP/1.1\r\nHost: {}\r\n", s.host());
+    let held: Vec<TcpStream> = (0..MAX_CONNECTIONS)
+        .map(|_| {
+            let mut c = TcpStream::connect(s.addr).unwrap();
+            c.write_all(partial.as_bytes()).unwrap();
+            c
+        })
+        .collect();
+    std::thread::sleep(Duration::from_millis(300));
+    let mut extra = TcpStream::connect(s.addr).unwrap();
+    let (text, t) = read_to_close(&mut extra, Duration::from_secs(3));
+    assert!(t < Duration::from_secs(2), "{t:?}");
+    assert!(
+        text.is_empty() || text.starts_with("HTTP/1.1 503"),
+        "{text}"
+    );
+    // The slow ones are dropped by the header timeout; then the server answers again.
+    std::thread::sleep(HEADER_TIMEOUT + Duration::from_secs(1));
+    let (code, v) = s.cmd(r#"{"cmd": "get"}"#);
+    assert_eq!(code, 200, "{v}");
+    drop(held);
 }

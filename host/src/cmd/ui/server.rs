@@ -9,6 +9,7 @@
 //! offline. A page that reads too slowly loses display frames (it is told how many), never
 //! the device's samples.
 
+use super::conn::Busy;
 use super::device::{Request, Shared};
 use super::plane;
 use super::security::{token_from_query, Guard, TOKEN_HEADER};
@@ -20,6 +21,7 @@ use axum::http::{header, HeaderValue, StatusCode};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
+use axum::Extension;
 use axum::Router;
 use serde_json::{json, Value};
 use std::sync::{mpsc, Arc, Mutex};
@@ -154,10 +156,12 @@ fn reply_json(id: &Value, r: Reply) -> Value {
     }
 }
 
-async fn api_cmd(State(app): State<App>, body: Bytes) -> Response {
+async fn api_cmd(State(app): State<App>, busy: Option<Extension<Busy>>, body: Bytes) -> Response {
     match parse_command(&body) {
         Ok(env) => {
             let id = env.id.clone();
+            // A release test or a tune may take minutes: the connection is not idle meanwhile.
+            let _busy = busy.map(|b| b.hold());
             let r = submit(&app, env).await;
             let status = if r.is_ok() {
                 StatusCode::OK
