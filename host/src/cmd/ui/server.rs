@@ -2,17 +2,20 @@
 //! binary from `host/ui/`), the WebSocket at `/ws`, `POST /api/cmd` (the same commands as
 //! over the WebSocket) and `POST /api/map` (a `hostctl map` JSON to view).
 //!
-//! Invariants: every request passes [`super::security::Guard`] first (Host, Origin, and the
-//! token for everything but the two static assets), so a refused request never reaches a
-//! handler, and a refused WebSocket is never upgraded. The page allows only its own origin
-//! (Content-Security-Policy `default-src 'self'`): it loads nothing from elsewhere and works
-//! offline. A page that reads too slowly loses display frames (it is told how many), never
+//! Invariants: every request passes [`super::security`]'s rules first (one Host, an
+//! origin-form target, Host, Origin, and the token for everything but the static assets and
+//! the favicon), so a refused request never reaches a handler, and a refused WebSocket is
+//! never upgraded. Every answer, refusals included, carries `X-Content-Type-Options:
+//! nosniff`. The page allows only its own origin (Content-Security-Policy `default-src
+//! 'self'`): it loads nothing from elsewhere and works offline. Request bodies are limited
+//! ([`MAX_MAP_BYTES`], [`MAX_CMD_BYTES`]): a larger `Content-Length` is answered `413` before
+//! the body is read, and a chunked body is cut off at the limit with the same `413`. A page that reads too slowly loses display frames (it is told how many), never
 //! the device's samples.
 
 use super::conn::Busy;
 use super::device::{Request, Shared};
 use super::plane;
-use super::security::{token_from_query, Guard, TOKEN_HEADER};
+use super::security::{check_form, token_from_query, Guard, Refusal, TOKEN_HEADER};
 use super::wire::{parse_command, Envelope, Reply};
 use axum::body::Bytes;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
@@ -26,6 +29,7 @@ use axum::Router;
 use serde_json::{json, Value};
 use std::sync::{mpsc, Arc, Mutex};
 use tokio::sync::broadcast::error::RecvError;
+use tower_http::limit::RequestBodyLimitLayer;
 
 /// The page, its script and its style, embedded at build time.
 pub const INDEX_HTML: &str = include_str!("../../../ui/index.html");
@@ -34,8 +38,11 @@ pub const APP_JS: &str = include_str!("../../../ui/app.js");
 /// The page's style.
 pub const STYLE_CSS: &str = include_str!("../../../ui/style.css");
 
-/// Largest map JSON accepted by `POST /api/map`.
-pub const MAX_MAP_BYTES: usize = 256 << 20;
+/// Largest map JSON accepted by `POST /api/map` (4 MiB: a complete `hostctl map` of the
+/// default 34 × 21 grid is tens of kB; this holds sweeps a hundred times finer).
+pub const MAX_MAP_BYTES: usize = 4 << 20;
+/// Largest command accepted by `POST /api/cmd`.
+pub const MAX_CMD_BYTES: usize = 64 << 10;
 
 /// What the handlers share.
 #[derive(Debug, Clone)]
@@ -54,41 +61,55 @@ pub fn router(app: App) -> Router {
         .route("/", get(index))
         .route("/app.js", get(app_js))
         .route("/style.css", get(style_css))
+        .route("/favicon.ico", get(StatusCode::NO_CONTENT))
         .route("/ws", get(ws))
-        .route("/api/cmd", post(api_cmd))
-        .route(
-            "/api/map",
-            post(api_map).layer(DefaultBodyLimit::max(MAX_MAP_BYTES)),
-        )
+        .route("/api/cmd", post(api_cmd).layer(body_limit(MAX_CMD_BYTES)))
+        .route("/api/map", post(api_map).layer(body_limit(MAX_MAP_BYTES)))
         .layer(middleware::from_fn_with_state(app.clone(), guard))
         .with_state(app)
 }
 
-fn forbidden(why: &str) -> Response {
+/// The body limit of a route: `413` by `Content-Length` before reading, or at the limit while
+/// reading a chunked body (the extractor's own limit is the same).
+fn body_limit(bytes: usize) -> (RequestBodyLimitLayer, DefaultBodyLimit) {
     (
-        StatusCode::FORBIDDEN,
+        RequestBodyLimitLayer::new(bytes),
+        DefaultBodyLimit::max(bytes),
+    )
+}
+
+fn refused(why: &Refusal) -> Response {
+    let status = StatusCode::from_u16(why.status()).unwrap_or(StatusCode::FORBIDDEN);
+    let reason = status.canonical_reason().unwrap_or("");
+    (
+        status,
         [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
-        format!("403 Forbidden: {why}\n"),
+        format!("{} {reason}: {why}\n", status.as_u16()),
     )
         .into_response()
 }
 
-async fn guard(State(app): State<App>, req: HttpRequest, next: Next) -> Response {
+/// The rules of [`super::security`], in order.
+fn check(guard: &Guard, req: &HttpRequest) -> Result<(), Refusal> {
     let h = req.headers();
+    check_form(h.get_all(header::HOST).iter().count(), req.uri())?;
     let text = |name: header::HeaderName| h.get(name).and_then(|v| v.to_str().ok());
     let host = text(header::HOST);
     let origin = text(header::ORIGIN);
-    let public = matches!(req.uri().path(), "/app.js" | "/style.css");
+    let public = matches!(req.uri().path(), "/app.js" | "/style.css" | "/favicon.ico");
     let token = h
         .get(TOKEN_HEADER)
         .and_then(|v| v.to_str().ok())
         .or_else(|| token_from_query(req.uri().query()));
-    let verdict = if public {
-        app.guard.check_site(host, origin)
+    if public {
+        guard.check_site(host, origin)
     } else {
-        app.guard.check(host, origin, token)
-    };
-    match verdict {
+        guard.check(host, origin, token)
+    }
+}
+
+async fn guard(State(app): State<App>, req: HttpRequest, next: Next) -> Response {
+    let mut resp = match check(&app.guard, &req) {
         Ok(()) => {
             let mut resp = next.run(req).await;
             let hs = resp.headers_mut();
@@ -106,8 +127,13 @@ async fn guard(State(app): State<App>, req: HttpRequest, next: Next) -> Response
             );
             resp
         }
-        Err(e) => forbidden(&e.to_string()),
-    }
+        Err(e) => refused(&e),
+    };
+    resp.headers_mut().insert(
+        header::X_CONTENT_TYPE_OPTIONS,
+        HeaderValue::from_static("nosniff"),
+    );
+    resp
 }
 
 async fn index() -> impl IntoResponse {
