@@ -8,7 +8,7 @@ mod ui_support;
 use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
-use ui_support::{read_frame, send_frame, Server};
+use ui_support::{read_close, read_frame, send_frame, Server};
 
 /// `POST /api/map`'s limit (docs/UI.md).
 const MAX_MAP_BYTES: usize = 4 << 20;
@@ -213,6 +213,21 @@ fn array_values_cannot_smuggle_flags() {
             }
         }
     }
+}
+
+#[test]
+fn websocket_refusals_close_with_a_reason() {
+    let s = Server::start(&[]);
+    let mut ws = s.ws();
+    send_frame(&mut ws, 1, &vec![b' '; 70_000]).unwrap();
+    let (code, reason) = read_close(&mut ws);
+    assert_eq!(code, 1009, "{reason}");
+    assert!(reason.contains("64 KiB limit"), "{reason}");
+    let mut ws = s.ws();
+    send_frame(&mut ws, 2, b"\x01\x02").unwrap();
+    let (code, reason) = read_close(&mut ws);
+    assert_eq!(code, 1003, "{reason}");
+    assert!(reason.contains("binary"), "{reason}");
 }
 
 /// A 10⁶-tick release: the message the page gets (and a page that opens later is sent) stays

@@ -27,7 +27,12 @@ function connect() {
   ws.binaryType = 'arraybuffer';
   st.ws = ws;
   ws.onopen = () => { setConn(true); };
-  ws.onclose = () => { setConn(false); setTimeout(connect, 1000); };
+  ws.onclose = (ev) => {
+    setConn(false);
+    // The server closes with a reason (message too large, server stopped, …): show it.
+    if (ev.reason) showLog(`connection closed (${ev.code}): ${ev.reason}`);
+    setTimeout(connect, 1000);
+  };
   ws.onmessage = (ev) => {
     if (typeof ev.data === 'string') onJson(JSON.parse(ev.data));
     else onFrame(ev.data);

@@ -10,7 +10,7 @@
 //!   partial header, or keeps an idle keep-alive connection, is dropped);
 //! - a connection on which no byte moves either way for [`IDLE_TIMEOUT`] is dropped (a request
 //!   body sent too slowly, a page that stopped reading its WebSocket; the WebSocket pings the
-//!   page well within it, see `/ws`), except while the server itself is working on
+//!   page well within it, see [`super::ws`]), except while the server itself is working on
 //!   one of its requests ([`Busy`]: a release test or a tune over `POST /api/cmd` may take
 //!   minutes).
 //!

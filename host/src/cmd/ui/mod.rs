@@ -3,7 +3,8 @@
 //! viewer — served on a local address with a per-run token.
 //!
 //! Parts: [`security`] (who may talk to the server), [`conn`] (connections and their limits),
-//! [`server`] (HTTP, the WebSocket, the embedded page from `host/ui/`), [`device`] (the thread that owns the device connection),
+//! [`server`] (HTTP routes, the embedded page from `host/ui/`), [`ws`] (the WebSocket
+//! session), [`device`] (the thread that owns the device connection),
 //! [`wire`] (commands, events and the binary telemetry frames), [`plane`] (the (β, σ) plane
 //! and the map overlay, computed with the same code as the figures), [`frontier`] (the (B, K)
 //! frontier K_max(B) beside it, with the configured (B, K)), [`record`] (recording
@@ -29,6 +30,7 @@ pub mod security;
 pub mod server;
 pub mod trace;
 pub mod wire;
+pub mod ws;
 
 use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;

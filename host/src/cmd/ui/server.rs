@@ -1,6 +1,6 @@
 //! The HTTP side of `hostctl ui` (axum on tokio): the page and its assets (embedded in the
-//! binary from `host/ui/`), the WebSocket at `/ws`, `POST /api/cmd` (the same commands as
-//! over the WebSocket) and `POST /api/map` (a `hostctl map` JSON to view).
+//! binary from `host/ui/`), the WebSocket at `/ws` ([`super::ws`]), `POST /api/cmd` (the same
+//! commands as over the WebSocket) and `POST /api/map` (a `hostctl map` JSON to view).
 //!
 //! Invariants: every request passes [`super::security`]'s rules first (one Host, an
 //! origin-form target, Host, Origin, and the token for everything but the static assets and
@@ -9,16 +9,15 @@
 //! nosniff`. The page allows only its own origin (Content-Security-Policy `default-src
 //! 'self'`): it loads nothing from elsewhere and works offline. Request bodies are limited
 //! ([`MAX_MAP_BYTES`], [`MAX_CMD_BYTES`]): a larger `Content-Length` is answered `413` before
-//! the body is read, and a chunked body is cut off at the limit with the same `413`. A page that reads too slowly loses display frames (it is told how many), never
-//! the device's samples.
+//! the body is read, and a chunked body is cut off at the limit with the same `413`.
 
 use super::conn::Busy;
 use super::device::{Request, Shared};
 use super::plane;
 use super::security::{check_form, token_from_query, Guard, Refusal, TOKEN_HEADER};
 use super::wire::{parse_command, Envelope, Reply};
+use super::ws::ws;
 use axum::body::Bytes;
-use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{DefaultBodyLimit, Request as HttpRequest, State};
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::middleware::{self, Next};
@@ -28,7 +27,6 @@ use axum::Extension;
 use axum::Router;
 use serde_json::{json, Value};
 use std::sync::{mpsc, Arc, Mutex};
-use tokio::sync::broadcast::error::RecvError;
 use tower_http::limit::RequestBodyLimitLayer;
 
 /// The page, its script and its style, embedded at build time.
@@ -41,8 +39,8 @@ pub const STYLE_CSS: &str = include_str!("../../../ui/style.css");
 /// Largest map JSON accepted by `POST /api/map` (4 MiB: a complete `hostctl map` of the
 /// default 34 × 21 grid is tens of kB; this holds sweeps a hundred times finer).
 pub const MAX_MAP_BYTES: usize = 4 << 20;
-/// Largest command accepted by `POST /api/cmd`.
-pub const MAX_CMD_BYTES: usize = 64 << 10;
+/// Largest command accepted by `POST /api/cmd` (as over the WebSocket).
+pub const MAX_CMD_BYTES: usize = super::ws::MAX_WS_MESSAGE;
 
 /// What the handlers share.
 #[derive(Debug, Clone)]
@@ -158,7 +156,7 @@ async fn style_css() -> impl IntoResponse {
 }
 
 /// Sends a command to the device thread and waits for its answer.
-async fn submit(app: &App, env: Envelope) -> Reply {
+pub(crate) async fn submit(app: &App, env: Envelope) -> Reply {
     let (tx, rx) = tokio::sync::oneshot::channel();
     let sent = app
         .commands
@@ -175,7 +173,8 @@ async fn submit(app: &App, env: Envelope) -> Reply {
         .unwrap_or_else(|_| Err("the device thread stopped".into()))
 }
 
-fn reply_json(id: &Value, r: Reply) -> Value {
+/// The answer to a command as the page reads it.
+pub(crate) fn reply_json(id: &Value, r: Reply) -> Value {
     match r {
         Ok(v) => json!({"type": "reply", "id": id, "ok": true, "result": v}),
         Err(e) => json!({"type": "reply", "id": id, "ok": false, "error": e}),
@@ -211,70 +210,5 @@ async fn api_map(body: Bytes) -> Response {
             axum::Json(json!({"type": "map", "error": format!("{e:#}")})),
         )
             .into_response(),
-    }
-}
-
-async fn ws(State(app): State<App>, up: WebSocketUpgrade) -> Response {
-    up.on_upgrade(move |socket| session(app, socket))
-}
-
-async fn session(app: App, mut socket: WebSocket) {
-    // Subscribe first: nothing published after the snapshot is missed.
-    let mut rx = app.shared.tx.subscribe();
-    let first: Vec<String> = match app.shared.snapshot.lock() {
-        Ok(s) => std::iter::once(s.hello.to_string())
-            .chain(s.latest.iter().map(|(_, v)| v.to_string()))
-            .collect(),
-        Err(_) => Vec::new(),
-    };
-    for text in first {
-        if socket.send(Message::Text(text.into())).await.is_err() {
-            return;
-        }
-    }
-    let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Value>();
-    let mut check = tokio::time::interval(std::time::Duration::from_millis(200));
-    loop {
-        tokio::select! {
-            _ = check.tick() => if app.shared.stop.load(std::sync::atomic::Ordering::Relaxed) {
-                let _ = socket.send(Message::Close(None)).await;
-                return;
-            },
-            m = rx.recv() => match m {
-                Ok(msg) => if socket.send(msg).await.is_err() { return },
-                Err(RecvError::Lagged(n)) => {
-                    let v = json!({"type": "lagged", "frames": n});
-                    if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
-                }
-                Err(RecvError::Closed) => {
-                    let _ = socket.send(Message::Close(None)).await;
-                    return;
-                }
-            },
-            r = reply_rx.recv() => if let Some(v) = r {
-                if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
-            },
-            m = socket.recv() => match m {
-                Some(Ok(Message::Text(t))) => {
-                    match parse_command(t.as_bytes()) {
-                        Ok(env) => {
-                            let app = app.clone();
-                            let tx = reply_tx.clone();
-                            tokio::spawn(async move {
-                                let id = env.id.clone();
-                                let r = submit(&app, env).await;
-                                let _ = tx.send(reply_json(&id, r));
-                            });
-                        }
-                        Err((id, e)) => {
-                            let v = reply_json(&id, Err(e));
-                            if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
-                        }
-                    }
-                }
-                Some(Ok(Message::Close(_)) | Err(_)) | None => return,
-                Some(Ok(_)) => {}
-            },
-        }
     }
 }
