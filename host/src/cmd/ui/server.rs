@@ -36,8 +36,8 @@ pub const APP_JS: &str = include_str!("../../../ui/app.js");
 /// The page's style.
 pub const STYLE_CSS: &str = include_str!("../../../ui/style.css");
 
-/// Largest map JSON accepted by `POST /api/map` (4 MiB: a complete `hostctl map` of the
-/// default 34 × 21 grid is tens of kB; this holds sweeps a hundred times finer).
+/// Largest map JSON accepted by `POST /api/map` (4 MiB: about 220 bytes per grid point, so
+/// ≈ 19 000 points, e.g. the default 34 × 21 grid (≈ 160 kB per panel) in 25 panels).
 pub const MAX_MAP_BYTES: usize = 4 << 20;
 /// Largest command accepted by `POST /api/cmd` (as over the WebSocket).
 pub const MAX_CMD_BYTES: usize = super::ws::MAX_WS_MESSAGE;

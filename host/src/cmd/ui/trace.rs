@@ -1,7 +1,7 @@
 //! A release test's trace as the page gets it: decimated to at most [`TRACE_POINTS`] points,
 //! keeping each bucket's minimum and maximum (in time order), so a one-tick spike stays visible
 //! however long the test; the `release` message that carries it is therefore bounded
-//! (≈ 50 kB for any `--ticks`), and so is what the server keeps for pages that open later.
+//! (under 100 kB for any `--ticks`), and so is what the server keeps for pages that open later.
 //! The full trace, every sample, is in a recording started from the page (the lossless CSV of
 //! `hostctl record`).
 //!
