@@ -189,9 +189,15 @@ pub fn send_frame(s: &mut TcpStream, opcode: u8, payload: &[u8]) -> std::io::Res
     s.write_all(&f)
 }
 
-/// Reads frames until a close frame; returns its code and reason.
+/// Reads frames until a close frame (within 10 s: telemetry keeps arriving meanwhile, so a
+/// server that never closes fails the test instead of hanging it); returns its code and reason.
 pub fn read_close(s: &mut TcpStream) -> (u16, String) {
+    let t0 = std::time::Instant::now();
     loop {
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "no close frame within 10 s"
+        );
         let (op, p) = read_frame(s).expect("a close frame before the connection ends");
         if op == 8 {
             assert!(p.len() >= 2, "a close frame with a code");
