@@ -13,7 +13,8 @@ use anyhow::{bail, Context, Result};
 use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
 
 /// `on` / `off`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum OnOff {
     /// Enabled.
     On,
@@ -22,7 +23,8 @@ pub enum OnOff {
 }
 
 /// Wall geometry on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum WallArg {
     /// Spring on both sides of the wall position.
     Bidirectional,
@@ -31,7 +33,8 @@ pub enum WallArg {
 }
 
 /// Safe mode on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum SafeModeArg {
     /// Zero force after a fault.
     ZeroForce,
@@ -40,8 +43,11 @@ pub enum SafeModeArg {
 }
 
 /// Configuration fields to change; fields not given keep their current value. Shared by
-/// `config set`, `stream` and `record`.
-#[derive(Debug, Clone, Default, clap::Args)]
+/// `config set`, `stream` and `record`, and by `hostctl ui`'s `config` command, which reads it
+/// from JSON with the flags' names as keys (`{"stiffness": 2, "wall": "one-sided"}`): each key
+/// takes its field's type, unknown keys are refused.
+#[derive(Debug, Clone, Default, clap::Args, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
 pub struct Overrides {
     /// Wall stiffness K [N/m or N·m/rad], >= 0.
     #[arg(long, allow_negative_numbers = true)]

@@ -27,7 +27,12 @@ function connect() {
   ws.binaryType = 'arraybuffer';
   st.ws = ws;
   ws.onopen = () => { setConn(true); };
-  ws.onclose = () => { setConn(false); setTimeout(connect, 1000); };
+  ws.onclose = (ev) => {
+    setConn(false);
+    // The server closes with a reason (message too large, server stopped, …): show it.
+    if (ev.reason) showLog(`connection closed (${ev.code}): ${ev.reason}`);
+    setTimeout(connect, 1000);
+  };
   ws.onmessage = (ev) => {
     if (typeof ev.data === 'string') onJson(JSON.parse(ev.data));
     else onFrame(ev.data);
@@ -385,19 +390,20 @@ function drawRelease(m) {
   const g = cv.getContext('2d');
   const w = cv.width; const h = cv.height;
   g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
-  const c = m.counts; if (!c.length) return;
+  // The server sends at most a few thousand points: each bucket's min and max, at their ticks.
+  const t = m.trace; const c = t.counts; const n = Math.max(t.samples, 1); if (!c.length) return;
   let lo = -2; let hi = 2; for (const x of c) { if (x < lo) lo = x; if (x > hi) hi = x; }
   lo -= 0.5; hi += 1.5;
-  const L = 40; const X = (i) => L + i / c.length * (w - L - 6); const Y = (v) => h - 18 - (v - lo) / (hi - lo) * (h - 28);
+  const L = 40; const X = (i) => L + i / n * (w - L - 6); const Y = (v) => h - 18 - (v - lo) / (hi - lo) * (h - 28);
   g.strokeStyle = '#999'; g.setLineDash([6, 4]);
   for (const lv of [-1, 1]) { g.beginPath(); g.moveTo(L, Y(lv)); g.lineTo(w - 6, Y(lv)); g.stroke(); }
   g.setLineDash([]);
   g.strokeStyle = '#1f5fbf'; g.beginPath();
-  c.forEach((x, i) => (i ? g.lineTo(X(i), Y(x)) : g.moveTo(X(i), Y(x))));
+  c.forEach((x, k) => (k ? g.lineTo(X(t.index[k]), Y(x)) : g.moveTo(X(t.index[k]), Y(x))));
   g.stroke();
   g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
   g.fillText(fmt(hi), 2, 14); g.fillText(fmt(lo), 2, h - 18);
-  g.fillText(`x [ticks] over ${(c.length / m.rate_hz).toFixed(2)} s after the release`, L + 4, h - 4);
+  g.fillText(`x [ticks] over ${(t.samples / m.rate_hz).toFixed(2)} s after the release${c.length < t.samples ? ` (${c.length} of ${t.samples} points: min/max per bucket)` : ''}`, L + 4, h - 4);
 }
 
 // ---------- tune ----------
@@ -467,6 +473,9 @@ function drawMap(m) {
 }
 
 // ---------- controls ----------
+// Commands are typed: a number field takes a JSON number. Text that is not a finite number
+// is sent as it is, and the server refuses it naming the field.
+function num(text) { const x = Number(text); return text !== '' && Number.isFinite(x) ? x : text; }
 function flash(el, ok, text) { el.className = 'msg ' + (ok ? 'ok' : 'err'); el.textContent = text; }
 
 $('cfg-form').addEventListener('submit', async (e) => {
@@ -474,7 +483,7 @@ $('cfg-form').addEventListener('submit', async (e) => {
   const set = {};
   for (const el of $('cfg-form').querySelectorAll('input, select')) {
     const v = el.value.trim();
-    if (v !== '') set[el.name] = v;
+    if (v !== '') set[el.name] = el.tagName === 'SELECT' ? v : num(v);
   }
   const r = await send({ cmd: 'config', set });
   flash($('cfg-msg'), r.ok, r.ok ? 'applied' : r.error);
@@ -485,15 +494,15 @@ $('clear-faults').onclick = $('banner-clear').onclick = async () => {
   if (!r.ok) showLog(r.error);
 };
 $('rel-run').onclick = async () => {
-  const args = { deflection: $('rel-deflection').value.trim(), ticks: $('rel-ticks').value.trim() };
-  const k = $('rel-stiffness').value.trim(); if (k !== '') args.stiffness = k;
+  const args = { deflection: num($('rel-deflection').value.trim()), ticks: num($('rel-ticks').value.trim()) };
+  const k = $('rel-stiffness').value.trim(); if (k !== '') args.stiffness = num(k);
   const v = $('rel-verdict'); v.dataset.state = 'running'; v.textContent = 'starting…';
   const r = await send({ cmd: 'release', args });
   if (!r.ok) { v.dataset.state = 'fail'; v.textContent = r.error; }
 };
 $('tune-run').onclick = async () => {
-  const args = { margin: $('tune-margin').value.trim(), 'dry-run': $('tune-dry-run').checked };
-  const mv = $('tune-max-velocity').value.trim(); if (mv !== '') args['max-velocity'] = mv;
+  const args = { margin: num($('tune-margin').value.trim()), 'dry-run': $('tune-dry-run').checked };
+  const mv = $('tune-max-velocity').value.trim(); if (mv !== '') args['max-velocity'] = num(mv);
   $('tune-log').textContent = ''; $('tune-result').hidden = true;
   const r = await send({ cmd: 'tune', args });
   if (!r.ok && !/tune failed/.test(r.error)) onTune({ state: 'error', error: r.error });

@@ -32,6 +32,9 @@ pub enum Kind {
     Release(ReleaseArgs),
 }
 
+/// Default of `experiment release --ticks` (and of the page's release test).
+pub const DEFAULT_RELEASE_TICKS: u32 = 3000;
+
 /// Arguments of `hostctl experiment release`.
 #[derive(Debug, clap::Args)]
 pub struct ReleaseArgs {
@@ -41,7 +44,7 @@ pub struct ReleaseArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub deflection: i32,
     /// Servo ticks to record after the release (100–10000000).
-    #[arg(long, default_value_t = 3000, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = DEFAULT_RELEASE_TICKS, allow_hyphen_values = true)]
     pub ticks: u32,
     /// Wall stiffness for the test, N/m (N·m/rad); default: the device's configured K
     /// (needed when the device's wall is off, K = 0, as on a fresh virtual device).
@@ -72,16 +75,21 @@ pub fn run(a: &Args) -> Result<()> {
 /// # Errors
 /// The first argument out of range, named with its range.
 pub fn check_release(a: &ReleaseArgs) -> Result<()> {
-    if a.deflection == 0 || a.deflection.unsigned_abs() > 1 << 20 {
-        bail!(
-            "--deflection must be non-zero and within [-1048576, 1048576] (got {})",
-            a.deflection
-        );
+    check_release_values(a.deflection, a.ticks, a.stiffness)
+}
+
+/// [`check_release`] on the values themselves (shared with `hostctl ui`'s release command).
+///
+/// # Errors
+/// As [`check_release`].
+pub fn check_release_values(deflection: i32, ticks: u32, stiffness: Option<f64>) -> Result<()> {
+    if deflection == 0 || deflection.unsigned_abs() > 1 << 20 {
+        bail!("--deflection must be non-zero and within [-1048576, 1048576] (got {deflection})");
     }
-    if !(100..=10_000_000).contains(&a.ticks) {
-        bail!("--ticks must be within [100, 10000000] (got {})", a.ticks);
+    if !(100..=10_000_000).contains(&ticks) {
+        bail!("--ticks must be within [100, 10000000] (got {ticks})");
     }
-    if let Some(k) = a.stiffness {
+    if let Some(k) = stiffness {
         if !(k.is_finite() && k > 0.0) {
             bail!("--stiffness must be finite and > 0 (got {k})");
         }

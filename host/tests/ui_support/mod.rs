@@ -54,6 +54,36 @@ impl Server {
         }
     }
 
+    /// The server's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// A WebSocket on `/ws` as the page opens it (handshake done, response read).
+    pub fn ws(&self) -> TcpStream {
+        let mut s = TcpStream::connect(self.addr).expect("connect");
+        s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+        let h = self.host();
+        let req = format!(
+            "GET /ws?token={} HTTP/1.1\r\nHost: {h}\r\nOrigin: http://{h}\r\nConnection: Upgrade\r\n\
+             Upgrade: websocket\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n",
+            self.token
+        );
+        s.write_all(req.as_bytes()).expect("send the upgrade");
+        let mut head = Vec::new();
+        let mut b = [0u8; 1];
+        while !head.ends_with(b"\r\n\r\n") {
+            s.read_exact(&mut b).expect("read the upgrade answer");
+            head.push(b[0]);
+        }
+        assert!(
+            head.starts_with(b"HTTP/1.1 101"),
+            "{}",
+            String::from_utf8_lossy(&head)
+        );
+        s
+    }
+
     /// `Host` value of this server.
     pub fn host(&self) -> String {
         self.addr.to_string()
@@ -115,5 +145,64 @@ impl Drop for Server {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+/// Reads one WebSocket frame sent by the server (unmasked): its opcode and payload.
+pub fn read_frame(s: &mut TcpStream) -> std::io::Result<(u8, Vec<u8>)> {
+    let mut h = [0u8; 2];
+    s.read_exact(&mut h)?;
+    let len = match h[1] & 0x7f {
+        126 => {
+            let mut e = [0u8; 2];
+            s.read_exact(&mut e)?;
+            u64::from(u16::from_be_bytes(e))
+        }
+        127 => {
+            let mut e = [0u8; 8];
+            s.read_exact(&mut e)?;
+            u64::from_be_bytes(e)
+        }
+        n => u64::from(n),
+    };
+    let mut payload = vec![0u8; usize::try_from(len).expect("frame length")];
+    s.read_exact(&mut payload)?;
+    Ok((h[0] & 0x0f, payload))
+}
+
+/// Sends one masked WebSocket frame (as a browser does) of `opcode` with `payload`.
+pub fn send_frame(s: &mut TcpStream, opcode: u8, payload: &[u8]) -> std::io::Result<()> {
+    let mut f = vec![0x80 | opcode];
+    let n = payload.len();
+    if n < 126 {
+        f.push(0x80 | n as u8);
+    } else if n <= 0xffff {
+        f.push(0x80 | 126);
+        f.extend_from_slice(&(n as u16).to_be_bytes());
+    } else {
+        f.push(0x80 | 127);
+        f.extend_from_slice(&(n as u64).to_be_bytes());
+    }
+    let key = [0x12, 0x34, 0x56, 0x78];
+    f.extend_from_slice(&key);
+    f.extend(payload.iter().enumerate().map(|(i, b)| b ^ key[i % 4]));
+    s.write_all(&f)
+}
+
+/// Reads frames until a close frame (within 10 s: telemetry keeps arriving meanwhile, so a
+/// server that never closes fails the test instead of hanging it); returns its code and reason.
+pub fn read_close(s: &mut TcpStream) -> (u16, String) {
+    let t0 = std::time::Instant::now();
+    loop {
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "no close frame within 10 s"
+        );
+        let (op, p) = read_frame(s).expect("a close frame before the connection ends");
+        if op == 8 {
+            assert!(p.len() >= 2, "a close frame with a code");
+            let code = u16::from_be_bytes([p[0], p[1]]);
+            return (code, String::from_utf8_lossy(&p[2..]).into_owned());
+        }
     }
 }

@@ -17,15 +17,16 @@
 
 use super::plane::{self, Model};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
-use super::wire::{self, Command, Reply};
-use crate::cmd::experiment::{check_release, release_config};
-use crate::cmd::tune as tune_cmd;
+use super::trace;
+use super::wire::{self, Command, ReleaseTest, Reply, TuneTest};
+use crate::cmd::experiment::{check_release_values, release_config};
+use crate::config_flags::Overrides;
 use crate::device::client::{Client, HEARTBEAT_PERIOD};
 use crate::device::connect::ConnectArgs;
 use crate::recording::Writer;
 use crate::session::{self, Stats};
 use crate::tune::procedure;
-use crate::tune::release::{classify, released_counts};
+use crate::tune::release::classify;
 use anyhow::{bail, Context, Result};
 use axum::extract::ws::Message;
 use serde_json::{json, Value};
@@ -127,7 +128,11 @@ struct Release {
     original: ServoConfig,
     test: ServoConfig,
     deflection: i32,
-    samples: Vec<Sample>,
+    /// Released counts (effective ticks, as `released_counts`): 8 bytes per tick while the
+    /// test runs; only their decimated trace is kept afterwards.
+    counts: Vec<i64>,
+    /// Tick of the first hold or released sample.
+    first_tick: Option<u32>,
     start: Instant,
     limit: Duration,
     last_hb: Instant,
@@ -300,11 +305,15 @@ impl Dev {
             }
         }
         if let Some(rel) = &mut self.release {
-            rel.samples.extend(
-                samples
-                    .iter()
-                    .filter(|s| s.flags & (flags::HOLD | flags::RELEASED) != 0),
-            );
+            let shift = rel.test.coarsen_shift;
+            for s in samples {
+                if s.flags & (flags::HOLD | flags::RELEASED) != 0 && rel.first_tick.is_none() {
+                    rel.first_tick = Some(s.tick);
+                }
+                if s.flags & flags::RELEASED != 0 {
+                    rel.counts.push(i64::from(s.count) >> shift);
+                }
+            }
         }
         if let Some(last) = samples.last() {
             self.last_sample = Some(*last);
@@ -421,14 +430,14 @@ impl Dev {
     /// Runs one command and answers it (a release test answers when it ends).
     fn command(&mut self, cmd: Command, reply: tokio::sync::oneshot::Sender<Reply>) {
         let r = match cmd {
-            Command::Config { set } => self.config(&set),
+            Command::Config(set) => self.config(&set),
             Command::ClearFaults => self.clear_faults(),
-            Command::Velocity { xidot } => self.velocity(xidot),
-            Command::RecordStart { file } => self.record_start(&file),
+            Command::Velocity(xidot) => self.velocity(xidot),
+            Command::RecordStart(file) => self.record_start(&file),
             Command::RecordStop => self.record_stop(),
             Command::Get => self.get(),
-            Command::Tune { args } => self.tune(&args),
-            Command::Release { args } => match self.release_start(&args) {
+            Command::Tune(args) => self.tune(&args),
+            Command::Release(args) => match self.release_start(&args) {
                 Ok(()) => {
                     if let Some(rel) = &mut self.release {
                         rel.reply = Some(reply);
@@ -448,11 +457,9 @@ impl Dev {
         Ok(())
     }
 
-    fn config(&mut self, set: &serde_json::Map<String, Value>) -> Reply {
+    fn config(&mut self, o: &Overrides) -> Reply {
         let mut run = || -> Result<Value> {
             self.busy_check("config set")?;
-            let argv = wire::argv("config set", set)?;
-            let o = wire::ConfigCli::parse_argv(&argv)?;
             // As `hostctl config set`: bad numbers are refused before the device is asked.
             o.apply(&ServoConfig::default())?;
             if o.is_empty() {
@@ -558,11 +565,9 @@ impl Dev {
         out
     }
 
-    fn release_start(&mut self, args: &serde_json::Map<String, Value>) -> Result<()> {
+    fn release_start(&mut self, a: &ReleaseTest) -> Result<()> {
         self.busy_check("release")?;
-        let argv = wire::argv("release", args)?;
-        let a = wire::ReleaseCli::parse_argv(&argv)?;
-        check_release(&a)?;
+        check_release_values(a.deflection, a.ticks, a.stiffness)?;
         let original = self.client.get_config()?;
         let test = release_config(
             &original,
@@ -590,7 +595,8 @@ impl Dev {
             original,
             test,
             deflection: a.deflection,
-            samples: Vec::with_capacity(a.ticks as usize + 1024),
+            counts: Vec::with_capacity(a.ticks as usize),
+            first_tick: None,
             start: Instant::now(),
             limit: Duration::from_secs_f64(f64::from(a.ticks) / rate * 20.0 + 10.0),
             last_hb: Instant::now(),
@@ -605,15 +611,12 @@ impl Dev {
         };
         // The experiment's stiffness is not kept.
         let restored = self.client.set_config(&rel.original);
-        let rel_samples: Vec<Sample> = rel
-            .samples
-            .iter()
-            .copied()
-            .filter(|s| s.flags & flags::RELEASED != 0)
-            .collect();
-        let counts = released_counts(&rel_samples, rel.test.coarsen_shift);
+        let counts = std::mem::take(&mut rel.counts);
         let verdict = classify(&counts, faults != 0);
-        let first = rel.samples.first().map_or(0, |s| s.tick);
+        let first = rel.first_tick.unwrap_or(0);
+        // The page gets a bounded trace; the full one is in a recording.
+        let trace = trace::decimate(&counts, trace::TRACE_POINTS);
+        drop(counts);
         let v = json!({
             "type": "release",
             "state": "done",
@@ -625,7 +628,7 @@ impl Dev {
             "completed": completed,
             "faults": faults,
             "fault_names": wire::fault_names(faults),
-            "counts": counts,
+            "trace": trace,
             "first_tick": first,
             "rate_hz": rel.test.servo_rate_hz,
         });
@@ -646,7 +649,7 @@ impl Dev {
         }
     }
 
-    fn tune(&mut self, args: &serde_json::Map<String, Value>) -> Reply {
+    fn tune(&mut self, a: &TuneTest) -> Reply {
         let mut run = || -> Result<Value> {
             self.busy_check("tune")?;
             if let Some(r) = &self.rec {
@@ -655,9 +658,7 @@ impl Dev {
                     r.path.display()
                 );
             }
-            let argv = wire::argv("tune", args)?;
-            let a = wire::TuneCli::parse_argv(&argv)?;
-            let s = tune_cmd::settings(&a)?;
+            let s = a.settings()?;
             // Flush what the page has, then give the link to tune.
             self.client.stream_stop()?;
             self.streaming = false;

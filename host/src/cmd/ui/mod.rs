@@ -2,12 +2,14 @@
 //! plane with the live operating point, release tests, tune, faults, recording and a map
 //! viewer — served on a local address with a per-run token.
 //!
-//! Parts: [`security`] (who may talk to the server), [`server`] (HTTP, the WebSocket, the
-//! embedded page from `host/ui/`), [`device`] (the thread that owns the device connection),
+//! Parts: [`security`] (who may talk to the server), [`conn`] (connections and their limits),
+//! [`server`] (HTTP routes, the embedded page from `host/ui/`), [`ws`] (the WebSocket
+//! session), [`device`] (the thread that owns the device connection),
 //! [`wire`] (commands, events and the binary telemetry frames), [`plane`] (the (β, σ) plane
 //! and the map overlay, computed with the same code as the figures), [`frontier`] (the (B, K)
 //! frontier K_max(B) beside it, with the configured (B, K)), [`record`] (recording
-//! from the page in `hostctl record`'s format).
+//! from the page in `hostctl record`'s format), [`trace`] (a release test's trace, decimated
+//! for the page).
 //!
 //! Unlike the other commands, this one imports its siblings' argument definitions and checks
 //! (config set, experiment release, tune, map files): it is a front end over them, so that the
@@ -19,13 +21,16 @@
 //! `config set`'s checks; the server binds to 127.0.0.1 unless `--listen` says otherwise (with
 //! a warning); the URL with the token is printed on stdout before anything is served.
 
+pub mod conn;
 pub mod device;
 pub mod frontier;
 pub mod plane;
 pub mod record;
 pub mod security;
 pub mod server;
+pub mod trace;
 pub mod wire;
+pub mod ws;
 
 use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;
@@ -150,13 +155,12 @@ pub fn run(a: &Args) -> Result<()> {
     };
     let stop = Arc::clone(&shared);
     let served = rt.block_on(async move {
-        axum::serve(listener, server::router(app))
-            .with_graceful_shutdown(async move {
-                while !stop.stop.load(Ordering::Relaxed) && !crate::session::interrupted() {
-                    tokio::time::sleep(Duration::from_millis(100)).await;
-                }
-            })
-            .await
+        conn::serve(listener, server::router(app), async move {
+            while !stop.stop.load(Ordering::Relaxed) && !crate::session::interrupted() {
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+        })
+        .await
     });
     shared.stop.store(true, Ordering::Relaxed);
     let dev = dev

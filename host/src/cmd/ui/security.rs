@@ -1,7 +1,11 @@
 //! Who may talk to `hostctl ui`: a page that changes a haptic device's stiffness is a
 //! physical-safety surface, so every request is checked before it is served.
 //!
-//! Rules (in this order; any failure is `403 Forbidden` with a one-line reason):
+//! Rules (in this order; a malformed request is `400 Bad Request`, any other failure
+//! `403 Forbidden`, both with a one-line reason):
+//! 0. **Form**: at most one `Host` header, and an origin-form request target (`/path?query`):
+//!    an absolute URI (`GET http://evil.example/ HTTP/1.1`), an authority (`CONNECT`) or `*`
+//!    is refused, so the `Host` checked below is the only name the request carries.
 //! 1. **Host**: the `Host` header must name the address the server is bound to (`IP:PORT`, or
 //!    `localhost:PORT` when bound to a loopback address). This defeats DNS rebinding: a foreign
 //!    site whose name resolves to 127.0.0.1 still sends its own name as `Host`.
@@ -47,6 +51,41 @@ pub enum Refusal {
     /// No token, or a wrong one.
     #[error("missing or wrong token: open the URL hostctl ui printed (it ends in ?token=...)")]
     Token,
+    /// More than one `Host` header.
+    #[error("{0} Host headers: a request must carry exactly one")]
+    HostCount(usize),
+    /// A request target that is not a path.
+    #[error(
+        "request target {0:?} is not a path: only origin-form targets (/path?query) are served"
+    )]
+    Target(String),
+}
+
+impl Refusal {
+    /// The HTTP status of the refusal: 400 for a malformed request, 403 otherwise.
+    #[must_use]
+    pub fn status(&self) -> u16 {
+        match self {
+            Self::HostCount(_) | Self::Target(_) => 400,
+            Self::Host(_) | Self::Origin(_) | Self::Token => 403,
+        }
+    }
+}
+
+/// Rule 0: `hosts` `Host` headers and the request target `uri` (as parsed by the server).
+///
+/// # Errors
+/// [`Refusal::HostCount`] for more than one `Host` (none is rule 1's refusal);
+/// [`Refusal::Target`] for a target
+/// with a scheme or an authority, or one that does not start with `/`.
+pub fn check_form(hosts: usize, uri: &axum::http::Uri) -> Result<(), Refusal> {
+    if hosts > 1 {
+        return Err(Refusal::HostCount(hosts));
+    }
+    if uri.scheme().is_some() || uri.authority().is_some() || !uri.path().starts_with('/') {
+        return Err(Refusal::Target(uri.to_string()));
+    }
+    Ok(())
 }
 
 /// The checks of one server run.
@@ -204,6 +243,29 @@ mod tests {
         let mut wrong = g.token().to_string();
         wrong.replace_range(31..32, "0");
         assert_eq!(g.check(h, None, Some(&wrong)), Err(Refusal::Token));
+    }
+
+    #[test]
+    fn only_one_host_and_origin_form_targets() {
+        let uri = |s: &str| s.parse::<axum::http::Uri>().unwrap();
+        assert_eq!(check_form(1, &uri("/ws?token=x")), Ok(()));
+        assert_eq!(check_form(2, &uri("/")), Err(Refusal::HostCount(2)));
+        assert_eq!(
+            check_form(0, &uri("/")),
+            Ok(()),
+            "no Host: rule 1 refuses it (403)"
+        );
+        for bad in [
+            "http://evil.example/",
+            "http://127.0.0.1:8737/",
+            "evil.example:80",
+            "*",
+        ] {
+            let e = check_form(1, &uri(bad)).unwrap_err();
+            assert!(matches!(e, Refusal::Target(_)), "{bad}: {e:?}");
+            assert_eq!(e.status(), 400);
+        }
+        assert_eq!(Refusal::Token.status(), 403);
     }
 
     #[test]

@@ -1,29 +1,33 @@
 //! The HTTP side of `hostctl ui` (axum on tokio): the page and its assets (embedded in the
-//! binary from `host/ui/`), the WebSocket at `/ws`, `POST /api/cmd` (the same commands as
-//! over the WebSocket) and `POST /api/map` (a `hostctl map` JSON to view).
+//! binary from `host/ui/`), the WebSocket at `/ws` ([`super::ws`]), `POST /api/cmd` (the same
+//! commands as over the WebSocket) and `POST /api/map` (a `hostctl map` JSON to view).
 //!
-//! Invariants: every request passes [`super::security::Guard`] first (Host, Origin, and the
-//! token for everything but the two static assets), so a refused request never reaches a
-//! handler, and a refused WebSocket is never upgraded. The page allows only its own origin
-//! (Content-Security-Policy `default-src 'self'`): it loads nothing from elsewhere and works
-//! offline. A page that reads too slowly loses display frames (it is told how many), never
-//! the device's samples.
+//! Invariants: every request passes [`super::security`]'s rules first (one Host, an
+//! origin-form target, Host, Origin, and the token for everything but the static assets and
+//! the favicon), so a refused request never reaches a handler, and a refused WebSocket is
+//! never upgraded. Every answer, refusals included, carries `X-Content-Type-Options:
+//! nosniff`. The page allows only its own origin (Content-Security-Policy `default-src
+//! 'self'`): it loads nothing from elsewhere and works offline. Request bodies are limited
+//! ([`MAX_MAP_BYTES`], [`MAX_CMD_BYTES`]): a larger `Content-Length` is answered `413` before
+//! the body is read, and a chunked body is cut off at the limit with the same `413`.
 
+use super::conn::Busy;
 use super::device::{Request, Shared};
 use super::plane;
-use super::security::{token_from_query, Guard, TOKEN_HEADER};
-use super::wire::{Envelope, Reply};
+use super::security::{check_form, token_from_query, Guard, Refusal, TOKEN_HEADER};
+use super::wire::{parse_command, Envelope, Reply};
+use super::ws::ws;
 use axum::body::Bytes;
-use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{DefaultBodyLimit, Request as HttpRequest, State};
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
+use axum::Extension;
 use axum::Router;
 use serde_json::{json, Value};
 use std::sync::{mpsc, Arc, Mutex};
-use tokio::sync::broadcast::error::RecvError;
+use tower_http::limit::RequestBodyLimitLayer;
 
 /// The page, its script and its style, embedded at build time.
 pub const INDEX_HTML: &str = include_str!("../../../ui/index.html");
@@ -32,8 +36,11 @@ pub const APP_JS: &str = include_str!("../../../ui/app.js");
 /// The page's style.
 pub const STYLE_CSS: &str = include_str!("../../../ui/style.css");
 
-/// Largest map JSON accepted by `POST /api/map`.
-pub const MAX_MAP_BYTES: usize = 256 << 20;
+/// Largest map JSON accepted by `POST /api/map` (4 MiB: about 220 bytes per grid point, so
+/// ≈ 19 000 points, e.g. the default 34 × 21 grid (≈ 160 kB per panel) in 25 panels).
+pub const MAX_MAP_BYTES: usize = 4 << 20;
+/// Largest command accepted by `POST /api/cmd` (as over the WebSocket).
+pub const MAX_CMD_BYTES: usize = super::ws::MAX_WS_MESSAGE;
 
 /// What the handlers share.
 #[derive(Debug, Clone)]
@@ -52,41 +59,55 @@ pub fn router(app: App) -> Router {
         .route("/", get(index))
         .route("/app.js", get(app_js))
         .route("/style.css", get(style_css))
+        .route("/favicon.ico", get(StatusCode::NO_CONTENT))
         .route("/ws", get(ws))
-        .route("/api/cmd", post(api_cmd))
-        .route(
-            "/api/map",
-            post(api_map).layer(DefaultBodyLimit::max(MAX_MAP_BYTES)),
-        )
+        .route("/api/cmd", post(api_cmd).layer(body_limit(MAX_CMD_BYTES)))
+        .route("/api/map", post(api_map).layer(body_limit(MAX_MAP_BYTES)))
         .layer(middleware::from_fn_with_state(app.clone(), guard))
         .with_state(app)
 }
 
-fn forbidden(why: &str) -> Response {
+/// The body limit of a route: `413` by `Content-Length` before reading, or at the limit while
+/// reading a chunked body (the extractor's own limit is the same).
+fn body_limit(bytes: usize) -> (RequestBodyLimitLayer, DefaultBodyLimit) {
     (
-        StatusCode::FORBIDDEN,
+        RequestBodyLimitLayer::new(bytes),
+        DefaultBodyLimit::max(bytes),
+    )
+}
+
+fn refused(why: &Refusal) -> Response {
+    let status = StatusCode::from_u16(why.status()).unwrap_or(StatusCode::FORBIDDEN);
+    let reason = status.canonical_reason().unwrap_or("");
+    (
+        status,
         [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
-        format!("403 Forbidden: {why}\n"),
+        format!("{} {reason}: {why}\n", status.as_u16()),
     )
         .into_response()
 }
 
-async fn guard(State(app): State<App>, req: HttpRequest, next: Next) -> Response {
+/// The rules of [`super::security`], in order.
+fn check(guard: &Guard, req: &HttpRequest) -> Result<(), Refusal> {
     let h = req.headers();
+    check_form(h.get_all(header::HOST).iter().count(), req.uri())?;
     let text = |name: header::HeaderName| h.get(name).and_then(|v| v.to_str().ok());
     let host = text(header::HOST);
     let origin = text(header::ORIGIN);
-    let public = matches!(req.uri().path(), "/app.js" | "/style.css");
+    let public = matches!(req.uri().path(), "/app.js" | "/style.css" | "/favicon.ico");
     let token = h
         .get(TOKEN_HEADER)
         .and_then(|v| v.to_str().ok())
         .or_else(|| token_from_query(req.uri().query()));
-    let verdict = if public {
-        app.guard.check_site(host, origin)
+    if public {
+        guard.check_site(host, origin)
     } else {
-        app.guard.check(host, origin, token)
-    };
-    match verdict {
+        guard.check(host, origin, token)
+    }
+}
+
+async fn guard(State(app): State<App>, req: HttpRequest, next: Next) -> Response {
+    let mut resp = match check(&app.guard, &req) {
         Ok(()) => {
             let mut resp = next.run(req).await;
             let hs = resp.headers_mut();
@@ -104,8 +125,13 @@ async fn guard(State(app): State<App>, req: HttpRequest, next: Next) -> Response
             );
             resp
         }
-        Err(e) => forbidden(&e.to_string()),
-    }
+        Err(e) => refused(&e),
+    };
+    resp.headers_mut().insert(
+        header::X_CONTENT_TYPE_OPTIONS,
+        HeaderValue::from_static("nosniff"),
+    );
+    resp
 }
 
 async fn index() -> impl IntoResponse {
@@ -130,7 +156,7 @@ async fn style_css() -> impl IntoResponse {
 }
 
 /// Sends a command to the device thread and waits for its answer.
-async fn submit(app: &App, env: Envelope) -> Reply {
+pub(crate) async fn submit(app: &App, env: Envelope) -> Reply {
     let (tx, rx) = tokio::sync::oneshot::channel();
     let sent = app
         .commands
@@ -147,17 +173,20 @@ async fn submit(app: &App, env: Envelope) -> Reply {
         .unwrap_or_else(|_| Err("the device thread stopped".into()))
 }
 
-fn reply_json(id: &Value, r: Reply) -> Value {
+/// The answer to a command as the page reads it.
+pub(crate) fn reply_json(id: &Value, r: Reply) -> Value {
     match r {
         Ok(v) => json!({"type": "reply", "id": id, "ok": true, "result": v}),
         Err(e) => json!({"type": "reply", "id": id, "ok": false, "error": e}),
     }
 }
 
-async fn api_cmd(State(app): State<App>, body: Bytes) -> Response {
-    match serde_json::from_slice::<Envelope>(&body) {
+async fn api_cmd(State(app): State<App>, busy: Option<Extension<Busy>>, body: Bytes) -> Response {
+    match parse_command(&body) {
         Ok(env) => {
             let id = env.id.clone();
+            // A release test or a tune may take minutes: the connection is not idle meanwhile.
+            let _busy = busy.map(|b| b.hold());
             let r = submit(&app, env).await;
             let status = if r.is_ok() {
                 StatusCode::OK
@@ -166,11 +195,9 @@ async fn api_cmd(State(app): State<App>, body: Bytes) -> Response {
             };
             (status, axum::Json(reply_json(&id, r))).into_response()
         }
-        Err(e) => (
-            StatusCode::BAD_REQUEST,
-            axum::Json(reply_json(&Value::Null, Err(format!("bad command: {e}")))),
-        )
-            .into_response(),
+        Err((id, e)) => {
+            (StatusCode::BAD_REQUEST, axum::Json(reply_json(&id, Err(e)))).into_response()
+        }
     }
 }
 
@@ -183,70 +210,5 @@ async fn api_map(body: Bytes) -> Response {
             axum::Json(json!({"type": "map", "error": format!("{e:#}")})),
         )
             .into_response(),
-    }
-}
-
-async fn ws(State(app): State<App>, up: WebSocketUpgrade) -> Response {
-    up.on_upgrade(move |socket| session(app, socket))
-}
-
-async fn session(app: App, mut socket: WebSocket) {
-    // Subscribe first: nothing published after the snapshot is missed.
-    let mut rx = app.shared.tx.subscribe();
-    let first: Vec<String> = match app.shared.snapshot.lock() {
-        Ok(s) => std::iter::once(s.hello.to_string())
-            .chain(s.latest.iter().map(|(_, v)| v.to_string()))
-            .collect(),
-        Err(_) => Vec::new(),
-    };
-    for text in first {
-        if socket.send(Message::Text(text.into())).await.is_err() {
-            return;
-        }
-    }
-    let (reply_tx, mut reply_rx) = tokio::sync::mpsc::unbounded_channel::<Value>();
-    let mut check = tokio::time::interval(std::time::Duration::from_millis(200));
-    loop {
-        tokio::select! {
-            _ = check.tick() => if app.shared.stop.load(std::sync::atomic::Ordering::Relaxed) {
-                let _ = socket.send(Message::Close(None)).await;
-                return;
-            },
-            m = rx.recv() => match m {
-                Ok(msg) => if socket.send(msg).await.is_err() { return },
-                Err(RecvError::Lagged(n)) => {
-                    let v = json!({"type": "lagged", "frames": n});
-                    if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
-                }
-                Err(RecvError::Closed) => {
-                    let _ = socket.send(Message::Close(None)).await;
-                    return;
-                }
-            },
-            r = reply_rx.recv() => if let Some(v) = r {
-                if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
-            },
-            m = socket.recv() => match m {
-                Some(Ok(Message::Text(t))) => {
-                    match serde_json::from_str::<Envelope>(t.as_str()) {
-                        Ok(env) => {
-                            let app = app.clone();
-                            let tx = reply_tx.clone();
-                            tokio::spawn(async move {
-                                let id = env.id.clone();
-                                let r = submit(&app, env).await;
-                                let _ = tx.send(reply_json(&id, r));
-                            });
-                        }
-                        Err(e) => {
-                            let v = reply_json(&Value::Null, Err(format!("bad command: {e}")));
-                            if socket.send(Message::Text(v.to_string().into())).await.is_err() { return }
-                        }
-                    }
-                }
-                Some(Ok(Message::Close(_)) | Err(_)) | None => return,
-                Some(Ok(_)) => {}
-            },
-        }
     }
 }

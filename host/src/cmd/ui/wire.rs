@@ -5,10 +5,15 @@
 //!   `{"cmd": "release", "args": {"deflection": 20, "ticks": 3000, "stiffness": 1}}`,
 //!   `{"cmd": "tune", "args": {"margin": 0.9, "dry-run": true}}`, `{"cmd": "clear_faults"}`,
 //!   `{"cmd": "record_start", "file": "run.csv"}`, `{"cmd": "record_stop"}`,
-//!   `{"cmd": "velocity", "xidot": 5}`, `{"cmd": "get"}`. The keys of `set` and `args` are the command-line
-//!   flags of `hostctl config set`, `experiment release` and `tune`; they are turned into an
-//!   argument list and parsed by the same clap definitions, then checked by the same
-//!   functions, so the page gets the same messages as the terminal.
+//!   `{"cmd": "velocity", "xidot": 5}`, `{"cmd": "get"}`. They are typed ([`Command`]): the
+//!   keys of `set` and `args` are the command-line flags' names of `hostctl config set`,
+//!   `experiment release` and `tune`, each takes its field's type (a number is a JSON number,
+//!   a word a JSON string, `dry-run` a boolean), and an unknown key or a value of another type
+//!   refuses the command naming the field (`config: set.stiffness: invalid type: sequence,
+//!   expected f32`). Nothing from the page is turned into a command line. The values are then
+//!   checked by the terminal's own functions ([`Overrides::apply`],
+//!   [`crate::cmd::experiment::check_release_values`], [`Settings::validate`]), so the page
+//!   gets the terminal's range messages.
 //! - **Answers** (server → page): `{"type": "reply", "id": 7, "ok": true, "result": …}` or
 //!   `{"type": "reply", "id": 7, "ok": false, "error": "--stiffness must be …"}`.
 //! - **Events** (server → page, JSON): `hello`, `config`, `plane`, `status`, `faults`,
@@ -19,10 +24,11 @@
 //!   energy (the units of [`stiffwall_proto::Sample`]). Every sample the device sent is in
 //!   exactly one frame.
 
-use crate::cmd::experiment::ReleaseArgs;
+use crate::cmd::experiment::DEFAULT_RELEASE_TICKS;
 use crate::config_flags::Overrides;
-use anyhow::{bail, Result};
-use clap::Parser;
+use crate::tune::procedure::Settings;
+use anyhow::Result;
+use serde::de::DeserializeOwned;
 use serde_json::Value;
 use stiffwall_proto::{fault, Sample};
 
@@ -35,38 +41,21 @@ pub const SAMPLE_BYTES: usize = 18;
 pub type Reply = Result<Value, String>;
 
 /// A command from the page.
-#[derive(Debug, Clone, serde::Deserialize)]
-#[serde(tag = "cmd", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Debug, Clone)]
 pub enum Command {
-    /// `hostctl config set` with these flags.
-    Config {
-        /// Flag name (without dashes) → value.
-        set: serde_json::Map<String, Value>,
-    },
-    /// `hostctl experiment release` with these flags (deflection, ticks, stiffness).
-    Release {
-        /// Flag name → value.
-        args: serde_json::Map<String, Value>,
-    },
-    /// `hostctl tune` with these flags (max-velocity, margin, release-ticks,
-    /// excite-seconds, dry-run).
-    Tune {
-        /// Flag name → value.
-        #[serde(default)]
-        args: serde_json::Map<String, Value>,
-    },
+    /// `hostctl config set` with these fields (`"set"`).
+    Config(Overrides),
+    /// `hostctl experiment release` with these arguments (`"args"`).
+    Release(ReleaseTest),
+    /// `hostctl tune` with these arguments (`"args"`, optional).
+    Tune(TuneTest),
     /// Clear latched faults.
     ClearFaults,
-    /// The velocity of the critical line, encoder ticks per servo period.
-    Velocity {
-        /// ξ̇ (> 0).
-        xidot: f64,
-    },
-    /// Start recording (lossless CSV, as `hostctl record`) into the record directory.
-    RecordStart {
-        /// Plain file name ending in `.csv`.
-        file: String,
-    },
+    /// The velocity of the critical line, encoder ticks per servo period (ξ̇ > 0).
+    Velocity(f64),
+    /// Start recording (lossless CSV, as `hostctl record`) into the record directory; a plain
+    /// file name ending in `.csv`.
+    RecordStart(String),
     /// Stop recording.
     RecordStop,
     /// The active configuration, latched faults, counters and the latest `plane` message
@@ -74,157 +63,167 @@ pub enum Command {
     Get,
 }
 
-/// A command with its request id, as sent by the page.
-#[derive(Debug, Clone, serde::Deserialize)]
-pub struct Envelope {
-    /// Echoed in the reply.
+/// The page's release test: `experiment release`'s test flags.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub struct ReleaseTest {
+    /// Initial deflection, effective encoder ticks.
+    pub deflection: i32,
+    /// Servo ticks recorded after the release.
+    #[serde(default = "default_ticks")]
+    pub ticks: u32,
+    /// Wall stiffness for the test (default: the configured K).
     #[serde(default)]
+    pub stiffness: Option<f64>,
+}
+
+fn default_ticks() -> u32 {
+    DEFAULT_RELEASE_TICKS
+}
+
+/// The page's tune: `tune`'s flags that the page may give (the others choose the device, the
+/// output or the plot).
+#[derive(Debug, Clone, Default, PartialEq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub struct TuneTest {
+    /// Expected maximum velocity (default: 5 ticks per period).
+    pub max_velocity: Option<f64>,
+    /// Fraction of the largest settling K that is set.
+    pub margin: Option<f64>,
+    /// Ticks per release test.
+    pub release_ticks: Option<u32>,
+    /// Duration of the identification excitation, s.
+    pub excite_seconds: Option<f64>,
+    /// Find and report K, but leave the device's config as it was.
+    #[serde(default)]
+    pub dry_run: bool,
+}
+
+impl TuneTest {
+    /// The tune library's settings, checked by [`Settings::validate`] (the fields not given
+    /// keep `tune`'s defaults).
+    ///
+    /// # Errors
+    /// The first field out of range, named with its range.
+    pub fn settings(&self) -> Result<Settings> {
+        let d = Settings::default();
+        let s = Settings {
+            max_velocity: self.max_velocity,
+            margin: self.margin.unwrap_or(d.margin),
+            release_ticks: self.release_ticks,
+            excite_seconds: self.excite_seconds.unwrap_or(d.excite_seconds),
+            ..d
+        };
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// A command with its request id, as sent by the page.
+#[derive(Debug, Clone)]
+pub struct Envelope {
+    /// Echoed in the reply (a number, a string or null).
     pub id: Value,
     /// The command.
-    #[serde(flatten)]
     pub cmd: Command,
 }
 
-/// Flags the page may give to `release` (the rest of `experiment release`'s flags pick the
-/// device, the output or the plot, which the page does not choose).
-pub const RELEASE_FLAGS: &[&str] = &["deflection", "ticks", "stiffness"];
-/// Flags the page may give to `tune`.
-pub const TUNE_FLAGS: &[&str] = &[
-    "max-velocity",
-    "margin",
-    "release-ticks",
-    "excite-seconds",
-    "dry-run",
-];
-
-/// The argument list `program --key value …` of a JSON object of flags: `true` is a bare
-/// flag, `false` and `null` are left out, numbers and strings are values, arrays give one value
-/// per element.
-///
-/// # Errors
-/// A key that is not a flag name, or a value of another type.
-pub fn argv(program: &str, flags: &serde_json::Map<String, Value>) -> Result<Vec<String>> {
-    let mut v = vec![program.to_string()];
-    for (k, val) in flags {
-        let name_ok = k.starts_with(|c: char| c.is_ascii_lowercase())
-            && k.chars()
-                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-');
-        if !name_ok {
-            bail!("{program}: {k:?} is not a flag name");
-        }
-        let flag = format!("--{k}");
-        let scalar = |x: &Value| -> Result<String> {
-            match x {
-                Value::Number(n) => Ok(n.to_string()),
-                Value::String(s) => Ok(s.clone()),
-                other => bail!("{program}: {flag} takes a number or a word, got {other}"),
-            }
-        };
-        match val {
-            Value::Null | Value::Bool(false) => {}
-            Value::Bool(true) => v.push(flag.clone()),
-            Value::Array(xs) => {
-                v.push(flag.clone());
-                for x in xs {
-                    v.push(scalar(x)?);
-                }
-            }
-            x => {
-                v.push(flag.clone());
-                v.push(scalar(x)?);
-            }
-        }
-    }
-    Ok(v)
-}
-
-fn only(program: &str, argv: &[String], allowed: &[&str]) -> Result<()> {
-    for a in argv.iter().skip(1).filter(|a| a.starts_with("--")) {
-        if !allowed.contains(&&a[2..]) {
-            bail!(
-                "{program}: the page cannot set {a} (allowed: {})",
-                allowed
-                    .iter()
-                    .map(|f| format!("--{f}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-    }
-    Ok(())
-}
-
-/// A clap error as the terminal shows it, without the usage lines.
-fn clap_message(e: &clap::Error) -> String {
-    e.to_string()
-        .lines()
-        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
-        .map(str::trim_end)
-        .filter(|l| !l.is_empty())
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-/// `hostctl config set`'s flags.
-#[derive(Debug, Parser)]
-#[command(name = "config set")]
-pub struct ConfigCli {
-    #[command(flatten)]
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConfigBody {
     set: Overrides,
 }
 
-impl ConfigCli {
-    /// Parses `argv` (program name first) with `config set`'s definitions.
-    ///
-    /// # Errors
-    /// clap's message (unknown flag, bad number, unknown wall mode, …).
-    pub fn parse_argv(argv: &[String]) -> Result<Overrides> {
-        Self::try_parse_from(argv)
-            .map(|c| c.set)
-            .map_err(|e| anyhow::anyhow!("{}", clap_message(&e)))
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReleaseBody {
+    args: ReleaseTest,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TuneBody {
+    #[serde(default)]
+    args: TuneTest,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VelocityBody {
+    xidot: f64,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RecordBody {
+    file: String,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoFields {}
+
+/// The names of the commands.
+pub const COMMANDS: [&str; 8] = [
+    "config",
+    "release",
+    "tune",
+    "clear_faults",
+    "velocity",
+    "record_start",
+    "record_stop",
+    "get",
+];
+
+/// `fields` (the command's object without `cmd` and `id`) as `T`, or the message naming the
+/// field that does not fit.
+fn typed<T: DeserializeOwned>(cmd: &str, fields: Value) -> Result<T, String> {
+    serde_path_to_error::deserialize(fields).map_err(|e| {
+        let path = e.path().to_string();
+        if path == "." {
+            format!("{cmd}: {}", e.inner())
+        } else {
+            format!("{cmd}: {path}: {}", e.inner())
+        }
+    })
+}
+
+/// Parses one command from the page (JSON text).
+///
+/// # Errors
+/// The id (when one could be read) and a one-line message: not a JSON object, no or an
+/// unknown `cmd`, an unknown field or a field of the wrong type (named).
+pub fn parse_command(text: &[u8]) -> Result<Envelope, (Value, String)> {
+    let bad = |id: &Value, e: String| (id.clone(), format!("bad command: {e}"));
+    let v: Value = serde_json::from_slice(text).map_err(|e| bad(&Value::Null, e.to_string()))?;
+    let Value::Object(mut fields) = v else {
+        return Err(bad(&Value::Null, "a command is a JSON object".into()));
+    };
+    let id = fields.remove("id").unwrap_or(Value::Null);
+    if !matches!(id, Value::Null | Value::Number(_) | Value::String(_)) {
+        return Err(bad(&Value::Null, "id must be a number or a string".into()));
     }
-}
-
-/// `hostctl experiment release`'s flags.
-#[derive(Debug, Parser)]
-#[command(name = "release")]
-pub struct ReleaseCli {
-    #[command(flatten)]
-    args: ReleaseArgs,
-}
-
-impl ReleaseCli {
-    /// Parses `argv` (program name first) with `experiment release`'s definitions.
-    ///
-    /// # Errors
-    /// A flag the page may not give, or clap's message.
-    pub fn parse_argv(argv: &[String]) -> Result<ReleaseArgs> {
-        only("release", argv, RELEASE_FLAGS)?;
-        Self::try_parse_from(argv)
-            .map(|c| c.args)
-            .map_err(|e| anyhow::anyhow!("{}", clap_message(&e)))
-    }
-}
-
-/// `hostctl tune`'s flags.
-#[derive(Debug, Parser)]
-#[command(name = "tune")]
-pub struct TuneCli {
-    #[command(flatten)]
-    args: crate::cmd::tune::Args,
-}
-
-impl TuneCli {
-    /// Parses `argv` (program name first) with `tune`'s definitions.
-    ///
-    /// # Errors
-    /// A flag the page may not give, or clap's message.
-    pub fn parse_argv(argv: &[String]) -> Result<crate::cmd::tune::Args> {
-        only("tune", argv, TUNE_FLAGS)?;
-        Self::try_parse_from(argv)
-            .map(|c| c.args)
-            .map_err(|e| anyhow::anyhow!("{}", clap_message(&e)))
-    }
+    let name = match fields.remove("cmd") {
+        Some(Value::String(s)) => s,
+        _ => return Err(bad(&id, format!("\"cmd\" must be one of {COMMANDS:?}"))),
+    };
+    let rest = Value::Object(fields);
+    let cmd = match name.as_str() {
+        "config" => typed::<ConfigBody>(&name, rest).map(|b| Command::Config(b.set)),
+        "release" => typed::<ReleaseBody>(&name, rest).map(|b| Command::Release(b.args)),
+        "tune" => typed::<TuneBody>(&name, rest).map(|b| Command::Tune(b.args)),
+        "velocity" => typed::<VelocityBody>(&name, rest).map(|b| Command::Velocity(b.xidot)),
+        "record_start" => typed::<RecordBody>(&name, rest).map(|b| Command::RecordStart(b.file)),
+        "clear_faults" => typed::<NoFields>(&name, rest).map(|_| Command::ClearFaults),
+        "record_stop" => typed::<NoFields>(&name, rest).map(|_| Command::RecordStop),
+        "get" => typed::<NoFields>(&name, rest).map(|_| Command::Get),
+        other => Err(format!("unknown command {other:?} (one of {COMMANDS:?})")),
+    };
+    cmd.map(|cmd| Envelope {
+        id: id.clone(),
+        cmd,
+    })
+    .map_err(|e| bad(&id, e))
 }
 
 /// Appends one chunk (consecutive samples from `seq`) to a frame body.
@@ -265,22 +264,28 @@ mod tests {
     use super::*;
     use serde_json::json;
 
-    fn map(v: Value) -> serde_json::Map<String, Value> {
-        v.as_object().unwrap().clone()
+    fn parse(v: Value) -> Result<Command, String> {
+        parse_command(v.to_string().as_bytes())
+            .map(|e| e.cmd)
+            .map_err(|(_, e)| e)
     }
 
     #[test]
-    fn config_flags_parse_like_the_terminal() {
-        let argv = argv(
-            "config set",
-            &map(json!({"stiffness": 2.5, "wall": "one-sided"})),
-        )
-        .unwrap();
-        let o = ConfigCli::parse_argv(&argv).unwrap();
+    fn config_fields_are_typed() {
+        let Command::Config(o) =
+            parse(json!({"cmd": "config", "set": {"stiffness": 2.5, "wall": "one-sided"}}))
+                .unwrap()
+        else {
+            panic!("not a config command")
+        };
         assert_eq!(o.stiffness, Some(2.5));
         assert_eq!(o.wall, Some(crate::config_flags::WallArg::OneSided));
-        // The host-side check is the one of `config set`: same message.
-        let bad = ConfigCli::parse_argv(&argv_of(json!({"stiffness": -1}))).unwrap();
+        // The range check is `config set`'s: same message as the terminal.
+        let Command::Config(bad) =
+            parse(json!({"cmd": "config", "set": {"stiffness": -1}})).unwrap()
+        else {
+            panic!("not a config command")
+        };
         let e = bad
             .apply(&stiffwall_proto::ServoConfig::default())
             .unwrap_err();
@@ -288,67 +293,78 @@ mod tests {
             e.to_string(),
             "--stiffness must be a finite number >= 0 (got -1)"
         );
-        let e = ConfigCli::parse_argv(&argv_of(json!({"wall": "sideways"}))).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("invalid value 'sideways' for '--wall"),
-            "{e}"
-        );
-        let e = ConfigCli::parse_argv(&argv_of(json!({"port": "/dev/x"}))).unwrap_err();
-        assert!(
-            e.to_string().contains("unexpected argument '--port'"),
-            "{e}"
-        );
-    }
-
-    fn argv_of(v: Value) -> Vec<String> {
-        argv("config set", &map(v)).unwrap()
     }
 
     #[test]
-    fn release_and_tune_take_only_their_test_flags() {
-        let a = ReleaseCli::parse_argv(
-            &argv("release", &map(json!({"deflection": 20, "stiffness": 1.5}))).unwrap(),
-        )
-        .unwrap();
+    fn a_field_of_another_type_is_refused_naming_it() {
+        for (set, field) in [
+            (
+                json!({"stiffness": [0.5, "--wall", "one-sided"]}),
+                "set.stiffness",
+            ),
+            (json!({"stiffness": "2"}), "set.stiffness"),
+            (json!({"damping": {"a": 1}}), "set.damping"),
+            (json!({"rate": 5000.5}), "set.rate"),
+            (json!({"wall": "sideways"}), "set.wall"),
+            (json!({"wall": ["one-sided"]}), "set.wall"),
+            (json!({"--wall": "one-sided"}), "--wall"),
+            (json!({"port": "/dev/x"}), "port"),
+        ] {
+            let e = parse(json!({"cmd": "config", "set": set})).unwrap_err();
+            assert!(e.starts_with("bad command: config: "), "{e}");
+            assert!(e.contains(field), "{set}: {e}");
+        }
+        let e =
+            parse(json!({"cmd": "release", "args": {"deflection": 20, "port": "x"}})).unwrap_err();
+        assert!(e.contains("unknown field `port`"), "{e}");
+        let e = parse(json!({"cmd": "tune", "args": {"plot": "x.png"}})).unwrap_err();
+        assert!(e.contains("unknown field `plot`"), "{e}");
+        let e = parse(json!({"cmd": "tune", "args": {"dry-run": "yes"}})).unwrap_err();
+        assert!(e.contains("args.dry-run"), "{e}");
+        let e = parse(json!({"cmd": "get", "extra": 1})).unwrap_err();
+        assert!(e.contains("unknown field `extra`"), "{e}");
+    }
+
+    #[test]
+    fn release_and_tune_take_only_their_test_fields() {
+        let Command::Release(a) =
+            parse(json!({"cmd": "release", "args": {"deflection": 20, "stiffness": 1.5}})).unwrap()
+        else {
+            panic!("not a release")
+        };
         assert_eq!((a.deflection, a.ticks, a.stiffness), (20, 3000, Some(1.5)));
-        let e = ReleaseCli::parse_argv(
-            &argv("release", &map(json!({"deflection": 20, "port": "x"}))).unwrap(),
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("cannot set --port"), "{e}");
-        let t = TuneCli::parse_argv(
-            &argv("tune", &map(json!({"dry-run": true, "margin": 0.8}))).unwrap(),
-        )
-        .unwrap();
+        let Command::Tune(t) =
+            parse(json!({"cmd": "tune", "args": {"dry-run": true, "margin": 0.8}})).unwrap()
+        else {
+            panic!("not a tune")
+        };
         assert!(t.dry_run);
-        assert_eq!(crate::cmd::tune::settings(&t).unwrap().margin, 0.8);
-        let e = TuneCli::parse_argv(&argv("tune", &map(json!({"plot": "x.png"}))).unwrap())
-            .unwrap_err();
-        assert!(e.to_string().contains("cannot set --plot"), "{e}");
-    }
-
-    #[test]
-    fn flag_names_are_checked() {
-        assert!(argv("x", &map(json!({"--evil": 1}))).is_err());
-        assert!(argv("x", &map(json!({"Stiffness": 1}))).is_err());
-        assert!(argv("x", &map(json!({"a": {"b": 1}}))).is_err());
+        assert_eq!(t.settings().unwrap().margin, 0.8);
+        let Command::Tune(t) = parse(json!({"cmd": "tune"})).unwrap() else {
+            panic!("not a tune")
+        };
+        assert_eq!(t.settings().unwrap().margin, Settings::default().margin);
+        let bad = TuneTest {
+            margin: Some(1.5),
+            ..TuneTest::default()
+        };
         assert_eq!(
-            argv(
-                "x",
-                &map(json!({"a": true, "b": false, "c": null, "d": [1, 2]}))
-            )
-            .unwrap(),
-            ["x", "--a", "--d", "1", "2"]
+            bad.settings().unwrap_err().to_string(),
+            "--margin must be in (0, 1] (got 1.5)"
         );
     }
 
     #[test]
     fn commands_parse() {
-        let e: Envelope = serde_json::from_str(r#"{"id": 3, "cmd": "clear_faults"}"#).unwrap();
+        let e = parse_command(br#"{"id": 3, "cmd": "clear_faults"}"#).unwrap();
         assert!(matches!(e.cmd, Command::ClearFaults));
         assert_eq!(e.id, json!(3));
-        assert!(serde_json::from_str::<Envelope>(r#"{"cmd": "format_disk"}"#).is_err());
+        let (id, msg) = parse_command(br#"{"id": 4, "cmd": "format_disk"}"#).unwrap_err();
+        assert_eq!(id, json!(4));
+        assert!(msg.contains("unknown command"), "{msg}");
+        assert!(parse_command(b"[1]").is_err());
+        assert!(parse_command(br#"{"cmd": 1}"#).is_err());
+        assert!(parse_command(br#"{"id": [1], "cmd": "get"}"#).is_err());
     }
 
     #[test]
