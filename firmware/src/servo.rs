@@ -33,6 +33,8 @@ use core::sync::atomic::Ordering;
 use stiffwall_core::monitor::{self, energy_e8_u32, EnergyMonitor};
 use stiffwall_proto::{fault, flags, ExperimentKind, Sample, ServoConfig, MAX_TABLE};
 
+mod commands;
+
 // The monitor's bits are the protocol's fault bits, so the servo latches them unchanged.
 const _: () =
     assert!(monitor::GROWTH == fault::ENERGY_GROWTH && monitor::LIMIT == fault::ENERGY_LIMIT);
@@ -619,14 +621,6 @@ impl<'a, N: Numeric> Servo<'a, N> {
         });
     }
 
-    /// A prepared test's config from its first tick on (see [`DecidedEnd`]).
-    fn prepare(&mut self, end: Option<DecidedEnd>) {
-        if let Some(e) = &end {
-            self.apply_config(&e.run);
-        }
-        self.end = end;
-    }
-
     #[inline]
     fn telemetry(&mut self, now: u32, rel: i32, n: i32, code: i32, fl: u16) {
         let left = self.decim_left.wrapping_sub(1);
@@ -653,97 +647,6 @@ impl<'a, N: Numeric> Servo<'a, N> {
         if self.port.telemetry.enqueue(item).is_err() {
             self.port.shared.dropped.fetch_add(1, Ordering::Relaxed);
         }
-    }
-
-    /// Handles one command from the main loop.
-    pub fn command(&mut self, now: u32, cmd: ServoCmd) {
-        match cmd {
-            ServoCmd::Config(cfg) => self.apply_config(&cfg),
-            ServoCmd::Stream { decimation } => {
-                self.user_decimation = decimation;
-                if self.mode == Mode::Wall {
-                    self.decimation = decimation;
-                }
-                self.decim_left = u32::from(self.decimation);
-            }
-            ServoCmd::Release {
-                deflection,
-                ticks,
-                end,
-            } => {
-                if self.faults == 0 {
-                    self.end_experiment(false);
-                    self.prepare(end);
-                    let hold = Hold::new(deflection, ticks).toggle_settles(self.g.damping_on);
-                    self.set_exp(Experiment::Hold(hold));
-                    self.start_experiment(now);
-                } else {
-                    self.refuse_experiment(ExperimentKind::Release);
-                }
-            }
-            ServoCmd::Impact {
-                start,
-                velocity_milli,
-                ticks,
-                end,
-            } => {
-                if self.faults == 0 {
-                    self.end_experiment(false);
-                    self.prepare(end);
-                    let launch =
-                        Launch::new(start, velocity_milli, ticks).toggle_settles(self.g.damping_on);
-                    self.set_exp(Experiment::Launch(launch));
-                    self.start_experiment(now);
-                } else {
-                    self.refuse_experiment(ExperimentKind::Impact);
-                }
-            }
-            ServoCmd::Excite { profile, ticks } => {
-                if self.faults == 0 {
-                    self.end_experiment(false);
-                    self.set_exp(Experiment::Excite(Excitation::new(profile, ticks)));
-                    self.start_experiment(now);
-                } else {
-                    self.refuse_experiment(ExperimentKind::Excite);
-                }
-            }
-            ServoCmd::TableChunk { offset, values } => {
-                for (i, v) in values.iter().enumerate() {
-                    if let Some(slot) = self.table.get_mut(usize::from(offset) + i) {
-                        *slot = *v;
-                    }
-                }
-            }
-            ServoCmd::ClearFaults => {
-                self.faults = 0;
-                self.port.shared.faults.store(0, Ordering::Relaxed);
-                self.ring = [0; RING];
-                self.monitor.reset();
-            }
-            ServoCmd::Stop => self.end_experiment(false),
-        }
-    }
-
-    /// A start refused because faults latched after the main loop checked: report it ended.
-    fn refuse_experiment(&mut self, kind: ExperimentKind) {
-        if self.mode == Mode::Wall {
-            self.port.shared.experiment.store(false, Ordering::Relaxed);
-        }
-        let _ = self.port.events.enqueue(ServoEvent::ExperimentDone {
-            kind,
-            completed: false,
-            faults: self.faults,
-            next_seq: self.seq,
-        });
-    }
-
-    fn start_experiment(&mut self, now: u32) {
-        self.monitor.reset();
-        self.decimation = 1;
-        self.decim_left = 1;
-        self.hb_seen = self.port.shared.heartbeat.load(Ordering::Relaxed);
-        self.hb_tick = now;
-        self.port.shared.experiment.store(true, Ordering::Relaxed);
     }
 }
 
