@@ -1,18 +1,18 @@
 //! The telemetry session of `stiffwall-client` ([`stiffwall_client::session`]: plan, pump,
-//! recorder), re-exported, plus what needs the command line: the Ctrl-C handler that sets
-//! [`INTERRUPTED`] and a recording header described from the `--port/--device/…` options.
+//! recorder), re-exported, plus what needs the command line: the Ctrl-C handler that cancels
+//! [`stiffwall_client::cancel::ctrl_c`] and a recording header described from the `--port/--device/…` options.
 
 pub use stiffwall_client::session::*;
 
 use crate::device::client::Client;
 use crate::device::connect::ConnectArgs;
 use crate::recording::Header;
-use std::sync::atomic::Ordering;
 use stiffwall_proto::ServoConfig;
 
-/// Makes Ctrl-C set [`INTERRUPTED`] (once per process; later calls keep the first handler).
+/// Makes Ctrl-C cancel [`stiffwall_client::cancel::ctrl_c`] (once per process; later calls
+/// keep the first handler).
 pub fn stop_on_ctrl_c() {
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::Relaxed));
+    let _ = ctrlc::set_handler(|| stiffwall_client::cancel::ctrl_c().cancel());
 }
 
 /// Header facts of a recording made through `client` now, its target described from `connect`.

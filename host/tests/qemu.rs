@@ -196,10 +196,11 @@ fn tune_dry_run_on_the_qemu_image() {
         &mut c,
         &Settings {
             excite_seconds: 2.0,
+            dry_run: true,
             ..Settings::default()
         },
-        true,
-        &|m| eprintln!("tune: {m}"),
+        &stiffwall_client::Cancel::default(),
+        &mut |m| eprintln!("tune: {m}"),
     )
     .expect("tune");
     let (m, b, cc) = (0.032, 0.02, 0.024); // the board's simulated Impulse Engine (Table II)

@@ -2,15 +2,26 @@
 //! identification accuracy, the set K against the true largest settling K found here
 //! independently, repeatability, and bad input.
 
+use stiffwall_client::Cancel;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_host::device::client::Client;
 use stiffwall_host::device::virtual_device::{spawn, Spec};
 use stiffwall_host::tune::procedure::{self, deflection_for, Settings, DEFAULT_XIDOT};
 use stiffwall_host::tune::release::classify;
+use stiffwall_host::tune::{Outcome, TuneError};
 use stiffwall_sim::PhysicalPlant;
 
 fn preset(name: &str) -> PhysicalParams {
     stiffwall_core::devices::find(name).expect("preset").params
+}
+
+/// `tune` without progress or cancel, `dry_run` as given.
+fn tune_with(c: &mut Client, s: &Settings, dry_run: bool) -> Result<Outcome, TuneError> {
+    let s = Settings {
+        dry_run,
+        ..s.clone()
+    };
+    procedure::tune(c, &s, &Cancel::default(), &mut |_| {})
 }
 
 fn connect(p: PhysicalParams) -> Client {
@@ -86,7 +97,7 @@ fn tune_identifies_the_rig_and_sets_k_within_80_to_100_percent_of_the_true_limit
         damping: procedure::Damping::Fixed(0.0),
         ..Settings::default()
     };
-    let o = procedure::tune(&mut c, &spring_only, true, &|_| {}).unwrap();
+    let o = tune_with(&mut c, &spring_only, true).unwrap();
     assert_eq!(o.b_set, 0.0);
     let m_err = o.identified.mass[0] / truth.mass - 1.0;
     let c_err = o.identified.coulomb[0] / truth.coulomb - 1.0;
@@ -127,9 +138,9 @@ fn tune_identifies_the_rig_and_sets_k_within_80_to_100_percent_of_the_true_limit
 #[test]
 fn repeated_tunes_agree_within_5_percent_and_a_real_run_saves() {
     let truth = preset("maxon-re35");
-    let a = procedure::tune(&mut connect(truth), &Settings::default(), true, &|_| {}).unwrap();
+    let a = tune_with(&mut connect(truth), &Settings::default(), true).unwrap();
     let mut c = connect(truth);
-    let b = procedure::tune(&mut c, &Settings::default(), false, &|_| {}).unwrap();
+    let b = tune_with(&mut c, &Settings::default(), false).unwrap();
     assert!(
         (a.k_set / b.k_set - 1.0).abs() < 0.05,
         "{} vs {}",
@@ -169,7 +180,7 @@ fn bad_max_velocity_is_refused_before_touching_the_device() {
         max_velocity: Some(0.0),
         ..Settings::default()
     };
-    assert!(procedure::tune(&mut c, &s, false, &|_| {}).is_err());
+    assert!(tune_with(&mut c, &s, false).is_err());
     assert_eq!(c.get_config().unwrap(), before);
 }
 
@@ -201,11 +212,22 @@ fn bad_damping_is_refused_naming_the_flag_and_its_range() {
         damping: procedure::Damping::Fixed(1e9),
         ..Settings::default()
     };
-    let tests = std::cell::Cell::new(0);
-    let e = procedure::tune(&mut c, &s, false, &|_| tests.set(tests.get() + 1)).unwrap_err();
-    let e = format!("{e:#}");
+    let mut tests = 0;
+    let e = procedure::tune(&mut c, &s, &Cancel::default(), &mut |_| tests += 1).unwrap_err();
+    match &e {
+        TuneError::Settings(s) => {
+            assert_eq!(s.field, "damping");
+            assert!(s.range.starts_with("within [0, "), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // The CLI names the flag.
+    let e = stiffwall_host::cmd::tune::flag_error(match &e {
+        TuneError::Settings(s) => s,
+        _ => unreachable!(),
+    });
     assert!(e.contains("--damping must be within [0, "), "{e}");
-    assert_eq!(tests.get(), 0, "refused before any test");
+    assert_eq!(tests, 0, "refused before any test");
     assert_eq!(c.get_config().unwrap(), before);
 }
 
@@ -286,9 +308,9 @@ fn fast_and_real_time_tunes_set_the_same_k_on_four_plants() {
     };
     for (name, connect_with) in &plants {
         for s in [&spring_only, &Settings::default()] {
-            let fast = procedure::tune(&mut connect_with(true), s, true, &|_| {}).unwrap();
+            let fast = tune_with(&mut connect_with(true), s, true).unwrap();
             let started = std::time::Instant::now();
-            let paced = procedure::tune(&mut connect_with(false), s, true, &|_| {}).unwrap();
+            let paced = tune_with(&mut connect_with(false), s, true).unwrap();
             eprintln!(
                 "{name} ({:?}): K fast {:.6} real time {:.6}, B fast {:.4e} real time {:.4e} \
                  ({:.1} s real time), mismatch {:?}",
@@ -327,11 +349,10 @@ fn static_friction_is_reported_and_makes_the_verification_thorough() {
         damping: procedure::Damping::Fixed(0.0),
         ..Settings::default()
     };
-    let o = procedure::tune(
+    let o = tune_with(
         &mut connect_plant_file(STICKY_PLANT, true),
         &spring_only,
         true,
-        &|_| {},
     )
     .unwrap();
     assert!(
@@ -344,11 +365,10 @@ fn static_friction_is_reported_and_makes_the_verification_thorough() {
     assert!(o.margin_used < Settings::default().margin);
     assert!(o.verification.len() > 8, "{:?}", o.verification);
     // The rigid preset fits its own model.
-    let o = procedure::tune(
+    let o = tune_with(
         &mut connect(preset("maxon-re35")),
         &Settings::default(),
         true,
-        &|_| {},
     )
     .unwrap();
     assert!(o.model_mismatch.is_empty(), "{:?}", o.model_mismatch);
@@ -431,7 +451,7 @@ fn a_launch_that_cannot_reach_the_speed_still_gets_a_verified_wall_and_a_finding
             ..Settings::default()
         };
         let mut c = connect_plant_file(WEAK_AMPLIFIER_PLANT, true);
-        let o = procedure::tune(&mut c, &s, true, &|_| {}).unwrap();
+        let o = tune_with(&mut c, &s, true).unwrap();
         assert!(o.k_set > 0.0, "{damping:?}: {o:?}");
         assert!(
             o.verification.iter().all(|r| r.verdict.passes()),

@@ -1,14 +1,14 @@
 //! Ctrl-C during `tune` (issue 11): interrupted in each phase — identification, the
 //! identified model, the stiffness search, the confirmation — the device is left with the
-//! config it had before, unchanged and unsaved. The interrupt is raised exactly as the Ctrl-C
-//! handler does (setting `session::INTERRUPTED`) from the progress callback when the phase
-//! starts. Its own test binary: the flag is process-wide.
+//! config it had before, unchanged and unsaved. The interrupt is raised as a front end does
+//! (cancelling the tune's `Cancel` token: the Ctrl-C handler cancels its root) from the
+//! progress callback when the phase starts.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use stiffwall_client::Cancel;
 use stiffwall_host::device::client::Client;
 use stiffwall_host::device::virtual_device::{spawn, Spec};
-use stiffwall_host::session::INTERRUPTED;
 use stiffwall_host::tune::procedure::{self, Settings};
+use stiffwall_host::tune::TuneError;
 use stiffwall_proto::ServoConfig;
 
 fn connect() -> Client {
@@ -44,21 +44,17 @@ fn tune_interrupted_in_each_phase_restores_the_previous_config() {
             ..c.get_config().unwrap()
         };
         c.set_config(&before).unwrap();
-        INTERRUPTED.store(false, Ordering::Relaxed);
-        let seen = AtomicBool::new(false);
-        let r = procedure::tune(&mut c, &Settings::default(), false, &|m: &str| {
-            if m.starts_with(phase) {
-                seen.store(true, Ordering::Relaxed);
-                INTERRUPTED.store(true, Ordering::Relaxed);
+        let cancel = Cancel::default();
+        let mut seen = false;
+        let r = procedure::tune(&mut c, &Settings::default(), &cancel, &mut |m| {
+            if m.to_string().starts_with(phase) {
+                seen = true;
+                cancel.cancel();
             }
         });
-        INTERRUPTED.store(false, Ordering::Relaxed);
-        assert!(
-            seen.load(Ordering::Relaxed),
-            "phase {phase:?} never started"
-        );
+        assert!(seen, "phase {phase:?} never started");
         let e = r.expect_err(phase);
-        assert!(format!("{e:#}").contains("interrupted"), "{phase}: {e:#}");
+        assert!(matches!(e, TuneError::Cancelled), "{phase}: {e:#}");
         assert_eq!(
             c.get_config().unwrap(),
             before,

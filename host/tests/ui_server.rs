@@ -181,20 +181,24 @@ fn config_messages_match_the_terminal() {
             .contains("set.wall: unknown variant `sideways`"),
         "{v}"
     );
+    // The release test's fields in the page's words (issue 22: "deflection", "duration", "K").
     let (code, v) = s.cmd(r#"{"cmd": "release", "args": {"deflection": 0}}"#);
     assert_eq!(code, 422);
     assert_eq!(
         v["error"],
-        "--deflection must be non-zero and within [-1048576, 1048576] (got 0)"
+        "deflection must be non-zero and within [-1048576, 1048576] ticks (got 0)"
     );
-    // The fresh virtual device's wall is off: the release names the flag, as on the terminal.
+    // The fresh virtual device's wall is off: the default release test points at the page's
+    // K field, not at a command line.
     let (_, v) = s.cmd(r#"{"cmd": "release", "args": {"deflection": 20}}"#);
+    let e = v["error"].as_str().unwrap();
     assert!(
-        v["error"]
-            .as_str()
-            .unwrap()
-            .contains("the device's wall is off"),
+        e.contains("the wall is off") && e.contains("K field"),
         "{v}"
+    );
+    assert!(
+        !e.contains("--"),
+        "no command-line flag in the page's words: {e}"
     );
     let (code, v) = s.cmd(r#"{"cmd": "record_start", "file": "../escape.csv"}"#);
     assert_eq!(code, 422);
@@ -286,7 +290,7 @@ fn tune_from_the_server_reports_and_keeps_the_stream() {
     // Tune's own checks and messages.
     let (code, v) = s.cmd(r#"{"cmd": "tune", "args": {"margin": 1.5}}"#);
     assert_eq!(code, 422);
-    assert_eq!(v["error"], "--margin must be in (0, 1] (got 1.5)");
+    assert_eq!(v["error"], "margin must be in (0, 1] (got 1.5)");
 }
 
 /// The (B, K) frontier sent with the plane: core's K_max(B) for the device, and the operating

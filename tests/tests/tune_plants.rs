@@ -43,8 +43,16 @@ fn check(case: &PlantCase) -> Result<String, String> {
     let t0 = std::time::Instant::now();
     let mut client =
         stiffwall_client::connect(&spec).map_err(|e| format!("{}: connect: {e:#}", case.name))?;
-    let o = procedure::tune(&mut client, &Settings::default(), true, &|_| {})
-        .map_err(|e| format!("{}: tune failed: {e:#}", case.name))?;
+    let o = procedure::tune(
+        &mut client,
+        &Settings {
+            dry_run: true,
+            ..Settings::default()
+        },
+        &stiffwall_client::Cancel::default(),
+        &mut |_| {},
+    )
+    .map_err(|e| format!("{}: tune failed: {e:#}", case.name))?;
     let tune_s = t0.elapsed().as_secs_f64();
     // Truth at the damping tune set (the same brute force with the firmware's damper).
     let ks = if o.b_set > 0.0 {

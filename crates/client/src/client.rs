@@ -5,6 +5,7 @@
 //! sample numbers is attributed to the device (its cumulative `dropped` counter grew by the
 //! same amount) or to the link (it did not).
 
+use crate::cancel::Cancel;
 use crate::error::{ClientError, Result};
 use crate::transport::Transport;
 use std::collections::VecDeque;
@@ -61,6 +62,8 @@ pub struct Client {
     pub gaps: GapStats,
     /// The device's handshake answer.
     pub info: DeviceInfo,
+    /// Checked while an experiment runs (see [`Client::set_cancel`]).
+    cancel: Cancel,
     _backend: Option<Box<dyn Backend>>,
 }
 
@@ -79,6 +82,7 @@ impl Client {
             last_dropped: 0,
             gaps: GapStats::default(),
             info: placeholder_info(),
+            cancel: Cancel::default(),
             _backend: backend,
         };
         // A board may still be printing its boot banner or be mid-frame: a 0x00 ends whatever
@@ -122,6 +126,21 @@ impl Client {
                 bad_frames: None,
             },
         ))))
+    }
+
+    /// Makes `cancel` the token this client's experiments check (returning the previous one):
+    /// once it is cancelled, a running or starting release, impact or excitation sends `Stop`,
+    /// lets the device end the test and fails with [`ClientError::Cancelled`]. Requests
+    /// (config, faults) are not affected, so a front end can restore a config after a cancel.
+    /// A new client checks a child of [`crate::cancel::ctrl_c`].
+    pub fn set_cancel(&mut self, cancel: Cancel) -> Cancel {
+        std::mem::replace(&mut self.cancel, cancel)
+    }
+
+    /// The token this client's experiments check.
+    #[must_use]
+    pub fn cancel_token(&self) -> &Cancel {
+        &self.cancel
     }
 
     /// Sends one message.

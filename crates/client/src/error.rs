@@ -79,6 +79,10 @@ pub enum ClientError {
     /// An experiment did not end in time.
     #[error("the experiment did not finish within {} s", .0.as_secs())]
     ExperimentTimeout(Duration),
+    /// The caller's [`crate::Cancel`] token was cancelled while an experiment ran; the device
+    /// was told to stop and ended the test.
+    #[error("cancelled")]
+    Cancelled,
     /// The device speaks another protocol version.
     #[error(
         "device speaks protocol version {device}, this host speaks {host}; update the {}",

@@ -11,7 +11,9 @@
 //! Invariants: the client never names command-line flags; refused fields are named by the
 //! protocol ([`stiffwall_proto::ConfigField::name`]) and carried as data in
 //! [`ClientError::Refused`], for a front end to spell as it likes. This crate installs no
-//! signal handler: a front end sets [`session::INTERRUPTED`].
+//! signal handler: a front end cancels [`cancel::ctrl_c`] (every client's experiments and
+//! every session check a child of it), and any [`Cancel`] given to [`Client::set_cancel`]
+//! aborts that client's experiments.
 //!
 //! ```
 //! use stiffwall_client::{connect, ClientError, ConnectSpec};
@@ -34,6 +36,7 @@
 //! # Ok::<(), ClientError>(())
 //! ```
 
+pub mod cancel;
 pub mod client;
 pub mod connect;
 pub mod describe;
@@ -46,6 +49,7 @@ pub mod transport;
 #[cfg(feature = "virtual")]
 pub mod virtual_device;
 
+pub use cancel::Cancel;
 pub use client::Client;
 pub use connect::{connect, ConnectSpec, VirtualPlant};
 pub use error::ClientError;

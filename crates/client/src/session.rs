@@ -16,7 +16,6 @@ use crate::client::{Client, HEARTBEAT_PERIOD};
 use crate::error::ClientError;
 use crate::recording::{Header, RecordingError, Writer};
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{HostMsg, ServoConfig, TelemetryBatch};
 
@@ -50,13 +49,10 @@ pub enum SessionError {
     Sink(Box<dyn std::error::Error + Send + Sync>),
 }
 
-/// Set by a front end's Ctrl-C handler: the running stream or recording ends cleanly.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-/// Whether [`INTERRUPTED`] was set.
+/// Whether Ctrl-C ([`crate::cancel::ctrl_c`]) was pressed.
 #[must_use]
 pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::Relaxed)
+    crate::cancel::ctrl_c().is_cancelled()
 }
 
 /// What to stream.
@@ -106,7 +102,7 @@ impl Plan {
 pub enum End {
     /// All planned samples covered.
     Complete,
-    /// Ctrl-C.
+    /// Ctrl-C, or the client's [`crate::Cancel`] token.
     Interrupted,
     /// The device closed the connection or a read failed (message).
     Disconnected(String),
@@ -196,7 +192,7 @@ pub fn pump(
     let mut last_data = Instant::now();
     let mut last_hb = Instant::now();
     let end = loop {
-        if interrupted() {
+        if client.cancel_token().is_cancelled() {
             break End::Interrupted;
         }
         if experiment && last_hb.elapsed() >= HEARTBEAT_PERIOD {
@@ -340,7 +336,7 @@ pub fn record<W: Write>(
     })?;
     let how = match &end {
         End::Complete => "complete".to_string(),
-        End::Interrupted => "interrupted (Ctrl-C)".to_string(),
+        End::Interrupted => "interrupted (Ctrl-C or cancelled)".to_string(),
         End::Disconnected(e) => format!("DISCONNECTED: {e}"),
         End::Silent(d) => format!("DEVICE SILENT for {:.1} s", d.as_secs_f64()),
     };

@@ -9,7 +9,8 @@
 
 use super::ident::{self, Identified};
 use super::model_check::{self, Evidence};
-use super::settings::{check_interrupt, Settings, RAMP_SECONDS};
+use super::progress::{Progress, Reporter};
+use super::settings::{check_cancel, Settings, RAMP_SECONDS};
 use super::verify::rest_position;
 use anyhow::{bail, Context, Result};
 use stiffwall_client::Client;
@@ -31,12 +32,14 @@ fn excite_and_identify(
     amplitude: i32,
     ticks: u32,
     f1: f32,
-    progress: &dyn Fn(&str),
+    progress: &Reporter<'_>,
 ) -> Result<(Identified, i32)> {
     let (res, t) = device_scale(c)?;
-    progress(&format!(
-        "identifying: chirp of {amplitude} codes, 0.5–{f1} Hz, {ticks} ticks"
-    ));
+    progress.report(Progress::Chirp {
+        amplitude_codes: amplitude,
+        f1_hz: f1,
+        ticks,
+    });
     super::verify::clear_faults(c)?;
     // From rest, so that the record does not depend on how long the host took since the
     // previous excitation (determinism: `--fast` and real time see the same counts).
@@ -101,11 +104,11 @@ fn excite_and_identify(
 /// the device slides most of the time and Coulomb friction acts as c·sgn(v).
 /// Returns the fit, the amplitude used (codes) and where the device ended, in raw counts from
 /// the configured wall position.
-pub fn identify(
+pub(crate) fn identify(
     c: &mut Client,
     cfg: &ServoConfig,
     s: &Settings,
-    progress: &dyn Fn(&str),
+    progress: &Reporter<'_>,
 ) -> Result<(Identified, i32, i32)> {
     let rate = f64::from(c.info.servo_rate_hz);
     let ticks = (s.excite_seconds * rate).round().clamp(500.0, 1e6) as u32;
@@ -119,7 +122,7 @@ pub fn identify(
     while i < levels.len() {
         let frac = levels[i];
         i += 1;
-        check_interrupt()?;
+        check_cancel(c)?;
         let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
         // A probe of half the length finds the level; the full chirp then gives the fit.
         match excite_and_identify(c, amplitude, (ticks / 2).max(500), f1, progress) {
@@ -129,7 +132,7 @@ pub fn identify(
                 if wanted <= amplitude * 5 / 4 {
                     wanted = amplitude;
                 }
-                check_interrupt()?;
+                check_cancel(c)?;
                 if let Ok((full, end2)) = excite_and_identify(c, wanted, ticks, f1, progress) {
                     return Ok((full, wanted, end2));
                 }
@@ -190,7 +193,7 @@ pub(super) fn breakaway(
     id: &Identified,
     rest: i32,
     e: &mut Evidence,
-    progress: &dyn Fn(&str),
+    progress: &Reporter<'_>,
 ) -> Result<()> {
     let (res, t) = device_scale(c)?;
     let rate = f64::from(c.info.servo_rate_hz);
@@ -203,8 +206,10 @@ pub(super) fn breakaway(
     let hold = ticks.div_ceil(stiffwall_proto::MAX_TABLE).max(1);
     let len = ticks.div_ceil(hold);
     for (i, sign) in [1i32, -1].into_iter().enumerate() {
-        check_interrupt()?;
-        progress(&format!("breakaway ramp to {} codes", sign * peak));
+        check_cancel(c)?;
+        progress.report(Progress::BreakawayRamp {
+            peak_codes: sign * peak,
+        });
         let table: Vec<i16> = (0..len)
             .map(|k| (sign * (i64::from(peak) * k as i64 / len as i64) as i32) as i16)
             .collect();

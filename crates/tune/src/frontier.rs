@@ -5,6 +5,7 @@
 //! Units: K N/m (N·m/rad), B N·s/m (N·m·s/rad), T s.
 
 use super::outcome::FrontierPoint;
+use super::progress::Progress;
 use super::release::Verdict;
 use super::search::{largest_settling_k, Found, Search};
 use super::settings::*;
@@ -155,10 +156,11 @@ pub(crate) fn choose_wall(
                 .into_iter()
                 .take(FRONTIER_TRIES)
             {
-                (run.progress)(&format!(
-                    "damping B = {b:.4e}: predicted K {k_pred:.4}, searching from {:.4}",
-                    (k_pred * FRONTIER_START).max(floor)
-                ));
+                (run.progress)(Progress::DampingSearch {
+                    b,
+                    k_predicted: k_pred,
+                    k_start: (k_pred * FRONTIER_START).max(floor),
+                });
                 let start = (k_pred * FRONTIER_START).clamp(floor, search.k_cap);
                 let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
                 let k = f.map(|f| f.k_pass).filter(|&k| k >= floor);
@@ -187,10 +189,7 @@ pub(crate) fn choose_wall(
         if let Damping::Fixed(b) = run.s.damping {
             bail!("no stiffness passed the verification set at the fixed damping B = {b:.4e}");
         }
-        (run.progress)(&format!(
-            "no K passed the verification set at B = {:.4e}; setting the spring-only wall",
-            best.0
-        ));
+        (run.progress)(Progress::DamperDropped { b: best.0 });
     }
     let (k_set, verification) = confirm_spring(run, c, base, k_spring, thorough, notes)?;
     Ok(Wall {
@@ -224,10 +223,10 @@ fn confirm_spring(
         .last_failure
         .is_some_and(|r| matches!(r.test, Test::Impact { .. }));
     if impact_failed {
-        (run.progress)(&format!(
-            "impacts at v failed at every K from {k:.4} down to {last:.4}; verifying without \
-             them (releases at full energy from both sides, slower impacts)"
-        ));
+        (run.progress)(Progress::ImpactsCapped {
+            k_from: k,
+            k_to: last,
+        });
         notes.impacts_capped = true;
         if let Some(found) = run.confirm(c, base, k, thorough, notes)? {
             return Ok(found);

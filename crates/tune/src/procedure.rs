@@ -32,27 +32,26 @@
 //! wall off and end at points computed from their counts), not on when the host's messages
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
+use super::error::TuneError;
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
 use super::launch::Delivered;
 use super::model_check::{self, Evidence};
+use super::progress::{Progress, Reporter};
 use super::search::{largest_settling_k, Search};
 use super::steps::{Notes, Run};
 use super::verify::rest_position;
-use anyhow::{bail, Context, Result};
-use stiffwall_client::Client;
+use anyhow::{Context, Result};
+use stiffwall_client::{Cancel, Client};
 use stiffwall_core::criteria;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
 
-/// Step 1, identification with the wall off (in [`super::excite`]).
-pub use super::excite::identify;
+use super::excite::identify;
 pub use super::outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
 pub use super::settings::*;
 pub use super::steps::{deflection_for, df_equivalent};
 pub use super::verify::Test;
-/// Set by the Ctrl-C handler; checked between experiments (the one flag of every session).
-pub use stiffwall_client::session::INTERRUPTED;
 
 /// Step 2: predictions for the identified device.
 pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
@@ -78,32 +77,63 @@ pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
     })
 }
 
-/// Runs the whole procedure. `progress` receives one-line status messages.
+/// Runs the whole procedure on `c`: identify, predict, verify and (unless
+/// [`Settings::dry_run`]) set and save the wall. `progress` receives one event per step as it
+/// starts. Cancelling `cancel` ends the running test and the tune ([`TuneError::Cancelled`]);
+/// whatever the error, the device is left with the config it had before.
+///
+/// # Errors
+/// A setting out of range (before any test), a cancel, the device failing, or no verifiable
+/// wall (see [`TuneError`]).
 pub fn tune(
     c: &mut Client,
     s: &Settings,
-    dry_run: bool,
-    progress: &dyn Fn(&str),
-) -> Result<Outcome> {
+    cancel: &Cancel,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Outcome, TuneError> {
     s.validate()?;
-    let original = c.get_config()?;
+    let original = c.get_config().map_err(|e| TuneError::Device {
+        during: format!("reading the config: {e}"),
+        source: e,
+    })?;
     if let Damping::Fixed(b) = s.damping {
         // Checked before any test: the firmware's limit at the config's rate and coarsening.
-        let cap = b_cap(c, &original, device_scale(c)?.1);
+        let t = device_scale(c)
+            .map_err(|e| TuneError::from_step(e, false))?
+            .1;
+        let cap = b_cap(c, &original, t);
         if b > cap {
-            bail!(
-                "--damping must be within [0, {cap:.4e}] N·s/m (N·m·s/rad) on this device (the \
-                 firmware's limit at its rate and coarsening; got {b})"
-            );
+            return Err(SettingsError {
+                field: "damping",
+                range: format!(
+                    "within [0, {cap:.4e}] N·s/m (N·m·s/rad) on this device (the firmware's \
+                     limit at its rate and coarsening)"
+                ),
+                got: b.to_string(),
+            }
+            .into());
         }
     }
-    let result = tune_inner(c, s, &original, dry_run, progress);
+    // The client's experiments check the caller's token for the whole tune.
+    let outer = c.set_cancel(cancel.clone());
+    let reporter = Reporter::new(progress);
+    let result = tune_inner(c, s, &original, &reporter)
+        .map_err(|e| TuneError::from_step(e, cancel.is_cancelled()));
+    c.set_cancel(outer);
     // Leave the device as it was unless a new config was deliberately set.
-    let keep = matches!(&result, Ok(o) if !dry_run && o.saved);
+    let keep = matches!(&result, Ok(o) if !s.dry_run && o.saved);
     if !keep {
         c.clear_faults().ok();
-        c.set_config(&original)
-            .context("restoring the previous config")?;
+        if let Err(restore) = c.set_config(&original) {
+            let error = match result {
+                Ok(_) => TuneError::Procedure("the tune finished but was not saved".into()),
+                Err(e) => e,
+            };
+            return Err(TuneError::NotRestored {
+                error: Box::new(error),
+                restore,
+            });
+        }
     }
     result
 }
@@ -112,8 +142,7 @@ fn tune_inner(
     c: &mut Client,
     s: &Settings,
     original: &ServoConfig,
-    dry_run: bool,
-    progress: &dyn Fn(&str),
+    progress: &Reporter<'_>,
 ) -> Result<Outcome> {
     let (res, t) = device_scale(c)?;
     // Experiments run with the wall off between them, without extra damping and with the
@@ -154,10 +183,13 @@ fn tune_inner(
     };
     let v = s.max_velocity.unwrap_or(DEFAULT_XIDOT * delta / t);
     let predicted = predict(&p, v)?;
-    progress(&format!(
-        "identified m={:.3e} b={:.3e} c={:.3e}; K guaranteed {:.4} expected {:.4}",
-        id.mass, id.viscous, id.coulomb, predicted.guaranteed, predicted.expected
-    ));
+    progress.report(Progress::Identified {
+        mass: id.mass,
+        viscous: id.viscous,
+        coulomb: id.coulomb,
+        k_guaranteed: predicted.guaranteed,
+        k_expected: predicted.expected,
+    });
     let units = if rotational {
         ("N·m", "N·m/rad")
     } else {
@@ -169,13 +201,14 @@ fn tune_inner(
     // A full-energy release then no longer stores the impact's energy, so above k_force each
     // search step also runs what saturates first in use: an impact at v from each side.
     let f_lim = f64::from(base.force_limit);
+    let report = |e: Progress| progress.report(e);
     let run = Run {
         s,
         p,
         v,
         k_force: (f_lim / (v * id.mass.sqrt())).powi(2),
         one_sided_wall: original.wall == stiffwall_proto::WallMode::OneSided,
-        progress,
+        progress: &report,
         slow_launch: std::cell::Cell::new(None),
         missed_launch: std::cell::Cell::new(None),
     };
@@ -210,7 +243,7 @@ fn tune_inner(
     // largest K is then less well tested, so the mismatch margin applies as well.
     let thorough = !model_mismatch.is_empty() || notes.not_launched.is_some();
     for f in &model_mismatch {
-        progress(&format!("model mismatch: {f}"));
+        progress.report(Progress::Finding { text: f.clone() });
     }
     let margin_used = s.margin
         * if !thorough {
@@ -246,12 +279,14 @@ fn tune_inner(
         }),
     ];
     for finding in launch_findings.into_iter().flatten() {
-        progress(&format!("model mismatch: {finding}"));
+        progress.report(Progress::Finding {
+            text: finding.clone(),
+        });
         model_mismatch.push(finding);
     }
     p.stiffness = wall.k_set;
     let mut saved = false;
-    if !dry_run {
+    if !s.dry_run {
         c.clear_faults().ok();
         c.set_config(&ServoConfig {
             stiffness: wall.k_set as f32,

@@ -1,11 +1,11 @@
 //! Tune settings and the constants of the procedure (a leaf module: it imports no other module
-//! of the crate).
+//! of the crate but the error type).
 //!
 //! Units: velocities m/s (rad/s for rotary devices), damping N·s/m (N·m·s/rad), seconds, ticks.
 //! Invariant: [`Settings::validate`] is the one place the settings are checked; the CLI and the
 //! live view call it before touching a device.
 
-use anyhow::{bail, Result};
+pub use super::error::SettingsError;
 
 /// Default maximum velocity, in encoder ticks per servo period (ξ̇ of Table I; independent of K).
 pub const DEFAULT_XIDOT: f64 = 5.0;
@@ -40,6 +40,9 @@ pub struct Settings {
     pub rel_tol: f64,
     /// Virtual damping B of the wall: searched (default) or fixed.
     pub damping: Damping,
+    /// Find and report the wall but leave the device's config as it was (default false: the
+    /// wall found is set and saved).
+    pub dry_run: bool,
 }
 
 /// How `tune` chooses the virtual damping B.
@@ -104,51 +107,66 @@ impl Default for Settings {
             excite_seconds: 3.0,
             rel_tol: 0.02,
             damping: Damping::Search,
+            dry_run: false,
         }
     }
 }
 
 impl Settings {
-    /// Checks every field, naming it (with the CLI's flag spelling) and its allowed range.
+    /// Checks every field, naming it (its Rust name, see [`SettingsError`]) and its allowed
+    /// range.
     ///
     /// # Errors
     /// The first field out of range.
-    pub fn validate(&self) -> Result<()> {
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let bad = |field: &'static str, range: &str, got: String| {
+            Err(SettingsError {
+                field,
+                range: range.to_string(),
+                got,
+            })
+        };
         if !(self.margin.is_finite() && self.margin > 0.0 && self.margin <= 1.0) {
-            bail!("--margin must be in (0, 1] (got {})", self.margin);
+            return bad("margin", "in (0, 1]", self.margin.to_string());
         }
         if let Some(v) = self.max_velocity {
             if !(v.is_finite() && v > 0.0) {
-                bail!("--max-velocity must be finite and > 0 (got {v})");
+                return bad("max_velocity", "finite and > 0", v.to_string());
             }
         }
         if let Damping::Fixed(b) = self.damping {
             if !(b.is_finite() && b >= 0.0) {
-                bail!("--damping must be finite and >= 0 N·s/m (N·m·s/rad) (got {b})");
+                return bad(
+                    "damping",
+                    "finite and >= 0 N·s/m (N·m·s/rad)",
+                    b.to_string(),
+                );
             }
         }
         if !(self.excite_seconds.is_finite() && (0.5..=1000.0).contains(&self.excite_seconds)) {
-            bail!(
-                "--excite-seconds must be within [0.5, 1000] (got {})",
-                self.excite_seconds
+            return bad(
+                "excite_seconds",
+                "within [0.5, 1000]",
+                self.excite_seconds.to_string(),
             );
         }
         if let Some(t) = self.release_ticks {
             if !(100..=10_000_000).contains(&t) {
-                bail!("--release-ticks must be within [100, 10000000] (got {t})");
+                return bad("release_ticks", "within [100, 10000000]", t.to_string());
             }
         }
         if !(self.rel_tol.is_finite() && self.rel_tol > 0.0 && self.rel_tol < 1.0) {
-            bail!("rel_tol must be in (0, 1) (got {})", self.rel_tol);
+            return bad("rel_tol", "in (0, 1)", self.rel_tol.to_string());
         }
         Ok(())
     }
 }
 
-/// Fails with "interrupted" once Ctrl-C (or a front end) set the session's flag.
-pub(crate) fn check_interrupt() -> Result<()> {
-    if stiffwall_client::session::interrupted() {
-        bail!("interrupted");
+/// Fails with [`stiffwall_client::ClientError::Cancelled`] once the client's cancel token
+/// (the caller's, for a tune) was cancelled.
+pub(crate) fn check_cancel(c: &stiffwall_client::Client) -> anyhow::Result<()> {
+    if c.cancel_token().is_cancelled() {
+        return Err(stiffwall_client::ClientError::Cancelled.into());
     }
     Ok(())
 }

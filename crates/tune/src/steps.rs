@@ -5,6 +5,7 @@
 //! Units: SI (N/m, N·s/m, kg, m/s; rotary N·m/rad, N·m·s/rad, kg·m², rad/s), ticks.
 
 use super::launch::Delivered;
+use super::progress::Progress;
 use super::release::Verdict;
 use super::settings::*;
 use super::verify::{min_settle_run, run_test, test_set, Test, TestResult, TestRun};
@@ -40,7 +41,7 @@ pub(crate) struct Run<'a> {
     /// Above this K the wall's peak force at v saturates (see `procedure::tune_inner`).
     pub(crate) k_force: f64,
     pub(crate) one_sided_wall: bool,
-    pub(crate) progress: &'a dyn Fn(&str),
+    pub(crate) progress: &'a dyn Fn(Progress),
     /// The slowest impact launch that passed below its asked speed (see [`Delivered::slow`]).
     pub(crate) slow_launch: std::cell::Cell<Option<Delivered>>,
     /// The last impact launch that failed off its asked speed ([`Verdict::NotLaunched`]).
@@ -126,7 +127,11 @@ impl Run<'_> {
     ) -> Result<Verdict> {
         let d = deflection_for(&self.p, k, self.v);
         let b = base.damping;
-        (self.progress)(&format!("release test K={k:.4} B={b:.4} from {d} ticks"));
+        (self.progress)(Progress::ReleaseStep {
+            k,
+            b: b.into(),
+            deflection_ticks: d,
+        });
         let TestRun {
             verdict, counts, ..
         } = self.test(
@@ -159,7 +164,11 @@ impl Run<'_> {
                 } else {
                     "damped wall"
                 };
-                (self.progress)(&format!("{} test K={k:.4} ({why})", test.describe()));
+                (self.progress)(Progress::ImpactStep {
+                    k,
+                    test: test.describe(),
+                    reason: why,
+                });
                 let impact = self.test(c, base, k, test, thorough)?.verdict;
                 if impact == Verdict::NotLaunched {
                     notes.not_launched.get_or_insert(k);
@@ -185,10 +194,11 @@ impl Run<'_> {
         notes: &mut Notes,
     ) -> Result<(bool, Vec<TestResult>)> {
         let d = deflection_for(&self.p, k, self.v);
-        (self.progress)(&format!(
-            "verifying K={k:.4} B={:.4}: releases from ±{d} ticks and below, impacts",
-            base.damping
-        ));
+        (self.progress)(Progress::Verifying {
+            k,
+            b: base.damping.into(),
+            deflection_ticks: d,
+        });
         let v_ticks = self.v * self.period_s() / self.p.resolution;
         let mut set = test_set(
             d,
@@ -235,11 +245,12 @@ impl Run<'_> {
             }
             if !verdict.passes() {
                 notes.last_failure = results.last().copied();
-                (self.progress)(&format!(
-                    "verification at K={k:.4}: {} {}; backing off ×{CONFIRM_BACKOFF}",
-                    test.describe(),
-                    verdict.describe()
-                ));
+                (self.progress)(Progress::VerifyFailed {
+                    k,
+                    test: test.describe(),
+                    verdict: verdict.describe().to_string(),
+                    backoff: CONFIRM_BACKOFF,
+                });
                 return Ok((false, results));
             }
         }

@@ -45,7 +45,6 @@ pub use super::judged::{
 use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
 use super::verdict::{classify, Verdict, Wall, MIN_TAIL};
 use anyhow::{bail, Result};
-use std::sync::atomic::Ordering;
 use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
 
@@ -348,9 +347,7 @@ fn run_aimed(
     min_run: usize,
     asked: Option<f64>,
 ) -> Result<TestRun> {
-    if stiffwall_client::session::INTERRUPTED.load(Ordering::Relaxed) {
-        bail!("interrupted");
-    }
+    super::settings::check_cancel(c)?;
     // A reproducible start (see the module header), with the damper off too: a damper
     // alone can be unstable (B·T/m large, or behind a slow amplifier) and must not keep the
     // device from coming to rest between tests.

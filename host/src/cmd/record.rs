@@ -14,7 +14,7 @@
 use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;
 use crate::output::emit;
-pub use crate::session::{header, pump, record, End, Outcome, Plan, Stats, INTERRUPTED};
+pub use crate::session::{header, pump, record, End, Outcome, Plan, Stats};
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 

@@ -6,7 +6,8 @@ use crate::device::connect::ConnectArgs;
 use crate::output::{emit, emit_json};
 use crate::session;
 use crate::tune::procedure::{self, Outcome, Settings};
-use anyhow::Result;
+use crate::tune::{SettingsError, TuneError};
+use anyhow::{anyhow, Result};
 use std::fmt::Write as _;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
@@ -56,10 +57,21 @@ pub fn settings(a: &Args) -> Result<Settings> {
         margin: a.margin,
         release_ticks: a.release_ticks,
         excite_seconds: a.excite_seconds,
+        dry_run: a.dry_run,
         ..Settings::default()
     };
-    s.validate()?;
+    s.validate().map_err(|e| anyhow!(flag_error(&e)))?;
     Ok(s)
+}
+
+/// A settings error in the command line's words: the field as its `--flag`.
+pub fn flag_error(e: &SettingsError) -> String {
+    format!(
+        "--{} must be {} (got {})",
+        e.field.replace('_', "-"),
+        e.range,
+        e.got
+    )
 }
 
 /// Runs `hostctl tune`.
@@ -77,23 +89,30 @@ pub fn run(a: &Args) -> Result<()> {
     if tty {
         bar.enable_steady_tick(std::time::Duration::from_millis(120));
     }
-    let progress = |m: &str| {
+    let say = |m: &str| {
         if tty {
             bar.set_message(m.to_string());
         } else {
             eprintln!("tune: {m}");
         }
     };
-    progress(&format!("connecting to the {}", a.connect.describe()));
+    say(&format!("connecting to the {}", a.connect.describe()));
     let mut client = a.connect.connect()?;
-    let outcome = procedure::tune(&mut client, &s, a.dry_run, &progress);
+    let cancel = stiffwall_client::Cancel::default();
+    let outcome = procedure::tune(&mut client, &s, &cancel, &mut |e| say(&e.to_string()));
     bar.finish_and_clear();
     let o = match outcome {
         Ok(o) => o,
-        Err(e) if session::interrupted() => {
-            return Err(e.context("interrupted; the previous config was restored"))
+        Err(TuneError::Cancelled) => {
+            return Err(anyhow!("interrupted; the previous config was restored"))
         }
-        Err(e) => return Err(e.context("tune failed; the previous config was restored")),
+        Err(TuneError::Settings(e)) => return Err(anyhow!(flag_error(&e))),
+        Err(e @ TuneError::NotRestored { .. }) => return Err(anyhow!("tune failed: {e}")),
+        Err(e) => {
+            return Err(anyhow!(
+                "tune failed; the previous config was restored: {e}"
+            ))
+        }
     };
     let report = analysis::analyze(None, &o.params, Some(o.max_velocity), None)?;
     let mut kb = None;

@@ -11,6 +11,9 @@ use crate::error::{ClientError, Result};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{DeviceMsg, ExciteProfile, ExperimentKind, HostMsg, Sample};
 
+/// How long a cancelled experiment waits for the device to report its end after `Stop`.
+const CANCEL_STOP_WAIT: Duration = Duration::from_secs(2);
+
 /// Judges the samples of a running experiment so far: true ends it early (see
 /// [`Client::release_until`]).
 pub type EnoughFn<'a> = dyn FnMut(&[Sample]) -> bool + 'a;
@@ -91,6 +94,25 @@ impl Client {
         )
     }
 
+    /// Stops the running experiment after a cancel and waits (briefly) for the device to
+    /// report its end, so that the next request finds the device idle.
+    fn stop_cancelled(&mut self, kind: ExperimentKind) -> ClientError {
+        if let Err(e) = self.send(&HostMsg::Stop) {
+            return e;
+        }
+        let deadline = Instant::now() + CANCEL_STOP_WAIT;
+        while Instant::now() < deadline {
+            match self.recv(Duration::from_millis(20)) {
+                Ok(Some(DeviceMsg::ExperimentDone { kind: k, .. })) if k == kind => break,
+                Ok(_) => {}
+                Err(e) => return e,
+            }
+        }
+        self.pending
+            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        ClientError::Cancelled
+    }
+
     fn experiment(&mut self, msg: &HostMsg, kind: ExperimentKind, ticks: u32) -> Result<Record> {
         self.experiment_until(msg, kind, ticks, None)
     }
@@ -104,6 +126,9 @@ impl Client {
     ) -> Result<Record> {
         self.pending
             .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        if self.cancel.is_cancelled() {
+            return Err(ClientError::Cancelled);
+        }
         let before = self.gaps;
         self.next_seq = None;
         self.request(msg)?;
@@ -154,6 +179,9 @@ impl Client {
             if start.elapsed() > limit {
                 let _ = self.send(&HostMsg::Stop);
                 return Err(ClientError::ExperimentTimeout(limit));
+            }
+            if self.cancel.is_cancelled() {
+                return Err(self.stop_cancelled(kind));
             }
         }
     }

@@ -15,18 +15,21 @@
 //! recording, and the stream pauses while it runs. A slow page loses display frames only
 //! (counted and shown), never recorded samples.
 
+mod release;
+mod tune;
+pub use release::{check_release_fields, MAX_RELEASE_SECONDS};
+pub use tune::{page_error, page_settings};
+
 use super::plane::{self, Model};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
 use super::trace;
-use super::wire::{self, Command, ReleaseTest, Reply, TuneTest};
-use crate::cmd::experiment::{check_release_values, release_config};
+use super::wire::{self, Command, Reply};
 use crate::config_flags::Overrides;
-use crate::device::client::{Client, HEARTBEAT_PERIOD};
+use crate::device::client::Client;
 use crate::device::connect::ConnectArgs;
 use crate::recording::Writer;
 use crate::session::{self, Stats};
 use crate::tune::procedure;
-use crate::tune::release::classify;
 use anyhow::{bail, Context, Result};
 use axum::extract::ws::Message;
 use serde_json::{json, Value};
@@ -35,7 +38,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
 use std::time::{Duration, Instant};
-use stiffwall_proto::{flags, DeviceMsg, ExperimentKind, HostMsg, Sample, ServoConfig};
+use stiffwall_proto::{flags, DeviceMsg, ExperimentKind, Sample, ServoConfig};
 use tokio::sync::broadcast;
 
 /// Period of the binary telemetry frames sent to the pages.
@@ -74,6 +77,8 @@ pub struct Shared {
     pub tx: broadcast::Sender<Message>,
     /// Set to end the device thread (server shutdown).
     pub stop: AtomicBool,
+    /// The controlling page and the running long operation.
+    pub control: super::control::Control,
 }
 
 impl Shared {
@@ -84,6 +89,7 @@ impl Shared {
             snapshot: Mutex::new(Snapshot::default()),
             tx: broadcast::channel(capacity).0,
             stop: AtomicBool::new(false),
+            control: super::control::Control::default(),
         }
     }
 
@@ -124,21 +130,6 @@ pub struct Setup {
     pub pace: bool,
 }
 
-struct Release {
-    original: ServoConfig,
-    test: ServoConfig,
-    deflection: i32,
-    /// Released counts (effective ticks, as `released_counts`): 8 bytes per tick while the
-    /// test runs; only their decimated trace is kept afterwards.
-    counts: Vec<i64>,
-    /// Tick of the first hold or released sample.
-    first_tick: Option<u32>,
-    start: Instant,
-    limit: Duration,
-    last_hb: Instant,
-    reply: Option<tokio::sync::oneshot::Sender<Reply>>,
-}
-
 /// The thread's state.
 struct Dev {
     client: Client,
@@ -157,7 +148,7 @@ struct Dev {
     faults: u32,
     rate: (Instant, u64, f64),
     rec: Option<Recorder>,
-    release: Option<Release>,
+    release: Option<release::Release>,
 }
 
 /// Runs the device thread until `shared.stop` or Ctrl-C; finishes a recording cleanly.
@@ -305,7 +296,7 @@ impl Dev {
             }
         }
         if let Some(rel) = &mut self.release {
-            let shift = rel.test.coarsen_shift;
+            let shift = rel.shift();
             for s in samples {
                 if s.flags & (flags::HOLD | flags::RELEASED) != 0 && rel.first_tick.is_none() {
                     rel.first_tick = Some(s.tick);
@@ -348,28 +339,7 @@ impl Dev {
         if self.safe_mode && self.last_fault_poll.elapsed() >= FAULT_POLL {
             self.poll_faults();
         }
-        if let Some(rel) = &mut self.release {
-            if rel.last_hb.elapsed() >= HEARTBEAT_PERIOD {
-                self.client.send(&HostMsg::Heartbeat)?;
-                rel.last_hb = Instant::now();
-            }
-            if rel.start.elapsed() > rel.limit {
-                let _ = self.client.send(&HostMsg::Stop);
-                let rel = self.release.take().expect("release");
-                let msg = format!(
-                    "the release test did not finish within {} s",
-                    rel.limit.as_secs()
-                );
-                let _ = self.client.set_config(&rel.original);
-                self.shared.publish(
-                    "release",
-                    json!({"type": "release", "state": "error", "error": msg}),
-                );
-                if let Some(tx) = rel.reply {
-                    let _ = tx.send(Err(msg));
-                }
-            }
-        }
+        self.release_tick()?;
         if self.last_status.elapsed() >= STATUS_PERIOD {
             self.status();
         }
@@ -444,10 +414,22 @@ impl Dev {
                     }
                     return;
                 }
-                Err(e) => Err(crate::cli_error::message(&e)),
+                Err(e) => {
+                    self.finish_op();
+                    Err(crate::cli_error::message(&e))
+                }
             },
+            Command::Abort | Command::TakeControl => {
+                Err("answered by the server, not the device thread".into())
+            }
         };
         let _ = reply.send(r);
+    }
+
+    /// The running operation ended (however it ended): pages may start another.
+    fn finish_op(&self) {
+        let ev = self.shared.control.finish();
+        self.shared.publish("op", ev);
     }
 
     fn busy_check(&self, what: &str) -> Result<()> {
@@ -563,172 +545,5 @@ impl Dev {
             finish_recording(r, "stopped from the page").map_err(|e| crate::cli_error::message(&e));
         self.status();
         out
-    }
-
-    fn release_start(&mut self, a: &ReleaseTest) -> Result<()> {
-        self.busy_check("release")?;
-        check_release_values(a.deflection, a.ticks, a.stiffness)?;
-        let original = self.client.get_config()?;
-        let test = release_config(
-            &original,
-            a.stiffness,
-            self.client.info.limits.max_stiffness,
-        )?;
-        // As `experiment release`: faults cleared, the test's K set, the original restored.
-        self.client.clear_faults().ok();
-        self.client.set_config(&test)?;
-        let rate = f64::from(test.servo_rate_hz.max(1));
-        if let Err(e) = self.client.request(&HostMsg::Release {
-            deflection_ticks: a.deflection,
-            ticks: a.ticks,
-        }) {
-            let _ = self.client.set_config(&original);
-            return Err(e.into());
-        }
-        self.poll_faults();
-        self.shared.publish(
-            "release",
-            json!({"type": "release", "state": "running", "deflection": a.deflection,
-                   "ticks": a.ticks, "stiffness": test.stiffness}),
-        );
-        self.release = Some(Release {
-            original,
-            test,
-            deflection: a.deflection,
-            counts: Vec::with_capacity(a.ticks as usize),
-            first_tick: None,
-            start: Instant::now(),
-            limit: Duration::from_secs_f64(f64::from(a.ticks) / rate * 20.0 + 10.0),
-            last_hb: Instant::now(),
-            reply: None,
-        });
-        Ok(())
-    }
-
-    fn release_done(&mut self, completed: bool, faults: u32) {
-        let Some(mut rel) = self.release.take() else {
-            return;
-        };
-        // The experiment's stiffness is not kept.
-        let restored = self.client.set_config(&rel.original);
-        let counts = std::mem::take(&mut rel.counts);
-        let verdict = classify(&counts, faults != 0);
-        let first = rel.first_tick.unwrap_or(0);
-        // The page gets a bounded trace; the full one is in a recording.
-        let trace = trace::decimate(&counts, trace::TRACE_POINTS);
-        drop(counts);
-        let v = json!({
-            "type": "release",
-            "state": "done",
-            "verdict": verdict,
-            "describe": verdict.describe(),
-            "passes": verdict.passes(),
-            "deflection": rel.deflection,
-            "stiffness": rel.test.stiffness,
-            "completed": completed,
-            "faults": faults,
-            "fault_names": wire::fault_names(faults),
-            "trace": trace,
-            "first_tick": first,
-            "rate_hz": rel.test.servo_rate_hz,
-        });
-        self.shared.publish("release", v.clone());
-        if faults != 0 {
-            self.poll_faults();
-        }
-        let reply = match restored {
-            Ok(()) => Ok(v),
-            Err(e) => Err(format!(
-                "the test ran ({}), but restoring the configuration failed: {e_text}",
-                verdict.describe(),
-                e_text = crate::cli_error::message(&e)
-            )),
-        };
-        if let Some(tx) = rel.reply.take() {
-            let _ = tx.send(reply);
-        }
-    }
-
-    fn tune(&mut self, a: &TuneTest) -> Reply {
-        let mut run = || -> Result<Value> {
-            self.busy_check("tune")?;
-            if let Some(r) = &self.rec {
-                bail!(
-                    "tune: stop the recording to {} first (tune's experiments take the telemetry stream)",
-                    r.path.display()
-                );
-            }
-            let s = a.settings()?;
-            // Flush what the page has, then give the link to tune.
-            self.client.stream_stop()?;
-            self.streaming = false;
-            self.status();
-            let shared = Arc::clone(&self.shared);
-            let progress = move |m: &str| {
-                shared.publish(
-                    "tune",
-                    json!({"type": "tune", "state": "running", "message": m}),
-                );
-            };
-            progress("starting");
-            let outcome = procedure::tune(&mut self.client, &s, a.dry_run, &progress);
-            let restart = self.start_stream();
-            let cfg = self.client.get_config();
-            let o = outcome.context("tune failed; the previous config was restored")?;
-            restart?;
-            if let Ok(cfg) = cfg {
-                self.cfg = cfg;
-            }
-            self.setup.model = Some(Model {
-                mass: o.params.mass,
-                viscous: o.params.viscous,
-                coulomb: o.params.coulomb,
-                source: "identified by tune",
-            });
-            let v = json!({
-                "type": "tune",
-                "state": "done",
-                "guaranteed": o.predicted.guaranteed,
-                "expected": o.predicted.expected,
-                // The largest settling K at the damping set (the spring-only search's when
-                // B = 0), of which the set K is the margin's fraction.
-                "verified": o
-                    .frontier
-                    .iter()
-                    .find(|p| p.b == o.b_set)
-                    .and_then(|p| p.k_verified)
-                    .unwrap_or(o.search.k_pass),
-                "set": o.k_set,
-                "damping": o.b_set,
-                "spring_only": o.k_spring_only,
-                "frontier": o.frontier,
-                "saved": o.saved,
-                "trials": o.search.trials,
-                "verification": o.verification,
-                "model_mismatch": o.model_mismatch,
-                "identified": o.identified,
-            });
-            self.shared.publish("tune", v.clone());
-            Ok(v)
-        };
-        let r = run();
-        if let Err(e) = &r {
-            self.shared.publish(
-                "tune",
-                json!({"type": "tune", "state": "error", "error": crate::cli_error::message(&e)}),
-            );
-            if !self.streaming {
-                if let Err(e2) = self.start_stream() {
-                    self.shared.event(&json!({"type": "log", "level": "error",
-                        "message": format!("restarting telemetry: {e2_text}", e2_text = crate::cli_error::message(&e2))}));
-                }
-            }
-        }
-        if let Ok(cfg) = self.client.get_config() {
-            self.cfg = cfg;
-        }
-        self.publish_config();
-        self.poll_faults();
-        r.map_err(|e| crate::cli_error::message(&e))
     }
 }

@@ -22,6 +22,7 @@
 //! a warning); the URL with the token is printed on stdout before anything is served.
 
 pub mod conn;
+pub mod control;
 pub mod device;
 pub mod frontier;
 pub mod plane;

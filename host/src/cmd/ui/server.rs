@@ -15,7 +15,7 @@ use super::conn::Busy;
 use super::device::{Request, Shared};
 use super::plane;
 use super::security::{check_form, token_from_query, Guard, Refusal, TOKEN_HEADER};
-use super::wire::{parse_command, Envelope, Reply};
+use super::wire::{parse_command, Command, Envelope, Reply};
 use super::ws::ws;
 use axum::body::Bytes;
 use axum::extract::{DefaultBodyLimit, Request as HttpRequest, State};
@@ -155,8 +155,36 @@ async fn style_css() -> impl IntoResponse {
     )
 }
 
+/// Runs a command from client `who` ([`super::control::API_CLIENT`] for the HTTP API):
+/// `abort` and `take_control` here, the rest by the device thread once [`super::control`]
+/// admitted it; waits for the answer.
+pub(crate) async fn submit(app: &App, env: Envelope, who: u64) -> Reply {
+    let control = &app.shared.control;
+    match env.cmd {
+        Command::Abort => return control.abort(who),
+        Command::TakeControl => {
+            if who == super::control::API_CLIENT {
+                return Err("take_control is for pages (the HTTP API acts while no page controls the device)".into());
+            }
+            let ev = control.take(who);
+            app.shared.publish("control", ev.clone());
+            return Ok(ev);
+        }
+        _ => {}
+    }
+    let admitted = control.admit(who, &env.cmd)?;
+    if let Some(ev) = admitted.control {
+        app.shared.publish("control", ev);
+    }
+    if let Some(ev) = admitted.op {
+        app.shared.publish("op", ev);
+    }
+    // The device thread clears a reservation when its operation ends, however it ends.
+    queue(app, env).await
+}
+
 /// Sends a command to the device thread and waits for its answer.
-pub(crate) async fn submit(app: &App, env: Envelope) -> Reply {
+async fn queue(app: &App, env: Envelope) -> Reply {
     let (tx, rx) = tokio::sync::oneshot::channel();
     let sent = app
         .commands
@@ -187,7 +215,7 @@ async fn api_cmd(State(app): State<App>, busy: Option<Extension<Busy>>, body: By
             let id = env.id.clone();
             // A release test or a tune may take minutes: the connection is not idle meanwhile.
             let _busy = busy.map(|b| b.hold());
-            let r = submit(&app, env).await;
+            let r = submit(&app, env, super::control::API_CLIENT).await;
             let status = if r.is_ok() {
                 StatusCode::OK
             } else {

@@ -5,15 +5,17 @@
 //!   `{"cmd": "release", "args": {"deflection": 20, "ticks": 3000, "stiffness": 1}}`,
 //!   `{"cmd": "tune", "args": {"margin": 0.9, "dry-run": true}}`, `{"cmd": "clear_faults"}`,
 //!   `{"cmd": "record_start", "file": "run.csv"}`, `{"cmd": "record_stop"}`,
-//!   `{"cmd": "velocity", "xidot": 5}`, `{"cmd": "get"}`. They are typed ([`Command`]): the
+//!   `{"cmd": "velocity", "xidot": 5}`, `{"cmd": "get"}`, `{"cmd": "abort"}` (the running
+//!   release test or tune), `{"cmd": "take_control"}` (see [`super::control`]). They are typed ([`Command`]): the
 //!   keys of `set` and `args` are the command-line flags' names of `hostctl config set`,
 //!   `experiment release` and `tune`, each takes its field's type (a number is a JSON number,
 //!   a word a JSON string, `dry-run` a boolean), and an unknown key or a value of another type
 //!   refuses the command naming the field (`config: set.stiffness: invalid type: sequence,
 //!   expected f32`). Nothing from the page is turned into a command line. The values are then
-//!   checked by the terminal's own functions ([`Overrides::apply`],
-//!   [`crate::cmd::experiment::check_release_values`], [`Settings::validate`]), so the page
-//!   gets the terminal's range messages.
+//!   checked: config by the terminal's own [`Overrides::apply`] (the terminal's range
+//!   messages), the release test and tune in the page's words
+//!   ([`super::device::release::check_release_fields`], `Settings::validate` rendered with the
+//!   page's labels by [`super::device::tune::page_settings`]).
 //! - **Answers** (server → page): `{"type": "reply", "id": 7, "ok": true, "result": …}` or
 //!   `{"type": "reply", "id": 7, "ok": false, "error": "--stiffness must be …"}`.
 //! - **Events** (server → page, JSON): `hello`, `config`, `plane`, `status`, `faults`,
@@ -26,7 +28,6 @@
 
 use crate::cmd::experiment::DEFAULT_RELEASE_TICKS;
 use crate::config_flags::Overrides;
-use crate::tune::procedure::Settings;
 use anyhow::Result;
 use serde::de::DeserializeOwned;
 use serde_json::Value;
@@ -61,6 +62,11 @@ pub enum Command {
     /// The active configuration, latched faults, counters and the latest `plane` message
     /// (with its (B, K) `frontier`); changes nothing.
     Get,
+    /// Abort the running release test or tune (the device ends the test and gets its previous
+    /// config back); answered by the server at once (see [`super::control`]).
+    Abort,
+    /// Make this page the controller (see [`super::control`]).
+    TakeControl,
 }
 
 /// The page's release test: `experiment release`'s test flags.
@@ -97,26 +103,6 @@ pub struct TuneTest {
     /// Find and report K, but leave the device's config as it was.
     #[serde(default)]
     pub dry_run: bool,
-}
-
-impl TuneTest {
-    /// The tune library's settings, checked by [`Settings::validate`] (the fields not given
-    /// keep `tune`'s defaults).
-    ///
-    /// # Errors
-    /// The first field out of range, named with its range.
-    pub fn settings(&self) -> Result<Settings> {
-        let d = Settings::default();
-        let s = Settings {
-            max_velocity: self.max_velocity,
-            margin: self.margin.unwrap_or(d.margin),
-            release_ticks: self.release_ticks,
-            excite_seconds: self.excite_seconds.unwrap_or(d.excite_seconds),
-            ..d
-        };
-        s.validate()?;
-        Ok(s)
-    }
 }
 
 /// A command with its request id, as sent by the page.
@@ -164,7 +150,7 @@ struct RecordBody {
 struct NoFields {}
 
 /// The names of the commands.
-pub const COMMANDS: [&str; 8] = [
+pub const COMMANDS: [&str; 10] = [
     "config",
     "release",
     "tune",
@@ -173,6 +159,8 @@ pub const COMMANDS: [&str; 8] = [
     "record_start",
     "record_stop",
     "get",
+    "abort",
+    "take_control",
 ];
 
 /// `fields` (the command's object without `cmd` and `id`) as `T`, or the message naming the
@@ -217,6 +205,8 @@ pub fn parse_command(text: &[u8]) -> Result<Envelope, (Value, String)> {
         "clear_faults" => typed::<NoFields>(&name, rest).map(|_| Command::ClearFaults),
         "record_stop" => typed::<NoFields>(&name, rest).map(|_| Command::RecordStop),
         "get" => typed::<NoFields>(&name, rest).map(|_| Command::Get),
+        "abort" => typed::<NoFields>(&name, rest).map(|_| Command::Abort),
+        "take_control" => typed::<NoFields>(&name, rest).map(|_| Command::TakeControl),
         other => Err(format!("unknown command {other:?} (one of {COMMANDS:?})")),
     };
     cmd.map(|cmd| Envelope {
@@ -339,19 +329,11 @@ mod tests {
             panic!("not a tune")
         };
         assert!(t.dry_run);
-        assert_eq!(t.settings().unwrap().margin, 0.8);
+        assert_eq!(t.margin, Some(0.8));
         let Command::Tune(t) = parse(json!({"cmd": "tune"})).unwrap() else {
             panic!("not a tune")
         };
-        assert_eq!(t.settings().unwrap().margin, Settings::default().margin);
-        let bad = TuneTest {
-            margin: Some(1.5),
-            ..TuneTest::default()
-        };
-        assert_eq!(
-            bad.settings().unwrap_err().to_string(),
-            "--margin must be in (0, 1] (got 1.5)"
-        );
+        assert_eq!(t, TuneTest::default());
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! The WebSocket at `/ws`: one page's session. On connecting the page is sent the snapshot
 //! (`hello` and the latest message of each kind), then every message the device thread
-//! publishes; the page's text messages are commands (see [`super::wire`]).
+//! publishes; the page's text messages are commands (see [`super::wire`]). Each page has a
+//! client number (sent first, as `{"type": "you", "client": n}`) and is the controller or a
+//! viewer ([`super::control`]); leaving releases control.
 //!
 //! Limits: a message or frame from the page over [`MAX_WS_MESSAGE`] bytes closes the socket
 //! with code 1009 and the limit as the reason; every other way the server ends a session
@@ -71,8 +73,14 @@ type End = Option<(u16, String)>;
 async fn session(app: App, mut socket: WebSocket) {
     // Subscribe first: nothing published after the snapshot is missed.
     let mut rx = app.shared.tx.subscribe();
-    for text in first_messages(&app) {
+    let (me, became) = app.shared.control.join();
+    if let Some(ev) = became {
+        app.shared.publish("control", ev);
+    }
+    let you = json!({"type": "you", "client": me}).to_string();
+    for text in std::iter::once(you).chain(first_messages(&app)) {
         if socket.send(Message::Text(text.into())).await.is_err() {
+            leave(&app, me);
             return;
         }
     }
@@ -95,7 +103,7 @@ async fn session(app: App, mut socket: WebSocket) {
                 }
             },
             r = reply_rx.recv() => r.map(|v| Message::Text(v.to_string().into())),
-            m = socket.recv() => match incoming(&app, m, &reply_tx) {
+            m = socket.recv() => match incoming(&app, me, m, &reply_tx) {
                 Ok(reply) => reply,
                 Err(end) => break end,
             },
@@ -106,8 +114,16 @@ async fn session(app: App, mut socket: WebSocket) {
             }
         }
     };
+    leave(&app, me);
     if let Some((code, reason)) = end {
         close(socket, code, &reason).await;
+    }
+}
+
+/// Page `me` is gone: control is free again if it held it.
+fn leave(app: &App, me: u64) {
+    if let Some(ev) = app.shared.control.leave(me) {
+        app.shared.publish("control", ev);
     }
 }
 
@@ -115,6 +131,7 @@ async fn session(app: App, mut socket: WebSocket) {
 /// command is answered at once. `Err` ends the session.
 fn incoming(
     app: &App,
+    me: u64,
     m: Option<Result<Message, axum::Error>>,
     replies: &tokio::sync::mpsc::UnboundedSender<Value>,
 ) -> Result<Option<Message>, End> {
@@ -125,7 +142,7 @@ fn incoming(
                 let tx = replies.clone();
                 tokio::spawn(async move {
                     let id = env.id.clone();
-                    let r = submit(&app, env).await;
+                    let r = submit(&app, env, me).await;
                     let _ = tx.send(reply_json(&id, r));
                 });
                 Ok(None)
