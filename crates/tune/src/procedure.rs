@@ -154,8 +154,10 @@ fn tune_inner(
         stiffness: 0.0,
         ..*original
     };
-    super::verify::clear_faults(c)?;
+    // The wall off first: a fault the user's wall keeps raising (an energy limit tripped by a
+    // K the device cannot hold) would otherwise latch again as soon as it is cleared.
     c.set_config(&base)?;
+    super::verify::clear_faults(c)?;
     let (id, amplitude, _) = identify(c, &base, s, progress)?;
     let rest = rest_position(c)?;
     // The chirp leaves the device wherever it stopped: the tests put the wall there (the
