@@ -180,6 +180,34 @@ async fn set_damping(c: &Client, b: &str) {
     .await;
 }
 
+async fn click(c: &Client, id: &str) {
+    c.find(Locator::Id(id))
+        .await
+        .unwrap()
+        .click()
+        .await
+        .unwrap();
+}
+
+async fn text_of(c: &Client, id: &str) -> String {
+    c.find(Locator::Id(id)).await.unwrap().text().await.unwrap()
+}
+
+/// The reply with `id` on a raw WebSocket (other messages and telemetry skipped), within 20 s.
+fn next_reply(ws: &mut std::net::TcpStream, id: u64) -> serde_json::Value {
+    let t0 = Instant::now();
+    loop {
+        assert!(t0.elapsed() < Duration::from_secs(20), "no reply {id}");
+        let (op, p) = ui_support::read_frame(ws).expect("a frame");
+        if op == 1 {
+            let v: serde_json::Value = serde_json::from_slice(&p).unwrap();
+            if v["type"] == "reply" && v["id"] == id {
+                return v;
+            }
+        }
+    }
+}
+
 async fn shot(c: &Client, name: &str) {
     if let Some(dir) = std::env::var_os("STIFFWALL_UI_SCREENSHOTS") {
         let png = c.screenshot().await.expect("screenshot");
@@ -226,8 +254,19 @@ fn the_page_in_chromium() {
         eprintln!("display: {fps} frames per second");
 
         step("live checks done");
-        // The fresh virtual device's wall is off: no operating point until K is set.
+        // The fresh virtual device's wall is off: no operating point until K is set, and the
+        // default release test says, in the page's words, to set K in the K field.
         assert!(attr(&c, "plane", "data-beta").await.is_none());
+        click(&c, "rel-run").await;
+        wait("the wall-off answer", long, || async {
+            attr(&c, "rel-verdict", "data-state")
+                .await
+                .filter(|s| s == "fail")
+        })
+        .await;
+        let text = text_of(&c, "rel-verdict").await;
+        assert!(text.contains("K field") && !text.contains("--"), "{text}");
+        step("wall-off release answered");
         set_stiffness(&c, "0.8").await;
         let (b1, s1, x1, y1) = plane_point(&c).await;
 
@@ -284,6 +323,73 @@ fn the_page_in_chromium() {
             .unwrap();
 
         step("release done");
+        // A long release (10⁶ ticks) aborted from the page: Run is off and Abort on while it
+        // runs; the verdict says it was aborted; the device keeps K = 0.8.
+        let ticks = c.find(Locator::Id("rel-ticks")).await.unwrap();
+        ticks.clear().await.unwrap();
+        ticks.send_keys("1000000").await.unwrap();
+        click(&c, "rel-run").await;
+        wait("Abort enabled", long, || async {
+            attr(&c, "rel-abort", "disabled")
+                .await
+                .is_none()
+                .then_some(())
+        })
+        .await;
+        assert!(
+            attr(&c, "rel-run", "disabled").await.is_some(),
+            "Run is off while it runs"
+        );
+        click(&c, "rel-abort").await;
+        wait("the aborted release", long, || async {
+            attr(&c, "rel-verdict", "data-state")
+                .await
+                .filter(|s| s == "aborted")
+        })
+        .await;
+        assert!(text_of(&c, "rel-verdict").await.contains("aborted"));
+        wait("Run enabled again", long, || async {
+            attr(&c, "rel-run", "disabled")
+                .await
+                .is_none()
+                .then_some(())
+        })
+        .await;
+        assert!((number(&c, "plane", "data-k").await.unwrap() - 0.8).abs() < 1e-6);
+        ticks.clear().await.unwrap();
+        ticks.send_keys("3000").await.unwrap();
+        step("release aborted");
+        // A second client is a viewer: its command is refused; when it takes control, the page
+        // shows the viewer banner with its Run buttons off, and takes control back.
+        let mut other = server.ws();
+        ui_support::send_frame(
+            &mut other,
+            1,
+            br#"{"id": 1, "cmd": "config", "set": {"stiffness": 0.5}}"#,
+        )
+        .unwrap();
+        let refused = next_reply(&mut other, 1);
+        assert_eq!(refused["ok"], false, "{refused}");
+        assert!(
+            refused["error"].as_str().unwrap().contains("viewer"),
+            "{refused}"
+        );
+        ui_support::send_frame(&mut other, 1, br#"{"id": 2, "cmd": "take_control"}"#).unwrap();
+        assert_eq!(next_reply(&mut other, 2)["ok"], true);
+        let banner = c.find(Locator::Id("viewer-banner")).await.unwrap();
+        wait("the viewer banner", long, || async {
+            banner.is_displayed().await.ok().filter(|d| *d)
+        })
+        .await;
+        assert!(attr(&c, "tune-run", "disabled").await.is_some());
+        shot(&c, "ui-viewer.png").await;
+        click(&c, "take-control").await;
+        wait("the banner to go", long, || async {
+            banner.is_displayed().await.ok().filter(|d| !*d)
+        })
+        .await;
+        drop(other);
+        step("viewer checked");
         // Doubling K halves β and σ (Fig. 4): the point moves towards the origin.
         set_stiffness(&c, "1.6").await;
         let (b2, s2, x2, y2) = plane_point(&c).await;
@@ -355,6 +461,33 @@ fn the_page_in_chromium() {
 
         step("cleared");
 
+        // Tune aborted from the page: the log says so, the pill says "not live" while it runs.
+        click(&c, "tune-run").await;
+        wait("tune's Abort enabled", long, || async {
+            attr(&c, "tune-abort", "disabled")
+                .await
+                .is_none()
+                .then_some(())
+        })
+        .await;
+        let pill = attr(&c, "conn", "data-state").await;
+        assert_eq!(pill.as_deref(), Some("not-live"), "the pill during tune");
+        click(&c, "tune-abort").await;
+        wait("the aborted tune", long, || async {
+            attr(&c, "tune-log", "data-state")
+                .await
+                .filter(|s| s == "aborted")
+        })
+        .await;
+        assert!(text_of(&c, "tune-log").await.contains("tune aborted"));
+        wait("Run tune enabled again", long, || async {
+            attr(&c, "tune-run", "disabled")
+                .await
+                .is_none()
+                .then_some(())
+        })
+        .await;
+        step("tune aborted");
         // Tune from the page (dry run): its progress, then guaranteed / expected / verified / set.
         c.find(Locator::Id("tune-run"))
             .await

@@ -18,6 +18,7 @@ const st = {
   paused: false, windowS: 2, viewEnd: null, nextId: 1, pending: new Map(),
   received: 0, lastSeq: -1, seqBase: null, frames: 0, fpsT: performance.now(), fps: 0,
   lagged: 0, ws: null, dirty: true,
+  me: null, controller: null, running: null, // this page's client number, the controller, the operation
 };
 const $ = (id) => document.getElementById(id);
 
@@ -26,11 +27,13 @@ function connect() {
   const ws = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(TOKEN)}`);
   ws.binaryType = 'arraybuffer';
   st.ws = ws;
-  ws.onopen = () => { setConn(true); };
+  ws.onopen = () => { st.retries = 0; setConn(true); };
   ws.onclose = (ev) => {
     setConn(false);
+    st.retries = (st.retries || 0) + 1;
     // The server closes with a reason (message too large, server stopped, …): show it.
     if (ev.reason) showLog(`connection closed (${ev.code}): ${ev.reason}`);
+    else if (st.retries === 5) showLog('the server does not answer: what is shown is stale. If hostctl ui was restarted, open the new URL it printed (its token is new).');
     setTimeout(connect, 1000);
   };
   ws.onmessage = (ev) => {
@@ -38,10 +41,13 @@ function connect() {
     else onFrame(ev.data);
   };
 }
-function setConn(ok) {
+// The pill: live, not live (tune has the link) or offline (with a reload hint after a while:
+// a restarted server has a new token).
+function setConn(ok, why) {
   const c = $('conn');
-  c.textContent = ok ? 'live' : 'offline';
-  c.className = 'pill ' + (ok ? 'ok' : 'bad');
+  c.textContent = !ok ? 'offline' : (why || 'live');
+  c.className = 'pill ' + (!ok ? 'bad' : (why ? 'warn' : 'ok'));
+  c.dataset.state = !ok ? 'offline' : (why ? 'not-live' : 'live');
 }
 function send(cmd) {
   return new Promise((resolve) => {
@@ -95,6 +101,9 @@ function onJson(m) {
     case 'faults': onFaults(m); break;
     case 'release': onRelease(m); break;
     case 'tune': onTune(m); break;
+    case 'you': st.me = m.client; showControl(); break;
+    case 'control': onControl(m); break;
+    case 'op': onOp(m); break;
     case 'reply': {
       const r = st.pending.get(m.id);
       if (r) { st.pending.delete(m.id); r(m); }
@@ -106,6 +115,41 @@ function onJson(m) {
     default: break;
   }
 }
+
+// One page controls the device; the others view until they take control (the server refuses
+// their commands). The page taken over is told.
+function onControl(m) {
+  const was = st.controller;
+  st.controller = m.controller;
+  if (was === st.me && m.controller !== st.me && m.controller !== null) {
+    showLog(`control was taken by page ${m.controller}: this page is now a viewer (press Take control to get it back)`);
+  }
+  showControl();
+}
+function showControl() {
+  const viewer = st.me !== null && st.controller !== null && st.controller !== st.me;
+  $('viewer-banner').hidden = !viewer;
+  $('viewer-text').textContent = viewer ? `page ${st.controller} controls the device; this page (${st.me}) shows what it does` : '';
+  document.body.dataset.role = viewer ? 'viewer' : 'controller';
+  showRunning();
+}
+// The running long operation (release test or tune): its Run button off, its Abort on.
+function onOp(m) { st.running = m.running; showRunning(); }
+function showRunning() {
+  const r = st.running;
+  const viewer = document.body.dataset.role === 'viewer';
+  $('rel-run').disabled = r !== null || viewer; $('tune-run').disabled = r !== null || viewer;
+  $('rel-abort').disabled = r !== 'release' || viewer; $('tune-abort').disabled = r !== 'tune' || viewer;
+  document.body.dataset.running = r || '';
+  if (r === 'tune') setConn(st.ws && st.ws.readyState === 1, 'not live: tune runs');
+  else setConn(st.ws && st.ws.readyState === 1);
+}
+function releaseSeconds() {
+  const ticks = Number($('rel-ticks').value.trim());
+  const el = $('rel-seconds');
+  el.textContent = Number.isFinite(ticks) && ticks > 0 ? `≈ ${fmtDuration(ticks / rate())} at ${rate()} Hz` : '';
+}
+function fmtDuration(s) { return s < 120 ? `${s.toFixed(s < 10 ? 1 : 0)} s` : `${(s / 60).toFixed(1)} min`; }
 
 function showLog(text) {
   const l = $('log');
@@ -129,6 +173,7 @@ function onConfig(m) {
   set('cfg-stiffness', c.stiffness); set('cfg-damping', c.damping); set('cfg-force-limit', c.force_limit);
   set('cfg-max-velocity', c.max_velocity); set('cfg-energy-limit', c.energy_limit);
   $('ring-seconds').textContent = (RING / rate()).toFixed(0);
+  releaseSeconds();
 }
 function onStatus(m) {
   st.status = m;
@@ -232,14 +277,25 @@ function drawTraces() {
       });
       continue;
     }
+    if (L === 2 && st.config && !(st.config.config.stiffness > 0)) {
+      // H_T/(KΔ²) is not defined without a wall: say so instead of drawing a saturated number.
+      g.fillStyle = '#777'; g.fillText('wall off (K = 0): no storage energy', left + 12, (y0 + y1) / 2 + 6);
+      cv.dataset.energyLane = 'wall-off';
+      continue;
+    }
+    if (L === 2) cv.dataset.energyLane = 'drawn';
     let vmin = Infinity; let vmax = -Infinity;
     for (let c = 0; c < cols; c++) { if (mins[L][c] < vmin) vmin = mins[L][c]; if (maxs[L][c] > vmax) vmax = maxs[L][c]; }
     if (!(vmin <= vmax)) continue;
-    if (vmax - vmin < 1e-12) { vmax += 1; vmin -= 1; }
-    const pad = (vmax - vmin) * 0.08; vmin -= pad; vmax += pad;
+    // A flat trace is labelled with its value (a range around it would be made up).
+    const flat = vmax - vmin < 1e-12; const value = vmin;
+    if (flat) { vmax = value + 1; vmin = value - 1; }
+    const pad = flat ? 0 : (vmax - vmin) * 0.08; vmin -= pad; vmax += pad;
     const Y = (v) => y1 - (v - vmin) / (vmax - vmin) * (y1 - y0 - 16);
     g.fillStyle = '#555';
-    g.fillText(fmt(vmax), 4, y0 + 20); g.fillText(fmt(vmin), 4, y1);
+    if (flat) g.fillText(`= ${fmt(value)}`, 4, Y(value) + 4);
+    else { g.fillText(fmt(vmax), 4, y0 + 20); g.fillText(fmt(vmin), 4, y1); }
+    cv.dataset[`flat${L}`] = flat ? String(value) : '';
     g.strokeStyle = LANES[L].color; g.lineWidth = 1;
     g.beginPath();
     let prev = null;
@@ -253,13 +309,17 @@ function drawTraces() {
     }
     g.stroke();
   }
-  // Time axis: seconds before the newest sample shown.
+  // Time axis: device time (servo ticks / servo rate) before the newest sample shown. The
+  // fast virtual device runs faster than real time: the speed-up is stated, not hidden.
   g.fillStyle = '#555';
   for (let i = 0; i <= 4; i++) {
     const x = left + pw * i / 4;
     g.fillText(`${(-(st.windowS) * (1 - i / 4)).toPrecision(3)} s`, Math.min(x, w - 50), h - 6);
   }
-  $('trace-info').textContent = `${st.paused ? 'paused' : 'live'} · ${st.windowS} s window · ${used.toLocaleString('en')} samples in ${cols} columns`;
+  const speed = st.status ? st.status.samples_per_s / r : 1;
+  const fast = speed > 1.5 ? ` · device time: the virtual device runs ×${speed.toFixed(1)} real time` : '';
+  cv.dataset.speed = speed.toFixed(2);
+  $('trace-info').textContent = `${st.paused ? 'paused' : (st.running === 'tune' ? 'not live (tune has the link)' : 'live')} · ${st.windowS} s window · ${used.toLocaleString('en')} samples in ${cols} columns${fast}`;
 }
 
 // ---------- (β, σ) plane ----------
@@ -273,11 +333,13 @@ function drawPlane() {
   if (!p) return;
   if (!p.point) {
     note.textContent = p.note || '';
-    op.textContent = 'no operating point';
+    op.textContent = 'no operating point: the wall is off';
     for (const k of ['beta', 'sigma', 'k', 'px', 'py', 'region']) delete cv.dataset[k];
-    return;
-  }
-  note.textContent = p.model ? `model: m = ${fmt(p.model.mass)}, b = ${fmt(p.model.viscous)}, c = ${fmt(p.model.coulomb)} (${p.model.source}); μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}` : '';
+    // The wall is off: the regions and the device's line, drawn at a reference K, without a point.
+    cv.dataset.wallOff = p.line ? '1' : '0';
+    if (!p.line) return;
+  } else delete cv.dataset.wallOff;
+  if (p.point) note.textContent = p.model ? `model: m = ${fmt(p.model.mass)}, b = ${fmt(p.model.viscous)}, c = ${fmt(p.model.coulomb)} (${p.model.source}); μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}` : '';
   const [bmax, smax] = p.window;
   const L = 60; const B = 36; const T = 10; const R = 10;
   const X = (b) => L + b / bmax * (w - L - R);
@@ -307,7 +369,7 @@ function drawPlane() {
     g.moveTo(X(p.critical[0][0]), Y(p.critical[0][1])); g.lineTo(X(p.critical[1][0]), Y(p.critical[1][1]));
     g.stroke(); g.lineWidth = 1;
   }
-  const { beta, sigma, k } = p.point;
+  const { beta, sigma, k } = p.point || p.line;
   // Path of the point as K grows: a ray to the origin (Fig. 4).
   const far = Math.min(bmax / Math.max(beta, 1e-300), smax / Math.max(sigma, 1e-300));
   g.strokeStyle = '#5a28a0'; g.setLineDash([5, 4]); g.beginPath();
@@ -318,6 +380,7 @@ function drawPlane() {
     g.strokeStyle = '#000'; g.beginPath(); g.moveTo(x - 5, y - 5); g.lineTo(x + 5, y + 5); g.moveTo(x + 5, y - 5); g.lineTo(x - 5, y + 5); g.stroke();
     g.fillStyle = '#000'; g.fillText(`${lim.label} = ${fmt(lim.k)}`, x + 7, y + 4);
   }
+  if (!p.point) return;
   const px = X(Math.min(beta, bmax)); const py = Y(Math.min(sigma, smax));
   g.fillStyle = '#000'; g.beginPath(); g.arc(px, py, 6, 0, 2 * Math.PI); g.fill();
   g.fillText(`K = ${fmt(k)}`, px + 9, py - 8);
@@ -375,10 +438,11 @@ function onRelease(m) {
   const v = $('rel-verdict');
   if (m.state === 'running') {
     v.dataset.state = 'running';
-    v.textContent = `running: release from ${m.deflection} ticks at K = ${fmt(m.stiffness)}…`;
+    v.textContent = `running: release from ${m.deflection} ticks at K = ${fmt(m.stiffness)}, ${m.ticks} ticks (${fmtDuration(m.seconds)})…`;
     return;
   }
   if (m.state === 'error') { v.dataset.state = 'fail'; v.textContent = m.error; return; }
+  if (m.state === 'aborted') { v.dataset.state = 'aborted'; v.textContent = m.error; return; }
   v.dataset.state = m.passes ? 'pass' : 'fail';
   v.dataset.verdict = JSON.stringify(m.verdict);
   v.textContent = `verdict: ${m.describe} (K = ${fmt(m.stiffness)}, from ${m.deflection} ticks${m.faults ? ', faults: ' + m.fault_names.join(', ') : ''})`;
@@ -414,10 +478,12 @@ function onTune(m) {
     log.scrollTop = log.scrollHeight;
     return;
   }
-  if (m.state === 'error') {
-    const li = document.createElement('li'); li.textContent = 'failed: ' + m.error; li.className = 'err'; log.appendChild(li);
+  if (m.state === 'error' || m.state === 'aborted') {
+    const li = document.createElement('li'); li.textContent = (m.state === 'error' ? 'failed: ' : '') + m.error; li.className = 'err'; log.appendChild(li);
+    log.dataset.state = m.state;
     return;
   }
+  log.dataset.state = 'done';
   const u = st.hello ? st.hello.units.k : '';
   $('tune-result').hidden = false;
   $('tune-guaranteed').textContent = `${fmt(m.guaranteed)} ${u}`;
@@ -498,14 +564,23 @@ $('rel-run').onclick = async () => {
   const k = $('rel-stiffness').value.trim(); if (k !== '') args.stiffness = num(k);
   const v = $('rel-verdict'); v.dataset.state = 'running'; v.textContent = 'starting…';
   const r = await send({ cmd: 'release', args });
-  if (!r.ok) { v.dataset.state = 'fail'; v.textContent = r.error; }
+  if (!r.ok && v.dataset.state !== 'aborted') { v.dataset.state = 'fail'; v.textContent = r.error; }
+};
+$('rel-ticks').addEventListener('input', releaseSeconds);
+$('rel-abort').onclick = $('tune-abort').onclick = async () => {
+  const r = await send({ cmd: 'abort' });
+  if (!r.ok) showLog(r.error);
+};
+$('take-control').onclick = async () => {
+  const r = await send({ cmd: 'take_control' });
+  if (!r.ok) showLog(r.error);
 };
 $('tune-run').onclick = async () => {
   const args = { margin: num($('tune-margin').value.trim()), 'dry-run': $('tune-dry-run').checked };
   const mv = $('tune-max-velocity').value.trim(); if (mv !== '') args['max-velocity'] = num(mv);
   $('tune-log').textContent = ''; $('tune-result').hidden = true;
   const r = await send({ cmd: 'tune', args });
-  if (!r.ok && !/tune failed/.test(r.error)) onTune({ state: 'error', error: r.error });
+  if (!r.ok && !/tune failed|tune aborted/.test(r.error)) onTune({ state: 'error', error: r.error });
 };
 $('rec-start').onclick = async () => {
   const r = await send({ cmd: 'record_start', file: $('rec-file').value.trim() });

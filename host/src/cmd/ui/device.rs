@@ -243,9 +243,9 @@ impl Dev {
             "target": self.setup.connect.describe(),
             "device": i,
             "units": if rotational {
-                json!({"k": "N·m/rad", "force": "N·m", "b": "N·m·s/rad", "m": "kg·m²", "c": "N·m"})
+                json!({"k": "N·m/rad", "force": "N·m", "b": "N·m·s/rad", "m": "kg·m²", "c": "N·m", "v": "rad/s"})
             } else {
-                json!({"k": "N/m", "force": "N", "b": "N·s/m", "m": "kg", "c": "N"})
+                json!({"k": "N/m", "force": "N", "b": "N·s/m", "m": "kg", "c": "N", "v": "m/s"})
             },
             "record_dir": self.setup.record_dir.display().to_string(),
             "flags": {"safe_mode": flags::SAFE_MODE, "hold": flags::HOLD, "released": flags::RELEASED,
@@ -492,13 +492,30 @@ impl Dev {
                   "plane": plane}))
     }
 
+    /// Clears the latched faults; when they latch again at once (their cause persists: a K the
+    /// device cannot hold, a velocity over the limit), says so in the page's words instead of
+    /// answering ok.
     fn clear_faults(&mut self) -> Reply {
-        let r = self
-            .client
+        self.client
             .clear_faults()
-            .map_err(|e| crate::cli_error::message(&e));
-        self.poll_faults();
-        r.map(|()| json!({"latched": self.faults}))
+            .map_err(|e| crate::cli_error::message(&e))?;
+        // The servo takes the command on its next tick: a few polls.
+        let deadline = Instant::now() + Duration::from_millis(200);
+        loop {
+            self.poll_faults();
+            if self.faults == 0 || Instant::now() > deadline {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        if self.faults != 0 {
+            return Err(format!(
+                "the faults latched again at once ({}): their cause persists; set K lower (or 0) \
+                 in Config, let the device come to rest, then clear again",
+                wire::fault_names(self.faults).join(", ")
+            ));
+        }
+        Ok(json!({"latched": 0}))
     }
 
     fn velocity(&mut self, xidot: f64) -> Reply {

@@ -81,8 +81,7 @@ fn beta_sigma(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot
     };
     let p = params(model, info, cfg);
     if p.stiffness.is_nan() || p.stiffness <= 0.0 {
-        return json!({"type": "plane", "point": null, "model": model, "note":
-            format!("the wall is off (K = {}): set a stiffness to see the operating point", cfg.stiffness)});
+        return wall_off(model, info, cfg, xidot);
     }
     let v = xidot * p.resolution / p.period_s;
     let r = match analysis::analyze(None, &p, Some(v), None) {
@@ -151,6 +150,44 @@ fn beta_sigma(model: Option<&Model>, info: &DeviceInfo, cfg: &ServoConfig, xidot
         "critical": critical,
         "limits": limits,
     })
+}
+
+/// The plane of a wall that is off (K = 0): no operating point, but the regions and the
+/// device's line (the ray the point moves along as K changes, Fig. 4) drawn at a reference K,
+/// the region-A limit (2b/T and 2c/Δ), with the limits marked on it.
+fn wall_off(model: &Model, info: &DeviceInfo, cfg: &ServoConfig, xidot: f64) -> Value {
+    let note = format!(
+        "the wall is off (K = {}): set K in Config to see the operating point",
+        cfg.stiffness
+    );
+    let p = PhysicalParams {
+        stiffness: 1.0,
+        ..params(model, info, cfg)
+    };
+    let reference = stiffwall_core::limits::k_max_passive(&p)
+        .ok()
+        .filter(|k| k.is_finite() && *k > 0.0);
+    let Some(k_ref) = reference else {
+        return json!({"type": "plane", "point": null, "model": model, "note": note});
+    };
+    let at_ref = ServoConfig {
+        stiffness: k_ref as f32,
+        ..*cfg
+    };
+    let mut v = beta_sigma(Some(model), info, &at_ref, xidot);
+    if let Some(o) = v.as_object_mut() {
+        let point = o.insert("point".into(), Value::Null).unwrap_or(Value::Null);
+        o.insert("line".into(), point);
+        o.insert("region".into(), Value::Null);
+        o.insert(
+            "note".into(),
+            json!(format!(
+                "{note}; the regions and the device's line are drawn at K = {k_ref:.4} (its \
+                 region-A limit)"
+            )),
+        );
+    }
+    v
 }
 
 /// A `hostctl map` JSON opened on the page: validated like every map file read from disk, then
