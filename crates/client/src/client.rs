@@ -12,7 +12,7 @@ use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{
-    encode, DeviceInfo, DeviceMsg, ErrorCode, FaultReport, FrameDecoder, HostMsg, Request,
+    encode, DeviceInfo, DeviceMsg, ErrorCode, FaultReport, FrameDecoder, HostMsg, Request, Sample,
     ServoConfig, TelemetryBatch, MAX_FRAME, PROTOCOL_VERSION,
 };
 
@@ -20,7 +20,6 @@ mod experiment;
 
 pub use crate::describe::{describe_error, describe_error_named, readable, FieldLabel};
 use crate::describe::{is_framing, is_framing_reply};
-pub use experiment::{EnoughFn, Record};
 
 /// How long a request waits for its answer.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
@@ -48,6 +47,23 @@ pub struct GapStats {
     pub dropped_on_device: u64,
     /// Frames that failed to decode (CRC, COBS, …), i.e. lost on the link.
     pub bad_frames: u64,
+}
+
+/// Judges the samples of a running experiment so far: true ends it early (see
+/// [`Client::release_until`]).
+pub type EnoughFn<'a> = dyn FnMut(&[Sample]) -> bool + 'a;
+
+/// Samples of one experiment with their bookkeeping.
+#[derive(Debug, Clone)]
+pub struct Record {
+    /// Samples in order.
+    pub samples: Vec<Sample>,
+    /// Whether the experiment ran its full length.
+    pub completed: bool,
+    /// Fault bits latched when it ended.
+    pub faults: u32,
+    /// Telemetry gaps seen.
+    pub gaps: GapStats,
 }
 
 /// A connected device.

@@ -17,8 +17,7 @@
 //! [`FrameDecoder`] starts the next frame with the byte after it, and [`decode_frame`] (which
 //! takes exactly one frame) refuses a 0x00 anywhere but at the end ([`FrameError::Cobs`]).
 
-use crate::msg::{DeviceMsg, ErrorCode, ErrorDetail, HostMsg};
-use crate::PROTOCOL_VERSION;
+use crate::msg::{DeviceMsg, ErrorCode, ErrorDetail, HostMsg, PROTOCOL_VERSION};
 use crc::{Crc, CRC_32_ISO_HDLC};
 use serde::de::DeserializeOwned;
 use serde::Serialize;

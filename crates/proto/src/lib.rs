@@ -22,7 +22,3 @@ pub mod msg;
 
 pub use frame::{encode, FrameDecoder, FrameError, Message, MAX_FRAME, MAX_PAYLOAD};
 pub use msg::*;
-
-/// Protocol version carried in the first byte of every frame and in the handshake.
-/// Bump on any incompatible change of a message or of the framing.
-pub const PROTOCOL_VERSION: u8 = 1;

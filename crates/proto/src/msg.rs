@@ -14,6 +14,10 @@
 use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
+/// Protocol version carried in the first byte of every frame and in the handshake.
+/// Bump on any incompatible change of a message or of the framing.
+pub const PROTOCOL_VERSION: u8 = 1;
+
 /// Telemetry samples per [`TelemetryBatch`].
 pub const TELEMETRY_BATCH: usize = 24;
 /// Values per [`HostMsg::TableChunk`].

@@ -6,30 +6,13 @@
 //! velocities effective ticks per 1000 servo ticks. Heartbeats go out every
 //! [`HEARTBEAT_PERIOD`] while an experiment runs.
 
-use super::{Client, GapStats, HEARTBEAT_PERIOD};
+use super::{Client, EnoughFn, Record, HEARTBEAT_PERIOD};
 use crate::error::{ClientError, Result};
 use std::time::{Duration, Instant};
-use stiffwall_proto::{DeviceMsg, ExciteProfile, ExperimentKind, HostMsg, Sample};
+use stiffwall_proto::{DeviceMsg, ExciteProfile, ExperimentKind, HostMsg};
 
 /// How long a cancelled experiment waits for the device to report its end after `Stop`.
 const CANCEL_STOP_WAIT: Duration = Duration::from_secs(2);
-
-/// Judges the samples of a running experiment so far: true ends it early (see
-/// [`Client::release_until`]).
-pub type EnoughFn<'a> = dyn FnMut(&[Sample]) -> bool + 'a;
-
-/// Samples of one experiment with their bookkeeping.
-#[derive(Debug, Clone)]
-pub struct Record {
-    /// Samples in order.
-    pub samples: Vec<Sample>,
-    /// Whether the experiment ran its full length.
-    pub completed: bool,
-    /// Fault bits latched when it ended.
-    pub faults: u32,
-    /// Telemetry gaps seen.
-    pub gaps: GapStats,
-}
 
 impl Client {
     /// Runs a release test and collects every sample until the device reports the end.

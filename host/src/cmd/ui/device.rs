@@ -16,17 +16,18 @@
 //! (counted and shown), never recorded samples.
 
 mod release;
+mod state;
 mod tune;
 pub use release::{check_release_fields, MAX_RELEASE_SECONDS};
+use state::Dev;
+pub use state::{Request, Setup, Shared, Snapshot};
 pub use tune::{page_error, page_settings};
 
-use super::plane::{self, Model};
+use super::plane::{self};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
-use super::trace;
 use super::wire::{self, Command, Reply};
 use crate::config_flags::Overrides;
 use crate::device::client::Client;
-use crate::device::connect::ConnectArgs;
 use crate::recording::Writer;
 use crate::session::{self, Stats};
 use crate::tune::procedure;
@@ -34,12 +35,10 @@ use anyhow::{bail, Context, Result};
 use axum::extract::ws::Message;
 use serde_json::{json, Value};
 use std::io::BufWriter;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc, Mutex};
+use std::sync::atomic::Ordering;
+use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{flags, DeviceMsg, ExperimentKind, Sample, ServoConfig};
-use tokio::sync::broadcast;
 
 /// Period of the binary telemetry frames sent to the pages.
 pub const FRAME_PERIOD: Duration = Duration::from_millis(25);
@@ -49,107 +48,6 @@ pub const STATUS_PERIOD: Duration = Duration::from_millis(250);
 pub const FAULT_POLL: Duration = Duration::from_millis(500);
 /// Recordings are flushed at least this often (as `hostctl record`).
 pub const FLUSH_PERIOD: Duration = Duration::from_millis(100);
-
-/// What the pages see on connecting, kept current by the device thread.
-#[derive(Debug, Default)]
-pub struct Snapshot {
-    /// The `hello` message.
-    pub hello: Value,
-    /// The latest `config`, `plane`, `status`, `faults`, `release` and `tune` messages.
-    pub latest: Vec<(&'static str, Value)>,
-}
-
-impl Snapshot {
-    fn set(&mut self, kind: &'static str, v: Value) {
-        match self.latest.iter_mut().find(|(k, _)| *k == kind) {
-            Some(slot) => slot.1 = v,
-            None => self.latest.push((kind, v)),
-        }
-    }
-}
-
-/// State shared between the device thread and the server.
-#[derive(Debug)]
-pub struct Shared {
-    /// The messages of a newly opened page.
-    pub snapshot: Mutex<Snapshot>,
-    /// Every message to every page.
-    pub tx: broadcast::Sender<Message>,
-    /// Set to end the device thread (server shutdown).
-    pub stop: AtomicBool,
-    /// The controlling page and the running long operation.
-    pub control: super::control::Control,
-}
-
-impl Shared {
-    /// New shared state with room for `capacity` queued messages per page.
-    #[must_use]
-    pub fn new(capacity: usize) -> Self {
-        Self {
-            snapshot: Mutex::new(Snapshot::default()),
-            tx: broadcast::channel(capacity).0,
-            stop: AtomicBool::new(false),
-            control: super::control::Control::default(),
-        }
-    }
-
-    /// Sends `v` to every page and keeps it as the latest of its `type`.
-    pub fn publish(&self, kind: &'static str, v: Value) {
-        let text = v.to_string();
-        if let Ok(mut s) = self.snapshot.lock() {
-            s.set(kind, v);
-        }
-        let _ = self.tx.send(Message::Text(text.into()));
-    }
-
-    /// Sends `v` to every page without keeping it.
-    pub fn event(&self, v: &Value) {
-        let _ = self.tx.send(Message::Text(v.to_string().into()));
-    }
-}
-
-/// A command with the channel its answer goes to.
-#[derive(Debug)]
-pub struct Request {
-    /// The command.
-    pub cmd: Command,
-    /// Where the answer goes.
-    pub reply: tokio::sync::oneshot::Sender<Reply>,
-}
-
-/// Fixed facts of the run.
-#[derive(Debug, Clone)]
-pub struct Setup {
-    /// How the device was reached (for recordings' headers and the page).
-    pub connect: ConnectArgs,
-    /// The model of the (β, σ) plane, if known.
-    pub model: Option<Model>,
-    /// Directory recordings from the page are written to.
-    pub record_dir: PathBuf,
-    /// Pace the stream (sleep between reads) because the virtual device runs `--fast`.
-    pub pace: bool,
-}
-
-/// The thread's state.
-struct Dev {
-    client: Client,
-    setup: Setup,
-    shared: Arc<Shared>,
-    cfg: ServoConfig,
-    xidot: f64,
-    streaming: bool,
-    frame: Vec<u8>,
-    chunks: u32,
-    last_frame: Instant,
-    last_status: Instant,
-    last_fault_poll: Instant,
-    last_sample: Option<Sample>,
-    safe_mode: bool,
-    faults: u32,
-    rate: (Instant, u64, f64),
-    rec: Option<Recorder>,
-    release: Option<release::Release>,
-}
 
 /// Runs the device thread until `shared.stop` or Ctrl-C; finishes a recording cleanly.
 ///

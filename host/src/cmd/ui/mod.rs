@@ -21,6 +21,7 @@
 //! `config set`'s checks; the server binds to 127.0.0.1 unless `--listen` says otherwise (with
 //! a warning); the URL with the token is printed on stdout before anything is served.
 
+pub mod app;
 pub mod conn;
 pub mod control;
 pub mod device;
@@ -149,7 +150,7 @@ pub fn run(a: &Args) -> Result<()> {
         writeln!(out, "hostctl ui: open the URL above; Ctrl-C stops")?;
         out.flush()?;
     }
-    let app = server::App {
+    let app = app::App {
         guard: Arc::new(guard),
         shared: Arc::clone(&shared),
         commands: Arc::new(Mutex::new(tx)),

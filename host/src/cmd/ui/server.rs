@@ -11,11 +11,11 @@
 //! ([`MAX_MAP_BYTES`], [`MAX_CMD_BYTES`]): a larger `Content-Length` is answered `413` before
 //! the body is read, and a chunked body is cut off at the limit with the same `413`.
 
+use super::app::{reply_json, submit, App};
 use super::conn::Busy;
-use super::device::{Request, Shared};
 use super::plane;
 use super::security::{check_form, token_from_query, Guard, Refusal, TOKEN_HEADER};
-use super::wire::{parse_command, Command, Envelope, Reply};
+use super::wire::parse_command;
 use super::ws::ws;
 use axum::body::Bytes;
 use axum::extract::{DefaultBodyLimit, Request as HttpRequest, State};
@@ -25,8 +25,7 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::Extension;
 use axum::Router;
-use serde_json::{json, Value};
-use std::sync::{mpsc, Arc, Mutex};
+use serde_json::json;
 use tower_http::limit::RequestBodyLimitLayer;
 
 /// The page, its script and its style, embedded at build time.
@@ -41,17 +40,6 @@ pub const STYLE_CSS: &str = include_str!("../../../ui/style.css");
 pub const MAX_MAP_BYTES: usize = 4 << 20;
 /// Largest command accepted by `POST /api/cmd` (as over the WebSocket).
 pub const MAX_CMD_BYTES: usize = super::ws::MAX_WS_MESSAGE;
-
-/// What the handlers share.
-#[derive(Debug, Clone)]
-pub struct App {
-    /// The request checks.
-    pub guard: Arc<Guard>,
-    /// State from the device thread.
-    pub shared: Arc<Shared>,
-    /// Commands to the device thread.
-    pub commands: Arc<Mutex<mpsc::Sender<Request>>>,
-}
 
 /// The router of one run.
 pub fn router(app: App) -> Router {
@@ -153,60 +141,6 @@ async fn style_css() -> impl IntoResponse {
         [(header::CONTENT_TYPE, "text/css; charset=utf-8")],
         STYLE_CSS,
     )
-}
-
-/// Runs a command from client `who` ([`super::control::API_CLIENT`] for the HTTP API):
-/// `abort` and `take_control` here, the rest by the device thread once [`super::control`]
-/// admitted it; waits for the answer.
-pub(crate) async fn submit(app: &App, env: Envelope, who: u64) -> Reply {
-    let control = &app.shared.control;
-    match env.cmd {
-        Command::Abort => return control.abort(who),
-        Command::TakeControl => {
-            if who == super::control::API_CLIENT {
-                return Err("take_control is for pages (the HTTP API acts while no page controls the device)".into());
-            }
-            let ev = control.take(who);
-            app.shared.publish("control", ev.clone());
-            return Ok(ev);
-        }
-        _ => {}
-    }
-    let admitted = control.admit(who, &env.cmd)?;
-    if let Some(ev) = admitted.control {
-        app.shared.publish("control", ev);
-    }
-    if let Some(ev) = admitted.op {
-        app.shared.publish("op", ev);
-    }
-    // The device thread clears a reservation when its operation ends, however it ends.
-    queue(app, env).await
-}
-
-/// Sends a command to the device thread and waits for its answer.
-async fn queue(app: &App, env: Envelope) -> Reply {
-    let (tx, rx) = tokio::sync::oneshot::channel();
-    let sent = app
-        .commands
-        .lock()
-        .map_err(|_| "the device thread stopped".to_string())?
-        .send(Request {
-            cmd: env.cmd,
-            reply: tx,
-        });
-    if sent.is_err() {
-        return Err("the device thread stopped".into());
-    }
-    rx.await
-        .unwrap_or_else(|_| Err("the device thread stopped".into()))
-}
-
-/// The answer to a command as the page reads it.
-pub(crate) fn reply_json(id: &Value, r: Reply) -> Value {
-    match r {
-        Ok(v) => json!({"type": "reply", "id": id, "ok": true, "result": v}),
-        Err(e) => json!({"type": "reply", "id": id, "ok": false, "error": e}),
-    }
 }
 
 async fn api_cmd(State(app): State<App>, busy: Option<Extension<Busy>>, body: Bytes) -> Response {

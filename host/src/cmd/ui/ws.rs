@@ -12,7 +12,7 @@
 //! that reads too slowly loses display frames (it is told how many), never the device's
 //! samples.
 
-use super::server::{reply_json, submit, App};
+use super::app::{reply_json, submit, App};
 use super::wire::parse_command;
 use axum::extract::ws::{close_code, CloseFrame, Message, WebSocket, WebSocketUpgrade};
 use axum::extract::State;

@@ -8,45 +8,22 @@
 //! Memory: the released counts are 8 bytes per tick while the test runs (at most
 //! [`MAX_RELEASE_SECONDS`] × the servo rate); only their decimated trace is kept.
 
-use super::{trace, wire, Dev};
+use super::state::{Dev, Release};
 use crate::cmd::experiment::release_config;
-use crate::cmd::ui::wire::{ReleaseTest, Reply};
+use crate::cmd::ui::wire::ReleaseTest;
+use crate::cmd::ui::{trace, wire};
 use crate::device::client::HEARTBEAT_PERIOD;
 use crate::tune::release::classify;
 use anyhow::{bail, Result};
 use serde_json::json;
 use std::time::{Duration, Instant};
-use stiffwall_proto::{HostMsg, ServoConfig};
+use stiffwall_proto::HostMsg;
 
 /// Longest release test the page runs, s of device time (duration ≤ this × the servo rate):
 /// a release settles or fails within a few hundred natural periods (well under a minute on
 /// any device), but a soak of a wall left running is a use too; 20 minutes holds 10⁶ ticks at
 /// 1 kHz (9.6 MB of counts while it runs) and refuses the hours that 10⁷ ticks would take.
 pub const MAX_RELEASE_SECONDS: f64 = 1200.0;
-
-/// A running release test.
-pub(super) struct Release {
-    original: ServoConfig,
-    test: ServoConfig,
-    deflection: i32,
-    /// Released counts (effective ticks, as `released_counts`).
-    pub(super) counts: Vec<i64>,
-    /// Tick of the first hold or released sample.
-    pub(super) first_tick: Option<u32>,
-    start: Instant,
-    limit: Duration,
-    last_hb: Instant,
-    /// `Stop` was sent because the page aborted.
-    aborted: bool,
-    pub(super) reply: Option<tokio::sync::oneshot::Sender<Reply>>,
-}
-
-impl Release {
-    /// Coarsening shift of the test's config (to turn counts into effective ticks).
-    pub(super) fn shift(&self) -> u8 {
-        self.test.coarsen_shift
-    }
-}
 
 /// The page's checks of a release test's fields, in its words; `rate_hz` caps the duration.
 ///

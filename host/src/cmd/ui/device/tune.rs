@@ -4,9 +4,9 @@
 //! [`stiffwall_client::Cancel`] (the page's Abort ends it; the previous config is restored),
 //! and the telemetry stream paused meanwhile (the pages show "not live").
 
-use super::super::plane::Model;
-use super::wire::{Reply, TuneTest};
-use super::Dev;
+use super::state::Dev;
+use crate::cmd::ui::plane::Model;
+use crate::cmd::ui::wire::{Reply, TuneTest};
 use crate::tune::{procedure, Settings, SettingsError, TuneError};
 use anyhow::{anyhow, bail, Result};
 use serde_json::{json, Value};
