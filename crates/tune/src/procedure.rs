@@ -138,12 +138,106 @@ pub fn tune(
     result
 }
 
+/// The spring-only search starts at the expected limit, but not below this fraction of the
+/// guaranteed one (an expected limit far below the guaranteed one means the friction estimate
+/// is off, and the bracket would start needlessly low).
+const SEARCH_START_OF_GUARANTEED: f64 = 0.5;
+
+/// Zero crossings of the best release used to measure its frequency (the first ones: the
+/// oscillation before friction and quantization distort it).
+const FREQUENCY_CROSSINGS: usize = 12;
+
+/// What identification (step 1) and prediction (step 2) give the rest of the procedure.
+struct Identification {
+    id: super::ident::Identified,
+    /// Chirp amplitude that moved the device, DAC codes.
+    amplitude: i32,
+    /// The tests' config: the wall off, no damping, the energy monitor on, the wall where
+    /// the chirp left the device.
+    base: ServoConfig,
+    evidence: Evidence,
+    /// The identified model (K = 1 until the wall is chosen).
+    p: PhysicalParams,
+    /// Maximum velocity v, m/s (rad/s).
+    v: f64,
+    predicted: Predicted,
+    /// Force and stiffness units, for findings.
+    units: (&'static str, &'static str),
+}
+
 fn tune_inner(
     c: &mut Client,
     s: &Settings,
     original: &ServoConfig,
     progress: &Reporter<'_>,
 ) -> Result<Outcome> {
+    let mut ident = identify_and_predict(c, s, original, progress)?;
+    let early = model_check::findings(&ident.id, &ident.evidence, ident.units);
+    let report = |e: Progress| progress.report(e);
+    let run = Run {
+        s,
+        p: ident.p,
+        v: ident.v,
+        k_force: force_regime_k(&ident),
+        one_sided_wall: original.wall == stiffwall_proto::WallMode::OneSided,
+        progress: &report,
+        slow_launch: std::cell::Cell::new(None),
+        missed_launch: std::cell::Cell::new(None),
+    };
+    let search = Search {
+        k_cap: f64::from(c.info.limits.max_stiffness),
+        rel_tol: s.rel_tol,
+        ..Search::default()
+    };
+    // Step 4a: the spring-only search (a model that does not fit makes every test thorough).
+    let mut notes = Notes::default();
+    let found = spring_search(&run, c, &mut ident, &search, !early.is_empty(), &mut notes)?;
+    let mut model_mismatch = model_check::findings(&ident.id, &ident.evidence, ident.units);
+    // Only a search that found a failing K measured the limit (otherwise the force cap did).
+    if found.k_fail.is_some() {
+        model_mismatch.extend(model_check::prediction_finding(
+            found.k_pass,
+            ident.predicted.expected,
+        ));
+    }
+    // An impact the search could not launch was judged by releases only: the search's
+    // largest K is then less well tested, so the mismatch margin applies as well.
+    let thorough = !model_mismatch.is_empty() || notes.not_launched.is_some();
+    for f in &model_mismatch {
+        progress.report(Progress::Finding { text: f.clone() });
+    }
+    let margin_used = margin_for(s, thorough, &notes, &ident);
+    // Step 4b: the (K, B) frontier and the verification set of the chosen wall.
+    let base = ident.base;
+    let wall = choose_wall(
+        &run,
+        c,
+        &base,
+        &found,
+        &search,
+        thorough,
+        margin_used,
+        &mut notes,
+    )?;
+    for finding in launch_findings(&run, &notes, &ident) {
+        progress.report(Progress::Finding {
+            text: finding.clone(),
+        });
+        model_mismatch.push(finding);
+    }
+    // Step 5: set and save.
+    let saved = !s.dry_run && set_wall(c, original, &wall)?;
+    Ok(outcome(ident, found, wall, model_mismatch, saved))
+}
+
+/// Steps 1–2: the wall off, faults cleared, the chirp, the breakaway ramps, the model and its
+/// predicted limits at v.
+fn identify_and_predict(
+    c: &mut Client,
+    s: &Settings,
+    original: &ServoConfig,
+    progress: &Reporter<'_>,
+) -> Result<Identification> {
     let (res, t) = device_scale(c)?;
     // Experiments run with the wall off between them, without extra damping and with the
     // energy monitor on, whatever the user's config; the servo rate, delay and coarsening stay
@@ -173,7 +267,7 @@ fn tune_inner(
     breakaway(c, &base, &id, rest, &mut evidence, progress)?;
     let delta = res * f64::from(1u32 << base.coarsen_shift);
     let rotational = c.info.counts_per_rev > 0;
-    let mut p = PhysicalParams {
+    let p = PhysicalParams {
         mass: id.mass,
         viscous: id.viscous.max(0.0),
         coulomb: id.coulomb.max(0.0),
@@ -197,78 +291,77 @@ fn tune_inner(
     } else {
         ("N", "N/m")
     };
-    let early = model_check::findings(&id, &evidence, units);
-    // Force regime: above k_force the wall's peak force at v, K·Δ·(d + ½) with
-    // d = v√(m/K)/Δ, i.e. about v√(mK), exceeds the force limit and the firmware saturates it.
-    // A full-energy release then no longer stores the impact's energy, so above k_force each
-    // search step also runs what saturates first in use: an impact at v from each side.
-    let f_lim = f64::from(base.force_limit);
-    let report = |e: Progress| progress.report(e);
-    let run = Run {
-        s,
+    Ok(Identification {
+        id,
+        amplitude,
+        base,
+        evidence,
         p,
         v,
-        k_force: (f_lim / (v * id.mass.sqrt())).powi(2),
-        one_sided_wall: original.wall == stiffwall_proto::WallMode::OneSided,
-        progress: &report,
-        slow_launch: std::cell::Cell::new(None),
-        missed_launch: std::cell::Cell::new(None),
-    };
-    let search = Search {
-        k_cap: f64::from(c.info.limits.max_stiffness),
-        rel_tol: s.rel_tol,
-        ..Search::default()
-    };
-    let start = predicted
+        predicted,
+        units,
+    })
+}
+
+/// Force regime: above this K the wall's peak force at v, K·Δ·(d + ½) with d = v√(m/K)/Δ,
+/// i.e. about v√(mK), exceeds the force limit and the firmware saturates it. A full-energy
+/// release then no longer stores the impact's energy, so above it each search step also runs
+/// what saturates first in use: an impact at v from each side.
+fn force_regime_k(ident: &Identification) -> f64 {
+    let f_lim = f64::from(ident.base.force_limit);
+    (f_lim / (ident.v * ident.id.mass.sqrt())).powi(2)
+}
+
+/// Step 4a: the largest settling K at B = 0, from the prediction (the expected limit, not below
+/// half the guaranteed one); the release frequency of its best test goes into the evidence.
+fn spring_search(
+    run: &Run<'_>,
+    c: &mut Client,
+    ident: &mut Identification,
+    search: &Search,
+    thorough: bool,
+    notes: &mut Notes,
+) -> Result<super::search::Found> {
+    let start = ident
+        .predicted
         .expected
         .min(search.k_cap)
-        .max(predicted.guaranteed.min(search.k_cap) * 0.5);
-    let thorough_search = !early.is_empty();
-    let mut notes = Notes::default();
-    let found = largest_settling_k(start, &search, |k| {
-        run.step(c, &base, k, thorough_search, &mut notes)
-    })?;
+        .max(ident.predicted.guaranteed.min(search.k_cap) * SEARCH_START_OF_GUARANTEED);
+    let base = ident.base;
+    let found = largest_settling_k(start, search, |k| run.step(c, &base, k, thorough, notes))?;
     if let Some((k, counts)) = &notes.best {
-        evidence.release_k = Some(*k);
-        evidence.release_hz = model_check::release_frequency_hz(counts, t, 12);
-        evidence.model_hz = Some((k / id.mass).sqrt() / std::f64::consts::TAU);
+        let e = &mut ident.evidence;
+        e.release_k = Some(*k);
+        e.release_hz =
+            model_check::release_frequency_hz(counts, ident.p.period_s, FREQUENCY_CROSSINGS);
+        e.model_hz = Some((k / ident.id.mass).sqrt() / std::f64::consts::TAU);
     }
-    let mut model_mismatch = model_check::findings(&id, &evidence, units);
-    // Only a search that found a failing K measured the limit (otherwise the force cap did).
-    if found.k_fail.is_some() {
-        model_mismatch.extend(model_check::prediction_finding(
-            found.k_pass,
-            predicted.expected,
-        ));
-    }
-    // An impact the search could not launch was judged by releases only: the search's
-    // largest K is then less well tested, so the mismatch margin applies as well.
-    let thorough = !model_mismatch.is_empty() || notes.not_launched.is_some();
-    for f in &model_mismatch {
-        progress.report(Progress::Finding { text: f.clone() });
-    }
-    let margin_used = s.margin
+    Ok(found)
+}
+
+/// The margin applied to the largest settling K: the user's, times [`MISMATCH_MARGIN`] when
+/// the model does not fit (or an impact could not be launched), [`FRICTION_MISMATCH_MARGIN`]
+/// when only the friction does not fit.
+fn margin_for(s: &Settings, thorough: bool, notes: &Notes, ident: &Identification) -> f64 {
+    s.margin
         * if !thorough {
             1.0
-        } else if notes.not_launched.is_none() && model_check::dynamics_fit(&id, &evidence) {
+        } else if notes.not_launched.is_none()
+            && model_check::dynamics_fit(&ident.id, &ident.evidence)
+        {
             FRICTION_MISMATCH_MARGIN
         } else {
             MISMATCH_MARGIN
-        };
-    let wall = choose_wall(
-        &run,
-        c,
-        &base,
-        &found,
-        &search,
-        thorough,
-        margin_used,
-        &mut notes,
-    )?;
-    let launch_findings = [
+        }
+}
+
+/// What the impact launches showed: not launched, launched slowly, impacts at v left out.
+fn launch_findings(run: &Run<'_>, notes: &Notes, ident: &Identification) -> Vec<String> {
+    let (v, t) = (ident.v, ident.p.period_s);
+    [
         notes
             .not_launched
-            .map(|k| not_launched_finding(k, id.mass, t, run.missed_launch.get())),
+            .map(|k| not_launched_finding(k, ident.id.mass, t, run.missed_launch.get())),
         run.slow_launch.get().map(|d| slow_launch_finding(&d)),
         notes.impacts_capped.then(|| {
             format!(
@@ -276,29 +369,45 @@ fn tune_inner(
                  the wall set is verified by releases of the same energy from both sides and by \
                  impacts at half that speed and below only; a hit faster than v/2 is not tested \
                  on this device",
-                if rotational { "rad/s" } else { "m/s" }
+                if ident.p.rotational { "rad/s" } else { "m/s" }
             )
         }),
-    ];
-    for finding in launch_findings.into_iter().flatten() {
-        progress.report(Progress::Finding {
-            text: finding.clone(),
-        });
-        model_mismatch.push(finding);
-    }
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// Step 5: the user's config with the wall's K and B, set and saved; whether it was saved.
+fn set_wall(c: &mut Client, original: &ServoConfig, wall: &super::frontier::Wall) -> Result<bool> {
+    c.clear_faults().ok();
+    c.set_config(&ServoConfig {
+        stiffness: wall.k_set as f32,
+        damping: wall.b_set as f32,
+        ..*original
+    })?;
+    c.save_config().context("saving the tuned config")?;
+    Ok(true)
+}
+
+fn outcome(
+    ident: Identification,
+    found: super::search::Found,
+    wall: super::frontier::Wall,
+    model_mismatch: Vec<String>,
+    saved: bool,
+) -> Outcome {
+    let Identification {
+        id,
+        amplitude,
+        evidence,
+        mut p,
+        v,
+        predicted,
+        ..
+    } = ident;
     p.stiffness = wall.k_set;
-    let mut saved = false;
-    if !s.dry_run {
-        c.clear_faults().ok();
-        c.set_config(&ServoConfig {
-            stiffness: wall.k_set as f32,
-            damping: wall.b_set as f32,
-            ..*original
-        })?;
-        c.save_config().context("saving the tuned config")?;
-        saved = true;
-    }
-    Ok(Outcome {
+    Outcome {
         identified: IdentifiedReport {
             mass: [id.mass, id.mass_se],
             viscous: [id.viscous, id.viscous_se],
@@ -311,7 +420,7 @@ fn tune_inner(
         },
         params: p,
         max_velocity: v,
-        xidot: v * t / delta,
+        xidot: v * p.period_s / p.resolution,
         predicted,
         search: found,
         k_set: wall.k_set,
@@ -324,7 +433,7 @@ fn tune_inner(
         model_evidence: evidence,
         margin_used: wall.margin,
         saved,
-    })
+    }
 }
 
 fn not_launched_finding(k: f64, mass: f64, t: f64, missed: Option<Delivered>) -> String {
