@@ -34,6 +34,7 @@ enum Command {
     /// Find and set the largest stable wall stiffness, with evidence.
     Tune(cmd::tune::Args),
     /// Live view of the device in the browser (traces, (beta, sigma) plane, release, tune).
+    #[cfg(feature = "ui")]
     Ui(cmd::ui::Args),
     /// Serve the virtual device on a pseudo-terminal (prints its path) until Ctrl-C.
     Virtual(cmd::r#virtual::Args),
@@ -52,6 +53,7 @@ fn main() -> std::process::ExitCode {
         Command::Replay(a) => cmd::replay::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
         Command::Tune(a) => cmd::tune::run(a),
+        #[cfg(feature = "ui")]
         Command::Ui(a) => cmd::ui::run(a),
         Command::Virtual(a) => cmd::r#virtual::run(a),
     };

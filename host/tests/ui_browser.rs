@@ -10,6 +10,8 @@
 //! `STIFFWALL_UI_SCREENSHOTS=docs/figures`, which writes `ui-*.png` there.
 //! `STIFFWALL_CHROMEDRIVER` and `STIFFWALL_CHROMIUM` override the programs' paths.
 
+#![cfg(feature = "ui")]
+
 mod ui_support;
 
 use fantoccini::{Client, ClientBuilder, Locator};

@@ -2,6 +2,8 @@
 //! control explicitly, and Abort of a long release test and of tune, each leaving the device
 //! with its previous config.
 
+#![cfg(feature = "ui")]
+
 mod ui_support;
 
 use std::net::TcpStream;

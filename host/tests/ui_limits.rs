@@ -3,6 +3,8 @@
 //! typed commands, WebSocket frames, and the bounded release trace. The values are the ones
 //! docs/UI.md lists.
 
+#![cfg(feature = "ui")]
+
 mod ui_support;
 
 use std::io::{Read, Write};

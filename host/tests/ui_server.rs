@@ -3,6 +3,8 @@
 //! (compared with the terminal's own), a release test, and a recording made through the server
 //! (read back with the strict reader of `hostctl replay`).
 
+#![cfg(feature = "ui")]
+
 mod ui_support;
 
 use std::process::Command;

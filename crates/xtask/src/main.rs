@@ -135,6 +135,17 @@ fn ci() -> Result<()> {
         "-D",
         "warnings",
     ]))?;
+    step("hostctl without the live view (--no-default-features: no axum, tokio, hyper)");
+    run(cargo().args([
+        "clippy",
+        "-p",
+        "stiffwall-host",
+        "--all-targets",
+        "--no-default-features",
+        "--",
+        "-D",
+        "warnings",
+    ]))?;
     step("every declared dependency is used");
     unused_deps::unused_deps()?;
     step("no import cycle between the files of sim, host, tests and the client, tune and proto crates");

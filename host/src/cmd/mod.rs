@@ -10,5 +10,6 @@ pub mod replay;
 pub mod simulate;
 pub mod stream;
 pub mod tune;
+#[cfg(feature = "ui")]
 pub mod ui;
 pub mod r#virtual;
