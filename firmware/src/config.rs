@@ -24,11 +24,8 @@ pub const MAX_JUMP_COUNTS: u32 = 1 << 30;
 pub const MAX_ENERGY_J: f32 = 1.0e6;
 /// Velocity window of the over-velocity check, ticks (power of two).
 pub const VEL_WINDOW: usize = 8;
-/// Velocity clamp of the damping terms, effective counts per tick: the damper's code is
-/// `−g·clamp(dn, ±DAMPER_V_MAX)`, which keeps gain × velocity below 2^30 codes (g ≤ 2^16).
-/// The wall law is exact for |dn| ≤ this (2^14 counts per tick; faster than any encoder jump
-/// limit a device would set).
-pub const DAMPER_V_MAX: i32 = 1 << 14;
+/// Velocity clamp of the damping terms (defined beside the arithmetic that relies on it).
+pub use crate::numeric::DAMPER_V_MAX;
 /// Dimensionless hold damping β of the release test's holding controller (see [`Gains`]).
 pub const HOLD_BETA: f32 = 2.0;
 

@@ -15,6 +15,12 @@
 
 use fixed::types::{I16F16, I32F32};
 
+/// Velocity clamp of the damping terms, effective counts per tick: the damper's code is
+/// `−g·clamp(dn, ±DAMPER_V_MAX)`, which keeps gain × velocity below 2^30 codes (g ≤ 2^16).
+/// The wall law is exact for |dn| ≤ this (2^14 counts per tick; faster than any encoder jump
+/// limit a device would set).
+pub const DAMPER_V_MAX: i32 = 1 << 14;
+
 /// A numeric back-end for servo gains.
 pub trait Numeric: Copy + core::fmt::Debug + 'static {
     /// The gain representation.
@@ -269,7 +275,7 @@ mod tests {
     fn check_damper<N: Numeric>(b: f64) {
         let g = N::gain(b);
         let s = N::damper_gain(g);
-        let vmax = crate::config::DAMPER_V_MAX;
+        let vmax = DAMPER_V_MAX;
         for v in (-vmax..=vmax).step_by(7).chain([-vmax, -1, 0, 1, vmax]) {
             if b * f64::from(v).abs() < f64::from(1 << 30) {
                 assert_eq!(N::damper(s, v), N::mul_bounded(g, -v), "b {b} v {v}");

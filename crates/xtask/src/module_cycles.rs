@@ -22,11 +22,8 @@ struct Scope {
 }
 
 // Checked today: every file of `sim/src`, `host/src` (its `main.rs` is the binary crate, left
-// out, see `graph`), `crates/tune/src`, `crates/client/src`, `crates/proto/src` and `tests/src`.
-// Not yet: `crates/core/src` (`criteria.rs` <-> `criteria/damped.rs`: the damped criteria use
-// the sampled-system machinery of `criteria.rs`, which re-exports them) and `firmware/src`
-// (`config.rs` <-> `numeric.rs`).
-const SCOPES: [Scope; 8] = [
+// out, see `graph`), `crates/{tune,client,proto,core}/src`, `firmware/src` and `tests/src`.
+const SCOPES: [Scope; 10] = [
     Scope {
         root: "sim/src",
         under: "",
@@ -57,6 +54,14 @@ const SCOPES: [Scope; 8] = [
     },
     Scope {
         root: "crates/proto/src",
+        under: "",
+    },
+    Scope {
+        root: "crates/core/src",
+        under: "",
+    },
+    Scope {
+        root: "firmware/src",
         under: "",
     },
 ];

@@ -11,7 +11,7 @@
 //! [`ParamError`] naming `damping`); at B = 0 every function returns bit-for-bit what the
 //! spring-only function of [`super`] returns (it calls it).
 
-use super::{
+use super::sampled::{
     base, gil_avello_rubio_stable, k_max_gil_avello_rubio, numerator, schur_stable, split_delay,
     GIL_REL_TOL, MAX_DEGREE,
 };
