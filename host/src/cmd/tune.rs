@@ -187,8 +187,61 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report, kb: Option<&Path>) -> Str
         ("N/m", "kg", "N·s/m", "N", "m/s")
     };
     let mut s = String::new();
-    let id = &o.identified;
     let _ = writeln!(s, "tune: {}", a.connect.describe());
+    render_identified(&mut s, o, u);
+    render_limits(&mut s, o, u);
+    render_walls(&mut s, o, u.0, u.2);
+    if o.model_mismatch.is_empty() {
+        let _ = writeln!(s, "model check: the identified model fits the device");
+    } else {
+        let _ = writeln!(
+            s,
+            "model mismatch (margin ×{:.3} in all, longer tests at more energies):",
+            o.margin_used
+        );
+        for f in &o.model_mismatch {
+            let _ = writeln!(s, "  - {f}");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "operating point at the set K: μ = {:.4}, β = {:.5}, σ = {:.4}, τ_D = {:.3}",
+        r.mu, r.beta, r.sigma, r.tau_d
+    );
+    let _ = writeln!(s, "region {:?}: {}", r.region, r.region_meaning);
+    if o.b_set > 0.0 {
+        render_damped_point(&mut s, o, u.0);
+    }
+    let _ = writeln!(
+        s,
+        "{}",
+        if o.saved {
+            "config set and saved on the device"
+        } else {
+            "dry run: the device's config was left unchanged"
+        }
+    );
+    if let Some(p) = &a.plot {
+        let _ = writeln!(s, "plot: {}", p.display());
+    }
+    if let Some(p) = kb {
+        let _ = writeln!(s, "(K, B) frontier plot: {}", p.display());
+    }
+    s
+}
+
+/// Units of a report: stiffness, mass, damping, force, velocity.
+type Units = (
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+);
+
+/// The identified model, with its standard errors.
+fn render_identified(s: &mut String, o: &Outcome, u: Units) {
+    let id = &o.identified;
     let _ = writeln!(
         s,
         "identified (wall off, chirp of {} codes, {} windows):",
@@ -220,6 +273,10 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report, kb: Option<&Path>) -> Str
             u.0
         );
     }
+}
+
+/// The predicted, verified and set stiffness limits.
+fn render_limits(s: &mut String, o: &Outcome, u: Units) {
     let _ = writeln!(
         s,
         "max velocity: {:.4} {} ({:.2} ticks/period)",
@@ -268,44 +325,6 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report, kb: Option<&Path>) -> Str
             .collect::<Vec<_>>()
             .join("; ")
     );
-    render_walls(&mut s, o, u.0, u.2);
-    if o.model_mismatch.is_empty() {
-        let _ = writeln!(s, "model check: the identified model fits the device");
-    } else {
-        let _ = writeln!(
-            s,
-            "model mismatch (margin ×{:.3} in all, longer tests at more energies):",
-            o.margin_used
-        );
-        for f in &o.model_mismatch {
-            let _ = writeln!(s, "  - {f}");
-        }
-    }
-    let _ = writeln!(
-        s,
-        "operating point at the set K: μ = {:.4}, β = {:.5}, σ = {:.4}, τ_D = {:.3}",
-        r.mu, r.beta, r.sigma, r.tau_d
-    );
-    let _ = writeln!(s, "region {:?}: {}", r.region, r.region_meaning);
-    if o.b_set > 0.0 {
-        render_damped_point(&mut s, o, u.0);
-    }
-    let _ = writeln!(
-        s,
-        "{}",
-        if o.saved {
-            "config set and saved on the device"
-        } else {
-            "dry run: the device's config was left unchanged"
-        }
-    );
-    if let Some(p) = &a.plot {
-        let _ = writeln!(s, "plot: {}", p.display());
-    }
-    if let Some(p) = kb {
-        let _ = writeln!(s, "(K, B) frontier plot: {}", p.display());
-    }
-    s
 }
 
 /// With a virtual damper the paper's (β, σ) regions above describe the spring alone: the
