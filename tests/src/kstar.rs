@@ -30,10 +30,12 @@
 //! **settles** when over its last third the count stays within one count (max − min ≤ 1: at
 //! rest, or toggling between two neighbouring counts) — so a persistent oscillation above one
 //! count ("buzz") at any frequency fails, and so does growth (also stopped early when |n|
-//! exceeds 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration counts). K* is found by scanning K upwards by ×1.25 from a
-//! settling K until a trial fails, then bisecting (geometric) to a relative width of 0.5 %:
-//! K* is the top of the stable interval that contains the start, the largest K below the
-//! first failure.
+//! exceeds 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration counts).
+//! K* is found by scanning K upwards by ×1.25 from a settling K until a trial fails, then
+//! bisecting (geometric) to a relative width of 0.5 %, then confirming the span K*/1.5625..K*
+//! at ×1.05 (a failure there is bisected instead): K* is the top of the stable interval that
+//! contains the start, the largest K below the first failure, resolved to 5 % over the span
+//! where a tune's answer lies and to 25 % below it.
 //!
 //! Invariant: deterministic (no randomness, no threads); the verdict of a trial depends only on
 //! the plant prototype, the rig and K.
@@ -52,6 +54,13 @@ pub const TRIAL_TICKS: (f64, f64) = (2000.0, 40_000.0);
 pub const SCAN_FACTOR: f64 = 1.25;
 /// Relative width at which the bisection stops.
 pub const REL_TOL: f64 = 0.005;
+/// Step of the confirmation scan: after the bisection, K from K*/[`CONFIRM_SPAN`] up to K* is
+/// tried again at this ratio, so a failing band that the ×1.25 scan stepped over (seen with a
+/// damper behind an amplifier: maxon-re35-amp-3khz fails near 4.74 while 4.26 and 5.32 settle)
+/// is found where a tune's answer (≥ 0.7 K*) lies.
+pub const CONFIRM_FACTOR: f64 = 1.05;
+/// Span below K* that the confirmation scan covers (two steps of the coarse scan).
+pub const CONFIRM_SPAN: f64 = SCAN_FACTOR * SCAN_FACTOR;
 
 /// A plant stepped by a sampled controller (SI units, encoder on the controlled side).
 pub trait SampledPlant {
@@ -413,6 +422,7 @@ pub fn k_star<P: SampledPlant + Clone>(
         lo /= SCAN_FACTOR * SCAN_FACTOR;
         fail = eval(lo);
     }
+    let start_stable = lo;
     let (mut hi, mut failing) = loop {
         let k = lo * SCAN_FACTOR;
         if k > k_cap {
@@ -423,15 +433,27 @@ pub fn k_star<P: SampledPlant + Clone>(
             None => lo = k,
         }
     };
-    while hi / lo > 1.0 + REL_TOL {
-        let mid = (lo * hi).sqrt();
-        match eval(mid) {
-            Some((t, _)) => {
-                hi = mid;
-                failing = t;
-            }
-            None => lo = mid,
+    bisect(&mut eval, &mut lo, &mut hi, &mut failing);
+    // Confirmation: the ×1.25 scan can step over a narrow failing band; the span below K*
+    // where a tune's answer lies is re-scanned at ×CONFIRM_FACTOR, and a failure there becomes
+    // the new upper end.
+    let floor = (lo / CONFIRM_SPAN).max(start_stable);
+    // The last stable point below: a point of the coarse scan (all of them settled).
+    let mut stable = start_stable;
+    while stable * SCAN_FACTOR <= floor {
+        stable *= SCAN_FACTOR;
+    }
+    let mut k = floor;
+    while k < lo {
+        if let Some((t, _)) = eval(k) {
+            hi = k;
+            failing = t;
+            lo = stable;
+            bisect(&mut eval, &mut lo, &mut hi, &mut failing);
+            break;
         }
+        stable = k;
+        k *= CONFIRM_FACTOR;
     }
     Ok(KStar {
         k_star: lo,
@@ -439,6 +461,25 @@ pub fn k_star<P: SampledPlant + Clone>(
         failing,
         evaluations,
     })
+}
+
+/// Geometric bisection of [lo (stable), hi (failing)] to [`REL_TOL`].
+fn bisect(
+    eval: &mut impl FnMut(f64) -> Option<(Trial, TrialRun)>,
+    lo: &mut f64,
+    hi: &mut f64,
+    failing: &mut Trial,
+) {
+    while *hi / *lo > 1.0 + REL_TOL {
+        let mid = (*lo * *hi).sqrt();
+        match eval(mid) {
+            Some((t, _)) => {
+                *hi = mid;
+                *failing = t;
+            }
+            None => *lo = mid,
+        }
+    }
 }
 
 /// Default grid of the damper for [`frontier`], as β = B/(K*(0)·T): the evidence puts

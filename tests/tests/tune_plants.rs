@@ -18,18 +18,21 @@ use stiffwall_tests::kstar;
 
 /// The plants of the default run (quick K*): stiction, amplifier filter, compliant
 /// transmission, cogging, a hand (the spring-like force tune's identification fits beside m,
-/// b, c), and the launch family (stiction, a slow amplifier with a tight limit, delay). The
-/// every-plant test below runs all of `sim/plants/`. Known shortfall there, not here:
-/// `maxon-re35-amp-3khz` and `fine-encoder-stage` get a damped wall at 0.65-0.69 of K*(B set)
-/// (below the 0.7 floor, never above K*(B set): tune's damped tests find a buzz from the
-/// firmware hold's start below the brute force's first failure).
-pub const DEFAULT_PLANTS: [&str; 6] = [
+/// b, c), the launch family (stiction, a slow amplifier with a tight limit, delay), a damped
+/// wall behind a fast amplifier whose stable K has a narrow failing band below K*(B)
+/// (`maxon-re35-amp-3khz`: the brute force's confirmation scan finds it), and a light stage
+/// with a fine encoder whose damped release hold trips the encoder-jump limit when re-aimed
+/// farther (`fine-encoder-stage`: the first attempt's outcome stands). The every-plant test
+/// below runs all of `sim/plants/`.
+pub const DEFAULT_PLANTS: [&str; 8] = [
     "phantom-stiction",
     "phantom-amp-300hz",
     "phantom-cable-150hz",
     "rotary-ironcore-cogging",
     "phantom-light-grip",
     "maxon-re35-stiction-amp1k-delay",
+    "maxon-re35-amp-3khz",
+    "fine-encoder-stage",
 ];
 
 /// Lower bound of K set / K*.

@@ -259,6 +259,9 @@ pub struct TestRun {
     pub counts: Vec<i64>,
     /// An impact's launch at contact (None for a release, or an impact that never arrived).
     pub delivered: Option<Delivered>,
+    /// The supervisor tripped before the release or contact (during the hold or launch): the
+    /// record holds no motion of the wall under test.
+    pub hold_tripped: bool,
 }
 
 /// Runs one test at stiffness `k` (config `base` with that K) for a base length of `ticks`
@@ -292,7 +295,15 @@ pub fn run_test(
                 let aimed = Test::Release {
                     deflection_ticks: target,
                 };
-                result = run_once(c, base, k, aimed, ticks, min_run)?;
+                let again = run_once(c, base, k, aimed, ticks, min_run)?;
+                if again.hold_tripped {
+                    // The hold's own step to the farther target tripped the supervisor (its
+                    // overshoot, not the wall, ran faster than the encoder-jump or velocity
+                    // limit: a damped wall's hold on a light device): no release was run, so
+                    // nothing was learnt about the wall; the first attempt's outcome stands.
+                    break;
+                }
+                result = again;
             }
             Ok(result)
         }
@@ -412,6 +423,7 @@ fn run_aimed(
                 verdict: Verdict::Growing,
                 counts: Vec::new(),
                 delivered: None,
+                hold_tripped: true,
             });
         }
         Err(e) => return Err(e.into()),
@@ -449,6 +461,7 @@ fn run_aimed(
         }
     };
     Ok(TestRun {
+        hold_tripped: tripped && counts.is_empty(),
         verdict,
         counts,
         delivered,
