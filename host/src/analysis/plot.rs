@@ -10,6 +10,7 @@
 use super::Report;
 use crate::figure::{self, Figure, FigureError};
 use anyhow::anyhow;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -46,7 +47,9 @@ fn e<E: std::fmt::Display>(err: E) -> anyhow::Error {
     anyhow!("plot: {err}")
 }
 
-#[allow(clippy::too_many_lines)]
+/// The plane's chart: β on x, σ on y, over `f64` ranges.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 /// Draws the plane into `root` (which it fills), e.g. one panel of a larger figure.
 ///
 /// # Errors
@@ -57,29 +60,14 @@ where
 {
     root.fill(&WHITE).map_err(e)?;
     let tau = r.tau_d;
-    let delayed = tau > 0.0;
     let b_star = regions::beta_star(tau);
     let s_star = regions::sigma_star(tau, r.xiddot).unwrap_or(0.5);
-    // Slope of the critical line: the given velocity bound, else the velocity limit (15)
-    // (the line through the operating point).
-    let (slope, slope_label) = match (r.xidot, r.xidot_max) {
-        (Some(x), _) => (
-            Some(x),
-            format!("critical line, dξ/dτ max = {x:.3} (--velocity)"),
-        ),
-        (None, Some(x)) if x > 0.0 => (
-            Some(x),
-            format!("critical line at the velocity limit dξ/dτ max = {x:.3}"),
-        ),
-        _ => (None, String::new()),
-    };
     let bmax = (1.5 * b_star).max(1.2 * r.beta).max(1.0);
     let smax = (1.25 * r.sigma).max(s_star + 0.6).max(2.0);
-
     let title = format!(
         "{}: (β, σ) plane, {} — region {}",
         r.device.as_deref().unwrap_or("device"),
-        if delayed {
+        if tau > 0.0 {
             format!("Fig. 5 regions, τ_D = {tau:.3}")
         } else {
             "Fig. 3 regions".to_string()
@@ -102,47 +90,85 @@ where
         .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(e)?;
-
-    let c_a = RGBColor(120, 200, 120);
-    let c_b = RGBColor(140, 170, 235);
-    let c_c = RGBColor(235, 120, 120);
-    let c_d = RGBColor(245, 190, 120);
-    let c_e = RGBColor(200, 235, 150);
-    let c_f2 = RGBColor(170, 220, 210);
-
-    let mut region = |pts: Vec<(f64, f64)>, color: RGBColor, label: String| -> anyhow::Result<()> {
-        if pts.len() < 3 {
-            return Ok(());
-        }
-        chart
-            .draw_series(std::iter::once(Polygon::new(pts, color.mix(0.55).filled())))
-            .map_err(e)?
-            .label(label)
-            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], color.filled()));
-        Ok(())
-    };
     let window = Window {
         beta_min: 0.0,
         beta_max: bmax,
         sigma_min: 0.0,
         sigma_max: smax,
     };
+    draw_regions(&mut chart, r, &window)?;
+    draw_path(&mut chart, r, bmax, smax)?;
+    draw_operating_point(&mut chart, r)?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// The slope of the critical line: the given velocity bound, else the velocity limit (15)
+/// (the line through the operating point), with its legend label.
+fn critical_slope(r: &Report) -> (Option<f64>, String) {
+    match (r.xidot, r.xidot_max) {
+        (Some(x), _) => (
+            Some(x),
+            format!("critical line, dξ/dτ max = {x:.3} (--velocity)"),
+        ),
+        (None, Some(x)) if x > 0.0 => (
+            Some(x),
+            format!("critical line at the velocity limit dξ/dτ max = {x:.3}"),
+        ),
+        _ => (None, String::new()),
+    }
+}
+
+/// The regions of Fig. 3/5 in `window` and the critical line.
+fn draw_regions<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    r: &Report,
+    window: &Window,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let tau = r.tau_d;
+    let (slope, slope_label) = critical_slope(r);
+    let c_a = RGBColor(120, 200, 120);
     let regions_drawn = [
-        (Region::C, c_c, "C: unstable"),
-        (Region::B, c_b, "B: limit cycle < 1 tick"),
-        (Region::F2, c_f2, "F2: stable, brief energy generation"),
+        (Region::C, RGBColor(235, 120, 120), "C: unstable"),
+        (
+            Region::B,
+            RGBColor(140, 170, 235),
+            "B: limit cycle < 1 tick",
+        ),
+        (
+            Region::F2,
+            RGBColor(170, 220, 210),
+            "F2: stable, brief energy generation",
+        ),
         (Region::A, c_a, "A: passive, globally stable"),
         (Region::F1, c_a, "F1: stable, energy decreasing"),
-        (Region::D, c_d, "D: locally unstable"),
-        (Region::E, c_e, "E: locally stable"),
+        (Region::D, RGBColor(245, 190, 120), "D: locally unstable"),
+        (Region::E, RGBColor(200, 235, 150), "E: locally stable"),
     ];
     for (reg, color, label) in regions_drawn {
-        let poly = regions::region_polygon(reg, tau, slope, r.xiddot, &window).map_err(e)?;
-        region(poly.vertices().to_vec(), color, label.into())?;
+        let poly = regions::region_polygon(reg, tau, slope, r.xiddot, window).map_err(e)?;
+        let pts = poly.vertices().to_vec();
+        if pts.len() < 3 {
+            continue;
+        }
+        chart
+            .draw_series(std::iter::once(Polygon::new(pts, color.mix(0.55).filled())))
+            .map_err(e)?
+            .label(label)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], color.filled()));
     }
-
-    // Critical line.
-    let lines = regions::boundaries(tau, slope, r.xiddot, &window).map_err(e)?;
+    let lines = regions::boundaries(tau, slope, r.xiddot, window).map_err(e)?;
     if let Some(seg) = lines.get(Boundary::Critical) {
         chart
             .draw_series(LineSeries::new(
@@ -153,8 +179,20 @@ where
             .label(slope_label)
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
     }
+    Ok(())
+}
 
-    // Path of the operating point as K grows: (β, σ)·K0/K, a ray to the origin.
+/// The path of the operating point as K grows, (β, σ)·K0/K (a ray to the origin), with K/2,
+/// 2K, 4K and the stiffness limits marked on it.
+fn draw_path<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    r: &Report,
+    bmax: f64,
+    smax: f64,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
     let (b0, s0) = (r.beta, r.sigma);
     let far = if b0 > 0.0 || s0 > 0.0 {
         (bmax / b0.max(1e-300)).min(smax / s0.max(1e-300))
@@ -172,9 +210,10 @@ where
         .legend(move |(x, y)| {
             PathElement::new(vec![(x, y), (x + 16, y)], path_color.stroke_width(2))
         });
+    let inside = |pt: (f64, f64)| pt.0 <= bmax && pt.1 <= smax;
     for (factor, label) in [(0.5, "K/2"), (2.0, "2K"), (4.0, "4K")] {
         let pt = (b0 / factor, s0 / factor);
-        if pt.0 <= bmax && pt.1 <= smax {
+        if inside(pt) {
             chart
                 .draw_series(std::iter::once(
                     EmptyElement::at(pt)
@@ -188,7 +227,7 @@ where
     let k0 = r.params.stiffness;
     let limits = [
         (r.k_max_at_velocity, "K_max (12)"),
-        (r.k_max_delayed.filter(|_| delayed), "K_max (19)"),
+        (r.k_max_delayed.filter(|_| r.tau_d > 0.0), "K_max (19)"),
         (Some(r.k_max_passive), "K_max region A"),
     ];
     for (km, label) in limits {
@@ -196,7 +235,7 @@ where
             continue;
         };
         let pt = (b0 * k0 / km, s0 * k0 / km);
-        if pt.0 <= bmax && pt.1 <= smax {
+        if inside(pt) {
             chart
                 .draw_series(std::iter::once(
                     EmptyElement::at(pt)
@@ -206,7 +245,18 @@ where
                 .map_err(e)?;
         }
     }
-    // Operating point.
+    Ok(())
+}
+
+/// The operating point, labelled with K, β and σ.
+fn draw_operating_point<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    r: &Report,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (b0, s0) = (r.beta, r.sigma);
     chart
         .draw_series(std::iter::once(
             EmptyElement::at((b0, s0))
@@ -220,15 +270,5 @@ where
         .map_err(e)?
         .label(format!("operating point (β = {b0:.4}, σ = {s0:.3})"))
         .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.filled()));
-
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 15))
-        .draw()
-        .map_err(e)?;
-    root.present().map_err(e)?;
     Ok(())
 }
