@@ -147,27 +147,7 @@ pub fn analyze(
         (None, Some(x)) => x / d.mu.sqrt(),
         (None, None) => 0.0,
     };
-    let (region, assumption) = match xidot {
-        Some(x) => (
-            regions::classify_delayed(d.beta, d.sigma, d.tau_d, Some(x), Some(xiddot))?,
-            if delayed {
-                format!("velocity bound ξ̇_max = {x:.4} ticks/period, acceleration bound ξ̈_max = {xiddot:.4} ticks/period²{}", if acceleration.is_none() { " (harmonic: ξ̇_max/√μ)" } else { "" })
-            } else {
-                format!("velocity bound ξ̇_max = {x:.4} ticks/period")
-            },
-        ),
-        None => (
-            regions::classify_delayed(d.beta, d.sigma, d.tau_d, Some(0.0), Some(xiddot))?,
-            format!(
-                "low-speed limit ξ̇_max → 0{} (give --velocity for a velocity bound)",
-                if delayed {
-                    ", ξ̈_max as given or 0"
-                } else {
-                    ""
-                }
-            ),
-        ),
-    };
+    let (region, assumption) = classify(&d, xidot, xiddot, acceleration.is_some())?;
     let xidot_max = match (delayed, acceleration) {
         (false, _) => regions::velocity_limit(d.beta, d.sigma)?,
         (true, Some(_)) => regions::velocity_limit_delayed(d.beta, d.sigma, d.tau_d, xiddot)?,
@@ -183,6 +163,87 @@ pub fn analyze(
         (Some(v), None) => Some(limits::k_max_delayed_harmonic(p, v)?),
         _ => None,
     };
+    let crit = criteria_table(
+        p,
+        k_max_passive,
+        k_max_at_velocity,
+        k_max_delayed,
+        acceleration.is_some(),
+    )?;
+    let tau_l = 0.5 + d.tau_d;
+    let limit_cycle =
+        describing::small_limit_cycle(d.mu, d.beta, d.sigma, tau_l)?.map(|lc| LimitCycleReport {
+            amplitude_ticks: lc.amplitude,
+            frequency_hz: lc.frequency_hz(p.period_s),
+            omega: lc.omega,
+        });
+    let sigma_min_large_amplitude = describing::sigma_min_large(d.mu, d.beta, tau_l)?;
+    check_positive("mu", d.mu)?;
+    Ok(Report {
+        device,
+        params: *p,
+        mu: d.mu,
+        beta: d.beta,
+        sigma: d.sigma,
+        tau_d: d.tau_d,
+        region,
+        region_meaning: region.meaning(),
+        region_assumption: assumption,
+        xidot,
+        xiddot: delayed.then_some(xiddot),
+        xidot_max,
+        velocity_limit_m_s,
+        k_max_passive,
+        k_max_at_velocity,
+        k_max_delayed,
+        criteria: crit,
+        limit_cycle,
+        sigma_min_large_amplitude,
+        mu_sampling_ok: d.mu >= 10.0 / (std::f64::consts::PI * std::f64::consts::PI),
+        damping: None,
+    })
+}
+
+/// The region of the operating point under the velocity bound (or the low-speed limit), and
+/// the assumption it was classified under, in words.
+fn classify(
+    d: &stiffwall_core::params::Dimensionless,
+    xidot: Option<f64>,
+    xiddot: f64,
+    acceleration_given: bool,
+) -> Result<(Region, String), ParamError> {
+    let delayed = d.tau_d > 0.0;
+    Ok(match xidot {
+        Some(x) => (
+            regions::classify_delayed(d.beta, d.sigma, d.tau_d, Some(x), Some(xiddot))?,
+            if delayed {
+                format!("velocity bound ξ̇_max = {x:.4} ticks/period, acceleration bound ξ̈_max = {xiddot:.4} ticks/period²{}", if acceleration_given { "" } else { " (harmonic: ξ̇_max/√μ)" })
+            } else {
+                format!("velocity bound ξ̇_max = {x:.4} ticks/period")
+            },
+        ),
+        None => (
+            regions::classify_delayed(d.beta, d.sigma, d.tau_d, Some(0.0), Some(xiddot))?,
+            format!(
+                "low-speed limit ξ̇_max → 0{} (give --velocity for a velocity bound)",
+                if delayed {
+                    ", ξ̈_max as given or 0"
+                } else {
+                    ""
+                }
+            ),
+        ),
+    })
+}
+
+/// Every criterion's stiffness limit at the device's K, keyed by name.
+fn criteria_table(
+    p: &PhysicalParams,
+    k_max_passive: f64,
+    k_max_at_velocity: Option<f64>,
+    k_max_delayed: Option<f64>,
+    acceleration_given: bool,
+) -> Result<BTreeMap<&'static str, CriterionLimit>, ParamError> {
     let k = p.stiffness;
     let entry = |k_max: f64, formula, source| CriterionLimit {
         k_max: k_max.is_finite().then_some(k_max),
@@ -212,7 +273,7 @@ pub fn analyze(
     if let Some(km) = k_max_delayed {
         crit.insert(
             "diolaiti_eq19_delayed",
-            entry(km, if acceleration.is_some() { "K <= min((c + bv)/(Δ/2 + a(T_D² + T T_D) + v(T/2 + T_D)), c/(Δ/2 + a(T_D² + T T_D)))  (eq. 19)" } else { "eq. 19 with a = v·sqrt(K/m) (harmonic), bisection" }, "Diolaiti et al. 2006, eq. (19)"),
+            entry(km, if acceleration_given { "K <= min((c + bv)/(Δ/2 + a(T_D² + T T_D) + v(T/2 + T_D)), c/(Δ/2 + a(T_D² + T T_D)))  (eq. 19)" } else { "eq. 19 with a = v·sqrt(K/m) (harmonic), bisection" }, "Diolaiti et al. 2006, eq. (19)"),
         );
     }
     crit.insert(
@@ -247,38 +308,7 @@ pub fn analyze(
             "Hulin, Preusche & Hirzinger, IROS 2006",
         ),
     );
-    let tau_l = 0.5 + d.tau_d;
-    let limit_cycle =
-        describing::small_limit_cycle(d.mu, d.beta, d.sigma, tau_l)?.map(|lc| LimitCycleReport {
-            amplitude_ticks: lc.amplitude,
-            frequency_hz: lc.frequency_hz(p.period_s),
-            omega: lc.omega,
-        });
-    let sigma_min_large_amplitude = describing::sigma_min_large(d.mu, d.beta, tau_l)?;
-    check_positive("mu", d.mu)?;
-    Ok(Report {
-        device,
-        params: *p,
-        mu: d.mu,
-        beta: d.beta,
-        sigma: d.sigma,
-        tau_d: d.tau_d,
-        region,
-        region_meaning: region.meaning(),
-        region_assumption: assumption,
-        xidot,
-        xiddot: delayed.then_some(xiddot),
-        xidot_max,
-        velocity_limit_m_s,
-        k_max_passive,
-        k_max_at_velocity,
-        k_max_delayed,
-        criteria: crit,
-        limit_cycle,
-        sigma_min_large_amplitude,
-        mu_sampling_ok: d.mu >= 10.0 / (std::f64::consts::PI * std::f64::consts::PI),
-        damping: None,
-    })
+    Ok(crit)
 }
 
 fn opt(v: Option<f64>, unbounded: &str) -> String {
