@@ -359,34 +359,8 @@ fn run_aimed(
     asked: Option<f64>,
 ) -> Result<TestRun> {
     super::settings::check_cancel(c)?;
-    // A reproducible start (see the module header), with the damper off too: a damper
-    // alone can be unstable (B·T/m large, or behind a slow amplifier) and must not keep the
-    // device from coming to rest between tests.
-    c.set_config(&ServoConfig {
-        stiffness: 0.0,
-        damping: 0.0,
-        ..*base
-    })?;
-    let rest = rest_position(c)?;
-    let one_sided = matches!(
-        test,
-        Test::Impact {
-            one_sided: true,
-            ..
-        }
-    );
-    let cfg = ServoConfig {
-        stiffness: k as f32,
-        wall_position: base.wall_position.saturating_add(rest),
-        wall: if one_sided {
-            WallMode::OneSided
-        } else {
-            WallMode::Bidirectional
-        },
-        ..*base
-    };
+    let cfg = wall_under_test(c, base, k, test)?;
     clear_faults(c)?;
-    let shift = base.coarsen_shift;
     // A damped wall's test ends when it is within one count ([`settled_within`]): its damper
     // answers every count change, so it often toggles between two counts instead of resting.
     // The device runs the test with the wall under test from its first tick, ends it on the
@@ -434,38 +408,102 @@ fn run_aimed(
             rec.gaps.missing
         );
     }
-    let mut counts = super::release::released_counts(&rec.samples, shift);
-    // Judge only up to where the record settled (what came after is the Stop's latency).
-    let tripped = rec.faults != 0;
-    if let Some(len) = judged_len_within(&counts, ticks as usize, min_run, one_count) {
-        counts.truncate(len);
-    } else if !tripped {
-        counts.truncate(budget as usize);
-    }
-    let (verdict, delivered) = match test {
-        Test::Release { .. } => (classify(&counts, tripped), None),
-        Test::Impact {
-            one_sided,
-            velocity_milliticks,
-            ..
-        } => {
-            let asked = asked.unwrap_or(f64::from(velocity_milliticks).abs() / 1000.0);
-            let delivered = Delivered::from_record(&rec.samples, &counts, shift, asked);
-            let wall = if one_sided {
-                Wall::OneSided
-            } else {
-                Wall::Bidirectional
-            };
-            let verdict = judge_impact(&counts, wall, delivered.as_ref(), tripped);
-            (verdict, delivered)
-        }
+    let judged = Judged {
+        ticks: ticks as usize,
+        min_run,
+        budget: budget as usize,
+        one_count,
+        shift: base.coarsen_shift,
     };
-    Ok(TestRun {
-        hold_tripped: tripped && counts.is_empty(),
-        verdict,
-        counts,
-        delivered,
+    Ok(judged.judge(test, &rec, asked))
+}
+
+/// The wall under test at `k` (config `base` with that K, its wall at the device's rest
+/// position), after a reproducible start (see the module header): the device brought to rest
+/// with the wall off and the damper off too (a damper alone can be unstable, B·T/m large or
+/// behind a slow amplifier, and must not keep the device from coming to rest between tests).
+fn wall_under_test(c: &mut Client, base: &ServoConfig, k: f64, test: Test) -> Result<ServoConfig> {
+    c.set_config(&ServoConfig {
+        stiffness: 0.0,
+        damping: 0.0,
+        ..*base
+    })?;
+    let rest = rest_position(c)?;
+    let one_sided = matches!(
+        test,
+        Test::Impact {
+            one_sided: true,
+            ..
+        }
+    );
+    Ok(ServoConfig {
+        stiffness: k as f32,
+        wall_position: base.wall_position.saturating_add(rest),
+        wall: if one_sided {
+            WallMode::OneSided
+        } else {
+            WallMode::Bidirectional
+        },
+        ..*base
     })
+}
+
+/// How a test's record is cut and judged.
+struct Judged {
+    /// Base length, ticks after the release.
+    ticks: usize,
+    /// Constant run that settles the record.
+    min_run: usize,
+    /// Most ticks the test may run.
+    budget: usize,
+    /// Settled within one count (a damped wall) instead of at rest.
+    one_count: bool,
+    /// The config's coarsening shift (effective counts).
+    shift: u8,
+}
+
+impl Judged {
+    /// The verdict of `test`'s record; an impact judged against the speed `asked` (counts per
+    /// tick; None: its own).
+    fn judge(
+        &self,
+        test: Test,
+        rec: &stiffwall_client::client::Record,
+        asked: Option<f64>,
+    ) -> TestRun {
+        let mut counts = super::release::released_counts(&rec.samples, self.shift);
+        // Judge only up to where the record settled (what came after is the Stop's latency).
+        let tripped = rec.faults != 0;
+        if let Some(len) = judged_len_within(&counts, self.ticks, self.min_run, self.one_count) {
+            counts.truncate(len);
+        } else if !tripped {
+            counts.truncate(self.budget);
+        }
+        let (verdict, delivered) = match test {
+            Test::Release { .. } => (classify(&counts, tripped), None),
+            Test::Impact {
+                one_sided,
+                velocity_milliticks,
+                ..
+            } => {
+                let asked = asked.unwrap_or(f64::from(velocity_milliticks).abs() / 1000.0);
+                let delivered = Delivered::from_record(&rec.samples, &counts, self.shift, asked);
+                let wall = if one_sided {
+                    Wall::OneSided
+                } else {
+                    Wall::Bidirectional
+                };
+                let verdict = judge_impact(&counts, wall, delivered.as_ref(), tripped);
+                (verdict, delivered)
+            }
+        };
+        TestRun {
+            hold_tripped: tripped && counts.is_empty(),
+            verdict,
+            counts,
+            delivered,
+        }
+    }
 }
 
 /// Minimum constant run for [`settled_at`]: three natural periods 2π√(m/K)/T, at least
