@@ -393,8 +393,11 @@ a one-sided wall without a hand spring nothing brings the plant back once it lef
 (count < −1, moving away): the trial ends there and settles when the plant leaves no faster than a\n\
 passive wall returns it (the impact speed; after a release from count d, the speed of kinetic\n\
 energy ½K((d + 1)Δ)²). K is scanned upwards by ×1.25 from\n\
-σ = c/(KΔ) = 4 until a trial fails, then bisected to 0.5 %: K* is the largest K below the first\n\
-failure. The trial that failed just above K* is listed.\n\n\
+σ = c/(KΔ) = 4 until a trial fails, then bisected to 0.5 %, then K*/1.5625 … K* is tried again\n\
+in steps of ×1.05 (a failing band that the coarse scan stepped over is bisected instead): K* is\n\
+the largest K below the first failure, resolved to 5 % over the span where a tune's answer\n\
+(≥ 0.7 K*) lies. K*(B) at the B tune set is scanned from 0.5 K*(0). The trial that failed just\n\
+above K* is listed.\n\n\
 ## The supervisor at 1.5 K*(B) (tests/src/supervise.rs, tests/tests/supervisor_plants.rs)\n\n\
 The firmware core (`stiffwall-firmware`'s `Servo`, the virtual device's boot config: energy monitor\n\
 on, growth trip 4, force limit at full scale) with the damping B that tune set and K forced to\n\
