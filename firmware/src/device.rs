@@ -454,19 +454,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
     pub fn handle(&mut self, msg: HostMsg) -> DeviceMsg {
         let ack = |r| DeviceMsg::Ack(r);
         match msg {
-            HostMsg::Hello { protocol_version } => {
-                if protocol_version == PROTOCOL_VERSION {
-                    DeviceMsg::HelloReply(self.board.device_info(self.config.servo_rate_hz))
-                } else {
-                    DeviceMsg::Error {
-                        code: ErrorCode::VersionMismatch,
-                        detail: ErrorDetail::Version {
-                            got: protocol_version,
-                            expected: PROTOCOL_VERSION,
-                        },
-                    }
-                }
-            }
+            HostMsg::Hello { protocol_version } => self.hello(protocol_version),
             HostMsg::GetConfig => DeviceMsg::Config(self.config),
             HostMsg::SetConfig(cfg) => self.apply(cfg, ack(Request::SetConfig)),
             HostMsg::LoadDefaults => {
@@ -483,18 +471,12 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             HostMsg::StreamStart { decimation } => {
                 if decimation == 0 {
                     invalid(ConfigField::Argument, 1.0, f64::from(u16::MAX))
-                } else if self.send_servo(ServoCmd::Stream { decimation }) {
-                    ack(Request::StreamStart)
                 } else {
-                    busy("servo queue full")
+                    self.queued(ServoCmd::Stream { decimation }, Request::StreamStart)
                 }
             }
             HostMsg::StreamStop => {
-                if self.send_servo(ServoCmd::Stream { decimation: 0 }) {
-                    ack(Request::StreamStop)
-                } else {
-                    busy("servo queue full")
-                }
+                self.queued(ServoCmd::Stream { decimation: 0 }, Request::StreamStop)
             }
             HostMsg::Release {
                 deflection_ticks,
@@ -510,23 +492,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
                 Some(velocity_milliticks),
                 ticks,
             ),
-            HostMsg::Excite { profile, ticks } => {
-                if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
-                    return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
-                }
-                if let Err((min, max)) = self.check_profile(&profile) {
-                    return invalid(ConfigField::Argument, min, max);
-                }
-                if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
-                    return busy("faults latched");
-                }
-                if self.send_servo(ServoCmd::Excite { profile, ticks }) {
-                    self.port.shared.experiment.store(true, Ordering::Relaxed);
-                    ack(Request::Excite)
-                } else {
-                    busy("servo queue full")
-                }
-            }
+            HostMsg::Excite { profile, ticks } => self.excite(profile, ticks),
             HostMsg::TableChunk { offset, values } => {
                 if usize::from(offset) + values.len() > MAX_TABLE {
                     return invalid(
@@ -535,42 +501,15 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
                         (MAX_TABLE - values.len()) as f64,
                     );
                 }
-                if self.send_servo(ServoCmd::TableChunk { offset, values }) {
-                    ack(Request::TableChunk)
-                } else {
-                    busy("servo queue full")
-                }
+                self.queued(ServoCmd::TableChunk { offset, values }, Request::TableChunk)
             }
             HostMsg::Heartbeat => {
                 self.port.shared.heartbeat.fetch_add(1, Ordering::Relaxed);
                 ack(Request::Heartbeat)
             }
-            HostMsg::GetFaults => {
-                let latched = self.port.shared.faults.load(Ordering::Relaxed);
-                DeviceMsg::Faults(FaultReport {
-                    latched,
-                    first_tick: if latched != 0 {
-                        self.port.shared.first_fault_tick.load(Ordering::Relaxed)
-                    } else {
-                        0
-                    },
-                    safe_mode: latched != 0,
-                })
-            }
-            HostMsg::ClearFaults => {
-                if self.send_servo(ServoCmd::ClearFaults) {
-                    ack(Request::ClearFaults)
-                } else {
-                    busy("servo queue full")
-                }
-            }
-            HostMsg::Stop => {
-                if self.send_servo(ServoCmd::Stop) {
-                    ack(Request::Stop)
-                } else {
-                    busy("servo queue full")
-                }
-            }
+            HostMsg::GetFaults => self.fault_report(),
+            HostMsg::ClearFaults => self.queued(ServoCmd::ClearFaults, Request::ClearFaults),
+            HostMsg::Stop => self.queued(ServoCmd::Stop, Request::Stop),
             HostMsg::Shutdown { exit_code } => {
                 self.shutdown = Some(exit_code);
                 ack(Request::Shutdown)
@@ -582,6 +521,63 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
                 decay_base_ticks,
             } => self.prepare_test(config, min_run_ticks, within_one_count, decay_base_ticks),
         }
+    }
+
+    /// The reply to `Hello`: the device's identity, or a version mismatch.
+    fn hello(&self, protocol_version: u8) -> DeviceMsg {
+        if protocol_version == PROTOCOL_VERSION {
+            DeviceMsg::HelloReply(self.board.device_info(self.config.servo_rate_hz))
+        } else {
+            DeviceMsg::Error {
+                code: ErrorCode::VersionMismatch,
+                detail: ErrorDetail::Version {
+                    got: protocol_version,
+                    expected: PROTOCOL_VERSION,
+                },
+            }
+        }
+    }
+
+    /// `cmd` queued for the servo, acknowledged as `done`; busy when the queue is full.
+    fn queued(&mut self, cmd: ServoCmd, done: Request) -> DeviceMsg {
+        if self.send_servo(cmd) {
+            DeviceMsg::Ack(done)
+        } else {
+            busy("servo queue full")
+        }
+    }
+
+    /// Starts an excitation of `ticks` ticks (wall off) after checking its length and profile.
+    fn excite(&mut self, profile: ExciteProfile, ticks: u32) -> DeviceMsg {
+        if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
+            return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
+        }
+        if let Err((min, max)) = self.check_profile(&profile) {
+            return invalid(ConfigField::Argument, min, max);
+        }
+        if self.port.shared.faults.load(Ordering::Relaxed) != 0 {
+            return busy("faults latched");
+        }
+        if self.send_servo(ServoCmd::Excite { profile, ticks }) {
+            self.port.shared.experiment.store(true, Ordering::Relaxed);
+            DeviceMsg::Ack(Request::Excite)
+        } else {
+            busy("servo queue full")
+        }
+    }
+
+    /// The latched faults, the tick of the first, and whether the servo is in safe mode.
+    fn fault_report(&self) -> DeviceMsg {
+        let latched = self.port.shared.faults.load(Ordering::Relaxed);
+        DeviceMsg::Faults(FaultReport {
+            latched,
+            first_tick: if latched != 0 {
+                self.port.shared.first_fault_tick.load(Ordering::Relaxed)
+            } else {
+                0
+            },
+            safe_mode: latched != 0,
+        })
     }
 
     /// `HostMsg::PrepareTest`: checks and keeps the next test's config and end rule.
