@@ -202,15 +202,10 @@ pub(crate) fn choose_wall(
     })
 }
 
-/// Lowest K, as a fraction of the first K confirmed, down to which the confirmation backs off
-/// while impacts at v fail, before the impacts at v are left out.
-pub const IMPACT_FLOOR: f64 = 0.25;
-
 /// Confirms the spring-only wall from `k`. When no K passes and the last failure was an
-/// impact at v, the confirmation backs off further, down to [`IMPACT_FLOOR`] × `k`; when
-/// impacts at v still fail there, the releases passed: the wall is then confirmed from `k`
-/// without the impacts at v (the releases at full energy from both sides and the slower
-/// impacts), and reported (`notes.impacts_capped`). Only when a release fails at every K does it end with an error,
+/// impact at v, the releases passed: the wall is then confirmed without the impacts at v (the
+/// releases at full energy from both sides and the slower impacts), and reported
+/// (`notes.impacts_capped`). Only when a release fails at every K does it end with an error,
 /// naming the test that failed and what to try.
 fn confirm_spring(
     run: &Run<'_>,
@@ -223,24 +218,11 @@ fn confirm_spring(
     if let Some(found) = run.confirm(c, base, k, thorough, notes)? {
         return Ok(found);
     }
-    let round = CONFIRM_BACKOFF.powi(CONFIRM_TRIES as i32 - 1);
-    let mut last = k * round;
-    let impact_failed = |notes: &Notes| {
-        notes
-            .last_failure
-            .is_some_and(|r| matches!(r.test, Test::Impact { .. }))
-    };
-    // Impacts failed down to `last`: the wall itself may fail them below what its releases
-    // show (random-launch-1 of the opt-in set: releases pass to 1.16, the v impact fails above
-    // 0.38). Back off on, down to IMPACT_FLOOR × k, before leaving the impacts at v out.
-    while impact_failed(notes) && last * CONFIRM_BACKOFF >= k * IMPACT_FLOOR {
-        let from = last * CONFIRM_BACKOFF;
-        if let Some(found) = run.confirm_from(c, base, from, thorough, notes, true)? {
-            return Ok(found);
-        }
-        last = from * round;
-    }
-    if impact_failed(notes) {
+    let last = k * CONFIRM_BACKOFF.powi(CONFIRM_TRIES as i32 - 1);
+    let impact_failed = notes
+        .last_failure
+        .is_some_and(|r| matches!(r.test, Test::Impact { .. }));
+    if impact_failed {
         (run.progress)(Progress::ImpactsCapped {
             k_from: k,
             k_to: last,

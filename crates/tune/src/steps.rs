@@ -266,64 +266,22 @@ impl Run<'_> {
         &self,
         c: &mut Client,
         base: &ServoConfig,
-        k: f64,
-        thorough: bool,
-        notes: &mut Notes,
-    ) -> Result<Option<(f64, Vec<TestResult>)>> {
-        self.confirm_from(c, base, k, thorough, notes, false)
-    }
-
-    /// [`Run::confirm`], `backed_off` when a K just above `k` already failed (a continued
-    /// back-off: a first pass then also sets one more step down).
-    pub(crate) fn confirm_from(
-        &self,
-        c: &mut Client,
-        base: &ServoConfig,
         mut k: f64,
         thorough: bool,
         notes: &mut Notes,
-        mut backed_off: bool,
     ) -> Result<Option<(f64, Vec<TestResult>)>> {
+        let mut backed_off = false;
         for _ in 0..CONFIRM_TRIES {
             let (confirmed, results) = self.verify_set(c, base, k, thorough, notes)?;
             if confirmed {
-                if !backed_off {
-                    return Ok(Some((k, results)));
+                if backed_off {
+                    k *= CONFIRM_BACKOFF;
                 }
-                let below = k * CONFIRM_BACKOFF;
-                if self.full_releases_pass(c, base, k, below, thorough)? {
-                    return Ok(Some((below, results)));
-                }
-                k = below;
+                return Ok(Some((k, results)));
             }
             backed_off = true;
             k *= CONFIRM_BACKOFF;
         }
         Ok(None)
-    }
-
-    /// Whether the wall at `below` (one step under `k`, whose set passed) holds the releases
-    /// at full energy that the set at `k` did not run: one step down, the full-energy
-    /// deflection d ∝ 1/√K can round to another count (random-launch-1 of the opt-in set: 11
-    /// counts at 0.407, 12 at 0.387, where the release from 12 grows). True when d is the same.
-    fn full_releases_pass(
-        &self,
-        c: &mut Client,
-        base: &ServoConfig,
-        k: f64,
-        below: f64,
-        thorough: bool,
-    ) -> Result<bool> {
-        let d = deflection_for(&self.p, below, self.v);
-        if d == deflection_for(&self.p, k, self.v) {
-            return Ok(true);
-        }
-        for deflection_ticks in [d, -d] {
-            let run = self.test(c, base, below, Test::Release { deflection_ticks }, thorough)?;
-            if !run.verdict.passes() {
-                return Ok(false);
-            }
-        }
-        Ok(true)
     }
 }
