@@ -12,8 +12,8 @@
 //! spring-only function of [`super`] returns (it calls it).
 
 use super::sampled::{
-    base, gil_avello_rubio_stable, k_max_gil_avello_rubio, numerator, schur_stable, split_delay,
-    GIL_REL_TOL, MAX_DEGREE,
+    base, bisect_stable, gil_avello_rubio_stable, k_max_gil_avello_rubio, numerator, schur_stable,
+    split_delay, MAX_DEGREE,
 };
 use crate::params::{check_non_negative, ParamError, PhysicalParams};
 
@@ -90,7 +90,7 @@ pub fn exact_linear_stable(p: &PhysicalParams, damping_n_s_per_m: f64) -> Result
 /// so this scans g = KT²/m on a logarithmic grid of [`SCAN_PER_DECADE`] points per decade over
 /// [`SCAN_DECADES`] decades below the cap g ≤ 64·(1 + bT/m + BT/m), takes the largest stable grid
 /// point and bisects between it and the next (unstable) grid point to relative tolerance
-/// [`GIL_REL_TOL`]. Returns that supremum of the stable K (the last stable value), or 0 when no
+/// [`GIL_REL_TOL`](super::sampled::GIL_REL_TOL). Returns that supremum of the stable K (the last stable value), or 0 when no
 /// grid point is stable. Stable islands narrower than one grid step (≈ 6 %) can be missed.
 ///
 /// # Errors
@@ -127,19 +127,7 @@ pub fn k_max_exact_linear(p: &PhysicalParams, damping_n_s_per_m: f64) -> Result<
     if lo == cap {
         return Ok(cap * scale);
     }
-    hi = lo * ratio;
-    while hi - lo > GIL_REL_TOL * hi {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        if stable(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(lo * scale)
+    Ok(bisect_stable(lo, lo * ratio, stable) * scale)
 }
 
 /// Colgate & Schenkel with a damper: passive iff b > KT/2 + |B|, so K < 2(b − B)/T. Returns

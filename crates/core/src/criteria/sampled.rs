@@ -200,6 +200,23 @@ pub fn gil_avello_rubio_stable(p: &PhysicalParams) -> Result<bool, ParamError> {
     Ok(schur_stable(c, n))
 }
 
+/// Bisection of g between `lo` (stable) and `hi` (unstable) to relative tolerance
+/// [`GIL_REL_TOL`] (or until the midpoint no longer separates them): the last stable value.
+pub(crate) fn bisect_stable(mut lo: f64, mut hi: f64, stable: impl Fn(f64) -> bool) -> f64 {
+    while hi - lo > GIL_REL_TOL * hi {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if stable(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
 /// Exact largest K of the sampled linear loop of [`gil_avello_rubio_stable`] (Gil, Avello &
 /// Rubio 2004): bisection on g = KT²/m between a stable and an unstable value found by
 /// doubling/halving, to relative tolerance [`GIL_REL_TOL`]; assumes the stable set of K is an
@@ -247,17 +264,5 @@ pub fn k_max_gil_avello_rubio(p: &PhysicalParams) -> Result<f64, ParamError> {
             return Ok(0.0);
         }
     }
-    hi = lo * 2.0;
-    while hi - lo > GIL_REL_TOL * hi {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        if stable(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(lo * p.mass / p.period_s / p.period_s)
+    Ok(bisect_stable(lo, lo * 2.0, stable) * p.mass / p.period_s / p.period_s)
 }
