@@ -338,6 +338,17 @@ pub fn render_table(r: &Report) -> String {
     let _ = writeln!(s, "  period T         {:>12.5e} s", p.period_s);
     let _ = writeln!(s, "  stiffness K      {:>12.5e} {k_u}", p.stiffness);
     let _ = writeln!(s, "  delay T_D        {:>12.5e} s", p.delay_s);
+    render_dimensionless(&mut s, r, v_u);
+    render_limits(&mut s, r, k_u);
+    render_describing(&mut s, r);
+    if let Some(d) = &r.damping {
+        s.push_str(&damping::render(d, p));
+    }
+    s
+}
+
+/// Table I's numbers, the region and the velocity limit (15).
+fn render_dimensionless(s: &mut String, r: &Report, v_u: &str) {
     let _ = writeln!(s, "\nDimensionless (Table I)");
     let _ = writeln!(
         s,
@@ -361,6 +372,11 @@ pub fn render_table(r: &Report) -> String {
         r.velocity_limit_m_s
             .map_or_else(|| "unbounded".to_string(), |v| format!("{v:.4e}"))
     );
+}
+
+/// Every criterion's stiffness limit against the current K.
+fn render_limits(s: &mut String, r: &Report, k_u: &str) {
+    let p = &r.params;
     let _ = writeln!(
         s,
         "\nStiffness limits [{k_u}]  (current K = {:.5e})",
@@ -383,6 +399,10 @@ pub fn render_table(r: &Report) -> String {
             c.formula
         );
     }
+}
+
+/// The describing-function predictions of Sec. VII.
+fn render_describing(s: &mut String, r: &Report) {
     let _ = writeln!(s, "\nDescribing function (Sec. VII)");
     match &r.limit_cycle {
         Some(lc) => {
@@ -410,8 +430,4 @@ pub fn render_table(r: &Report) -> String {
         "  large-amplitude bound (75): stable only if σ >= {:.4} (σ = {:.4})",
         r.sigma_min_large_amplitude, r.sigma
     );
-    if let Some(d) = &r.damping {
-        s.push_str(&damping::render(d, p));
-    }
-    s
 }
