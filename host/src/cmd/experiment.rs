@@ -128,21 +128,7 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     if let Some(p) = &a.plot {
         figure::prepare(p)?;
     }
-    let model = match &a.model {
-        Some(v) if v.iter().all(|x| x.is_finite() && *x >= 0.0) && v[0] > 0.0 => {
-            Some((v[0], v[1], v[2]))
-        }
-        Some(v) => bail!(
-            "--model M B C must be finite, M > 0 kg, B ≥ 0 N·s/m, C ≥ 0 N (got {} {} {})",
-            v[0],
-            v[1],
-            v[2]
-        ),
-        None => a
-            .connect
-            .virtual_spec()?
-            .map(|s| (s.plant.mass, s.plant.viscous, s.plant.coulomb)),
-    };
+    let model = release_model(a)?;
     let mut c = a.connect.connect()?;
     let original = c.get_config()?;
     let cfg = release_config(&original, a.stiffness, c.info.limits.max_stiffness)?;
@@ -188,58 +174,119 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         };
         figure::write(path, (1500, 600), &fig)?;
     }
-    let peak_tail = counts
-        .iter()
-        .rev()
-        .take(counts.len() / 4)
-        .map(|n| (*n as f64 + 0.5).abs())
-        .fold(0.0, f64::max);
+    let done = ReleaseDone {
+        stiffness: cfg.stiffness,
+        start,
+        counts: &counts,
+        verdict,
+        rec: &rec,
+        v_eq,
+        report: report.as_ref(),
+    };
     if a.json {
-        let j = serde_json::json!({
-            "verdict": verdict,
-            "deflection_ticks": a.deflection,
-            "start_ticks": start,
-            "ticks": counts.len(),
-            "completed": rec.completed,
-            "faults": rec.faults,
-            "tail_peak_ticks": peak_tail,
-            "stiffness": cfg.stiffness,
-            "equivalent_velocity": v_eq,
-            "mu": report.as_ref().map(|r| r.mu),
-            "beta": report.as_ref().map(|r| r.beta),
-            "sigma": report.as_ref().map(|r| r.sigma),
-            "region": report.as_ref().map(|r| r.region),
-            "gaps": rec.gaps,
-        });
-        emit_json(&j)?;
+        emit_json(&done.json(a))?;
     } else {
+        emit(&done.text(a))?;
+    }
+    Ok(())
+}
+
+/// The plant model of `--model M B C`, else the virtual device's own plant (None on a real
+/// device: no (β, σ) for the release).
+fn release_model(a: &ReleaseArgs) -> Result<Option<(f64, f64, f64)>> {
+    Ok(match &a.model {
+        Some(v) if v.iter().all(|x| x.is_finite() && *x >= 0.0) && v[0] > 0.0 => {
+            Some((v[0], v[1], v[2]))
+        }
+        Some(v) => bail!(
+            "--model M B C must be finite, M > 0 kg, B ≥ 0 N·s/m, C ≥ 0 N (got {} {} {})",
+            v[0],
+            v[1],
+            v[2]
+        ),
+        None => a
+            .connect
+            .virtual_spec()?
+            .map(|s| (s.plant.mass, s.plant.viscous, s.plant.coulomb)),
+    })
+}
+
+/// A finished release test, as reported.
+struct ReleaseDone<'a> {
+    /// The test's stiffness.
+    stiffness: f32,
+    /// Where the device was released, effective ticks.
+    start: i64,
+    /// Counts after the release.
+    counts: &'a [i64],
+    verdict: Verdict,
+    rec: &'a stiffwall_client::client::Record,
+    /// Equivalent maximum velocity of the release (with a model).
+    v_eq: Option<f64>,
+    /// The analysis at that velocity (with a model).
+    report: Option<&'a analysis::Report>,
+}
+
+impl ReleaseDone<'_> {
+    /// The largest |x| (ticks, from the middle of the count) over the last quarter.
+    fn peak_tail(&self) -> f64 {
+        self.counts
+            .iter()
+            .rev()
+            .take(self.counts.len() / 4)
+            .map(|n| (*n as f64 + 0.5).abs())
+            .fold(0.0, f64::max)
+    }
+
+    fn json(&self, a: &ReleaseArgs) -> serde_json::Value {
+        let r = self.report;
+        serde_json::json!({
+            "verdict": self.verdict,
+            "deflection_ticks": a.deflection,
+            "start_ticks": self.start,
+            "ticks": self.counts.len(),
+            "completed": self.rec.completed,
+            "faults": self.rec.faults,
+            "tail_peak_ticks": self.peak_tail(),
+            "stiffness": self.stiffness,
+            "equivalent_velocity": self.v_eq,
+            "mu": r.map(|r| r.mu),
+            "beta": r.map(|r| r.beta),
+            "sigma": r.map(|r| r.sigma),
+            "region": r.map(|r| r.region),
+            "gaps": self.rec.gaps,
+        })
+    }
+
+    fn text(&self, a: &ReleaseArgs) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "release test on the {}", a.connect.describe());
         let _ = writeln!(
             s,
-            "  K = {} , released from {start} ticks, {} ticks recorded",
-            cfg.stiffness,
-            counts.len()
+            "  K = {} , released from {} ticks, {} ticks recorded",
+            self.stiffness,
+            self.start,
+            self.counts.len()
         );
-        let _ = writeln!(s, "  verdict: {}", verdict.describe());
+        let _ = writeln!(s, "  verdict: {}", self.verdict.describe());
         let _ = writeln!(
             s,
-            "  peak |x| over the last quarter: {peak_tail:.1} ticks; faults {:#x}",
-            rec.faults
+            "  peak |x| over the last quarter: {:.1} ticks; faults {:#x}",
+            self.peak_tail(),
+            self.rec.faults
         );
-        if let Some(r) = &report {
+        if let Some(r) = self.report {
             let _ = writeln!(
                 s,
                 "  (β, σ) = ({:.4}, {:.4}), μ = {:.3}; region {:?} for the equivalent velocity {:.4}",
-                r.beta, r.sigma, r.mu, r.region, v_eq.unwrap_or(0.0)
+                r.beta, r.sigma, r.mu, r.region, self.v_eq.unwrap_or(0.0)
             );
         }
         if let Some(p) = &a.plot {
             let _ = writeln!(s, "  plot: {}", p.display());
         }
-        emit(&s)?;
+        s
     }
-    Ok(())
 }
 
 /// The release figure: the (β, σ) plane (when a model is known) beside x(t).
