@@ -288,45 +288,13 @@ pub fn parse(text: &str) -> Result<Recording> {
         ),
         None => fail!("line 1: empty file, not a stiffwall recording"),
     }
-    let mut host_time = None;
-    let mut target = None;
-    let mut plant = None;
-    let mut decimation = None;
-    let mut device: Option<DeviceInfo> = None;
-    let mut config: Option<ServoConfig> = None;
+    let mut fields = HeaderFields::default();
     let mut saw_columns = false;
     for (ln, line) in lines.by_ref() {
         let line = line.trim_end();
         if let Some(c) = line.strip_prefix('#') {
-            let Some((key, value)) = c.trim_start().split_once(':') else {
-                continue;
-            };
-            let value = value.trim();
-            match key.trim() {
-                "host_time_unix_s" => {
-                    host_time = Some(value.parse::<f64>().map_err(|e| {
-                        format_err!("line {ln}: header host_time_unix_s: {e} (found {value:?})")
-                    })?);
-                }
-                "target" => target = Some(value.to_string()),
-                "virtual_plant" => plant = Some(value.to_string()),
-                "decimation" => {
-                    let d = value.parse::<u16>().ok().filter(|d| *d >= 1).ok_or_else(|| {
-                        format_err!("line {ln}: header decimation must be an integer in [1, 65535] (found {value:?})")
-                    })?;
-                    decimation = Some(d);
-                }
-                "device" => {
-                    device = Some(serde_json::from_str(value).map_err(|e| {
-                        format_err!("line {ln}: header device (DeviceInfo JSON): {e}")
-                    })?);
-                }
-                "config" => {
-                    config = Some(serde_json::from_str(value).map_err(|e| {
-                        format_err!("line {ln}: header config (ServoConfig JSON): {e}")
-                    })?);
-                }
-                _ => {}
+            if let Some((key, value)) = c.trim_start().split_once(':') {
+                fields.read(ln, key.trim(), value.trim())?;
             }
             continue;
         }
@@ -342,11 +310,7 @@ pub fn parse(text: &str) -> Result<Recording> {
     if !saw_columns {
         fail!("no column header {COLUMNS:?}: the file ends inside the header");
     }
-    let device = device.ok_or_else(|| format_err!("header: missing `# device:` line"))?;
-    let config = config.ok_or_else(|| format_err!("header: missing `# config:` line"))?;
-    let decimation =
-        decimation.ok_or_else(|| format_err!("header: missing `# decimation:` line"))?;
-    check_header(&device, &config)?;
+    let header = fields.finish()?;
     let mut rows: Vec<Row> = Vec::new();
     for (ln, line) in lines {
         let line = line.trim_end();
@@ -365,17 +329,75 @@ pub fn parse(text: &str) -> Result<Recording> {
         }
         rows.push(row);
     }
-    Ok(Recording {
-        header: Header {
-            host_time_unix_s: host_time.unwrap_or(f64::NAN),
-            target: target.unwrap_or_default(),
-            virtual_plant: plant,
+    Ok(Recording { header, rows })
+}
+
+/// The `# key: value` lines of a recording's header, as read so far.
+#[derive(Default)]
+struct HeaderFields {
+    host_time: Option<f64>,
+    target: Option<String>,
+    plant: Option<String>,
+    decimation: Option<u16>,
+    device: Option<DeviceInfo>,
+    config: Option<ServoConfig>,
+}
+
+impl HeaderFields {
+    /// Reads the header line `ln` (`# key: value`); unknown keys are ignored.
+    fn read(&mut self, ln: usize, key: &str, value: &str) -> Result<()> {
+        match key {
+            "host_time_unix_s" => {
+                self.host_time = Some(value.parse::<f64>().map_err(|e| {
+                    format_err!("line {ln}: header host_time_unix_s: {e} (found {value:?})")
+                })?);
+            }
+            "target" => self.target = Some(value.to_string()),
+            "virtual_plant" => self.plant = Some(value.to_string()),
+            "decimation" => {
+                let d = value.parse::<u16>().ok().filter(|d| *d >= 1).ok_or_else(|| {
+                    format_err!("line {ln}: header decimation must be an integer in [1, 65535] (found {value:?})")
+                })?;
+                self.decimation = Some(d);
+            }
+            "device" => {
+                self.device =
+                    Some(serde_json::from_str(value).map_err(|e| {
+                        format_err!("line {ln}: header device (DeviceInfo JSON): {e}")
+                    })?);
+            }
+            "config" => {
+                self.config = Some(serde_json::from_str(value).map_err(|e| {
+                    format_err!("line {ln}: header config (ServoConfig JSON): {e}")
+                })?);
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The header, once the column line is reached: device, config and decimation required
+    /// and checked against each other.
+    fn finish(self) -> Result<Header> {
+        let device = self
+            .device
+            .ok_or_else(|| format_err!("header: missing `# device:` line"))?;
+        let config = self
+            .config
+            .ok_or_else(|| format_err!("header: missing `# config:` line"))?;
+        let decimation = self
+            .decimation
+            .ok_or_else(|| format_err!("header: missing `# decimation:` line"))?;
+        check_header(&device, &config)?;
+        Ok(Header {
+            host_time_unix_s: self.host_time.unwrap_or(f64::NAN),
+            target: self.target.unwrap_or_default(),
+            virtual_plant: self.plant,
             decimation,
             device,
             config,
-        },
-        rows,
-    })
+        })
+    }
 }
 
 fn check_header(d: &DeviceInfo, c: &ServoConfig) -> Result<()> {
