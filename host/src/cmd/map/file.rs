@@ -352,8 +352,6 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
         "{name}: seconds = {}: need a finite value >= 0",
         f.seconds
     );
-    let len = f.spec.len();
-    let want = map::shard_len(len, k, n);
     ensure!(
         f.cost.ns_per_period.len() == specs.len(),
         "{name}: cost.ns_per_period has {} panels, need {}",
@@ -361,49 +359,7 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
         specs.len()
     );
     for (pi, (panel, ps)) in f.panels.iter().zip(&specs).enumerate() {
-        for (field, got, want) in [
-            ("mu", panel.mu, ps.mu),
-            ("tau_d", panel.tau_d, ps.tau_d),
-            ("xidot0", panel.xidot0, ps.xidot0),
-        ] {
-            ensure!(
-                got.to_bits() == want.to_bits(),
-                "{name}: panel {pi} has {field} = {got}, the spec says {want}"
-            );
-        }
-        ensure!(
-            panel.points.len() == want,
-            "{name}: panel {pi} has {} points; shard {k}/{n} of a {len}-point grid has {want}",
-            panel.points.len()
-        );
-        let ns = &f.cost.ns_per_period[pi];
-        ensure!(
-            ns.len() == panel.points.len() && ns.iter().all(|c| c.is_finite() && *c >= 0.0),
-            "{name}: cost.ns_per_period[{pi}]: need one finite value >= 0 per point ({})",
-            panel.points.len()
-        );
-        for (j, pt) in panel.points.iter().enumerate() {
-            let index = k + j * n;
-            ensure!(
-                pt.index == index,
-                "{name}: panel {pi}, point {j}: index {}, expected {index} (shard {k}/{n})",
-                pt.index
-            );
-            let (beta, sigma) = ps.point(index);
-            ensure!(
-                pt.beta.to_bits() == beta.to_bits() && pt.sigma.to_bits() == sigma.to_bits(),
-                "{name}: panel {pi}, point {index}: beta = {}, sigma = {} contradict its index \
-                 (expected beta = {beta}, sigma = {sigma})",
-                pt.beta,
-                pt.sigma
-            );
-            ensure!(
-                pt.periods_run <= f.spec.periods,
-                "{name}: panel {pi}, point {index}: periods_run = {} exceeds the horizon {}",
-                pt.periods_run,
-                f.spec.periods
-            );
-        }
+        validate_panel(&name, f, pi, panel, ps, (k, n))?;
     }
     let recount = Cost::of(&f.panels, f.cost.ns_per_period.clone());
     ensure!(
@@ -416,6 +372,64 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
         ensure!(
             c.is_finite() && c >= 0.0,
             "{name}: cost.cpu_seconds = {c}: need a finite value >= 0"
+        );
+    }
+    Ok(())
+}
+
+/// Checks panel `pi` of the map file against its spec `ps`: its (mu, tau_d, xidot0), its
+/// points of shard (k, n), their costs, indices, (β, σ) and periods run.
+fn validate_panel(
+    name: &std::path::Display<'_>,
+    f: &MapFile,
+    pi: usize,
+    panel: &Panel,
+    ps: &MapSpec,
+    (k, n): (usize, usize),
+) -> Result<()> {
+    let len = f.spec.len();
+    let want = map::shard_len(len, k, n);
+    for (field, got, want) in [
+        ("mu", panel.mu, ps.mu),
+        ("tau_d", panel.tau_d, ps.tau_d),
+        ("xidot0", panel.xidot0, ps.xidot0),
+    ] {
+        ensure!(
+            got.to_bits() == want.to_bits(),
+            "{name}: panel {pi} has {field} = {got}, the spec says {want}"
+        );
+    }
+    ensure!(
+        panel.points.len() == want,
+        "{name}: panel {pi} has {} points; shard {k}/{n} of a {len}-point grid has {want}",
+        panel.points.len()
+    );
+    let ns = &f.cost.ns_per_period[pi];
+    ensure!(
+        ns.len() == panel.points.len() && ns.iter().all(|c| c.is_finite() && *c >= 0.0),
+        "{name}: cost.ns_per_period[{pi}]: need one finite value >= 0 per point ({})",
+        panel.points.len()
+    );
+    for (j, pt) in panel.points.iter().enumerate() {
+        let index = k + j * n;
+        ensure!(
+            pt.index == index,
+            "{name}: panel {pi}, point {j}: index {}, expected {index} (shard {k}/{n})",
+            pt.index
+        );
+        let (beta, sigma) = ps.point(index);
+        ensure!(
+            pt.beta.to_bits() == beta.to_bits() && pt.sigma.to_bits() == sigma.to_bits(),
+            "{name}: panel {pi}, point {index}: beta = {}, sigma = {} contradict its index \
+             (expected beta = {beta}, sigma = {sigma})",
+            pt.beta,
+            pt.sigma
+        );
+        ensure!(
+            pt.periods_run <= f.spec.periods,
+            "{name}: panel {pi}, point {index}: periods_run = {} exceeds the horizon {}",
+            pt.periods_run,
+            f.spec.periods
         );
     }
     Ok(())
