@@ -17,7 +17,7 @@
 //! is reported at the tick where the device (with its monitor on) latched it. It runs even when
 //! the recording's config had the monitor off, and then says what *would* have latched.
 
-use crate::recording::Recording;
+use crate::recording::{Recording, Row};
 use anyhow::{bail, Result};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -93,8 +93,6 @@ pub fn monitor_recording(rec: &Recording, board: &BoardInfo) -> Result<MonitorRe
         bail!("the energy monitor needs a stiffness K > 0 (the storage function is K·Δ_eff²·H)");
     }
     let de = f64::from(board.delta_eff(cfg.coarsen_shift));
-    let joules = |e8: u64| e8 as f64 * f64::from(cfg.stiffness) * de * de / 8.0;
-    let one_sided = cfg.wall == WallMode::OneSided;
     let mut r = MonitorReplay {
         device_monitor_on: cfg.energy_monitor && g.energy_monitor,
         trip: g.growth_trip,
@@ -104,10 +102,17 @@ pub fn monitor_recording(rec: &Recording, board: &BoardInfo) -> Result<MonitorRe
         max_e8: None,
         events: Vec::new(),
     };
-    let mut m = EnergyMonitor::default();
+    let mut t = Tracker {
+        g: &g,
+        m: EnergyMonitor::default(),
+        growing: false,
+        over: false,
+        k: f64::from(cfg.stiffness),
+        de,
+    };
+    let one_sided = cfg.wall == WallMode::OneSided;
     for seg in rec.segments() {
-        m.reset();
-        let (mut growing, mut over) = (false, false);
+        t.reset();
         let mut prev: Option<u16> = None;
         for row in &rec.rows[seg] {
             let s = row.sample;
@@ -125,55 +130,83 @@ pub fn monitor_recording(rec: &Recording, board: &BoardInfo) -> Result<MonitorRe
             let forget_before =
                 (was_safe && !safe) || (!safe && !latched_here && phase != prev_phase);
             if forget_before {
-                m.reset();
-                (growing, over) = (false, false);
+                t.reset();
             }
             let n = s.count >> g.shift.min(31);
             if phase & (flags::HOLD | flags::EXCITE) == 0 {
                 if one_sided && n < 0 {
-                    m.reset();
-                    (growing, over) = (false, false);
+                    t.reset();
                 } else {
-                    r.monitored += 1;
-                    let (bits, turn) = m.update(n, g.growth_trip, g.energy_limit_m);
-                    r.turning_points += usize::from(turn);
-                    let e8 = energy_e8(n);
-                    if r.max_e8.is_none_or(|(e, _)| e8 > e) {
-                        r.max_e8 = Some((e8, s.tick));
-                    }
-                    let mut event = |fault: &'static str, (peak_n, peak_e8): (i32, u64)| {
-                        r.events.push(MonitorEvent {
-                            fault,
-                            seq: row.seq,
-                            tick: s.tick,
-                            count: s.count,
-                            score: m.score(),
-                            peak_n,
-                            peak_e8,
-                            peak_energy_j: joules(peak_e8),
-                            device_latched_here: latched_here,
-                        });
-                    };
-                    if bits & monitor::GROWTH != 0 && !growing {
-                        event("ENERGY_GROWTH", m.last_peak().unwrap_or((n, e8)));
-                    }
-                    if bits & monitor::LIMIT != 0 && !over {
-                        event("ENERGY_LIMIT", (n, e8));
-                    }
-                    if turn {
-                        growing = bits & monitor::GROWTH != 0;
-                    }
-                    over = bits & monitor::LIMIT != 0;
+                    t.update(&mut r, row, n, latched_here);
                 }
             }
             if latched_here && prev_phase != 0 {
-                m.reset();
-                (growing, over) = (false, false);
+                t.reset();
             }
             prev = Some(s.flags);
         }
     }
     Ok(r)
+}
+
+/// The monitor as the device ran it over a recording, with the fault bits it last raised.
+struct Tracker<'a> {
+    g: &'a Gains<Fx64>,
+    m: EnergyMonitor,
+    /// The growth fault was raised at the last turning point.
+    growing: bool,
+    /// The limit fault was raised at the last update.
+    over: bool,
+    /// The wall's stiffness K (the storage function's scale), N/m or N·m/rad.
+    k: f64,
+    /// The effective count Δ_eff, m or rad.
+    de: f64,
+}
+
+impl Tracker<'_> {
+    /// Forgets the motion (as the device's monitor does on a reset).
+    fn reset(&mut self) {
+        self.m.reset();
+        (self.growing, self.over) = (false, false);
+    }
+
+    /// One monitored tick at effective count `n`: the monitor's update, the largest energy,
+    /// and an event for every fault it newly raises.
+    fn update(&mut self, r: &mut MonitorReplay, row: &Row, n: i32, latched_here: bool) {
+        let s = row.sample;
+        r.monitored += 1;
+        let (bits, turn) = self.m.update(n, self.g.growth_trip, self.g.energy_limit_m);
+        r.turning_points += usize::from(turn);
+        let e8 = energy_e8(n);
+        if r.max_e8.is_none_or(|(e, _)| e8 > e) {
+            r.max_e8 = Some((e8, s.tick));
+        }
+        let score = self.m.score();
+        let (k, de) = (self.k, self.de);
+        let mut event = |fault: &'static str, (peak_n, peak_e8): (i32, u64)| {
+            r.events.push(MonitorEvent {
+                fault,
+                seq: row.seq,
+                tick: s.tick,
+                count: s.count,
+                score,
+                peak_n,
+                peak_e8,
+                peak_energy_j: peak_e8 as f64 * k * de * de / 8.0,
+                device_latched_here: latched_here,
+            });
+        };
+        if bits & monitor::GROWTH != 0 && !self.growing {
+            event("ENERGY_GROWTH", self.m.last_peak().unwrap_or((n, e8)));
+        }
+        if bits & monitor::LIMIT != 0 && !self.over {
+            event("ENERGY_LIMIT", (n, e8));
+        }
+        if turn {
+            self.growing = bits & monitor::GROWTH != 0;
+        }
+        self.over = bits & monitor::LIMIT != 0;
+    }
 }
 
 /// Text lines of the monitor replay.
