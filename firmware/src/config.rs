@@ -468,6 +468,58 @@ pub struct Gains<N: Numeric> {
     pub rate_hz: u32,
 }
 
+/// The output limit in codes: `force_limit` over the code's force, rounded, within
+/// [0, min(board max, `MAX_LIMIT_CODES`)] (0 when not finite).
+fn limit_codes(cfg: &ServoConfig, board: &BoardInfo) -> i32 {
+    let codes = libm::round(f64::from(cfg.force_limit) / f64::from(board.force_per_code));
+    if codes.is_finite() {
+        (codes as i32).clamp(0, board.max_code.clamp(0, MAX_LIMIT_CODES))
+    } else {
+        0
+    }
+}
+
+/// The energy limit in the monitor's units e8 = 8·E/(K·Δ_eff²) (`kd2` = K·Δ_eff²); no limit
+/// (u64::MAX) when K = 0 or the quotient is not a positive finite number.
+fn energy_limit_e8(cfg: &ServoConfig, kd2: f64) -> u64 {
+    let e8 = if kd2 > 0.0 {
+        8.0 * f64::from(cfg.energy_limit) / kd2
+    } else {
+        0.0
+    };
+    if e8.is_finite() && e8 > 0.0 {
+        e8 as u64
+    } else {
+        u64::MAX
+    }
+}
+
+/// The count beyond which the spring's code is at the limit even after the damper's largest
+/// code (|g|·DAMPER_V_MAX, rounded up, + 1 for the rounding), so that spring + damper is still
+/// exactly clamped at every count (without a damper the bound is the spring-only one, bit for
+/// bit); `kf` = K·Δ_eff/2 and `damp` the damper gain, in codes. At most 2^29.
+fn saturation_count(limit: i32, kf: f64, damp: f64) -> i32 {
+    let damp_max = libm::ceil(libm::fabs(damp) * f64::from(DAMPER_V_MAX));
+    let damp_max = if damp_max > 0.0 { damp_max + 1.0 } else { 0.0 };
+    if kf > 0.0 {
+        (libm::ceil((f64::from(limit) + damp_max) / (2.0 * kf)) as i32).clamp(0, 1 << 29)
+    } else {
+        1 << 29
+    }
+}
+
+/// The over-velocity bound: `max_velocity` as counts over [`VEL_WINDOW`] ticks, rounded up
+/// (0: off).
+fn velocity_window_counts(cfg: &ServoConfig, board: &BoardInfo, rate: f64) -> u32 {
+    let vel =
+        f64::from(cfg.max_velocity) * VEL_WINDOW as f64 / (rate * f64::from(board.resolution));
+    if vel.is_finite() && vel > 0.0 {
+        libm::ceil(vel) as u32
+    } else {
+        0
+    }
+}
+
 impl<N: Numeric> Gains<N> {
     /// Derives the gains (call only with a config that passed [`validate`]; out-of-range
     /// values saturate).
@@ -479,25 +531,9 @@ impl<N: Numeric> Gains<N> {
         let rate = f64::from(cfg.servo_rate_hz.max(1));
         let k = f64::from(cfg.stiffness);
         let k_half = k * de / (2.0 * fs);
-        let limit_codes = libm::round(f64::from(cfg.force_limit) / fs);
-        let limit = if limit_codes.is_finite() {
-            (limit_codes as i32).clamp(0, board.max_code.clamp(0, MAX_LIMIT_CODES))
-        } else {
-            0
-        };
-        let vel =
-            f64::from(cfg.max_velocity) * VEL_WINDOW as f64 / (rate * f64::from(board.resolution));
+        let limit = limit_codes(cfg, board);
         let kd2 = k * de * de;
-        let e8 = if kd2 > 0.0 {
-            8.0 * f64::from(cfg.energy_limit) / kd2
-        } else {
-            0.0
-        };
-        let e8_limit = if e8.is_finite() && e8 > 0.0 {
-            e8 as u64
-        } else {
-            u64::MAX
-        };
+        let e8_limit = energy_limit_e8(cfg, kd2);
         let limit_m = stiffwall_core::monitor::limit_m(e8_limit);
         let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
         let k_half = N::gain(k_half);
@@ -507,24 +543,14 @@ impl<N: Numeric> Gains<N> {
         // spring saturates only where its code exceeds the limit by that much, so that
         // spring + damper is still exactly clamped at every count (0 without a damper: the
         // bound is the spring-only one, bit for bit).
-        let damp_max = libm::ceil(libm::fabs(N::to_f64(damp)) * f64::from(DAMPER_V_MAX));
-        let damp_max = if damp_max > 0.0 { damp_max + 1.0 } else { 0.0 };
-        let n_sat = if kf > 0.0 {
-            (libm::ceil((f64::from(limit) + damp_max) / (2.0 * kf)) as i32).clamp(0, 1 << 29)
-        } else {
-            1 << 29
-        };
+        let n_sat = saturation_count(limit, kf, N::to_f64(damp));
         let one_sided = cfg.wall == WallMode::OneSided;
         // n_sat ≤ 2^29: |2n+1| < 2^31 (the codes at the bounds, as the servo used to compute
         // them after clamping n).
         let spring_hi =
             N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1).wrapping_neg());
         let spring_lo = N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1));
-        let vel_window_counts = if vel.is_finite() && vel > 0.0 {
-            libm::ceil(vel) as u32
-        } else {
-            0
-        };
+        let vel_window_counts = velocity_window_counts(cfg, board, rate);
         let wall_n_lo = if one_sided {
             -1
         } else {
