@@ -165,30 +165,11 @@ pub fn pump(
     let rate = f64::from(cfg.servo_rate_hz.max(1));
     let silence = Duration::from_secs_f64((3.0 * f64::from(plan.decimation) / rate).max(2.0));
     let bad0 = client.gaps.bad_frames;
-    client.stream_start(plan.decimation).map_err(failed)?;
-    let mut experiment = false;
-    if let Some(d) = plan.release {
-        if plan.decimation != 1 {
-            let _ = client.stream_stop();
-            return Err(SessionError::ReleaseNeedsEveryTick);
-        }
-        let ticks = plan
-            .samples
-            .unwrap_or(u64::from(u32::MAX))
-            .clamp(1, 10_000_000) as u32;
-        if let Err(e) = client.request(&HostMsg::Release {
-            deflection_ticks: d,
-            ticks,
-        }) {
-            let _ = client.stream_stop();
-            return Err(failed(e));
-        }
-        experiment = true;
-    }
+    let experiment = start(client, plan)?;
     let mut st = Stats::default();
     let mut next: Option<u32> = None;
     let mut last_dropped = 0u32;
-    let start = Instant::now();
+    let started = Instant::now();
     let mut last_data = Instant::now();
     let mut last_hb = Instant::now();
     let end = loop {
@@ -214,29 +195,14 @@ pub fn pump(
         last_data = Instant::now();
         st.bad_frames = client.gaps.bad_frames - bad0;
         let first = *st.first_seq.get_or_insert(batch.seq);
-        let (mut missing, mut dev) = (0, 0);
-        if let Some(expect) = next {
-            let gap = batch.seq.wrapping_sub(expect);
-            if gap >= u32::MAX / 2 {
+        let (missing, dev) = match next {
+            Some(expect) => match count_gap(&mut st, plan, expect, first, &batch, last_dropped) {
+                Some(gap) => gap,
                 // A stale or repeated batch: never written twice.
-                continue;
-            }
-            // Only the part of a gap inside the plan counts.
-            let gap = match plan.samples {
-                Some(n) => {
-                    u64::from(gap).min(n.saturating_sub(u64::from(expect.wrapping_sub(first))))
-                }
-                None => u64::from(gap),
-            };
-            if gap != 0 {
-                missing = gap;
-                dev = u64::from(batch.dropped.wrapping_sub(last_dropped)).min(missing);
-                st.missing += missing;
-                st.device_dropped += dev;
-                st.link_lost += missing - dev;
-                st.gap_events += 1;
-            }
-        }
+                None => continue,
+            },
+            None => (0, 0),
+        };
         last_dropped = batch.dropped;
         let mut take = batch.samples.len();
         if let Some(n) = plan.samples {
@@ -249,7 +215,7 @@ pub fn pump(
             // plan's end), so the file accounts for every planned sample.
             if let (Some(expect), true) = (next, missing > 0) {
                 let end_seq = expect.wrapping_add(missing as u32);
-                st.wall_s = start.elapsed().as_secs_f64();
+                st.wall_s = started.elapsed().as_secs_f64();
                 if let Err(e) = sink(end_seq, &[], missing, dev, &st) {
                     let _ = client.stream_stop();
                     return Err(e);
@@ -261,7 +227,7 @@ pub fn pump(
         st.received += take as u64;
         st.last_seq = Some(batch.seq.wrapping_add(take as u32 - 1));
         next = Some(batch.seq.wrapping_add(batch.samples.len() as u32));
-        st.wall_s = start.elapsed().as_secs_f64();
+        st.wall_s = started.elapsed().as_secs_f64();
         if let Err(e) = sink(batch.seq, samples, missing, dev, &st) {
             let _ = client.stream_stop();
             return Err(e);
@@ -272,7 +238,7 @@ pub fn pump(
             }
         }
     };
-    st.wall_s = start.elapsed().as_secs_f64();
+    st.wall_s = started.elapsed().as_secs_f64();
     if !matches!(end, End::Disconnected(_)) {
         if experiment {
             let _ = client.request(&HostMsg::Stop);
@@ -280,6 +246,62 @@ pub fn pump(
         let _ = client.stream_stop();
     }
     Ok((end, st))
+}
+
+/// Starts the stream (and the plan's release test); whether an experiment runs.
+fn start(client: &mut Client, plan: &Plan) -> Result<bool, SessionError> {
+    client
+        .stream_start(plan.decimation)
+        .map_err(SessionError::Client)?;
+    let Some(d) = plan.release else {
+        return Ok(false);
+    };
+    if plan.decimation != 1 {
+        let _ = client.stream_stop();
+        return Err(SessionError::ReleaseNeedsEveryTick);
+    }
+    let ticks = plan
+        .samples
+        .unwrap_or(u64::from(u32::MAX))
+        .clamp(1, 10_000_000) as u32;
+    if let Err(e) = client.request(&HostMsg::Release {
+        deflection_ticks: d,
+        ticks,
+    }) {
+        let _ = client.stream_stop();
+        return Err(SessionError::Client(e));
+    }
+    Ok(true)
+}
+
+/// The samples missing before `batch` (expected at `expect`; the session's first at `first`),
+/// counted into `st`: (missing, of them dropped by the device). Only the part of a gap inside
+/// the plan counts. None for a stale or repeated batch (a gap of half the sequence space).
+fn count_gap(
+    st: &mut Stats,
+    plan: &Plan,
+    expect: u32,
+    first: u32,
+    batch: &TelemetryBatch,
+    last_dropped: u32,
+) -> Option<(u64, u64)> {
+    let gap = batch.seq.wrapping_sub(expect);
+    if gap >= u32::MAX / 2 {
+        return None;
+    }
+    let gap = match plan.samples {
+        Some(n) => u64::from(gap).min(n.saturating_sub(u64::from(expect.wrapping_sub(first)))),
+        None => u64::from(gap),
+    };
+    if gap == 0 {
+        return Some((0, 0));
+    }
+    let dev = u64::from(batch.dropped.wrapping_sub(last_dropped)).min(gap);
+    st.missing += gap;
+    st.device_dropped += dev;
+    st.link_lost += gap - dev;
+    st.gap_events += 1;
+    Some((gap, dev))
 }
 
 /// Header facts of a recording made through `client` now, of the target described as `target`
