@@ -426,54 +426,18 @@ the firmware applies no force after the plant left.\n\n## Table\n\n{table}\n"
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let mut hostctl = root.join("target").join("release").join("hostctl");
-    let mut out = root.join("docs").join("TUNE.md");
-    let mut only: Vec<String> = Vec::new();
-    let mut extra: Vec<PathBuf> = Vec::new();
-    let (mut quick, mut write) = (false, true);
-    let mut i = 0;
-    while i < args.len() {
-        let value = |i: usize| {
-            args.get(i + 1)
-                .cloned()
-                .with_context(|| format!("{} needs a value", args[i]))
-        };
-        match args[i].as_str() {
-            "--hostctl" => {
-                hostctl = PathBuf::from(value(i)?);
-                i += 1;
-            }
-            "--out" => {
-                out = PathBuf::from(value(i)?);
-                i += 1;
-            }
-            "--only" => {
-                only.push(value(i)?);
-                i += 1;
-            }
-            "--plant" => {
-                extra.push(PathBuf::from(value(i)?));
-                i += 1;
-            }
-            "--quick" => quick = true,
-            "--no-write" => write = false,
-            other => bail!(
-                "unknown option {other:?}; available: --hostctl PATH, --out FILE, --only NAME, --plant FILE, --quick, --no-write"
-            ),
-        }
-        i += 1;
-    }
+    let mut o = Options::parse(&args, &root)?;
     // `--plant FILE` (repeatable) checks the user's own plant files instead of sim/plants/;
     // the table is then printed, and written only with an explicit `--out`.
-    let extra_given = !extra.is_empty();
+    let extra_given = !o.extra.is_empty();
     let root_abs = std::fs::canonicalize(&root).unwrap_or_else(|_| root.clone());
-    let files = if extra.is_empty() {
-        family::plant_files(&family::plants_dir()).context("listing sim/plants")?
-    } else {
-        if !args.iter().any(|a| a == "--out") {
-            write = false;
+    let files = if extra_given {
+        if !o.out_given {
+            o.write = false;
         }
-        extra
+        std::mem::take(&mut o.extra)
+    } else {
+        family::plant_files(&family::plants_dir()).context("listing sim/plants")?
     };
     let mut rows = Vec::new();
     let mut skipped: Vec<String> = Vec::new();
@@ -486,95 +450,18 @@ fn main() -> Result<()> {
                 continue;
             }
         };
-        if !only.is_empty() && !only.contains(&case.name) {
+        if !o.only.is_empty() && !o.only.contains(&case.name) {
             continue;
         }
-        let t0 = Instant::now();
-        let k_star = match kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12) {
-            Ok(k) => k,
+        match plant_row(case, &f, &o) {
+            Ok(row) => rows.push(row),
             Err(e) => {
-                // Still say what tune sets there: with no finite K*, it cannot be unsafe.
-                let tune = (!quick).then(|| run_tune(&hostctl, &f));
-                let e = format!(
-                    "{}: K*: {e}{}",
-                    case.name,
-                    match tune {
-                        Some(Ok(t)) =>
-                            format!("; tune sets K = {:.5} ({:.1} s)", t.k_set, t.seconds),
-                        Some(Err(e)) => format!("; tune failed: {e:#}"),
-                        None => String::new(),
-                    }
-                );
                 eprintln!("skipped: {e}");
                 skipped.push(e);
-                continue;
             }
-        };
-        let best = best_of_frontier(&case, k_star.k_star);
-        let k_star_seconds = t0.elapsed().as_secs_f64();
-        let tune = (!quick).then(|| run_tune(&hostctl, &f).map_err(|e| format!("{e:#}")));
-        let b_set = match &tune {
-            Some(Ok(t)) => t.b_set,
-            _ => 0.0,
-        };
-        let damped = PlantCase {
-            rig: Rig {
-                damping: b_set,
-                ..case.rig.clone()
-            },
-            ..case.clone()
-        };
-        let k_star_set = tune.as_ref().map(|_| {
-            if b_set > 0.0 {
-                kstar::k_star(&damped.proto, &damped.rig, k_star.k_star * 0.5, 1e12)
-                    .map_err(|e| format!("K*(B = {b_set:.4e}): {e}"))
-            } else {
-                Ok(k_star.clone())
-            }
-        });
-        let unstable_at_set = match &tune {
-            Some(Ok(t)) => Some(
-                kstar::first_failure(&damped.proto, &damped.rig, t.k_set)
-                    .map(|(trial, _)| describe(&trial)),
-            ),
-            _ => None,
-        };
-        let k_sup = match &k_star_set {
-            Some(Ok(k)) => k.k_star,
-            _ => k_star.k_star,
-        };
-        let supervisor = damped.supervisor_report(1.5 * k_sup);
-        eprintln!(
-            "{}: K*(0) = {:.5} ({} evaluations), best K*(B) {best:?} ({k_star_seconds:.1} s), tune {}, at 1.5 K*(B set) = {:.5}: v_max impacts trip {:?}, {} other unstable trials, all stopped: {}",
-            case.name,
-            k_star.k_star,
-            k_star.evaluations,
-            match &tune {
-                Some(Ok(t)) => format!("K = {:.5}, B = {:.4e} ({:.3} K*(B set), {:.1} s)", t.k_set, t.b_set, t.k_set / k_sup, t.seconds),
-                Some(Err(e)) => format!("failed: {e}"),
-                None => "skipped".into(),
-            },
-            1.5 * k_sup,
-            supervisor
-                .v_max_impacts
-                .iter()
-                .map(|s| s.run.trip_tick)
-                .collect::<Vec<_>>(),
-            supervisor.other_unstable.len(),
-            supervisor.all_safe(),
-        );
-        rows.push(Row {
-            case,
-            k_star,
-            best,
-            k_star_set,
-            unstable_at_set,
-            k_star_seconds,
-            tune,
-            supervisor,
-        });
+        }
     }
-    let table = render(&rows, quick);
+    let table = render(&rows, o.quick);
     print!("{table}");
     let total: f64 = rows.iter().map(|r| r.k_star_seconds).sum();
     eprintln!("K* searches: {total:.1} s in total");
@@ -585,46 +472,200 @@ fn main() -> Result<()> {
             skipped.join("\n")
         );
     }
-    if write {
-        let mut cmd = String::from(if quick {
-            "cargo xtask tune-table --quick"
-        } else {
-            "cargo xtask tune-table"
-        });
-        let source = if extra_given {
-            // Relative to the repository when the files are inside it.
-            let names: Vec<String> = rows
-                .iter()
-                .map(|r| {
-                    let p = r.case.path.strip_prefix(&root_abs).unwrap_or(&r.case.path);
-                    p.display().to_string()
-                })
-                .collect();
-            for n in &names {
-                cmd.push_str(&format!(" --plant {n}"));
-            }
-            let mut dirs: Vec<String> = names
-                .iter()
-                .map(|n| {
-                    Path::new(n)
-                        .parent()
-                        .map_or_else(String::new, |d| d.display().to_string())
-                })
-                .collect();
-            dirs.dedup();
-            format!("`{}/`", dirs.join("/`, `"))
-        } else {
-            "`sim/plants/`".to_string()
-        };
-        if extra_given {
-            cmd.push_str(&format!(
-                " --out {}",
-                out.strip_prefix(&root_abs).unwrap_or(&out).display()
-            ));
-        }
-        std::fs::write(&out, document(&table, &cmd, &source))
-            .with_context(|| format!("writing {}", out.display()))?;
-        eprintln!("wrote {}", out.display());
+    if o.write {
+        let (cmd, source) = provenance(&rows, extra_given, &root_abs, &o);
+        std::fs::write(&o.out, document(&table, &cmd, &source))
+            .with_context(|| format!("writing {}", o.out.display()))?;
+        eprintln!("wrote {}", o.out.display());
     }
     Ok(())
+}
+
+/// The program's options (see `cargo xtask tune-table`).
+struct Options {
+    /// The hostctl binary that tunes.
+    hostctl: PathBuf,
+    /// Where the document goes.
+    out: PathBuf,
+    /// `--out` was given.
+    out_given: bool,
+    /// Only these plants (file stems), if any.
+    only: Vec<String>,
+    /// The user's own plant files instead of sim/plants/.
+    extra: Vec<PathBuf>,
+    /// K* and the supervisor only, no tune runs.
+    quick: bool,
+    /// Write the document (else print only).
+    write: bool,
+}
+
+impl Options {
+    fn parse(args: &[String], root: &Path) -> Result<Self> {
+        let mut o = Self {
+            hostctl: root.join("target").join("release").join("hostctl"),
+            out: root.join("docs").join("TUNE.md"),
+            out_given: false,
+            only: Vec::new(),
+            extra: Vec::new(),
+            quick: false,
+            write: true,
+        };
+        let mut i = 0;
+        while i < args.len() {
+            let value = |i: usize| {
+                args.get(i + 1)
+                    .cloned()
+                    .with_context(|| format!("{} needs a value", args[i]))
+            };
+            match args[i].as_str() {
+                "--hostctl" => {
+                    o.hostctl = PathBuf::from(value(i)?);
+                    i += 1;
+                }
+                "--out" => {
+                    o.out = PathBuf::from(value(i)?);
+                    o.out_given = true;
+                    i += 1;
+                }
+                "--only" => {
+                    o.only.push(value(i)?);
+                    i += 1;
+                }
+                "--plant" => {
+                    o.extra.push(PathBuf::from(value(i)?));
+                    i += 1;
+                }
+                "--quick" => o.quick = true,
+                "--no-write" => o.write = false,
+                other => bail!(
+                    "unknown option {other:?}; available: --hostctl PATH, --out FILE, --only NAME, --plant FILE, --quick, --no-write"
+                ),
+            }
+            i += 1;
+        }
+        Ok(o)
+    }
+}
+
+/// One plant's row: K*(0), the frontier's best, tune's (K, B) from `f`, K*(B set), the set
+/// point's stability and the supervisor at 1.5 K*(B set). Err (the reason, for the skipped
+/// list) when K*(0) has no finite value.
+fn plant_row(case: PlantCase, f: &Path, o: &Options) -> Result<Row, String> {
+    let t0 = Instant::now();
+    let k_star = match kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12) {
+        Ok(k) => k,
+        Err(e) => {
+            // Still say what tune sets there: with no finite K*, it cannot be unsafe.
+            let tune = (!o.quick).then(|| run_tune(&o.hostctl, f));
+            return Err(format!(
+                "{}: K*: {e}{}",
+                case.name,
+                match tune {
+                    Some(Ok(t)) => format!("; tune sets K = {:.5} ({:.1} s)", t.k_set, t.seconds),
+                    Some(Err(e)) => format!("; tune failed: {e:#}"),
+                    None => String::new(),
+                }
+            ));
+        }
+    };
+    let best = best_of_frontier(&case, k_star.k_star);
+    let k_star_seconds = t0.elapsed().as_secs_f64();
+    let tune = (!o.quick).then(|| run_tune(&o.hostctl, f).map_err(|e| format!("{e:#}")));
+    let b_set = match &tune {
+        Some(Ok(t)) => t.b_set,
+        _ => 0.0,
+    };
+    let damped = PlantCase {
+        rig: Rig {
+            damping: b_set,
+            ..case.rig.clone()
+        },
+        ..case.clone()
+    };
+    let k_star_set = tune.as_ref().map(|_| {
+        if b_set > 0.0 {
+            kstar::k_star(&damped.proto, &damped.rig, k_star.k_star * 0.5, 1e12)
+                .map_err(|e| format!("K*(B = {b_set:.4e}): {e}"))
+        } else {
+            Ok(k_star.clone())
+        }
+    });
+    let unstable_at_set = match &tune {
+        Some(Ok(t)) => Some(
+            kstar::first_failure(&damped.proto, &damped.rig, t.k_set)
+                .map(|(trial, _)| describe(&trial)),
+        ),
+        _ => None,
+    };
+    let k_sup = match &k_star_set {
+        Some(Ok(k)) => k.k_star,
+        _ => k_star.k_star,
+    };
+    let supervisor = damped.supervisor_report(1.5 * k_sup);
+    eprintln!(
+        "{}: K*(0) = {:.5} ({} evaluations), best K*(B) {best:?} ({k_star_seconds:.1} s), tune {}, at 1.5 K*(B set) = {:.5}: v_max impacts trip {:?}, {} other unstable trials, all stopped: {}",
+        case.name,
+        k_star.k_star,
+        k_star.evaluations,
+        match &tune {
+            Some(Ok(t)) => format!("K = {:.5}, B = {:.4e} ({:.3} K*(B set), {:.1} s)", t.k_set, t.b_set, t.k_set / k_sup, t.seconds),
+            Some(Err(e)) => format!("failed: {e}"),
+            None => "skipped".into(),
+        },
+        1.5 * k_sup,
+        supervisor
+            .v_max_impacts
+            .iter()
+            .map(|s| s.run.trip_tick)
+            .collect::<Vec<_>>(),
+        supervisor.other_unstable.len(),
+        supervisor.all_safe(),
+    );
+    Ok(Row {
+        case,
+        k_star,
+        best,
+        k_star_set,
+        unstable_at_set,
+        k_star_seconds,
+        tune,
+        supervisor,
+    })
+}
+
+/// The command that made the document and the plant directories it covers (relative to the
+/// repository when the files are inside it).
+fn provenance(rows: &[Row], extra_given: bool, root_abs: &Path, o: &Options) -> (String, String) {
+    let mut cmd = String::from(if o.quick {
+        "cargo xtask tune-table --quick"
+    } else {
+        "cargo xtask tune-table"
+    });
+    if !extra_given {
+        return (cmd, "`sim/plants/`".to_string());
+    }
+    let names: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            let p = r.case.path.strip_prefix(root_abs).unwrap_or(&r.case.path);
+            p.display().to_string()
+        })
+        .collect();
+    for n in &names {
+        cmd.push_str(&format!(" --plant {n}"));
+    }
+    let mut dirs: Vec<String> = names
+        .iter()
+        .map(|n| {
+            Path::new(n)
+                .parent()
+                .map_or_else(String::new, |d| d.display().to_string())
+        })
+        .collect();
+    dirs.dedup();
+    cmd.push_str(&format!(
+        " --out {}",
+        o.out.strip_prefix(root_abs).unwrap_or(&o.out).display()
+    ));
+    (cmd, format!("`{}/`", dirs.join("/`, `")))
 }
