@@ -106,7 +106,39 @@ struct Dep {
 }
 
 /// Check 2: member dependencies no compiled unit uses.
+/// Member packages by id: (name, dependencies compiled for this platform).
+type Members = BTreeMap<String, (String, Vec<Dep>)>;
+/// Per package: compiled units (all, test-profile).
+type Units = BTreeMap<String, (usize, usize)>;
+/// Per (package, crate): how many units report the crate unused.
+type Unused = BTreeMap<(String, String), usize>;
+
 fn unused_member_deps() -> Result<Vec<String>> {
+    let deps = member_deps()?;
+    let (units, unused) = clippy_unused(&deps)?;
+    let mut problems = Vec::new();
+    for (id, (name, list)) in &deps {
+        let (all, test) = units.get(id).copied().unwrap_or_default();
+        for d in list {
+            let seen_by = if d.dev_only { test } else { all };
+            let reported = unused
+                .get(&(id.clone(), d.krate.clone()))
+                .copied()
+                .unwrap_or(0);
+            if seen_by > 0 && reported >= seen_by {
+                problems.push(format!(
+                    "{}: {}dependency of {name}, used by none of its {seen_by} compiled unit(s)",
+                    d.key,
+                    if d.dev_only { "dev-" } else { "" }
+                ));
+            }
+        }
+    }
+    Ok(problems)
+}
+
+/// The workspace members and their dependencies, from `cargo metadata`.
+fn member_deps() -> Result<Members> {
     let out = crate::cargo()
         .args(["metadata", "--format-version", "1", "--no-deps"])
         .output()
@@ -118,7 +150,7 @@ fn unused_member_deps() -> Result<Vec<String>> {
         );
     }
     let meta: Value = serde_json::from_slice(&out.stdout).context("parsing cargo metadata")?;
-    let mut deps: BTreeMap<String, (String, Vec<Dep>)> = BTreeMap::new();
+    let mut deps: Members = BTreeMap::new();
     for p in meta["packages"].as_array().context("metadata packages")? {
         let id = p["id"].as_str().unwrap_or_default().to_string();
         let name = p["name"].as_str().unwrap_or_default().to_string();
@@ -146,6 +178,12 @@ fn unused_member_deps() -> Result<Vec<String>> {
         }
         deps.insert(id, (name, list));
     }
+    Ok(deps)
+}
+
+/// One clippy pass with `unused-crate-dependencies`: the units compiled per member and the
+/// crates each reports unused.
+fn clippy_unused(deps: &Members) -> Result<(Units, Unused)> {
     let mut child = crate::cargo()
         .args([
             "clippy",
@@ -161,8 +199,8 @@ fn unused_member_deps() -> Result<Vec<String>> {
         .spawn()
         .context("running cargo clippy")?;
     // Per package: units (all, test-profile) and, per crate, how many units report it unused.
-    let mut units: BTreeMap<String, (usize, usize)> = BTreeMap::new();
-    let mut unused: BTreeMap<(String, String), usize> = BTreeMap::new();
+    let mut units: Units = BTreeMap::new();
+    let mut unused: Unused = BTreeMap::new();
     let stdout = child.stdout.take().context("clippy stdout")?;
     for line in std::io::BufReader::new(stdout).lines() {
         let line = line?;
@@ -207,23 +245,5 @@ fn unused_member_deps() -> Result<Vec<String>> {
     if !status.success() {
         bail!("cargo clippy (unused-crate-dependencies pass) failed with {status}");
     }
-    let mut problems = Vec::new();
-    for (id, (name, list)) in &deps {
-        let (all, test) = units.get(id).copied().unwrap_or_default();
-        for d in list {
-            let seen_by = if d.dev_only { test } else { all };
-            let reported = unused
-                .get(&(id.clone(), d.krate.clone()))
-                .copied()
-                .unwrap_or(0);
-            if seen_by > 0 && reported >= seen_by {
-                problems.push(format!(
-                    "{}: {}dependency of {name}, used by none of its {seen_by} compiled unit(s)",
-                    d.key,
-                    if d.dev_only { "dev-" } else { "" }
-                ));
-            }
-        }
-    }
-    Ok(problems)
+    Ok((units, unused))
 }
