@@ -22,9 +22,11 @@ use stiffwall_tests::kstar;
 /// wall behind a fast amplifier whose stable K has a narrow failing band below K*(B)
 /// (`maxon-re35-amp-3khz`: the brute force's confirmation scan finds it), and a light stage
 /// with a fine encoder whose damped release hold trips the encoder-jump limit when re-aimed
-/// farther (`fine-encoder-stage`: the first attempt's outcome stands). The every-plant test
-/// below runs all of `sim/plants/`.
-pub const DEFAULT_PLANTS: [&str; 8] = [
+/// farther (`fine-encoder-stage`: the first attempt's outcome stands), and a lighter rotor
+/// behind two ticks of delay whose release hold rings far past its target above K* and, re-aimed
+/// nearer, sticks at the wall (`rotary-light-stiction-delay2`: the failure from farther stands;
+/// tune set 0.62–0.69 = 1.7 K* before). The every-plant test below runs all of `sim/plants/`.
+pub const DEFAULT_PLANTS: [&str; 9] = [
     "phantom-stiction",
     "phantom-amp-300hz",
     "phantom-cable-150hz",
@@ -33,6 +35,7 @@ pub const DEFAULT_PLANTS: [&str; 8] = [
     "maxon-re35-stiction-amp1k-delay",
     "maxon-re35-amp-3khz",
     "fine-encoder-stage",
+    "rotary-light-stiction-delay2",
 ];
 
 /// Lower bound of K set / K*.
