@@ -128,50 +128,29 @@ pub(crate) fn choose_wall(
         b: 0.0,
         k_verified: Some(found.k_pass),
     }];
-    let cap = b_cap(c, base, run.period_s());
-    let mut best = (0.0, found.k_pass);
-    match run.s.damping {
-        Damping::Fixed(b) if b > 0.0 => {
-            let start = predicted_k(run, found.k_pass, b).map_or(found.k_pass, |k| {
-                (k * FRONTIER_START).clamp(found.k_pass * 1e-3, search.k_cap)
-            });
-            let floor = found.k_pass * 1e-3;
-            let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
-            let Some(f) = f else {
-                bail!("no stiffness down to {floor:.4e} settles at the fixed damping B = {b:.4e}");
-            };
-            frontier.push(FrontierPoint {
-                b,
-                k_verified: Some(f.k_pass),
-            });
-            best = (b, f.k_pass);
-        }
-        Damping::Fixed(_) => {}
+    let best = match run.s.damping {
+        Damping::Fixed(b) if b > 0.0 => fixed_damping(
+            run,
+            c,
+            base,
+            b,
+            found,
+            search,
+            thorough,
+            notes,
+            &mut frontier,
+        )?,
+        Damping::Fixed(_) => (0.0, found.k_pass),
         Damping::Search => {
-            // The damper must buy DAMPING_MIN_GAIN of the stiffness *set*: its wall is set at
-            // DAMPED_MARGIN of its largest settling K, the spring-only one at `margin`.
-            let floor =
-                found.k_pass * (1.0 + DAMPING_MIN_GAIN) * margin / margin.min(DAMPED_MARGIN);
-            for (b, k_pred) in predicted_frontier(run, found.k_pass, cap)
-                .into_iter()
-                .take(FRONTIER_TRIES)
-            {
-                (run.progress)(Progress::DampingSearch {
-                    b,
-                    k_predicted: k_pred,
-                    k_start: (k_pred * FRONTIER_START).max(floor),
-                });
-                let start = (k_pred * FRONTIER_START).clamp(floor, search.k_cap);
-                let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
-                let k = f.map(|f| f.k_pass).filter(|&k| k >= floor);
-                frontier.push(FrontierPoint { b, k_verified: k });
-                if let Some(k) = k {
-                    best = (b, k);
-                    break;
-                }
-            }
+            let at = Searched {
+                found,
+                search,
+                thorough,
+                margin,
+            };
+            search_frontier(run, c, base, &at, notes, &mut frontier)?
         }
-    }
+    };
     if best.0 > 0.0 {
         let cfg = damped(base, best.0);
         if let Some((k_set, verification)) =
@@ -200,6 +179,82 @@ pub(crate) fn choose_wall(
         verification,
         frontier,
     })
+}
+
+/// The spring-only search's result and the settings the frontier search runs with.
+struct Searched<'a> {
+    found: &'a Found,
+    search: &'a Search,
+    thorough: bool,
+    /// The spring-only wall's margin.
+    margin: f64,
+}
+
+/// The largest settling K at the fixed damping `b` (`--damping B`), searched from the K the
+/// linear boundary predicts there, added to `frontier`: (B, K), or an error naming B when no K
+/// down to 10⁻³ of the spring-only one settles.
+#[allow(clippy::too_many_arguments)]
+fn fixed_damping(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    b: f64,
+    found: &Found,
+    search: &Search,
+    thorough: bool,
+    notes: &mut Notes,
+    frontier: &mut Vec<FrontierPoint>,
+) -> Result<(f64, f64)> {
+    let start = predicted_k(run, found.k_pass, b).map_or(found.k_pass, |k| {
+        (k * FRONTIER_START).clamp(found.k_pass * 1e-3, search.k_cap)
+    });
+    let floor = found.k_pass * 1e-3;
+    let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
+    let Some(f) = f else {
+        bail!("no stiffness down to {floor:.4e} settles at the fixed damping B = {b:.4e}");
+    };
+    frontier.push(FrontierPoint {
+        b,
+        k_verified: Some(f.k_pass),
+    });
+    Ok((b, f.k_pass))
+}
+
+/// The frontier search: the predicted levels, stiffest first (at most [`FRONTIER_TRIES`]), each
+/// searched from [`FRONTIER_START`] × its predicted K, added to `frontier`; the first whose
+/// largest settling K buys [`DAMPING_MIN_GAIN`] of the stiffness set is (B, K), else
+/// (0, the spring-only K).
+fn search_frontier(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    at: &Searched<'_>,
+    notes: &mut Notes,
+    frontier: &mut Vec<FrontierPoint>,
+) -> Result<(f64, f64)> {
+    let (found, search, margin) = (at.found, at.search, at.margin);
+    let cap = b_cap(c, base, run.period_s());
+    // The damper must buy DAMPING_MIN_GAIN of the stiffness *set*: its wall is set at
+    // DAMPED_MARGIN of its largest settling K, the spring-only one at `margin`.
+    let floor = found.k_pass * (1.0 + DAMPING_MIN_GAIN) * margin / margin.min(DAMPED_MARGIN);
+    for (b, k_pred) in predicted_frontier(run, found.k_pass, cap)
+        .into_iter()
+        .take(FRONTIER_TRIES)
+    {
+        (run.progress)(Progress::DampingSearch {
+            b,
+            k_predicted: k_pred,
+            k_start: (k_pred * FRONTIER_START).max(floor),
+        });
+        let start = (k_pred * FRONTIER_START).clamp(floor, search.k_cap);
+        let f = search_at(run, c, base, b, start, floor, search, at.thorough, notes)?;
+        let k = f.map(|f| f.k_pass).filter(|&k| k >= floor);
+        frontier.push(FrontierPoint { b, k_verified: k });
+        if let Some(k) = k {
+            return Ok((b, k));
+        }
+    }
+    Ok((0.0, found.k_pass))
 }
 
 /// Confirms the spring-only wall from `k`. When no K passes and the last failure was an
