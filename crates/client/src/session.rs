@@ -173,24 +173,10 @@ pub fn pump(
     let mut last_data = Instant::now();
     let mut last_hb = Instant::now();
     let end = loop {
-        if client.cancel_token().is_cancelled() {
-            break End::Interrupted;
-        }
-        if experiment && last_hb.elapsed() >= HEARTBEAT_PERIOD {
-            if let Err(e) = client.send(&HostMsg::Heartbeat) {
-                break End::Disconnected(format!("{e:#}"));
-            }
-            last_hb = Instant::now();
-        }
-        let batch: TelemetryBatch = match client.next_batch(Duration::from_millis(50)) {
+        let batch = match poll(client, experiment, silence, &mut last_hb, last_data) {
             Ok(Some(b)) => b,
-            Ok(None) => {
-                if last_data.elapsed() > silence {
-                    break End::Silent(last_data.elapsed());
-                }
-                continue;
-            }
-            Err(e) => break End::Disconnected(format!("{e:#}")),
+            Ok(None) => continue,
+            Err(end) => break end,
         };
         last_data = Instant::now();
         st.bad_frames = client.gaps.bad_frames - bad0;
@@ -204,11 +190,7 @@ pub fn pump(
             None => (0, 0),
         };
         last_dropped = batch.dropped;
-        let mut take = batch.samples.len();
-        if let Some(n) = plan.samples {
-            let covered = u64::from(batch.seq.wrapping_sub(first));
-            take = take.min(n.saturating_sub(covered) as usize);
-        }
+        let take = planned_take(plan, &batch, first);
         if take == 0 {
             // The batch lies past the plan's end: samples missing before it inside the plan
             // are a trailing gap, counted above and written here (an empty batch at the
@@ -239,13 +221,60 @@ pub fn pump(
         }
     };
     st.wall_s = started.elapsed().as_secs_f64();
+    stop(client, experiment, &end);
+    Ok((end, st))
+}
+
+/// One wait for telemetry: ends the stream on cancellation, sends the heartbeat when due
+/// (during an `experiment`) and waits up to 50 ms for the next batch. `Ok(None)`: no batch
+/// yet, and the last (at `last_data`) is not older than `silence`; `Err`: how the stream ended.
+fn poll(
+    client: &mut Client,
+    experiment: bool,
+    silence: Duration,
+    last_hb: &mut Instant,
+    last_data: Instant,
+) -> Result<Option<TelemetryBatch>, End> {
+    if client.cancel_token().is_cancelled() {
+        return Err(End::Interrupted);
+    }
+    if experiment && last_hb.elapsed() >= HEARTBEAT_PERIOD {
+        if let Err(e) = client.send(&HostMsg::Heartbeat) {
+            return Err(End::Disconnected(format!("{e:#}")));
+        }
+        *last_hb = Instant::now();
+    }
+    match client.next_batch(Duration::from_millis(50)) {
+        Ok(Some(b)) => Ok(Some(b)),
+        Ok(None) => {
+            if last_data.elapsed() > silence {
+                return Err(End::Silent(last_data.elapsed()));
+            }
+            Ok(None)
+        }
+        Err(e) => Err(End::Disconnected(format!("{e:#}"))),
+    }
+}
+
+/// How many of `batch`'s samples lie inside the plan (the session's first sample at `first`).
+fn planned_take(plan: &Plan, batch: &TelemetryBatch, first: u32) -> usize {
+    let mut take = batch.samples.len();
+    if let Some(n) = plan.samples {
+        let covered = u64::from(batch.seq.wrapping_sub(first));
+        take = take.min(n.saturating_sub(covered) as usize);
+    }
+    take
+}
+
+/// Stops the experiment (if one runs) and the stream, best effort, unless the stream `end`ed
+/// in a disconnect.
+fn stop(client: &mut Client, experiment: bool, end: &End) {
     if !matches!(end, End::Disconnected(_)) {
         if experiment {
             let _ = client.request(&HostMsg::Stop);
         }
         let _ = client.stream_stop();
     }
-    Ok((end, st))
 }
 
 /// Starts the stream (and the plan's release test); whether an experiment runs.
