@@ -89,7 +89,39 @@ pub const TIME_LIMIT: Duration = Duration::from_secs(600);
 /// Boots `image` under QEMU (mps2-an386, Cortex-M4F) with UART0 on a new pseudo-terminal.
 /// The instance is killed when the returned [`Qemu`] is dropped, or after [`TIME_LIMIT`].
 pub fn boot(image: &Path) -> Result<Qemu> {
-    let mut child = Command::new("qemu-system-arm")
+    let mut child = spawn(image)?;
+    // QEMU announces the pty on stdout; the semihosting console shares stdout, so a thread
+    // keeps draining it for the life of the process (and forwards the console to stderr).
+    // Time limit without `unsafe`: a thread that kills the process by PID unless it has
+    // already been reaped (checked through the shared flag set on drop).
+    let reaped = watchdog(child.id());
+    let stdout = child
+        .stdout
+        .take()
+        .ok_or_else(|| ClientError::Qemu("QEMU stdout".into()))?;
+    let rx = drain(stdout);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        if let Ok(pty) = rx.recv_timeout(Duration::from_millis(50)) {
+            return Ok(Qemu { child, pty, reaped });
+        }
+        if let Some(status) = child.try_wait().map_err(qemu_io)? {
+            return Err(ClientError::Qemu(format!(
+                "QEMU exited before creating its pty ({status})"
+            )));
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            return Err(ClientError::Qemu(
+                "QEMU did not report its pty within 10 s".into(),
+            ));
+        }
+    }
+}
+
+/// Starts `qemu-system-arm` on `image` with UART0 on `-serial pty` and stdout piped.
+fn spawn(image: &Path) -> Result<Child> {
+    Command::new("qemu-system-arm")
         .args([
             "-cpu",
             "cortex-m4",
@@ -119,12 +151,12 @@ pub fn boot(image: &Path) -> Result<Qemu> {
             } else {
                 ClientError::Qemu(format!("cannot start qemu-system-arm: {e}"))
             }
-        })?;
-    // QEMU announces the pty on stdout; the semihosting console shares stdout, so a thread
-    // keeps draining it for the life of the process (and forwards the console to stderr).
-    // Time limit without `unsafe`: a thread that kills the process by PID unless it has
-    // already been reaped (checked through the shared flag set on drop).
-    let pid = child.id();
+        })
+}
+
+/// A thread that kills process `pid` after [`TIME_LIMIT`] unless the returned flag is set
+/// (on drop, once the process is reaped) first; polls every 200 ms.
+fn watchdog(pid: u32) -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let reaped = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let reaped2 = std::sync::Arc::clone(&reaped);
     std::thread::spawn(move || {
@@ -138,10 +170,12 @@ pub fn boot(image: &Path) -> Result<Qemu> {
         eprintln!("qemu: killing pid {pid} after {} s", TIME_LIMIT.as_secs());
         let _ = Command::new("kill").args(["-9", &pid.to_string()]).status();
     });
-    let stdout = child
-        .stdout
-        .take()
-        .ok_or_else(|| ClientError::Qemu("QEMU stdout".into()))?;
+    reaped
+}
+
+/// A thread that reads QEMU's `stdout` to its end, forwarding the console to stderr and
+/// sending the path of each pty QEMU announces ("... redirected to PATH ...").
+fn drain(stdout: std::process::ChildStdout) -> std::sync::mpsc::Receiver<String> {
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         for line in BufReader::new(stdout)
@@ -157,23 +191,7 @@ pub fn boot(image: &Path) -> Result<Qemu> {
             }
         }
     });
-    let deadline = Instant::now() + Duration::from_secs(10);
-    loop {
-        if let Ok(pty) = rx.recv_timeout(Duration::from_millis(50)) {
-            return Ok(Qemu { child, pty, reaped });
-        }
-        if let Some(status) = child.try_wait().map_err(qemu_io)? {
-            return Err(ClientError::Qemu(format!(
-                "QEMU exited before creating its pty ({status})"
-            )));
-        }
-        if Instant::now() > deadline {
-            let _ = child.kill();
-            return Err(ClientError::Qemu(
-                "QEMU did not report its pty within 10 s".into(),
-            ));
-        }
-    }
+    rx
 }
 
 fn qemu_io(e: std::io::Error) -> ClientError {
