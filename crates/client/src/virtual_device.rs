@@ -279,6 +279,8 @@ pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPor
     ))
 }
 
+/// The virtual device's loop until `stop` or the host hangs up: bytes from the host, the
+/// firmware's `Device`, the servo ticks due (each against `plant`), bytes to the host.
 fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &AtomicBool) {
     let board = spec.board();
     let mut channels = Box::new(Channels::new());
@@ -296,28 +298,12 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
     let mut ticks_since_epoch: u64 = 0;
     let mut epoch = Instant::now();
     let mut buf = [0u8; 4096];
-    let mask: u64 = if board.encoder_bits >= 32 {
-        u64::from(u32::MAX)
-    } else {
-        (1u64 << board.encoder_bits) - 1
-    };
+    let mask = encoder_mask(board.encoder_bits);
     while !stop.load(Ordering::Relaxed) {
         // Host → device, while the receive buffer has room.
-        let room = RX_LIMIT.saturating_sub(link.rx.len()).min(buf.len());
-        let got = if room == 0 {
-            Ok(0)
-        } else {
-            pty.read(&mut buf[..room])
+        let Some(room) = receive(pty, &mut link, &mut buf) else {
+            break; // the host hung up
         };
-        match got {
-            Ok(n) => link.rx.extend(&buf[..n]),
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                ) => {}
-            Err(_) => break, // the host hung up
-        }
         device.poll(tick, &mut link);
         if let Some(hz) = device.take_rate_change() {
             period_s = 1.0 / f64::from(hz.max(1));
@@ -325,16 +311,7 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
             ticks_since_epoch = 0;
         }
         // Servo ticks due now.
-        let due = if spec.fast {
-            if link.tx.len() < FAST_BACKLOG {
-                32
-            } else {
-                0
-            }
-        } else {
-            let target = (epoch.elapsed().as_secs_f64() / period_s) as u64;
-            target.saturating_sub(ticks_since_epoch).min(64)
-        };
+        let due = ticks_due(spec.fast, &link, epoch, period_s, ticks_since_epoch);
         for _ in 0..due {
             tick = tick.wrapping_add(1);
             ticks_since_epoch += 1;
@@ -346,22 +323,82 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
             device.poll(tick, &mut link);
         }
         // Device → host.
-        if !link.tx.is_empty() {
-            let (a, _) = link.tx.as_slices();
-            match pty.write(a) {
-                Ok(n) => {
-                    link.tx.drain(..n);
-                }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                    ) => {}
-                Err(_) => break,
-            }
+        if !transmit(pty, &mut link) {
+            break;
         }
         if due == 0 && (link.rx.is_empty() || room == 0) && link.tx.is_empty() && !spec.fast {
             std::thread::sleep(Duration::from_micros(200));
         }
     }
+}
+
+/// The mask of an encoder of `bits` bits (all 32 bits from 32 up).
+fn encoder_mask(bits: u8) -> u64 {
+    if bits >= 32 {
+        u64::from(u32::MAX)
+    } else {
+        (1u64 << bits) - 1
+    }
+}
+
+/// Whether a pty error is only a timeout or an interruption (the host is still there).
+fn transient(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+    )
+}
+
+/// Reads what the host sent into `link.rx`, at most up to [`RX_LIMIT`] bytes held; returns
+/// the room there was (0: nothing read), or None when the host hung up.
+fn receive(pty: &mut serialport::TTYPort, link: &mut MemLink, buf: &mut [u8]) -> Option<usize> {
+    let room = RX_LIMIT.saturating_sub(link.rx.len()).min(buf.len());
+    let got = if room == 0 {
+        Ok(0)
+    } else {
+        pty.read(&mut buf[..room])
+    };
+    match got {
+        Ok(n) => link.rx.extend(&buf[..n]),
+        Err(e) if transient(&e) => {}
+        Err(_) => return None,
+    }
+    Some(room)
+}
+
+/// Servo ticks to run now: `fast`, 32 while fewer than [`FAST_BACKLOG`] bytes wait for the
+/// host (else 0); paced, those the wall clock is ahead of since `epoch` (at most 64).
+fn ticks_due(
+    fast: bool,
+    link: &MemLink,
+    epoch: Instant,
+    period_s: f64,
+    ticks_since_epoch: u64,
+) -> u64 {
+    if fast {
+        if link.tx.len() < FAST_BACKLOG {
+            32
+        } else {
+            0
+        }
+    } else {
+        let target = (epoch.elapsed().as_secs_f64() / period_s) as u64;
+        target.saturating_sub(ticks_since_epoch).min(64)
+    }
+}
+
+/// Writes what waits in `link.tx` to the host (as much as the pty takes); false when the host
+/// hung up.
+fn transmit(pty: &mut serialport::TTYPort, link: &mut MemLink) -> bool {
+    if !link.tx.is_empty() {
+        let (a, _) = link.tx.as_slices();
+        match pty.write(a) {
+            Ok(n) => {
+                link.tx.drain(..n);
+            }
+            Err(e) if transient(&e) => {}
+            Err(_) => return false,
+        }
+    }
+    true
 }
