@@ -125,6 +125,33 @@ impl Identified {
 
 /// Identifies m, b, c from an excitation record.
 pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
+    check(s, samples.len())?;
+    let x = positions(samples, s.resolution);
+    let v = velocities(&x, s.half_window, s.period_s);
+    let rows = window_rows(samples, &x, &v, s);
+    if rows.len() < 6 {
+        bail!(
+            "only {} usable windows (the device stuck or barely moved); excite harder",
+            rows.len()
+        );
+    }
+    let (fit, spring) = rigid_or_extended(&rows)?;
+    Ok(Identified {
+        mass: fit.p[0],
+        mass_se: fit.se[0],
+        viscous: fit.p[1],
+        viscous_se: fit.se[1],
+        coulomb: fit.p[2],
+        coulomb_se: fit.se[2],
+        equations: rows.len(),
+        residual_rel: fit.residual_rel,
+        spring,
+    })
+}
+
+/// Checks the settings and that `n` samples hold at least one window with its velocity
+/// estimates and delay.
+fn check(s: &Settings, n: usize) -> Result<()> {
     if !(s.period_s.is_finite() && s.period_s > 0.0) {
         bail!("period_s must be finite and > 0 (got {})", s.period_s);
     }
@@ -134,7 +161,6 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
     if s.half_window == 0 || s.window < 2 {
         bail!("half_window must be ≥ 1 and window ≥ 2");
     }
-    let n = samples.len();
     let h = s.half_window;
     if n < 2 * h + s.window + s.delay_periods + 1 {
         bail!(
@@ -142,20 +168,35 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
             2 * h + s.window + s.delay_periods + 1
         );
     }
-    let t = s.period_s;
-    let x: Vec<f64> = samples
+    Ok(())
+}
+
+/// The mid-tick positions (n + ½)Δ of the samples' counts, m (rad), for `resolution` Δ.
+fn positions(samples: &[Sample], resolution: f64) -> Vec<f64> {
+    samples
         .iter()
-        .map(|p| (p.count as f64 + 0.5) * s.resolution)
-        .collect();
-    // Velocity by least-squares line over ±h samples (central, so no lag).
+        .map(|p| (p.count as f64 + 0.5) * resolution)
+        .collect()
+}
+
+/// Velocity by least-squares line over ±`h` samples (central, so no lag), m/s (rad/s) for a
+/// period `t` s; NaN within `h` samples of either end.
+fn velocities(x: &[f64], h: usize, t: f64) -> Vec<f64> {
+    let n = x.len();
     let denom: f64 = (1..=h).map(|j| 2.0 * (j * j) as f64).sum::<f64>() * t;
     let mut v = vec![f64::NAN; n];
     for k in h..n - h {
         let num: f64 = (1..=h).map(|j| j as f64 * (x[k + j] - x[k - j])).sum();
         v[k] = num / denom;
     }
+    v
+}
+
+/// One integrated equation per window that never sticks: [Δv, Δx, ∫sgn(v) dt, ∫x dt, ∫dt] ·
+/// (m, b, c, k, f₀) = ∫F_A dt, windows of `s.window` samples advancing by half a window.
+fn window_rows(samples: &[Sample], x: &[f64], v: &[f64], s: &Settings) -> Vec<([f64; 5], f64)> {
+    let (n, h, t) = (samples.len(), s.half_window, s.period_s);
     let stick_speed = s.stick_speed_ticks * s.resolution / t;
-    // One integrated equation per window: [Δv, Δx, ∫sgn(v) dt, ∫x dt, ∫dt] · (m, b, c, k, f₀).
     let mut rows: Vec<([f64; 5], f64)> = Vec::new();
     let mut a = h;
     while a + s.window < n - h {
@@ -178,15 +219,15 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
         }
         a += s.window / 2;
     }
-    if rows.len() < 6 {
-        bail!(
-            "only {} usable windows (the device stuck or barely moved); excite harder",
-            rows.len()
-        );
-    }
-    let rigid = least_squares(&rows, 3)
+    rows
+}
+
+/// The rigid fit (m, b, c), or the extended one (m, b, c, k, f₀) with its spring when k is
+/// resolved and the residual clearly smaller ([`SPRING_SIGNIFICANCE`], [`SPRING_RESIDUAL_GAIN`]).
+fn rigid_or_extended(rows: &[([f64; 5], f64)]) -> Result<(Fit, Option<Spring>)> {
+    let rigid = least_squares(rows, 3)
         .ok_or_else(|| anyhow::anyhow!("excitation does not separate m, b and c (singular fit)"))?;
-    let extended = least_squares(&rows, 5).filter(|e| {
+    let extended = least_squares(rows, 5).filter(|e| {
         e.p[3] > SPRING_SIGNIFICANCE * e.se[3]
             && e.residual_rel < SPRING_RESIDUAL_GAIN * rigid.residual_rel
     });
@@ -196,18 +237,7 @@ pub fn identify(samples: &[Sample], s: &Settings) -> Result<Identified> {
         offset: e.p[4],
         rigid_residual_rel: rigid.residual_rel,
     });
-    let fit = extended.unwrap_or(rigid);
-    Ok(Identified {
-        mass: fit.p[0],
-        mass_se: fit.se[0],
-        viscous: fit.p[1],
-        viscous_se: fit.se[1],
-        coulomb: fit.p[2],
-        coulomb_se: fit.se[2],
-        equations: rows.len(),
-        residual_rel: fit.residual_rel,
-        spring,
-    })
+    Ok((extended.unwrap_or(rigid), spring))
 }
 
 /// A least-squares fit: parameters, their standard errors and the relative residual.
