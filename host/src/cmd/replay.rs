@@ -189,72 +189,114 @@ pub fn replay_servo(rec: &Recording) -> Result<ServoReplay> {
         ..rec.header.config
     };
     let warm = usize::from(rec.header.config.extra_delay_ticks) + 1;
-    let bits = u32::from(board.encoder_bits.clamp(1, 32));
-    let mask: u32 = if bits >= 32 {
-        u32::MAX
-    } else {
-        (1u32 << bits) - 1
-    };
-    let sext = |raw: u32| -> i64 {
-        let sh = 32 - bits;
-        i64::from((raw.wrapping_shl(sh) as i32).wrapping_shr(sh))
-    };
+    let encoder = Encoder::of(&board, wall);
     let mut r = ServoReplay::default();
     for seg in rec.segments() {
         let rows = &rec.rows[seg];
-        // The device's absolute position is count + wall; the host servo primes its position
-        // from the (sign-extended) hardware counter, so shift its wall by the difference.
-        let pos0 = i64::from(rows[0].sample.count) + i64::from(wall);
-        let raw0 = (pos0 as u32) & mask;
-        let host_wall = i64::from(wall) + (sext(raw0) - pos0);
-        let host_wall = i32::try_from(host_wall).map_err(|_| {
-            anyhow!("servo replay: the recorded position {pos0} is outside the servo's i32 range")
-        })?;
         let cfg = ServoConfig {
-            wall_position: host_wall,
+            wall_position: encoder.host_wall(rows[0].sample.count)?,
             ..cfg_base
         };
-        let mut ch = Channels::new();
-        let (sp, _hp) = ch.split();
-        let mut servo: Servo<'_> = Servo::new(board, &cfg, sp);
-        let mut since_clean = 0usize;
-        for row in rows {
-            let s = row.sample;
-            let raw = ((i64::from(s.count) + i64::from(wall)) as u32) & mask;
-            let mut out = HeldCode(0);
-            let code = servo.tick(s.tick, &mut SampledCount(raw), &mut out);
-            if s.flags & flags::SAFE_MODE != 0 {
-                r.excluded_safe_mode += 1;
-                since_clean = 0;
-                continue;
-            }
-            if s.flags & (flags::HOLD | flags::EXCITE) != 0 {
-                r.excluded_experiment += 1;
-                since_clean = 0;
-                continue;
-            }
-            since_clean += 1;
-            if since_clean <= warm {
-                r.excluded_warmup += 1;
-                continue;
-            }
-            r.compared += 1;
-            if code == s.force_code {
-                r.matched += 1;
-            } else {
-                r.mismatch_count += 1;
-                if r.mismatches.len() < 20 {
-                    r.mismatches.push(Mismatch {
-                        seq: row.seq,
-                        count: s.count,
-                        recorded: s.force_code,
-                        replayed: code,
-                    });
-                }
+        replay_run(&mut r, rows, board, &cfg, encoder, warm);
+    }
+    Ok(r)
+}
+
+/// The recorded device's encoder: the hardware counter's width in bits (1..=32) and their
+/// mask, and the recorded wall (the device's absolute position is count + wall).
+#[derive(Debug, Clone, Copy)]
+struct Encoder {
+    bits: u32,
+    mask: u32,
+    wall: i32,
+}
+
+impl Encoder {
+    /// The encoder of `board` (its `encoder_bits`, clamped to 1..=32) with the recorded `wall`.
+    fn of(board: &BoardInfo, wall: i32) -> Self {
+        let bits = u32::from(board.encoder_bits.clamp(1, 32));
+        let mask: u32 = if bits >= 32 {
+            u32::MAX
+        } else {
+            (1u32 << bits) - 1
+        };
+        Self { bits, mask, wall }
+    }
+
+    /// The counter's reading `raw` sign-extended from its width.
+    fn sext(self, raw: u32) -> i64 {
+        let sh = 32 - self.bits;
+        i64::from((raw.wrapping_shl(sh) as i32).wrapping_shr(sh))
+    }
+
+    /// The counter's reading at the recorded `count`.
+    fn raw(self, count: i32) -> u32 {
+        ((i64::from(count) + i64::from(self.wall)) as u32) & self.mask
+    }
+
+    /// The host servo's wall for a run starting at the recorded count `count0`: the host
+    /// servo primes its position from the (sign-extended) hardware counter, so its wall is
+    /// the recorded one shifted by the difference.
+    fn host_wall(self, count0: i32) -> Result<i32> {
+        let pos0 = i64::from(count0) + i64::from(self.wall);
+        let raw0 = (pos0 as u32) & self.mask;
+        let host_wall = i64::from(self.wall) + (self.sext(raw0) - pos0);
+        i32::try_from(host_wall).map_err(|_| {
+            anyhow!("servo replay: the recorded position {pos0} is outside the servo's i32 range")
+        })
+    }
+}
+
+/// One run of consecutive `rows` through a fresh servo of `board` with `cfg`, counted into
+/// `r`: samples in safe mode or an experiment excluded, then `warm` samples of warm-up, the
+/// rest compared with the recorded force codes.
+fn replay_run(
+    r: &mut ServoReplay,
+    rows: &[recording::Row],
+    board: BoardInfo,
+    cfg: &ServoConfig,
+    encoder: Encoder,
+    warm: usize,
+) {
+    let mut ch = Channels::new();
+    let (sp, _hp) = ch.split();
+    let mut servo: Servo<'_> = Servo::new(board, cfg, sp);
+    let mut since_clean = 0usize;
+    for row in rows {
+        let s = row.sample;
+        let raw = encoder.raw(s.count);
+        let mut out = HeldCode(0);
+        let code = servo.tick(s.tick, &mut SampledCount(raw), &mut out);
+        if s.flags & flags::SAFE_MODE != 0 {
+            r.excluded_safe_mode += 1;
+            since_clean = 0;
+            continue;
+        }
+        if s.flags & (flags::HOLD | flags::EXCITE) != 0 {
+            r.excluded_experiment += 1;
+            since_clean = 0;
+            continue;
+        }
+        since_clean += 1;
+        if since_clean <= warm {
+            r.excluded_warmup += 1;
+            continue;
+        }
+        r.compared += 1;
+        if code == s.force_code {
+            r.matched += 1;
+        } else {
+            r.mismatch_count += 1;
+            if r.mismatches.len() < 20 {
+                r.mismatches.push(Mismatch {
+                    seq: row.seq,
+                    count: s.count,
+                    recorded: s.force_code,
+                    replayed: code,
+                });
             }
         }
     }
-    Ok(r)
 }
 
 /// Plant for (a): a plant file (given, or the recording's when no plant flag is given) with the
