@@ -552,22 +552,7 @@ impl Options {
 /// list) when K*(0) has no finite value.
 fn plant_row(case: PlantCase, f: &Path, o: &Options) -> Result<Row, String> {
     let t0 = Instant::now();
-    let k_star = match kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12) {
-        Ok(k) => k,
-        Err(e) => {
-            // Still say what tune sets there: with no finite K*, it cannot be unsafe.
-            let tune = (!o.quick).then(|| run_tune(&o.hostctl, f));
-            return Err(format!(
-                "{}: K*: {e}{}",
-                case.name,
-                match tune {
-                    Some(Ok(t)) => format!("; tune sets K = {:.5} ({:.1} s)", t.k_set, t.seconds),
-                    Some(Err(e)) => format!("; tune failed: {e:#}"),
-                    None => String::new(),
-                }
-            ));
-        }
-    };
+    let k_star = k_star_or_reason(&case, f, o)?;
     let best = best_of_frontier(&case, k_star.k_star);
     let k_star_seconds = t0.elapsed().as_secs_f64();
     let tune = (!o.quick).then(|| run_tune(&o.hostctl, f).map_err(|e| format!("{e:#}")));
@@ -582,14 +567,9 @@ fn plant_row(case: PlantCase, f: &Path, o: &Options) -> Result<Row, String> {
         },
         ..case.clone()
     };
-    let k_star_set = tune.as_ref().map(|_| {
-        if b_set > 0.0 {
-            kstar::k_star(&damped.proto, &damped.rig, k_star.k_star * 0.5, 1e12)
-                .map_err(|e| format!("K*(B = {b_set:.4e}): {e}"))
-        } else {
-            Ok(k_star.clone())
-        }
-    });
+    let k_star_set = tune
+        .as_ref()
+        .map(|_| k_star_at_set(&damped, &k_star, b_set));
     let unstable_at_set = match &tune {
         Some(Ok(t)) => Some(
             kstar::first_failure(&damped.proto, &damped.rig, t.k_set)
@@ -597,17 +577,71 @@ fn plant_row(case: PlantCase, f: &Path, o: &Options) -> Result<Row, String> {
         ),
         _ => None,
     };
-    let k_sup = match &k_star_set {
+    let k_sup = supervised_k_star(&k_star, k_star_set.as_ref());
+    let supervisor = damped.supervisor_report(1.5 * k_sup);
+    let row = Row {
+        case,
+        k_star,
+        best,
+        k_star_set,
+        unstable_at_set,
+        k_star_seconds,
+        tune,
+        supervisor,
+    };
+    log_row(&row, k_sup);
+    Ok(row)
+}
+
+/// K*(0) of `case`, or the reason it has none (with what tune from `f` sets there, unless
+/// `--quick`: with no finite K*, it cannot be unsafe).
+fn k_star_or_reason(case: &PlantCase, f: &Path, o: &Options) -> Result<KStar, String> {
+    match kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12) {
+        Ok(k) => Ok(k),
+        Err(e) => {
+            // Still say what tune sets there: with no finite K*, it cannot be unsafe.
+            let tune = (!o.quick).then(|| run_tune(&o.hostctl, f));
+            Err(format!(
+                "{}: K*: {e}{}",
+                case.name,
+                match tune {
+                    Some(Ok(t)) => format!("; tune sets K = {:.5} ({:.1} s)", t.k_set, t.seconds),
+                    Some(Err(e)) => format!("; tune failed: {e:#}"),
+                    None => String::new(),
+                }
+            ))
+        }
+    }
+}
+
+/// K*(B set) of the `damped` case (the damping tune set, `b_set`), scanned from 0.5 K*(0);
+/// K*(0) itself when tune set no damping.
+fn k_star_at_set(damped: &PlantCase, k_star: &KStar, b_set: f64) -> Result<KStar, String> {
+    if b_set > 0.0 {
+        kstar::k_star(&damped.proto, &damped.rig, k_star.k_star * 0.5, 1e12)
+            .map_err(|e| format!("K*(B = {b_set:.4e}): {e}"))
+    } else {
+        Ok(k_star.clone())
+    }
+}
+
+/// The K* the supervisor's 1.5 K* is taken of: K*(B set) when found, else K*(0).
+fn supervised_k_star(k_star: &KStar, k_star_set: Option<&Result<KStar, String>>) -> f64 {
+    match k_star_set {
         Some(Ok(k)) => k.k_star,
         _ => k_star.k_star,
-    };
-    let supervisor = damped.supervisor_report(1.5 * k_sup);
+    }
+}
+
+/// The row's progress line on stderr (`k_sup`: the K* the supervisor ran at 1.5 times).
+fn log_row(r: &Row, k_sup: f64) {
+    let (best, k_star_seconds, supervisor) = (&r.best, r.k_star_seconds, &r.supervisor);
     eprintln!(
         "{}: K*(0) = {:.5} ({} evaluations), best K*(B) {best:?} ({k_star_seconds:.1} s), tune {}, at 1.5 K*(B set) = {:.5}: v_max impacts trip {:?}, {} other unstable trials, all stopped: {}",
-        case.name,
-        k_star.k_star,
-        k_star.evaluations,
-        match &tune {
+        r.case.name,
+        r.k_star.k_star,
+        r.k_star.evaluations,
+        match &r.tune {
             Some(Ok(t)) => format!("K = {:.5}, B = {:.4e} ({:.3} K*(B set), {:.1} s)", t.k_set, t.b_set, t.k_set / k_sup, t.seconds),
             Some(Err(e)) => format!("failed: {e}"),
             None => "skipped".into(),
@@ -621,16 +655,6 @@ fn plant_row(case: PlantCase, f: &Path, o: &Options) -> Result<Row, String> {
         supervisor.other_unstable.len(),
         supervisor.all_safe(),
     );
-    Ok(Row {
-        case,
-        k_star,
-        best,
-        k_star_set,
-        unstable_at_set,
-        k_star_seconds,
-        tune,
-        supervisor,
-    })
 }
 
 /// The command that made the document and the plant directories it covers (relative to the
