@@ -375,18 +375,9 @@ impl Linear {
         dt_s: f64,
         max_events: u32,
     ) {
-        let fs = self.p.fs;
-        let subs = if self.rho > 0.0 {
-            libm::ceil(dt_s * self.rho / 0.5).clamp(1.0, 1e6)
-        } else {
-            1.0
-        };
+        let subs = self.substeps(dt_s);
         let h = dt_s / subs;
-        let mut z = [y[0], y[1], y[2], y[3], y[4], y[5], 1.0, u];
-        if !self.p.trans {
-            z[2] = z[0];
-            z[3] = z[1];
-        }
+        let mut z = self.augmented(y, u);
         let mut clamp = self.clamp_of(z[4]);
         let mut t = 0.0;
         let mut events = 0;
@@ -426,21 +417,57 @@ impl Linear {
             z = zh;
             t += tau;
             events += 1;
-            let mut yy = [0.0; 6];
-            yy.copy_from_slice(&z[..6]);
-            if *slide != 0.0 && *slide * z[1] <= 0.0 {
-                z[1] = 0.0;
-                yy[1] = 0.0;
-                *slide = super::friction::stick_rule(self.p.f_ext(&yy, u, 0.0), fs);
-            } else if *slide == 0.0 {
-                *slide = super::friction::stick_rule(self.p.f_ext(&yy, u, 0.0), fs);
-            }
+            self.switch_slide(&mut z, slide, u);
             clamp = self.clamp_of(z[4]);
             if t >= t_next {
                 k += 1.0;
                 aligned = true;
             }
         }
+        self.store(z, y);
+    }
+
+    /// Sub-steps of an interval of `dt_s`: none longer than ½/ρ (at least 1, at most 10⁶).
+    #[inline]
+    fn substeps(&self, dt_s: f64) -> f64 {
+        if self.rho > 0.0 {
+            libm::ceil(dt_s * self.rho / 0.5).clamp(1.0, 1e6)
+        } else {
+            1.0
+        }
+    }
+
+    /// The augmented state z = [y, 1, u] (without a transmission the link follows the motor).
+    #[inline]
+    fn augmented(&self, y: &[f64; 6], u: f64) -> [f64; N] {
+        let mut z = [y[0], y[1], y[2], y[3], y[4], y[5], 1.0, u];
+        if !self.p.trans {
+            z[2] = z[0];
+            z[3] = z[1];
+        }
+        z
+    }
+
+    /// The motor's mode after an event at z: a slide whose velocity reached zero stops there
+    /// and sticks or slides on by the stick rule, as does a stuck motor.
+    #[inline]
+    fn switch_slide(&self, z: &mut [f64; N], slide: &mut f64, u: f64) {
+        let fs = self.p.fs;
+        let mut yy = [0.0; 6];
+        yy.copy_from_slice(&z[..6]);
+        if *slide != 0.0 && *slide * z[1] <= 0.0 {
+            z[1] = 0.0;
+            yy[1] = 0.0;
+            *slide = super::friction::stick_rule(self.p.f_ext(&yy, u, 0.0), fs);
+        } else if *slide == 0.0 {
+            *slide = super::friction::stick_rule(self.p.f_ext(&yy, u, 0.0), fs);
+        }
+    }
+
+    /// Writes z's state back to y (without a transmission the link follows the motor), unless
+    /// it is not finite.
+    #[inline]
+    fn store(&self, mut z: [f64; N], y: &mut [f64; 6]) {
         if !self.p.trans {
             z[2] = z[0];
             z[3] = z[1];
