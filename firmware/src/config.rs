@@ -535,7 +535,6 @@ impl<N: Numeric> Gains<N> {
         let kd2 = k * de * de;
         let e8_limit = energy_limit_e8(cfg, kd2);
         let limit_m = stiffwall_core::monitor::limit_m(e8_limit);
-        let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
         let k_half = N::gain(k_half);
         let kf = N::to_f64(k_half);
         let damp = N::gain(f64::from(cfg.damping) * de * rate / fs);
@@ -545,17 +544,9 @@ impl<N: Numeric> Gains<N> {
         // bound is the spring-only one, bit for bit).
         let n_sat = saturation_count(limit, kf, N::to_f64(damp));
         let one_sided = cfg.wall == WallMode::OneSided;
-        // n_sat ≤ 2^29: |2n+1| < 2^31 (the codes at the bounds, as the servo used to compute
-        // them after clamping n).
-        let spring_hi =
-            N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1).wrapping_neg());
-        let spring_lo = N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1));
+        let (spring_hi, spring_lo) = Self::spring_bounds(k_half, n_sat);
         let vel_window_counts = velocity_window_counts(cfg, board, rate);
-        let wall_n_lo = if one_sided {
-            -1
-        } else {
-            n_sat.wrapping_neg().wrapping_sub(1)
-        };
+        let wall_n_lo = wall_n_lo(n_sat, one_sided);
         // n_sat ≤ 2^29: no overflow.
         let wall_in = wall_n_lo + 1;
         Self {
@@ -572,11 +563,7 @@ impl<N: Numeric> Gains<N> {
             damp_s: N::damper_gain(damp),
             damper_v: AbsBound::new(DAMPER_V_MAX.unsigned_abs()),
             damping_on: damp != N::ZERO,
-            hold_damp: if N::to_f64(damp) >= HOLD_WALL_DAMPING * 2.0 * kf && kf > 0.0 {
-                damp
-            } else {
-                N::gain(2.0 * f64::from(HOLD_BETA) * kf)
-            },
+            hold_damp: Self::hold_damp(damp, kf),
             launch_damp: N::gain(2.0 * f64::from(HOLD_BETA) * kf),
             safe_damp: N::gain(
                 f64::from(cfg.safe_damping) * f64::from(board.resolution) * rate / fs,
@@ -589,11 +576,7 @@ impl<N: Numeric> Gains<N> {
             delay: u32::from(cfg.extra_delay_ticks.min(MAX_DELAY_TICKS)),
             limit,
             vel_window_counts,
-            vel_bound: AbsBound::new(if vel_window_counts > 0 {
-                vel_window_counts
-            } else {
-                u32::MAX
-            }),
+            vel_bound: velocity_bound(vel_window_counts),
             jump: cfg.encoder_jump_counts.max(1),
             jump_bound: AbsBound::new(cfg.encoder_jump_counts.max(1)),
             energy_monitor: cfg.energy_monitor && kd2 > 0.0,
@@ -601,11 +584,56 @@ impl<N: Numeric> Gains<N> {
             energy_limit_m: limit_m,
             growth_trip: i32::from(cfg.energy_growth_cycles.max(1)),
             buzz_window_ticks: stiffwall_core::monitor::buzz_window_ticks(cfg.servo_rate_hz),
-            heartbeat_ticks: u32::try_from(hb).unwrap_or(u32::MAX),
+            heartbeat_ticks: heartbeat_ticks(cfg),
             safe_damping: cfg.safe_mode == stiffwall_proto::SafeMode::Damping,
             rate_hz: cfg.servo_rate_hz,
         }
     }
+
+    /// The spring codes at the count clamp: at n = `n_sat` (the code for every n ≥ `n_sat`)
+    /// and at n = −`n_sat`−1 (for every n below). n_sat ≤ 2^29: |2n+1| < 2^31 (the codes at
+    /// the bounds, as the servo used to compute them after clamping n).
+    fn spring_bounds(k_half: N::Gain, n_sat: i32) -> (i32, i32) {
+        let spring_hi =
+            N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1).wrapping_neg());
+        let spring_lo = N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1));
+        (spring_hi, spring_lo)
+    }
+
+    /// The release-test hold's damping: the wall's own `damp` when its β_v is at least
+    /// [`HOLD_WALL_DAMPING`] (and K > 0), else β = `HOLD_BETA` (2·β·k_half; `kf` = k_half).
+    fn hold_damp(damp: N::Gain, kf: f64) -> N::Gain {
+        if N::to_f64(damp) >= HOLD_WALL_DAMPING * 2.0 * kf && kf > 0.0 {
+            damp
+        } else {
+            N::gain(2.0 * f64::from(HOLD_BETA) * kf)
+        }
+    }
+}
+
+/// The wall's lower count bound: −1 for a one-sided wall, else −`n_sat`−1.
+fn wall_n_lo(n_sat: i32, one_sided: bool) -> i32 {
+    if one_sided {
+        -1
+    } else {
+        n_sat.wrapping_neg().wrapping_sub(1)
+    }
+}
+
+/// The over-velocity test as an [`AbsBound`]: `vel_window_counts`, or never exceeded when
+/// the test is off (0).
+fn velocity_bound(vel_window_counts: u32) -> AbsBound {
+    AbsBound::new(if vel_window_counts > 0 {
+        vel_window_counts
+    } else {
+        u32::MAX
+    })
+}
+
+/// The heartbeat timeout in servo ticks (saturating; 0 = off).
+fn heartbeat_ticks(cfg: &ServoConfig) -> u32 {
+    let hb = u64::from(cfg.heartbeat_timeout_ms) * u64::from(cfg.servo_rate_hz) / 1000;
+    u32::try_from(hb).unwrap_or(u32::MAX)
 }
 
 #[cfg(test)]
