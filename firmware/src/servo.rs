@@ -320,6 +320,23 @@ impl<'a, N: Numeric> Servo<'a, N> {
         }
     }
 
+    /// The heartbeat watchdog (experiments only): [`fault::HEARTBEAT`] when the host's heartbeat
+    /// counter has not changed for more than `heartbeat_ticks` ticks, else 0. Inlined into
+    /// [`Self::step`], where it was written out (same code).
+    #[inline(always)]
+    fn heartbeat(&mut self, now: u32) -> u32 {
+        let hb = self.port.shared.heartbeat.load(Ordering::Relaxed);
+        if hb != self.hb_seen {
+            self.hb_seen = hb;
+            self.hb_tick = now;
+            0
+        } else if now.wrapping_sub(self.hb_tick) > self.g.heartbeat_ticks {
+            fault::HEARTBEAT
+        } else {
+            0
+        }
+    }
+
     /// One tick. `WALL`: the mode is [`Mode::Wall`] (the caller tested it; no experiment runs,
     /// so nothing in the tick changes the mode), which leaves out the experiments' tests.
     #[inline(always)]
@@ -369,13 +386,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             }
         }
         if !WALL && self.g.heartbeat_ticks > 0 {
-            let hb = self.port.shared.heartbeat.load(Ordering::Relaxed);
-            if hb != self.hb_seen {
-                self.hb_seen = hb;
-                self.hb_tick = now;
-            } else if now.wrapping_sub(self.hb_tick) > self.g.heartbeat_ticks {
-                new_faults |= fault::HEARTBEAT;
-            }
+            new_faults |= self.heartbeat(now);
         }
         // The count's backward difference (for the dampers), taken here, where the force
         // needs it, so it is not held through the supervisor.
