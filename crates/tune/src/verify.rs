@@ -270,7 +270,8 @@ pub struct TestRun {
 /// whose hold stopped off target is re-aimed ([`reaim`], at most [`HOLD_REAIMS`] times); an
 /// impact whose launch arrived too fast and failed is re-aimed at a launch speed that should
 /// deliver the asked one ([`Delivered::reaimed`], at most [`LAUNCH_REAIMS`] times). The last
-/// attempt's outcome is the test's.
+/// attempt's outcome is the test's, but for a release that passed only from short of its
+/// deflection after an attempt failed from farther: that failure stands ([`run_release`]).
 pub fn run_test(
     c: &mut Client,
     base: &ServoConfig,
