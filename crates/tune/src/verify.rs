@@ -19,12 +19,12 @@
 //! A K passes when every test of the set passes by [`super::verdict`]: the motion settles or
 //! stays within one count and never grows; a buzz over more than one count fails. An impact
 //! whose launch did not deliver the device to the wall at the requested speed (never reached
-//! it, or moved more than [`LAUNCH_SPEED_TOLERANCE`] × faster in any tick of its last
-//! [`EXIT_WINDOW`] before contact: the firmware's damped hold
-//! cannot move a device whose μ = m/(KT²) is small) and then failed says nothing about the
-//! wall ([`Verdict::NotLaunched`]); it is judged by the releases of the set, which reach the
-//! same energy from both sides, and reported. (A launch faster than asked that passes, a
-//! harder test, passes.)
+//! it, arrived slower than asked, or more than
+//! [`LAUNCH_EXCUSE_FACTOR`](super::launch::LAUNCH_EXCUSE_FACTOR) × faster, see
+//! [`super::launch`]: the firmware's damped hold cannot move a device whose μ = m/(KT²) is
+//! small) and then failed says nothing about the wall ([`Verdict::NotLaunched`]); it is judged
+//! by the releases of the set, which reach the same energy from both sides, and reported. (A
+//! launch faster than asked that passes, a harder test, passes.)
 //!
 //! Each test starts from a reproducible state: the wall off until the device has stopped, the
 //! wall position moved to where it stopped (so the wall's force while the hold starts is the
@@ -271,7 +271,7 @@ pub struct TestRun {
 /// impact whose launch arrived too fast and failed is re-aimed at a launch speed that should
 /// deliver the asked one ([`Delivered::reaimed`], at most [`LAUNCH_REAIMS`] times). The last
 /// attempt's outcome is the test's, but for a release that passed only from short of its
-/// deflection after an attempt failed from farther: that failure stands ([`run_release`]).
+/// deflection after an attempt failed from farther: that failure stands (see `run_release`).
 pub fn run_test(
     c: &mut Client,
     base: &ServoConfig,
