@@ -362,13 +362,21 @@ fn run_release(
         }
         result = again;
     }
-    let short = result
+    Ok(release_outcome(deflection_ticks, result, failed_farther))
+}
+
+/// The outcome of a release asked from `requested` ticks whose last attempt was `last`:
+/// `failed_farther` (an earlier attempt that failed from farther than asked) when `last`
+/// passed only from short of the deflection ([`short_of`]), else `last`.
+#[must_use]
+pub fn release_outcome(requested: i32, last: TestRun, failed_farther: Option<TestRun>) -> TestRun {
+    let short = last
         .counts
         .first()
-        .is_some_and(|&start| short_of(deflection_ticks, start));
+        .is_some_and(|&start| short_of(requested, start));
     match failed_farther {
-        Some(failure) if result.verdict.passes() && short => Ok(failure),
-        _ => Ok(result),
+        Some(failure) if last.verdict.passes() && short => failure,
+        _ => last,
     }
 }
 
@@ -585,6 +593,41 @@ mod tests {
         // Started on the other side, or at the wall: nothing to scale.
         assert_eq!(reaim(57, 57, -66, false), None);
         assert_eq!(reaim(57, 57, 0, true), None);
+    }
+
+    fn run(verdict: Verdict, counts: &[i64]) -> TestRun {
+        TestRun {
+            verdict,
+            counts: counts.to_vec(),
+            delivered: None,
+            hold_tripped: false,
+        }
+    }
+
+    #[test]
+    fn a_pass_only_from_short_after_a_failure_from_farther_keeps_the_failure() {
+        // Asked 9: the hold rang out to 54 and the release grew; re-aimed at 1 it stuck at the
+        // wall and "settled": the failure stands.
+        let rang = run(Verdict::Growing, &[54, 60, 71]);
+        let stuck = run(Verdict::Settles, &[0, 0, 0]);
+        assert_eq!(
+            release_outcome(9, stuck.clone(), Some(rang.clone())).verdict,
+            Verdict::Growing
+        );
+        // Re-aimed and passed from the energy asked (8 is within 9's tolerance): the pass.
+        let held = run(Verdict::Settles, &[8, 3, 0]);
+        assert_eq!(
+            release_outcome(9, held, Some(rang.clone())).verdict,
+            Verdict::Settles
+        );
+        // Stuck at the wall on the first attempt (no failure from farther): the pass stands.
+        assert_eq!(release_outcome(9, stuck, None).verdict, Verdict::Settles);
+        // A last attempt that failed is the outcome either way.
+        let failed = run(Verdict::Growing, &[2, 9, 20]);
+        assert_eq!(
+            release_outcome(9, failed, Some(rang)).counts,
+            vec![2, 9, 20]
+        );
     }
 
     #[test]
