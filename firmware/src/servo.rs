@@ -1138,18 +1138,23 @@ mod tests {
         assert_eq!(s.tick(7, &mut Enc(7), &mut out), spring_at_2);
     }
 
+    /// The K = 8 wall of the prepared-test tests (20 N limit, no host heartbeat).
+    fn wall_k8() -> ServoConfig {
+        ServoConfig {
+            stiffness: 8.0,
+            force_limit: 20.0,
+            heartbeat_timeout_ms: 0,
+            ..ServoConfig::default()
+        }
+    }
+
     /// `HostMsg::PrepareTest`: a release runs with the prepared config from its first tick,
     /// ends on the tick its released counts settle (a toggle counts only within one count),
     /// and the active config is back on that tick however it ends.
     #[test]
     fn a_prepared_test_runs_its_config_ends_when_settled_and_restores_the_active_one() {
         let b = board();
-        let wall = ServoConfig {
-            stiffness: 8.0,
-            force_limit: 20.0,
-            heartbeat_timeout_ms: 0, // no host here
-            ..ServoConfig::default()
-        };
+        let wall = wall_k8();
         let off = ServoConfig {
             stiffness: 0.0,
             ..wall
@@ -1223,12 +1228,7 @@ mod tests {
     #[test]
     fn a_prepared_test_is_not_ended_by_the_buzz_detector() {
         let b = board();
-        let wall = ServoConfig {
-            stiffness: 8.0,
-            force_limit: 20.0,
-            heartbeat_timeout_ms: 0, // no host here
-            ..ServoConfig::default()
-        };
+        let wall = wall_k8();
         let prepared = DecidedEnd {
             min_run: 30,
             one_count: false,
