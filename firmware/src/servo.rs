@@ -1223,8 +1223,8 @@ mod tests {
     }
 
     /// The buzz detector does not end a prepared test (the host judges its counts, as the
-    /// stability criterion does); an unprepared release and the wall itself still trip on the
-    /// same buzz.
+    /// stability criterion does); an unprepared release still trips on the same buzz (the
+    /// wall path calls the detector whatever the test).
     #[test]
     fn a_prepared_test_is_not_ended_by_the_buzz_detector() {
         let b = board();
