@@ -7,8 +7,8 @@
 //! Modules: [`params`] (Table I conversions and validation), [`regions`] (regions A–E, F1/F2,
 //! criteria (12), (15), (16), (19)), [`limits`] (largest stable K), [`energy`] (H_T (35) and the
 //! bounds (40), (47), (58)), [`describing`] (Sec. VII, (62)–(75)), [`criteria`] (classic
-//! criteria: Colgate–Schenkel, Abbott–Okamura, Gil–Avello–Rubio, Hulin et al.) and
-//! [`devices`] (Table II and Sec. V presets).
+//! criteria: Colgate–Schenkel, Abbott–Okamura, Gil–Avello–Rubio, Hulin et al.), [`devices`] (Table II and Sec. V presets) and [`rest`] (when a wall comes to rest: the one
+//! rule every check uses, chatter, the quiet ceiling 2c/Δ).
 #![no_std]
 #![cfg_attr(not(test), warn(missing_docs))]
 
@@ -20,6 +20,7 @@ pub mod limits;
 pub mod monitor;
 pub mod params;
 pub mod regions;
+pub mod rest;
 
 pub use params::{Dimensionless, ParamError, PhysicalParams};
 pub use regions::Region;
