@@ -234,6 +234,7 @@ impl PlantCase {
                 && model.hand.is_none_or(|h| h.stiffness_n_per_m == 0.0),
             force_limit_n: full_scale_n(&model),
             damping: 0.0,
+            deadband_counts: 0,
             v_max: DEFAULT_XIDOT * d / controller.period_s,
             moving_mass_kg: moving_mass_kg(&model),
             wall_offsets,
@@ -305,12 +306,14 @@ impl PlantCase {
         for trial in self.rig.trials(k) {
             let bare = kstar::run_trial(&self.proto, &self.rig, k, trial);
             let v_max = trial == self.impact_at_v_max(trial.side);
-            if bare.settled() && !v_max {
+            // The supervisor is for growth and buzz: a trial that chatters within one count is
+            // not one it must stop.
+            if bare.within_one_count() && !v_max {
                 continue;
             }
             let s = Supervised {
                 trial,
-                unsupervised_settles: bare.settled(),
+                unsupervised_settles: bare.within_one_count(),
                 unsupervised_peak: bare.peak(),
                 left_faster: bare.exit.map(|(v, passive)| v / passive),
                 delay_ticks: self.rig.delay_ticks,

@@ -11,10 +11,11 @@
 //!
 //! **Criterion** (also in docs/TUNE.md). v_max = [`DEFAULT_XIDOT`] counts per period (5Δ/T,
 //! the default maximum velocity of `hostctl tune`) unless the plant states another. K is
-//! *stable* when every one of these trials settles:
+//! *quiet* (the wall it renders is good) when every one of these trials **comes to rest**
+//! (`stiffwall_core::rest`, the rule every check of the project uses):
 //! - impacts: the plant starts at the wall surface (x = 0, or just below it for the negative
-//!   side) moving into the wall at v ∈ v_max·{1, 0.6, 0.3, 0.1}, from both sides (one side for
-//!   a one-sided wall);
+//!   side) moving into the wall at ten speeds v ∈ v_max·{0.1, 0.2, …, 1}, from both sides (one
+//!   side for a one-sided wall);
 //! - releases from rest at deflection d ∈ d_max·{1, 0.6, 0.3} and d = 1 count (the middle of
 //!   count d), both sides, where ½K(d_max·Δ)² = ½ m v_max², m the whole moving mass
 //!   (motor side + link + hand);
@@ -26,11 +27,17 @@
 //! count d, the speed of kinetic energy ½K((d + 1)Δ)²). With a hand spring the plant comes back
 //! and the trial is judged like any other.
 //!
-//! A trial runs for 120 natural periods 2π√(m/K) (at least 2000, at most 40000 ticks) and
-//! **settles** when over its last third the count stays within one count (max − min ≤ 1: at
-//! rest, or toggling between two neighbouring counts) — so a persistent oscillation above one
-//! count ("buzz") at any frequency fails, and so does growth (also stopped early when |n|
-//! exceeds 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration counts).
+//! A trial runs for 60 natural periods 2π√(m/K) (at least 2000, at most 40000 ticks) and
+//! **comes to rest** when the count changes at most twice over its judged window (the last
+//! quarter, starting no later than 45 natural periods in: [`stiffwall_core::rest`]). So a
+//! persistent oscillation at any frequency fails: growth (also stopped early when |n| exceeds
+//! 10·(d_max + 2) + 100 counts; on a one-sided wall only the penetration counts), a buzz over
+//! several counts, and **chatter**, a count that toggles between two neighbouring counts for
+//! ever (the wall's force then swings by KΔ, plus a damper's pulse at every change, as long as
+//! the device is touched). [`TrialRun::within_one_count`] keeps the older, weaker criterion
+//! (the count stays within one count over the window) to tell chatter from growth in reports.
+//! The search below finds K*_quiet(B); "K*" in this crate means it.
+//!
 //! K* is found by scanning K upwards by ×1.25 from a settling K until a trial fails, then
 //! bisecting (geometric) to a relative width of 0.5 %, then confirming the span K*/1.5625..K*
 //! at ×1.05 (a failure there is bisected instead): K* is the top of the stable interval that
@@ -43,11 +50,11 @@
 /// Default maximum velocity, counts per servo period (`hostctl tune`'s `DEFAULT_XIDOT`).
 pub const DEFAULT_XIDOT: f64 = 5.0;
 /// Impact speeds, fractions of v_max.
-pub const IMPACT_FRACTIONS: [f64; 4] = [1.0, 0.6, 0.3, 0.1];
+pub const IMPACT_FRACTIONS: [f64; 10] = [1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1];
 /// Release deflections, fractions of d_max (plus a release from 1 count).
 pub const RELEASE_FRACTIONS: [f64; 3] = [1.0, 0.6, 0.3];
 /// Natural periods per trial.
-pub const TRIAL_NATURAL_PERIODS: f64 = 120.0;
+pub const TRIAL_NATURAL_PERIODS: f64 = stiffwall_core::rest::REST_RUN_NATURAL_PERIODS;
 /// Fewest / most ticks per trial.
 pub const TRIAL_TICKS: (f64, f64) = (2000.0, 40_000.0);
 /// Scan factor and final relative width of the bisection.
@@ -114,6 +121,10 @@ pub struct Rig {
     /// Virtual damping B of the wall, N·s/m (N·m·s/rad), ≥ 0, on the backward difference of the
     /// counts (0: the pure spring of eq. (2)).
     pub damping: f64,
+    /// The damper's dead band, counts per tick: a count difference |n − n_prev| at most this
+    /// is no motion to the damper (the firmware's `DamperLaw::DeadBand`; 0: the plain
+    /// backward difference, `DamperLaw::Difference`).
+    pub deadband_counts: i64,
     /// Maximum impact velocity v_max, m/s (rad/s).
     pub v_max: f64,
     /// Whole moving mass (motor side + link + hand), kg (kg·m²).
@@ -129,11 +140,16 @@ impl Rig {
         self.v_max * (self.moving_mass_kg / k).sqrt() / self.resolution_m
     }
 
+    /// One natural period 2π√(m/K) at stiffness `k`, ticks.
+    #[must_use]
+    pub fn natural_ticks(&self, k: f64) -> f64 {
+        std::f64::consts::TAU * (self.moving_mass_kg / k).sqrt() / self.period_s
+    }
+
     /// Ticks of one trial at stiffness `k`.
     #[must_use]
     pub fn trial_ticks(&self, k: f64) -> usize {
-        let natural = std::f64::consts::TAU * (self.moving_mass_kg / k).sqrt() / self.period_s;
-        (TRIAL_NATURAL_PERIODS * natural).clamp(TRIAL_TICKS.0, TRIAL_TICKS.1) as usize
+        (TRIAL_NATURAL_PERIODS * self.natural_ticks(k)).clamp(TRIAL_TICKS.0, TRIAL_TICKS.1) as usize
     }
 
     /// The spring of eq. (2) at count `n` relative to the wall, clamped, N.
@@ -143,18 +159,20 @@ impl Rig {
     }
 
     /// The firmware's wall law at count `n` after count `n_prev` (the previous sample), clamped,
-    /// N: F = −K·Δ·(n + ½) − B·Δ·(n − n_prev)/T, 0 for n < 0 on a one-sided wall (the damper
-    /// acts only in contact). With B = 0 this is [`Rig::spring_n`] bit for bit.
+    /// N: F = −K·Δ·(n + ½) − B·Δ·v/T with v = n − n_prev, or v = 0 when |n − n_prev| ≤
+    /// [`Rig::deadband_counts`]; 0 for n < 0 on a one-sided wall (the damper acts only in
+    /// contact). With B = 0 this is [`Rig::spring_n`] bit for bit.
     #[must_use]
     pub fn wall_force_n(&self, k: f64, n: i64, n_prev: i64) -> f64 {
         if self.one_sided && n < 0 {
             return 0.0;
         }
         let spring = -k * self.resolution_m * (n as f64 + 0.5);
-        let f = if self.damping == 0.0 {
+        let dn = n - n_prev;
+        let f = if self.damping == 0.0 || dn.abs() <= self.deadband_counts {
             spring
         } else {
-            spring - self.damping * self.resolution_m * (n - n_prev) as f64 / self.period_s
+            spring - self.damping * self.resolution_m * dn as f64 / self.period_s
         };
         f.clamp(-self.force_limit_n, self.force_limit_n)
     }
@@ -269,6 +287,11 @@ impl Trial {
 pub struct TrialRun {
     /// Counts relative to the wall, one per tick (shorter when stopped early).
     pub counts: Vec<i64>,
+    /// The wall's commanded force at each of those ticks, N (N·m), before the delay line.
+    pub forces_n: Vec<f64>,
+    /// One natural period at the trial's K, ticks (where the rest window starts; 0: the last
+    /// quarter).
+    pub natural_ticks: f64,
     /// Stopped early: |n| exceeded the runaway bound.
     pub ran_away: bool,
     /// One-sided wall: the plant left the wall (the run stops there) at this speed, with the
@@ -277,20 +300,56 @@ pub struct TrialRun {
 }
 
 impl TrialRun {
-    /// Settled: not run away; on a one-sided wall that was left, left no faster than it could
-    /// passively; otherwise over the last third the count stays within one count.
+    /// The judged window of the counts ([`stiffwall_core::rest::window_start`]).
+    fn window(&self) -> &[i64] {
+        let start = stiffwall_core::rest::window_start(self.counts.len(), self.natural_ticks);
+        &self.counts[start..]
+    }
+
+    /// Comes to rest: not run away; on a one-sided wall that was left, left no faster than it
+    /// could passively; otherwise the count changes at most twice over the judged window
+    /// ([`stiffwall_core::rest::comes_to_rest`]).
     #[must_use]
-    pub fn settled(&self) -> bool {
+    pub fn rests(&self) -> bool {
         if self.ran_away || self.counts.is_empty() {
             return false;
         }
         if let Some((v, passive)) = self.exit {
             return v <= passive;
         }
-        let tail = &self.counts[self.counts.len() * 2 / 3..];
-        let lo = tail.iter().min().copied().unwrap_or(0);
-        let hi = tail.iter().max().copied().unwrap_or(0);
+        stiffwall_core::rest::window_rests(self.window())
+    }
+
+    /// The weaker criterion of earlier rounds: [`TrialRun::rests`], or over the judged window
+    /// the count stays within one count (chatter passes). False means a buzz or growth.
+    #[must_use]
+    pub fn within_one_count(&self) -> bool {
+        if self.rests() {
+            return true;
+        }
+        if self.ran_away || self.counts.is_empty() || self.exit.is_some() {
+            return false;
+        }
+        let w = self.window();
+        let lo = w.iter().min().copied().unwrap_or(0);
+        let hi = w.iter().max().copied().unwrap_or(0);
         hi - lo <= 1
+    }
+
+    /// A run that does not rest but stays within one count: how fast it toggles and how much
+    /// the wall's force swings (Coulomb friction `coulomb_n`, servo period `period_s`).
+    #[must_use]
+    pub fn chatter(&self, period_s: f64, coulomb_n: f64) -> Option<stiffwall_core::rest::Chatter> {
+        if self.rests() || !self.within_one_count() {
+            return None;
+        }
+        let start = stiffwall_core::rest::window_start(self.counts.len(), self.natural_ticks);
+        Some(stiffwall_core::rest::Chatter::of_window(
+            &self.counts[start..],
+            self.forces_n.get(start..).unwrap_or(&[]),
+            period_s,
+            coulomb_n,
+        ))
     }
 
     /// Largest |n + ½| over the run, counts.
@@ -321,6 +380,8 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
     let delay = rig.delay_ticks as usize;
     let mut line = std::collections::VecDeque::with_capacity(delay + 1);
     let mut counts = Vec::with_capacity(ticks);
+    let mut forces_n = Vec::with_capacity(ticks);
+    let natural_ticks = rig.natural_ticks(k);
     let mut n_prev = trial.previous_count(d, rig.period_s);
     for _ in 0..ticks {
         let n = plant.encoder_count() - trial.wall;
@@ -330,6 +391,8 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
         if excursion > bound {
             return TrialRun {
                 counts,
+                forces_n,
+                natural_ticks,
                 ran_away: true,
                 exit: None,
             };
@@ -340,13 +403,17 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
                 // Left the wall, moving away with no force on it: judged by its speed.
                 return TrialRun {
                     counts,
+                    forces_n,
+                    natural_ticks,
                     ran_away: false,
                     exit: Some((-plant.velocity_m_per_s(), passive)),
                 };
             }
         }
         // Delay line of `delay` whole periods (zeros first), as the firmware's ring.
-        line.push_back(rig.wall_force_n(k, n, n_prev));
+        let wall = rig.wall_force_n(k, n, n_prev);
+        forces_n.push(wall);
+        line.push_back(wall);
         n_prev = n;
         let f = if line.len() > delay {
             line.pop_front().unwrap_or(0.0)
@@ -357,12 +424,14 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
     }
     TrialRun {
         counts,
+        forces_n,
+        natural_ticks,
         ran_away: false,
         exit: None,
     }
 }
 
-/// The first failing trial at `k`, if any.
+/// The first trial at `k` that does not come to rest, if any.
 pub fn first_failure<P: SampledPlant + Clone>(
     proto: &P,
     rig: &Rig,
@@ -370,14 +439,23 @@ pub fn first_failure<P: SampledPlant + Clone>(
 ) -> Option<(Trial, TrialRun)> {
     rig.trials(k).into_iter().find_map(|t| {
         let r = run_trial(proto, rig, k, t);
-        (!r.settled()).then_some((t, r))
+        (!r.rests()).then_some((t, r))
     })
+}
+
+/// Every trial at `k`, run: what a report needs to say whether a wall rests in every run and,
+/// where it does not, whether it chatters, buzzes or grows.
+pub fn run_all<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64) -> Vec<(Trial, TrialRun)> {
+    rig.trials(k)
+        .into_iter()
+        .map(|t| (t, run_trial(proto, rig, k, t)))
+        .collect()
 }
 
 /// Result of the K* search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KStar {
-    /// Largest K found stable (all trials settle), N/m (N·m/rad).
+    /// Largest K found quiet (every trial comes to rest), N/m (N·m/rad).
     pub k_star: f64,
     /// Smallest K found unstable above it.
     pub k_fail: f64,
@@ -438,7 +516,7 @@ pub fn k_star<P: SampledPlant + Clone>(
     // where a tune's answer lies is re-scanned at ×CONFIRM_FACTOR, and a failure there becomes
     // the new upper end.
     let floor = (lo / CONFIRM_SPAN).max(start_stable);
-    // The last stable point below: a point of the coarse scan (all of them settled).
+    // The last stable point below: a point of the coarse scan (every trial of them came to rest).
     let mut stable = start_stable;
     while stable * SCAN_FACTOR <= floor {
         stable *= SCAN_FACTOR;

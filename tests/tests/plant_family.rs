@@ -148,6 +148,7 @@ fn k_star_of_a_rigid_rich_plant_equals_that_of_the_exact_paper_plant() {
         free_exit: false,
         force_limit_n: 1.0,
         damping: 0.0,
+        deadband_counts: 0,
         v_max: DEFAULT_XIDOT * p.resolution / p.period_s,
         moving_mass_kg: p.mass,
         wall_offsets: vec![0],
@@ -182,6 +183,7 @@ fn k_star_is_not_below_the_papers_guaranteed_limit() {
             free_exit: false,
             force_limit_n: 1e6,
             damping: 0.0,
+        deadband_counts: 0,
             v_max: v,
             moving_mass_kg: p.mass,
             wall_offsets: vec![0],
@@ -199,42 +201,49 @@ fn k_star_is_not_below_the_papers_guaranteed_limit() {
 }
 
 #[test]
-fn the_settling_verdict_fails_buzz_and_growth_and_passes_a_one_count_toggle() {
+fn the_rest_verdict_fails_chatter_buzz_and_growth() {
     let run = |counts: Vec<i64>| TrialRun {
         counts,
         ..TrialRun::default()
     };
     let toggle: Vec<i64> = (0..300).map(|i| [0, -1][i % 2]).collect();
     assert!(
-        run(toggle).settled(),
-        "toggling between two counts stays within one count"
+        !run(toggle.clone()).rests(),
+        "toggling between two counts for ever is chatter, not rest"
     );
+    assert!(run(toggle).within_one_count(), "but it stays within one count");
+    // Two changes in the window (one excursion and back) still rest; four do not.
+    let mut blip = vec![0i64; 300];
+    blip[280] = 1;
+    assert!(run(blip.clone()).rests());
+    blip[290] = 1;
+    assert!(!run(blip).rests());
     let buzz: Vec<i64> = (0..300).map(|i| [1, -1, -2, 0][i % 4]).collect();
     assert!(
-        !run(buzz).settled(),
+        !run(buzz).rests(),
         "a persistent 3-count oscillation is buzz"
     );
     let grow: Vec<i64> = (0..300)
         .map(|i| if i % 2 == 0 { i / 10 } else { -(i / 10) })
         .collect();
-    assert!(!run(grow).settled());
+    assert!(!run(grow).rests());
     let mut stop: Vec<i64> = (0..100).map(|i| 50 - i / 2).collect();
     stop.extend([0; 200]);
-    assert!(run(stop).settled());
+    assert!(run(stop).rests());
     assert!(!TrialRun {
         counts: vec![0; 300],
         ran_away: true,
-        exit: None,
+        ..TrialRun::default()
     }
-    .settled());
+    .rests());
     // One-sided wall: leaving no faster than a passive wall would return passes, faster fails.
     let left = |v: f64| TrialRun {
         counts: vec![3, 1, -2],
-        ran_away: false,
         exit: Some((v, 0.1)),
+        ..TrialRun::default()
     };
-    assert!(left(0.09).settled());
-    assert!(!left(0.11).settled());
+    assert!(left(0.09).rests());
+    assert!(!left(0.11).rests());
 }
 
 /// The criterion fails a plant that is unstable (region C of Fig. 3: β, σ < ½) and the trial that
@@ -253,12 +262,13 @@ fn an_unstable_stiffness_fails_and_a_stable_one_settles() {
         free_exit: false,
         force_limit_n: 1e3,
         damping: 0.0,
+        deadband_counts: 0,
         v_max: DEFAULT_XIDOT * d / t,
         moving_mass_kg: 0.1,
         wall_offsets: vec![0],
     };
     let (trial, r) = kstar::first_failure(&plant, &rig, k).expect("region C fails");
-    assert!(!r.settled());
+    assert!(!r.rests());
     eprintln!("region C: first failing trial {trial:?}, peak {}", r.peak());
     // σ = 4 at K = 50 N/m: Coulomb friction stops every trial.
     assert_eq!(kstar::first_failure(&plant, &rig, 50.0), None);
