@@ -16,7 +16,10 @@ use serde::{Deserialize, Serialize};
 
 /// Protocol version carried in the first byte of every frame and in the handshake.
 /// Bump on any incompatible change of a message or of the framing.
-pub const PROTOCOL_VERSION: u8 = 1;
+///
+/// Version 2: [`ServoConfig`] ends with [`ServoConfig::damper`] (the wall damper's
+/// [`DamperLaw`]); [`ConfigField::Damper`] names it in a refusal.
+pub const PROTOCOL_VERSION: u8 = 2;
 
 /// Telemetry samples per [`TelemetryBatch`].
 pub const TELEMETRY_BATCH: usize = 24;
@@ -28,6 +31,8 @@ pub const MAX_TABLE: usize = 1024;
 pub const MAX_DELAY_TICKS: u8 = 31;
 /// Maximum encoder coarsening shift.
 pub const MAX_COARSEN_SHIFT: u8 = 16;
+/// Largest dead band of [`DamperLaw::DeadBand`], effective counts per tick.
+pub const MAX_DEADBAND_COUNTS: u8 = 8;
 /// Length of short text fields (names, versions).
 pub const NAME_LEN: usize = 24;
 /// Last decay checkpoint index of [`HostMsg::PrepareTest`] (checkpoints j = 0..=8: the
@@ -264,6 +269,126 @@ pub enum SafeMode {
     Damping,
 }
 
+/// How the wall's virtual damper turns the count difference dn = n_h − n_(h−1) into a velocity.
+///
+/// dn is in effective counts (after the coarsening shift) per servo tick; the damper's code is
+/// −g_B·v (g_B = B·Δ_eff·rate in output codes, see the firmware model notes). Text form
+/// ([`core::fmt::Display`], [`core::str::FromStr`]): `difference`, `dead-band-N`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DamperLaw {
+    /// v = dn (the plain backward difference).
+    Difference,
+    /// v = 0 when |dn| ≤ counts, else v = dn (a dead band of `counts` effective counts per tick).
+    DeadBand {
+        /// The dead band, effective counts per tick, 1..=[`MAX_DEADBAND_COUNTS`].
+        counts: u8,
+    },
+}
+
+impl Default for DamperLaw {
+    /// A dead band of one count: a wall at rest toggling between two neighbouring counts
+    /// feels the spring alone, not a damper pulse B·Δ/T at every toggle.
+    fn default() -> Self {
+        Self::DeadBand { counts: 1 }
+    }
+}
+
+impl DamperLaw {
+    /// The law in a record written before the field existed (protocol 1, config store
+    /// `SWC1`, a recording's JSON header without `damper`): the plain backward difference.
+    #[must_use]
+    pub const fn legacy() -> Self {
+        Self::Difference
+    }
+
+    /// The dead band in effective counts per tick (0 for [`DamperLaw::Difference`]): the
+    /// velocity is 0 when |dn| is at most this.
+    #[must_use]
+    pub const fn dead_band(self) -> u8 {
+        match self {
+            Self::Difference => 0,
+            Self::DeadBand { counts } => counts,
+        }
+    }
+
+    /// The law's name: `"difference"` or `"dead-band-N"` (N the counts).
+    #[must_use]
+    pub fn name(self) -> String<NAME_LEN> {
+        use core::fmt::Write as _;
+        let mut s = String::new();
+        // At most 13 characters ("dead-band-255"): always fits.
+        let _ = write!(s, "{self}");
+        s
+    }
+}
+
+impl core::fmt::Display for DamperLaw {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Difference => f.write_str("difference"),
+            Self::DeadBand { counts } => write!(f, "dead-band-{counts}"),
+        }
+    }
+}
+
+/// A [`DamperLaw`] spelled wrong; its `Display` gives the allowed forms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParseDamperLawError {
+    /// Neither `difference` nor `dead-band-N` with N a decimal number.
+    Unknown,
+    /// `dead-band-N` with N outside 1..=[`MAX_DEADBAND_COUNTS`] (saturated at `u32::MAX`).
+    DeadBandOutOfRange {
+        /// The N given.
+        counts: u32,
+    },
+}
+
+impl core::fmt::Display for ParseDamperLawError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Unknown => write!(
+                f,
+                "allowed forms are `difference` and `dead-band-N` with N in 1..={MAX_DEADBAND_COUNTS}"
+            ),
+            Self::DeadBandOutOfRange { counts } => write!(
+                f,
+                "dead band {counts} counts is outside 1..={MAX_DEADBAND_COUNTS} (use `difference` \
+                 for no dead band)"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ParseDamperLawError {}
+
+impl core::str::FromStr for DamperLaw {
+    type Err = ParseDamperLawError;
+
+    /// Exactly `difference` or `dead-band-N`, N in decimal without sign or leading zeros,
+    /// 1..=[`MAX_DEADBAND_COUNTS`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s == "difference" {
+            return Ok(Self::Difference);
+        }
+        let digits = s
+            .strip_prefix("dead-band-")
+            .ok_or(ParseDamperLawError::Unknown)?;
+        let canonical = !digits.is_empty()
+            && digits.bytes().all(|b| b.is_ascii_digit())
+            && (digits == "0" || !digits.starts_with('0'));
+        if !canonical {
+            return Err(ParseDamperLawError::Unknown);
+        }
+        let counts = digits.bytes().fold(0u32, |n, b| {
+            n.saturating_mul(10).saturating_add(u32::from(b - b'0'))
+        });
+        match u8::try_from(counts) {
+            Ok(c) if (1..=MAX_DEADBAND_COUNTS).contains(&c) => Ok(Self::DeadBand { counts: c }),
+            _ => Err(ParseDamperLawError::DeadBandOutOfRange { counts }),
+        }
+    }
+}
+
 /// The servo configuration (Get/SetConfig, stored in the config store).
 ///
 /// Ranges are checked by the firmware (`stiffwall_firmware::config::validate`).
@@ -302,13 +427,21 @@ pub struct ServoConfig {
     pub safe_mode: SafeMode,
     /// Virtual damping in safe mode `Damping`, N·s/m, ≥ 0.
     pub safe_damping: f32,
+    /// How the wall's virtual damper (`damping`) turns the count difference into a velocity
+    /// (also in a release or impact test's released phase; the tests' hold dampers and the
+    /// safe-mode damping are plain differences). Added in protocol 2, last so that the fields
+    /// above keep their bytes; absent from a self-describing record (a recording's JSON header
+    /// written before it) it is [`DamperLaw::legacy`], the law such a record ran with.
+    #[serde(default = "DamperLaw::legacy")]
+    pub damper: DamperLaw,
 }
 
 impl Default for ServoConfig {
     /// Safe, board-independent defaults: no wall force (K = 0) until the host sets one,
     /// 1 kHz, no extra delay, no coarsening, bidirectional wall at count 0, 0.1 N force limit,
     /// velocity fault off, energy monitor on (1 J, 4 growing peaks), 1000-count jump limit,
-    /// 500 ms heartbeat timeout, zero force in safe mode.
+    /// 500 ms heartbeat timeout, zero force in safe mode, the damper's dead band of one count
+    /// ([`DamperLaw::default`]).
     fn default() -> Self {
         Self {
             stiffness: 0.0,
@@ -327,6 +460,7 @@ impl Default for ServoConfig {
             heartbeat_timeout_ms: 500,
             safe_mode: SafeMode::ZeroForce,
             safe_damping: 0.0,
+            damper: DamperLaw::default(),
         }
     }
 }
@@ -516,6 +650,8 @@ pub enum ConfigField {
     SafeDamping,
     /// Experiment / table parameters.
     Argument,
+    /// [`ServoConfig::damper`] (protocol 2; its range is the dead band's, in counts).
+    Damper,
 }
 
 impl ConfigField {
@@ -540,6 +676,7 @@ impl ConfigField {
             Self::SafeMode => "safe_mode",
             Self::SafeDamping => "safe_damping",
             Self::Argument => "argument",
+            Self::Damper => "damper",
         }
     }
 }
@@ -586,7 +723,101 @@ pub enum ErrorDetail {
 
 #[cfg(test)]
 mod tests {
-    use super::fault;
+    use super::{fault, DamperLaw, ParseDamperLawError, ServoConfig, MAX_DEADBAND_COUNTS};
+    use std::string::ToString;
+
+    /// The default config's postcard bytes, written out by hand from postcard's rules (f32:
+    /// 4 bytes LE; u32: varint; i32: zigzag varint; u8 and bool: one byte; an enum: its
+    /// variant index as a varint, then its fields).
+    #[test]
+    fn default_config_literal_bytes_end_with_the_damper() {
+        #[rustfmt::skip]
+        let mut want = std::vec![
+            0x00, 0x00, 0x00, 0x00, // stiffness 0.0
+            0x00, 0x00, 0x00, 0x00, // damping 0.0
+            0xe8, 0x07,             // servo_rate_hz 1000 = 0x68 | 0x80, 1000 >> 7 = 7
+            0x00,                   // extra_delay_ticks 0
+            0x00,                   // coarsen_shift 0
+            0x00,                   // wall: Bidirectional (variant 0)
+            0x00,                   // wall_position 0 (zigzag 0)
+            0xcd, 0xcc, 0xcc, 0x3d, // force_limit 0.1 = 0x3dcccccd
+            0x00, 0x00, 0x00, 0x00, // max_velocity 0.0
+            0x01,                   // energy_monitor true
+            0x00, 0x00, 0x80, 0x3f, // energy_limit 1.0 = 0x3f800000
+            0x04,                   // energy_growth_cycles 4
+            0xe8, 0x07,             // encoder_jump_counts 1000
+            0xf4, 0x03,             // heartbeat_timeout_ms 500 = 0x74 | 0x80, 500 >> 7 = 3
+            0x00,                   // safe_mode: ZeroForce (variant 0)
+            0x00, 0x00, 0x00, 0x00, // safe_damping 0.0
+            0x01, 0x01,             // damper: DeadBand (variant 1), counts 1
+        ];
+        let mut buf = [0u8; 64];
+        let c = ServoConfig::default();
+        assert_eq!(postcard::to_slice(&c, &mut buf).unwrap(), &want[..]);
+        // Difference is variant 0 with no fields: one byte.
+        want.truncate(want.len() - 2);
+        want.push(0x00);
+        let d = ServoConfig {
+            damper: DamperLaw::Difference,
+            ..c
+        };
+        assert_eq!(postcard::to_slice(&d, &mut buf).unwrap(), &want[..]);
+        assert_eq!(postcard::from_bytes::<ServoConfig>(&want), Ok(d));
+        // A protocol-1 config (no damper byte) does not decode as a protocol-2 one.
+        want.pop();
+        assert!(postcard::from_bytes::<ServoConfig>(&want).is_err());
+    }
+
+    #[test]
+    fn damper_law_text_round_trips_and_refuses_other_spellings() {
+        assert_eq!(DamperLaw::default(), DamperLaw::DeadBand { counts: 1 });
+        assert_eq!(DamperLaw::Difference.to_string(), "difference");
+        assert_eq!(DamperLaw::Difference.name(), "difference");
+        assert_eq!(DamperLaw::DeadBand { counts: 3 }.name(), "dead-band-3");
+        for c in 1..=MAX_DEADBAND_COUNTS {
+            let law = DamperLaw::DeadBand { counts: c };
+            assert_eq!(law.to_string().parse(), Ok(law));
+            assert_eq!(law.dead_band(), c);
+        }
+        assert_eq!("difference".parse(), Ok(DamperLaw::Difference));
+        assert_eq!(DamperLaw::Difference.dead_band(), 0);
+        for (bad, counts) in [
+            ("dead-band-0", 0),
+            ("dead-band-9", 9),
+            ("dead-band-256", 256),
+            ("dead-band-99999999999", u32::MAX),
+        ] {
+            let e = bad.parse::<DamperLaw>().unwrap_err();
+            assert_eq!(
+                e,
+                ParseDamperLawError::DeadBandOutOfRange { counts },
+                "{bad}"
+            );
+            let m = e.to_string();
+            assert!(m.contains("1..=8") && m.contains("`difference`"), "{m}");
+        }
+        for bad in [
+            "",
+            "Difference",
+            "dead-band",
+            "dead-band-",
+            "dead-band-01",
+            "dead-band-+1",
+            "dead-band--1",
+            "dead-band-1 ",
+            " difference",
+            "deadband-1",
+            "DeadBand",
+        ] {
+            let e = bad.parse::<DamperLaw>().unwrap_err();
+            assert_eq!(e, ParseDamperLawError::Unknown, "{bad:?}");
+            assert!(
+                e.to_string()
+                    .contains("`difference` and `dead-band-N` with N in 1..=8"),
+                "{e}"
+            );
+        }
+    }
 
     #[test]
     fn every_fault_bit_has_one_name_in_bit_order() {
