@@ -9,7 +9,8 @@
 
 use crate::numeric::Numeric;
 use stiffwall_proto::{
-    ConfigField, DeviceInfo, Limits, ServoConfig, WallMode, MAX_COARSEN_SHIFT, MAX_DELAY_TICKS,
+    ConfigField, DamperLaw, DeviceInfo, Limits, ServoConfig, WallMode, MAX_COARSEN_SHIFT,
+    MAX_DEADBAND_COUNTS, MAX_DELAY_TICKS,
 };
 
 /// Largest |gain| accepted, output codes per count (keeps `I16F16` and `I32F32` in range).
@@ -147,6 +148,15 @@ pub struct ConfigError {
 
 impl core::fmt::Display for ConfigError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.field == ConfigField::Damper {
+            // The range is the dead band's, in counts; `difference` is the law without one.
+            return write!(
+                f,
+                "damper: the dead band must be within [{}, {}] counts (use `difference` for no \
+                 dead band)",
+                self.min, self.max
+            );
+        }
         write!(
             f,
             "{} must be within [{}, {}]",
@@ -247,6 +257,9 @@ pub fn validate(cfg: &ServoConfig, board: &BoardInfo) -> Result<(), ConfigError>
     )?;
     let dsafe = board.max_damping(0, cfg.servo_rate_hz);
     check_f(F::SafeDamping, cfg.safe_damping, 0.0, dsafe)?;
+    if let DamperLaw::DeadBand { counts } = cfg.damper {
+        check_u(F::Damper, counts.into(), 1, MAX_DEADBAND_COUNTS.into())?;
+    }
     Ok(())
 }
 
@@ -387,8 +400,13 @@ pub struct Gains<N: Numeric> {
     pub spring: N::Spring,
     /// `damp` in the form [`Numeric::damper`] uses.
     pub damp_s: N::Spring,
-    /// |v| > [`DAMPER_V_MAX`] (a constant, kept here so the tick loads it with one paired
-    /// load instead of building it).
+    /// When the wall's damper acts: |dn| > the law's dead band ([`DamperLaw::dead_band`]: 0
+    /// for the plain difference, which acts on any motion), never without a damper (B = 0).
+    /// Where it does not act its term is exactly 0 (v = 0, or a zero gain), so one unsigned
+    /// compare is the damper's on/off test and its dead band at once.
+    pub damper_band: AbsBound,
+    /// |v| > [`DAMPER_V_MAX`] (a constant, kept here, beside `damper_band`, so the tick loads
+    /// both with one multiple load instead of building it).
     pub damper_v: AbsBound,
     /// The wall's counts strictly between `wall_n_lo` and `n_sat`, where the spring is
     /// computed: n with `(n − wall_in) as u32 < wall_span` (one unsigned compare; see
@@ -561,6 +579,7 @@ impl<N: Numeric> Gains<N> {
             wall_lo: if one_sided { 0 } else { spring_lo },
             damp,
             damp_s: N::damper_gain(damp),
+            damper_band: damper_band(damp != N::ZERO, cfg.damper),
             damper_v: AbsBound::new(DAMPER_V_MAX.unsigned_abs()),
             damping_on: damp != N::ZERO,
             hold_damp: Self::hold_damp(damp, kf),
@@ -608,6 +627,16 @@ impl<N: Numeric> Gains<N> {
         } else {
             N::gain(2.0 * f64::from(HOLD_BETA) * kf)
         }
+    }
+}
+
+/// When the wall's damper acts ([`Gains::damper_band`]): |dn| above the law's dead band
+/// (saturated to [`MAX_DEADBAND_COUNTS`]), never when `on` is false (no damper).
+fn damper_band(on: bool, law: DamperLaw) -> AbsBound {
+    if on {
+        AbsBound::new(u32::from(law.dead_band().min(MAX_DEADBAND_COUNTS)))
+    } else {
+        AbsBound::new(u32::MAX)
     }
 }
 
@@ -695,7 +724,7 @@ mod tests {
         let b = BoardInfo::default();
         let c = ServoConfig::default();
         assert_eq!(validate(&c, &b), Ok(()));
-        let bad: [(ServoConfig, ConfigField); 12] = [
+        let bad: [(ServoConfig, ConfigField); 14] = [
             (
                 ServoConfig {
                     stiffness: -1.0,
@@ -780,6 +809,22 @@ mod tests {
                 },
                 ConfigField::SafeDamping,
             ),
+            (
+                ServoConfig {
+                    damper: DamperLaw::DeadBand { counts: 0 },
+                    ..c
+                },
+                ConfigField::Damper,
+            ),
+            (
+                ServoConfig {
+                    damper: DamperLaw::DeadBand {
+                        counts: MAX_DEADBAND_COUNTS + 1,
+                    },
+                    ..c
+                },
+                ConfigField::Damper,
+            ),
         ];
         for (cfg, field) in bad {
             assert_eq!(validate(&cfg, &b).map_err(|e| e.field), Err(field));
@@ -828,5 +873,51 @@ mod tests {
         .unwrap_err();
         let err: &dyn core::error::Error = &e;
         assert_eq!(err.to_string(), "servo_rate_hz must be within [100, 20000]");
+        let e = validate(
+            &ServoConfig {
+                damper: DamperLaw::DeadBand { counts: 0 },
+                ..ServoConfig::default()
+            },
+            &BoardInfo::default(),
+        )
+        .unwrap_err();
+        assert_eq!((e.field, e.min, e.max), (ConfigField::Damper, 1.0, 8.0));
+        assert_eq!(
+            e.to_string(),
+            "damper: the dead band must be within [1, 8] counts (use `difference` for no dead band)"
+        );
+    }
+
+    /// The damper's one test: never without a damper; any motion for the plain difference;
+    /// beyond the dead band otherwise (every law in range is accepted).
+    #[test]
+    fn damper_band_is_the_law_and_the_on_off_test() {
+        let b = BoardInfo::default();
+        let gains = |damping: f32, damper: DamperLaw| {
+            let c = ServoConfig {
+                damping,
+                damper,
+                ..ServoConfig::default()
+            };
+            assert_eq!(validate(&c, &b), Ok(()));
+            Gains::<Fx64>::from_config(&c, &b)
+        };
+        for law in [DamperLaw::Difference, DamperLaw::DeadBand { counts: 3 }] {
+            let off = gains(0.0, law);
+            assert!(!off.damping_on);
+            assert!([i32::MIN, -5, 0, 5, i32::MAX]
+                .iter()
+                .all(|&dn| !off.damper_band.exceeded(dn)));
+        }
+        let diff = gains(0.01, DamperLaw::Difference);
+        assert!(!diff.damper_band.exceeded(0));
+        assert!(diff.damper_band.exceeded(1) && diff.damper_band.exceeded(-1));
+        for counts in 1..=MAX_DEADBAND_COUNTS {
+            let g = gains(0.01, DamperLaw::DeadBand { counts });
+            let c = i32::from(counts);
+            assert!(!g.damper_band.exceeded(c) && !g.damper_band.exceeded(-c));
+            assert!(g.damper_band.exceeded(c + 1) && g.damper_band.exceeded(-c - 1));
+            assert!(g.damper_band.exceeded(i32::MIN) && g.damper_band.exceeded(i32::MAX));
+        }
     }
 }

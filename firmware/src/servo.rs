@@ -487,10 +487,13 @@ impl<'a, N: Numeric> Servo<'a, N> {
     }
 
     /// The wall law before the delay line and the output clamp:
-    /// `code = spring_code(n) − g_B·dn` (saturating), with dn = n_h − n_(h−1) the backward
-    /// difference of the effective count and g_B = B·Δ_eff·rate/fs ([`Gains::damp`]). On a
-    /// one-sided wall the whole law, damper included, acts only in contact (n ≥ 0): in free
-    /// space (n < 0) the code is 0, so moving the device around outside the wall feels no drag.
+    /// `code = spring_code(n) − g_B·v` (saturating), with g_B = B·Δ_eff·rate/fs
+    /// ([`Gains::damp`]) and v the velocity the config's [`stiffwall_proto::DamperLaw`] makes
+    /// of dn = n_h − n_(h−1), the backward difference of the effective count: v = dn
+    /// (`Difference`), or v = 0 when |dn| ≤ c and v = dn otherwise (`DeadBand { counts: c }`).
+    /// On a one-sided wall the whole law, damper included, acts only in contact (n ≥ 0): in
+    /// free space (n < 0) the code is 0, so moving the device around outside the wall feels no
+    /// drag.
     #[inline(always)]
     fn wall_code(&self, n: i32, dn: i32) -> i32 {
         if n < self.g.contact_n {
@@ -500,16 +503,18 @@ impl<'a, N: Numeric> Servo<'a, N> {
         }
     }
 
-    /// Spring + damper in contact (no one-sided test): `spring_code(n) − g_B·dn`, saturating.
+    /// Spring + damper in contact (no one-sided test): `spring_code(n) − g_B·v`, saturating.
     #[inline(always)]
     fn contact_code(&self, n: i32, dn: i32) -> i32 {
         self.spring_code(n).saturating_add(self.damping(dn))
     }
 
-    /// The virtual damping term (skipped when the gain is zero).
+    /// The virtual damping term −g_B·v of the wall law, v by the config's damper law.
     #[inline(always)]
     fn damping(&self, dn: i32) -> i32 {
-        if self.g.damping_on {
+        // One test for "a damper is on and |dn| is beyond its dead band" (`Gains::damper_band`;
+        // elsewhere v = 0 or g_B = 0, and the term is exactly 0).
+        if self.g.damper_band.exceeded(dn) {
             // `damper(damp, dn)` with the gain's precomputed form; the velocity clamp, which
             // acts only beyond any encoder-jump limit a device would set, out of line.
             let v = if self.g.damper_v.exceeded(dn) {
@@ -677,7 +682,7 @@ mod tests {
     use crate::hal::{HeldCode as Out, SampledCount as Enc};
     use crate::numeric::{Fx32, F32};
     use proptest::prelude::*;
-    use stiffwall_proto::{ExciteProfile, WallMode};
+    use stiffwall_proto::{DamperLaw, ExciteProfile, WallMode, MAX_DEADBAND_COUNTS};
 
     /// Binary-exact units: Δ = 2^-13 m, 2^-10 N per code, so k_half = K/16 codes exactly.
     fn board() -> BoardInfo {
@@ -915,7 +920,8 @@ mod tests {
         );
     }
 
-    /// The wall law in f64 from the SI config: −K·Δ(n+½)/fs − B·Δ·dn·rate/fs codes, clamped.
+    /// The wall law in f64 from the SI config: −K·Δ(n+½)/fs − B·Δ·v·rate/fs codes, clamped,
+    /// with v = dn, or 0 when |dn| is within the config's dead band.
     fn wall_exact(cfg: &ServoConfig, n: i32, dn: i32, lim: f64) -> f64 {
         let b = board();
         let d = f64::from(b.resolution);
@@ -923,9 +929,22 @@ mod tests {
         if cfg.wall == WallMode::OneSided && n < 0 {
             return 0.0;
         }
+        let v = match cfg.damper {
+            DamperLaw::DeadBand { counts } if dn.unsigned_abs() <= u32::from(counts) => 0,
+            _ => dn,
+        };
         let f = -f64::from(cfg.stiffness) * d * (f64::from(n) + 0.5) / fs
-            - f64::from(cfg.damping) * d * f64::from(dn) * f64::from(cfg.servo_rate_hz) / fs;
+            - f64::from(cfg.damping) * d * f64::from(v) * f64::from(cfg.servo_rate_hz) / fs;
         f.clamp(-lim, lim)
+    }
+
+    /// The damper law of `band` (0: the plain difference).
+    fn law(band: u8) -> DamperLaw {
+        if band == 0 {
+            DamperLaw::Difference
+        } else {
+            DamperLaw::DeadBand { counts: band }
+        }
     }
 
     proptest! {
@@ -935,14 +954,20 @@ mod tests {
         /// the gains' quantization, and exactly 0 outside a one-sided wall. Counts within
         /// ±2^24 (8 m at 0.5 µm per count; the encoder jump limit stops a device long before):
         /// beyond the spring's count clamp (±2^29) a damper larger than the clamped spring
-        /// sets the sign, a known limit of the saturation bound (firmware model notes).
+        /// sets the sign, a known limit of the saturation bound (firmware model notes). Every
+        /// damper law: the plain difference and each dead band (v = 0 for |dn| ≤ c).
         #[test]
         fn wall_law_is_spring_plus_backward_difference_damper(
             k in 0.0f32..300.0, b in 0.0f32..128.0, limit in 1.0f32..29.0,
             one_sided in any::<bool>(), n in -(1i32 << 24)..(1 << 24), near in -3000i32..3000,
             dn in -(DAMPER_V_MAX)..=DAMPER_V_MAX, small_dn in -20i32..20,
+            band in 0u8..=MAX_DEADBAND_COUNTS,
         ) {
-            let cfg = ServoConfig { force_limit: limit, ..damper_cfg(k, b, one_sided) };
+            let cfg = ServoConfig {
+                force_limit: limit,
+                damper: law(band),
+                ..damper_cfg(k, b, one_sided)
+            };
             prop_assert!(crate::config::validate(&cfg, &board()).is_ok());
             let mut ch = Channels::new();
             let (sp, _hp) = ch.split();
@@ -960,6 +985,94 @@ mod tests {
                     "n={} dn={} code={} want={}", n, dn, code, want);
             }
         }
+    }
+
+    /// A damped wall at rest toggling between two neighbouring counts: with the dead band of
+    /// one count (the default law) each tick outputs the spring alone; with the plain
+    /// difference every toggle adds a damper pulse g_B = 4 codes (B·Δ/T).
+    #[test]
+    fn a_toggle_between_two_counts_outputs_the_spring_alone_in_the_dead_band() {
+        // K = 8 N/m: k_half = 0.5 code; B = 1/32 N·s/m: g_B = 4 codes per count per tick.
+        // Spring ⌊−(2n+1)·0.5 + ½⌋: n = 3 → −3, n = 4 → −4.
+        let run = |damper: DamperLaw| {
+            let cfg = ServoConfig {
+                damper,
+                ..damper_cfg(8.0, 1.0 / 32.0, false)
+            };
+            let mut ch = Channels::new();
+            let (sp, _hp) = ch.split();
+            let mut s: Servo<'_> = Servo::new(board(), &cfg, sp);
+            let mut out = Out(0);
+            (0..8u32)
+                .map(|t| s.tick_supervised(t, &mut Enc(3 + (t & 1)), &mut out))
+                .collect::<std::vec::Vec<_>>()
+        };
+        assert_eq!(DamperLaw::default(), DamperLaw::DeadBand { counts: 1 });
+        assert_eq!(run(DamperLaw::default()), [-3, -4, -3, -4, -3, -4, -3, -4]);
+        // The plain difference (the law before protocol 2): −4 − 4·1 and −3 + 4.
+        assert_eq!(run(DamperLaw::Difference), [-3, -8, 1, -8, 1, -8, 1, -8]);
+    }
+
+    /// Beyond the dead band the damper's pulse is the full g_B·dn (not g_B·(|dn| − c)).
+    #[test]
+    fn a_step_beyond_the_dead_band_gets_the_full_damper_pulse() {
+        let steps = |damper: DamperLaw| {
+            let cfg = ServoConfig {
+                damper,
+                ..damper_cfg(8.0, 1.0 / 32.0, false)
+            };
+            let mut ch = Channels::new();
+            let (sp, _hp) = ch.split();
+            let mut s: Servo<'_> = Servo::new(board(), &cfg, sp);
+            let mut out = Out(0);
+            [3i32, 5, 3, 6, 3]
+                .iter()
+                .zip(0..)
+                .map(|(&c, t)| s.tick_supervised(t, &mut Enc(c as u32), &mut out))
+                .collect::<std::vec::Vec<_>>()
+        };
+        // Spring at 3, 5, 6: −3, −5, −6; the damper −4·dn: dn = +2, −2, +3, −3.
+        assert_eq!(
+            steps(DamperLaw::DeadBand { counts: 1 }),
+            [-3, -5 - 8, -3 + 8, -6 - 12, -3 + 12]
+        );
+        assert_eq!(
+            steps(DamperLaw::DeadBand { counts: 2 }),
+            [-3, -5, -3, -6 - 12, -3 + 12]
+        );
+        assert_eq!(
+            steps(DamperLaw::DeadBand { counts: 3 }),
+            [-3, -5, -3, -6, -3]
+        );
+        assert_eq!(
+            steps(DamperLaw::Difference),
+            steps(DamperLaw::DeadBand { counts: 1 })
+        );
+    }
+
+    /// The released phase of a release or impact test is the wall (its damper law too); the
+    /// hold that precedes it keeps the plain difference (its damping acts on a one-count move).
+    #[test]
+    fn released_phase_uses_the_law_and_the_hold_damps_every_count() {
+        let cfg = ServoConfig {
+            damper: DamperLaw::DeadBand { counts: 1 },
+            ..damper_cfg(8.0, 1.0 / 32.0, false)
+        };
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let mut s: Servo<'_> = Servo::new(board(), &cfg, sp);
+        s.set_exp(Experiment::Released {
+            remaining: 10,
+            kind: ExperimentKind::Release,
+        });
+        assert_eq!(s.force(4, 1), (-4, flags::RELEASED));
+        assert_eq!(s.force(4, 2), (-4 - 8, flags::RELEASED));
+        s.set_exp(Experiment::Hold(crate::experiment::Hold::new(4, 10)));
+        let (code, fl) = s.force(4, 1);
+        assert_eq!(fl, flags::HOLD);
+        // At its target the hold's spring is ⌊−0.5 + ½⌋ = 0: the code is its damper alone.
+        assert_eq!(code, s.damper(s.gains().hold_damp, 1));
+        assert!(code < 0, "{code}");
     }
 
     #[test]
@@ -1433,10 +1546,13 @@ mod damper_monitor_tests {
 
     /// K = 100 N/m (spring-only stable: b = 0.1 > K·T/2 = 0.05 N·s/m), a bidirectional wall,
     /// force limit 29 N (so the linear range is wide), the given virtual damping and monitor.
+    /// The damper is the plain backward difference (`DamperLaw::Difference`), whose
+    /// stability the tests below are about.
     fn cfg(b_n_s_per_m: f32, monitor: bool) -> ServoConfig {
         ServoConfig {
             stiffness: 100.0,
             damping: b_n_s_per_m,
+            damper: stiffwall_proto::DamperLaw::Difference,
             force_limit: 29.0,
             energy_monitor: monitor,
             encoder_jump_counts: 1 << 20,

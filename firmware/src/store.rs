@@ -1,8 +1,13 @@
 //! Two-slot, CRC-protected configuration store.
 //!
 //! Record layout (bytes, little-endian), at offset 0 of a slot:
-//! `magic "SWC1" (4) | generation u32 (4) | len u16 (2) | postcard(ServoConfig) (len) | CRC-32 (4)`
+//! `magic "SWC2" (4) | generation u32 (4) | len u16 (2) | postcard(ServoConfig) (len) | CRC-32 (4)`
 //! with the CRC-32/ISO-HDLC over everything before it.
+//!
+//! Versions: records are written with magic `SWC2` (protocol 2's [`ServoConfig`], ending with
+//! its `damper`). A record with magic `SWC1` (same layout, protocol 1's config: every field
+//! but `damper`) is still read, and migrated with `damper = DamperLaw::Difference`, the law
+//! it was saved under; the next save writes it as `SWC2`. Generations count across both.
 //!
 //! Invariant: [`ConfigStore::save`] always writes the slot that does *not* hold the newest
 //! valid record, with generation = newest + 1. A write interrupted at any byte therefore leaves
@@ -11,11 +16,15 @@
 
 use crate::hal::{ConfigStorage, StorageError};
 use crc::{Crc, CRC_32_ISO_HDLC};
-use stiffwall_proto::ServoConfig;
+use serde::Deserialize;
+use stiffwall_proto::{DamperLaw, SafeMode, ServoConfig, WallMode};
 
 /// Largest record, bytes.
 pub const RECORD_MAX: usize = 128;
-const MAGIC: [u8; 4] = *b"SWC1";
+/// The magic of the records written (protocol 2's config).
+const MAGIC: [u8; 4] = *b"SWC2";
+/// The magic of a record of protocol 1's config ([`ServoConfigV1`]), read and migrated.
+const MAGIC_V1: [u8; 4] = *b"SWC1";
 const HEADER: usize = 10;
 const CRC32: Crc<u32> = Crc::<u32>::new(&CRC_32_ISO_HDLC);
 
@@ -25,11 +34,64 @@ pub struct ConfigStore<S: ConfigStorage> {
     storage: S,
 }
 
-/// Parses one record; `None` if it is not a valid record.
-fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
-    if buf.get(..4)? != MAGIC {
-        return None;
+/// Protocol 1's [`ServoConfig`], the payload of an `SWC1` record: today's fields before
+/// `damper`, in the same order (postcard writes a struct's fields in order, without names).
+/// Only read, to migrate.
+#[derive(Debug, Deserialize)]
+struct ServoConfigV1 {
+    stiffness: f32,
+    damping: f32,
+    servo_rate_hz: u32,
+    extra_delay_ticks: u8,
+    coarsen_shift: u8,
+    wall: WallMode,
+    wall_position: i32,
+    force_limit: f32,
+    max_velocity: f32,
+    energy_monitor: bool,
+    energy_limit: f32,
+    energy_growth_cycles: u8,
+    encoder_jump_counts: u32,
+    heartbeat_timeout_ms: u32,
+    safe_mode: SafeMode,
+    safe_damping: f32,
+}
+
+impl From<ServoConfigV1> for ServoConfig {
+    /// The same config with the damper it ran with: the plain backward difference.
+    fn from(c: ServoConfigV1) -> Self {
+        Self {
+            stiffness: c.stiffness,
+            damping: c.damping,
+            servo_rate_hz: c.servo_rate_hz,
+            extra_delay_ticks: c.extra_delay_ticks,
+            coarsen_shift: c.coarsen_shift,
+            wall: c.wall,
+            wall_position: c.wall_position,
+            force_limit: c.force_limit,
+            max_velocity: c.max_velocity,
+            energy_monitor: c.energy_monitor,
+            energy_limit: c.energy_limit,
+            energy_growth_cycles: c.energy_growth_cycles,
+            encoder_jump_counts: c.encoder_jump_counts,
+            heartbeat_timeout_ms: c.heartbeat_timeout_ms,
+            safe_mode: c.safe_mode,
+            safe_damping: c.safe_damping,
+            damper: DamperLaw::Difference,
+        }
     }
+}
+
+/// Parses one record (`SWC2`, or `SWC1` migrated); `None` if it is not a valid record.
+fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
+    let magic = buf.get(..4)?;
+    let v1 = if magic == MAGIC {
+        false
+    } else if magic == MAGIC_V1 {
+        true
+    } else {
+        return None;
+    };
     let gen = u32::from_le_bytes(buf.get(4..8)?.try_into().ok()?);
     let len = usize::from(u16::from_le_bytes(buf.get(8..10)?.try_into().ok()?));
     let end = HEADER.checked_add(len)?;
@@ -37,7 +99,12 @@ fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
     if CRC32.checksum(buf.get(..end)?) != crc {
         return None;
     }
-    let cfg = postcard::from_bytes(buf.get(HEADER..end)?).ok()?;
+    let body = buf.get(HEADER..end)?;
+    let cfg = if v1 {
+        postcard::from_bytes::<ServoConfigV1>(body).ok()?.into()
+    } else {
+        postcard::from_bytes(body).ok()?
+    };
     Some((gen, cfg))
 }
 
@@ -206,12 +273,115 @@ mod tests {
     fn record_literal_header() {
         let mut buf = [0u8; RECORD_MAX];
         let n = build(&cfg(0.0), 7, &mut buf).unwrap();
-        assert_eq!(&buf[..8], &[b'S', b'W', b'C', b'1', 7, 0, 0, 0]);
+        assert_eq!(&buf[..8], &[b'S', b'W', b'C', b'2', 7, 0, 0, 0]);
         assert_eq!(
             usize::from(u16::from_le_bytes([buf[8], buf[9]])) + HEADER + 4,
             n
         );
         assert_eq!(parse(&buf[..n]), Some((7, cfg(0.0))));
+    }
+
+    /// The protocol-1 default config's 37 postcard bytes (see `stiffwall_proto`'s literal
+    /// bytes test) with stiffness 2.0 (`00 00 00 40`) and damping 0.5 (`00 00 00 3f`).
+    #[rustfmt::skip]
+    const V1_PAYLOAD: [u8; 37] = [
+        0x00, 0x00, 0x00, 0x40, // stiffness 2.0
+        0x00, 0x00, 0x00, 0x3f, // damping 0.5
+        0xe8, 0x07,             // servo_rate_hz 1000
+        0x00, 0x00,             // extra_delay_ticks, coarsen_shift
+        0x00,                   // wall: Bidirectional
+        0x00,                   // wall_position 0
+        0xcd, 0xcc, 0xcc, 0x3d, // force_limit 0.1
+        0x00, 0x00, 0x00, 0x00, // max_velocity 0.0
+        0x01,                   // energy_monitor true
+        0x00, 0x00, 0x80, 0x3f, // energy_limit 1.0
+        0x04,                   // energy_growth_cycles 4
+        0xe8, 0x07,             // encoder_jump_counts 1000
+        0xf4, 0x03,             // heartbeat_timeout_ms 500
+        0x00,                   // safe_mode: ZeroForce
+        0x00, 0x00, 0x00, 0x00, // safe_damping 0.0
+    ];
+
+    /// An `SWC1` record of generation 5 holding [`V1_PAYLOAD`], CRC-32 written out
+    /// (Python's `zlib.crc32` of the 47 bytes before it).
+    fn v1_record() -> std::vec::Vec<u8> {
+        let mut r = std::vec![b'S', b'W', b'C', b'1', 5, 0, 0, 0, 37, 0];
+        r.extend_from_slice(&V1_PAYLOAD);
+        assert_eq!(CRC32.checksum(&r).to_le_bytes(), [0xea, 0x9e, 0x77, 0x05]);
+        r.extend_from_slice(&[0xea, 0x9e, 0x77, 0x05]);
+        r
+    }
+
+    /// What the `SWC1` record holds, migrated: the plain difference it ran with.
+    fn v1_config() -> ServoConfig {
+        ServoConfig {
+            stiffness: 2.0,
+            damping: 0.5,
+            damper: DamperLaw::Difference,
+            ..ServoConfig::default()
+        }
+    }
+
+    #[test]
+    fn record_literal_bytes_of_the_default_config() {
+        let mut buf = [0u8; RECORD_MAX];
+        let n = build(&ServoConfig::default(), 7, &mut buf).unwrap();
+        let mut want = std::vec![b'S', b'W', b'C', b'2', 7, 0, 0, 0, 39, 0];
+        want.extend_from_slice(&[0x00; 4]); // stiffness 0.0
+        want.extend_from_slice(&[0x00; 4]); // damping 0.0
+        want.extend_from_slice(&V1_PAYLOAD[8..]); // the rest of protocol 1's defaults
+        want.extend_from_slice(&[0x01, 0x01]); // damper: DeadBand (variant 1), counts 1
+        want.extend_from_slice(&[0x1d, 0x7e, 0x37, 0xc4]); // zlib.crc32 of the bytes before
+        assert_eq!(&buf[..n], &want[..]);
+    }
+
+    #[test]
+    fn a_v1_record_loads_with_the_plain_difference_and_the_next_save_is_v2() {
+        let rec = v1_record();
+        assert_eq!(parse(&rec), Some((5, v1_config())));
+        // A corrupted one is no record, as a v2 one.
+        let mut bad = rec.clone();
+        bad[20] ^= 1;
+        assert_eq!(parse(&bad), None);
+        for slot in 0..2 {
+            let mut m = MemStorage::default();
+            m.slots[slot][..rec.len()].copy_from_slice(&rec);
+            let mut s = ConfigStore::new(m);
+            assert_eq!(s.newest(), Some((slot, 5, v1_config())));
+            // Saved unchanged, it is written as SWC2 (its damper now in the record).
+            s.save(&v1_config()).unwrap();
+            let (new_slot, gen, got) = s.newest().unwrap();
+            assert_eq!((new_slot, gen, got), (1 - slot, 6, v1_config()));
+            assert_eq!(&s.storage.slots[new_slot][..4], b"SWC2");
+            // The v1 record is untouched until the slot is needed again.
+            assert_eq!(&s.storage.slots[slot][..rec.len()], &rec[..]);
+            s.save(&cfg(3.0)).unwrap();
+            assert_eq!(&s.storage.slots[slot][..4], b"SWC2");
+            assert_eq!(s.load(), Some(cfg(3.0)));
+        }
+    }
+
+    /// A save over a store holding only an SWC1 record, interrupted at every byte, leaves the
+    /// migrated SWC1 config loadable.
+    #[test]
+    fn interrupted_first_v2_write_keeps_the_v1_config() {
+        let rec = v1_record();
+        for erase_first in [true, false] {
+            let mut m = MemStorage {
+                erase_first,
+                ..MemStorage::default()
+            };
+            m.slots[0][..rec.len()].copy_from_slice(&rec);
+            let mut full = [0u8; RECORD_MAX];
+            let n = build(&cfg(3.0), 6, &mut full).unwrap();
+            for k in 0..=n {
+                let mut s = ConfigStore::new(m.clone());
+                s.storage.interrupt_after = Some(k);
+                assert!(s.save(&cfg(3.0)).is_err());
+                let want = if k == n { cfg(3.0) } else { v1_config() };
+                assert_eq!(s.load(), Some(want), "interrupted at byte {k}");
+            }
+        }
     }
 
     #[test]
