@@ -21,6 +21,13 @@ pub struct SettingsError {
     pub got: String,
 }
 
+/// No stiffness passed a search or a verification set under the tune's criterion (the message
+/// says where it looked and what failed). Under the rest criterion, `tune` then looks for the
+/// wall with the least chatter instead (see `procedure`).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct NoWallPassed(pub String);
+
 /// Why a tune did not set a wall. Whatever the error, the device was left with the config it
 /// had before, unless [`TuneError::NotRestored`] says otherwise.
 #[derive(Debug, thiserror::Error)]

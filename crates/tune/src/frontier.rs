@@ -11,7 +11,7 @@ use super::search::{largest_settling_k, Found, Search};
 use super::settings::*;
 use super::steps::{df_equivalent, Notes, Run};
 use super::verify::{Test, TestResult};
-use anyhow::{bail, Result};
+use anyhow::Result;
 use stiffwall_client::Client;
 use stiffwall_core::criteria;
 use stiffwall_proto::ServoConfig;
@@ -20,11 +20,22 @@ use stiffwall_proto::ServoConfig;
 pub(crate) struct Wall {
     pub(crate) k_set: f64,
     pub(crate) b_set: f64,
+    /// The damper's law (the tune's [`Settings::damper`]).
+    pub(crate) damper: stiffwall_proto::DamperLaw,
     /// The margin applied to the chosen wall's largest settling K.
     pub(crate) margin: f64,
     pub(crate) k_spring_only: f64,
     pub(crate) verification: Vec<TestResult>,
     pub(crate) frontier: Vec<FrontierPoint>,
+}
+
+impl Wall {
+    /// Every test of the verification set came to rest (or left a one-sided wall).
+    pub(crate) fn rests(&self) -> bool {
+        self.verification
+            .iter()
+            .all(|r| r.verdict.settled() || r.verdict == Verdict::Departs)
+    }
 }
 
 /// Largest B the firmware accepts at the config's rate and coarsening, N·s/m: its limit
@@ -159,6 +170,7 @@ pub(crate) fn choose_wall(
             return Ok(Wall {
                 k_set,
                 b_set: best.0,
+                damper: base.damper,
                 margin: margin.min(DAMPED_MARGIN),
                 k_spring_only: k_spring,
                 verification,
@@ -166,7 +178,10 @@ pub(crate) fn choose_wall(
             });
         }
         if let Damping::Fixed(b) = run.s.damping {
-            bail!("no stiffness passed the verification set at the fixed damping B = {b:.4e}");
+            return Err(super::error::NoWallPassed(format!(
+                "no stiffness passed the verification set at the fixed damping B = {b:.4e}"
+            ))
+            .into());
         }
         (run.progress)(Progress::DamperDropped { b: best.0 });
     }
@@ -174,6 +189,7 @@ pub(crate) fn choose_wall(
     Ok(Wall {
         k_set,
         b_set: 0.0,
+        damper: base.damper,
         margin,
         k_spring_only: k_set,
         verification,
@@ -211,7 +227,10 @@ fn fixed_damping(
     let floor = found.k_pass * 1e-3;
     let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
     let Some(f) = f else {
-        bail!("no stiffness down to {floor:.4e} settles at the fixed damping B = {b:.4e}");
+        return Err(super::error::NoWallPassed(format!(
+            "no stiffness down to {floor:.4e} settles at the fixed damping B = {b:.4e}"
+        ))
+        .into());
     };
     frontier.push(FrontierPoint {
         b,
@@ -298,10 +317,11 @@ fn confirm_spring(
             )
         },
     );
-    bail!(
+    Err(super::error::NoWallPassed(format!(
         "no stiffness passed the verification set from {k:.4} down to {last:.4}: {what}. Try a \
          lower --max-velocity (the impacts and releases reach v), a smaller --margin, or check \
          the device: the force output's sign and scale (`hostctl experiment` runs one release \
          test), the encoder, and the amplifier's limit"
-    )
+    ))
+    .into())
 }

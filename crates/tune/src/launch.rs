@@ -157,7 +157,9 @@ pub fn judge_impact(
         return Verdict::NotLaunched;
     };
     let verdict = classify_impact(in_contact, wall, d.mean, tripped);
-    if !verdict.passes() && d.excuses_failure() {
+    // Chatter is the wall's own (it keeps toggling where it came to rest, whatever the
+    // launch); only a failure in the motion itself can be the launch's.
+    if !verdict.passes() && !verdict.chatters() && d.excuses_failure() {
         Verdict::NotLaunched
     } else {
         verdict

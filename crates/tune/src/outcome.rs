@@ -6,6 +6,7 @@
 use super::model_check::Evidence;
 use super::release::Verdict;
 use super::search::Found;
+use super::verdict::Criterion;
 use super::verify::TestResult;
 use stiffwall_core::params::PhysicalParams;
 
@@ -51,6 +52,21 @@ pub struct Outcome {
     pub confirmation: Vec<Verdict>,
     /// The verification set at `k_set`, test by test.
     pub verification: Vec<TestResult>,
+    /// Every test of the verification set at the set wall came to rest (or left a one-sided
+    /// wall): the wall is quiet. False only where no wall rests ([`Outcome::no_rest`]) or
+    /// under [`Criterion::AcceptChatter`].
+    pub rests: bool,
+    /// What a passing test had to do.
+    pub criterion: Criterion,
+    /// The virtual damper's law (`difference`, `dead-band-N`; the firmware's `DamperLaw`),
+    /// set with `b_set` (the law is set even when B is 0, where it does nothing).
+    pub damper: String,
+    /// The quiet ceiling 2·max(c, F_s)/Δ of the identified device, N/m (N·m/rad): above it no
+    /// count can hold the wall's force KΔ/2 and every wall chatters (0: no friction).
+    pub quiet_ceiling: f64,
+    /// Why no wall comes to rest on this device (None when the set wall rests or chatter was
+    /// accepted): the wall set is then the one with the least chatter.
+    pub no_rest: Option<String>,
     /// Where the identified model does not describe the device (plain language; empty when
     /// it does).
     pub model_mismatch: Vec<String>,

@@ -148,6 +148,7 @@ const SEARCH_START_OF_GUARANTEED: f64 = 0.5;
 const FREQUENCY_CROSSINGS: usize = 12;
 
 /// What identification (step 1) and prediction (step 2) give the rest of the procedure.
+#[derive(Clone)]
 struct Identification {
     id: super::ident::Identified,
     /// Chirp amplitude that moved the device, DAC codes.
@@ -172,6 +173,129 @@ fn tune_inner(
     progress: &Reporter<'_>,
 ) -> Result<Outcome> {
     let mut ident = identify_and_predict(c, s, original, progress)?;
+    let ceiling = quiet_ceiling(&ident);
+    // The quiet search runs on a copy: where no wall rests, the search for the least chatter
+    // starts again from what identification found.
+    let mut tried = ident.clone();
+    let quiet = (s.criterion == Criterion::Rest && ceiling > 0.0)
+        .then(|| search_walls(c, s, &mut tried, original, progress, ceiling));
+    let (searched, no_rest) = match quiet {
+        Some(Ok(found)) => {
+            ident = tried;
+            (found, None)
+        }
+        Some(Err(e)) if e.downcast_ref::<super::error::NoWallPassed>().is_some() => {
+            let why = no_rest_reason(&ident, ceiling, Some(&e));
+            progress.report(Progress::Finding { text: why.clone() });
+            let chatter = least_chatter_settings(s);
+            let found = search_walls(c, &chatter, &mut ident, original, progress, 0.0)?;
+            (found, Some(why))
+        }
+        Some(Err(e)) => return Err(e),
+        None if s.criterion == Criterion::Rest => {
+            let why = no_rest_reason(&ident, ceiling, None);
+            progress.report(Progress::Finding { text: why.clone() });
+            let chatter = least_chatter_settings(s);
+            let found = search_walls(c, &chatter, &mut ident, original, progress, 0.0)?;
+            (found, Some(why))
+        }
+        None => (
+            search_walls(c, s, &mut ident, original, progress, 0.0)?,
+            None,
+        ),
+    };
+    let (found, wall, mut model_mismatch) = searched;
+    // The wall with the least chatter may still have come to rest in every test of its set.
+    let no_rest = no_rest.filter(|_| !wall.rests());
+    if let Some(why) = &no_rest {
+        model_mismatch.push(why.clone());
+    }
+    // Step 5: set and save.
+    let saved = !s.dry_run && set_wall(c, original, &wall)?;
+    let quiet = Quiet {
+        ceiling,
+        no_rest,
+        criterion: s.criterion,
+    };
+    Ok(outcome(ident, found, wall, model_mismatch, saved, quiet))
+}
+
+/// The settings of the search for the wall with the least chatter, where no wall rests: chatter
+/// within one count accepted, and no damper (it cannot make a wall rest where friction cannot
+/// hold it, and adds to the force swing) unless the user fixed one.
+fn least_chatter_settings(s: &Settings) -> Settings {
+    Settings {
+        criterion: Criterion::AcceptChatter,
+        damping: match s.damping {
+            Damping::Fixed(b) => Damping::Fixed(b),
+            Damping::Search => Damping::Fixed(0.0),
+        },
+        ..s.clone()
+    }
+}
+
+/// The quiet ceiling 2·max(c, F_s)/Δ of the identified device (`stiffwall_core::rest`), with
+/// F_s the smaller breakaway force the ramps measured (the side that holds less), N/m
+/// (N·m/rad).
+fn quiet_ceiling(ident: &Identification) -> f64 {
+    let breakaway = ident
+        .evidence
+        .breakaway_measured
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let static_n = if breakaway.is_finite() {
+        breakaway
+    } else {
+        0.0
+    };
+    stiffwall_core::rest::quiet_ceiling(ident.p.coulomb, static_n, ident.p.resolution)
+}
+
+/// Why no wall rests on this device, in words (`failure`: the search's or verification's).
+fn no_rest_reason(ident: &Identification, ceiling: f64, failure: Option<&anyhow::Error>) -> String {
+    let (f, k) = ident.units;
+    let head = if ceiling <= 0.0 {
+        format!(
+            "no wall comes to rest on this device: no Coulomb friction was identified (c = \
+             {:.3e} {f}), and with the wall's force −KΔ(n + ½) at least KΔ/2 at every count, \
+             nothing holds the device still, so the count toggles between two counts for ever \
+             at any K",
+            ident.p.coulomb
+        )
+    } else {
+        format!(
+            "no wall comes to rest on this device: no stiffness down to a quarter of the smaller of \
+             the quiet ceiling 2·max(c, F_s)/Δ = {ceiling:.4e} {k} and the guaranteed limit came \
+             to rest in every test (a hand or \
+             a spring pushing the device, or friction too small to hold the wall's force KΔ/2)"
+        )
+    };
+    let what = failure.map_or(String::new(), |e| format!(" ({e})"));
+    format!(
+        "{head}{what}; the wall set is the stiffest that stays within one count and never \
+         grows, without a damper (the least chatter): it chatters, as reported for each test"
+    )
+}
+
+/// What the tune found about rest (see `stiffwall_core::rest`).
+struct Quiet {
+    ceiling: f64,
+    no_rest: Option<String>,
+    criterion: Criterion,
+}
+
+/// Steps 4–4b under `s.criterion`: the spring-only search (not below `k_floor`), the model
+/// findings, the (K, B) frontier and the verification of the chosen wall.
+fn search_walls(
+    c: &mut Client,
+    s: &Settings,
+    ident: &mut Identification,
+    original: &ServoConfig,
+    progress: &Reporter<'_>,
+    ceiling: f64,
+) -> Result<(super::search::Found, super::frontier::Wall, Vec<String>)> {
     let early = model_check::findings(&ident.id, &ident.evidence, ident.units);
     let report = |e: Progress| progress.report(e);
     let run = Run {
@@ -180,6 +304,7 @@ fn tune_inner(
         v: ident.v,
         k_force: force_regime_k(&ident),
         one_sided_wall: original.wall == stiffwall_proto::WallMode::OneSided,
+        force_per_code: f64::from(c.info.force_per_code),
         progress: &report,
         slow_launch: std::cell::Cell::new(None),
         missed_launch: std::cell::Cell::new(None),
@@ -187,11 +312,15 @@ fn tune_inner(
     let search = Search {
         k_cap: f64::from(c.info.limits.max_stiffness),
         rel_tol: s.rel_tol,
+        // Below a quarter of both the quiet ceiling (σ ≥ 2: friction holds the wall at four
+        // counts either side) and the guaranteed limit (no growth at v), a spring that still
+        // does not rest is held off rest by something else: the device has no quiet wall.
+        k_floor: ceiling.min(ident.predicted.guaranteed) / 4.0,
         ..Search::default()
     };
     // Step 4a: the spring-only search (a model that does not fit makes every test thorough).
     let mut notes = Notes::default();
-    let found = spring_search(&run, c, &mut ident, &search, !early.is_empty(), &mut notes)?;
+    let found = spring_search(&run, c, ident, &search, !early.is_empty(), &mut notes)?;
     let mut model_mismatch = model_check::findings(&ident.id, &ident.evidence, ident.units);
     // Only a search that found a failing K measured the limit (otherwise the force cap did).
     if found.k_fail.is_some() {
@@ -219,15 +348,13 @@ fn tune_inner(
         margin_used,
         &mut notes,
     )?;
-    for finding in launch_findings(&run, &notes, &ident) {
+    for finding in launch_findings(&run, &notes, ident) {
         progress.report(Progress::Finding {
             text: finding.clone(),
         });
         model_mismatch.push(finding);
     }
-    // Step 5: set and save.
-    let saved = !s.dry_run && set_wall(c, original, &wall)?;
-    Ok(outcome(ident, found, wall, model_mismatch, saved))
+    Ok((found, wall, model_mismatch))
 }
 
 /// Steps 1–2: the wall off, faults cleared, the chirp, the breakaway ramps, the model and its
@@ -244,6 +371,7 @@ fn identify_and_predict(
     // as configured.
     let base = ServoConfig {
         damping: 0.0,
+        damper: s.damper,
         energy_monitor: true,
         stiffness: 0.0,
         ..*original
@@ -384,6 +512,7 @@ fn set_wall(c: &mut Client, original: &ServoConfig, wall: &super::frontier::Wall
     c.set_config(&ServoConfig {
         stiffness: wall.k_set as f32,
         damping: wall.b_set as f32,
+        damper: wall.damper,
         ..*original
     })?;
     c.save_config().context("saving the tuned config")?;
@@ -396,6 +525,7 @@ fn outcome(
     wall: super::frontier::Wall,
     model_mismatch: Vec<String>,
     saved: bool,
+    quiet: Quiet,
 ) -> Outcome {
     let Identification {
         id,
@@ -407,7 +537,9 @@ fn outcome(
         ..
     } = ident;
     p.stiffness = wall.k_set;
+    let rests = wall.rests();
     Outcome {
+        rests,
         identified: IdentifiedReport {
             mass: [id.mass, id.mass_se],
             viscous: [id.viscous, id.viscous_se],
@@ -429,6 +561,10 @@ fn outcome(
         frontier: wall.frontier,
         confirmation: wall.verification.iter().map(|r| r.verdict).collect(),
         verification: wall.verification,
+        criterion: quiet.criterion,
+        damper: wall.damper.to_string(),
+        quiet_ceiling: quiet.ceiling,
+        no_rest: quiet.no_rest,
         model_mismatch,
         model_evidence: evidence,
         margin_used: wall.margin,

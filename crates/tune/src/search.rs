@@ -21,6 +21,8 @@ pub struct Search {
     pub rel_tol: f64,
     /// Most release tests the search may run.
     pub max_tests: usize,
+    /// The search going down gives up below this K (besides 10⁻⁶ of its start): 0 for none.
+    pub k_floor: f64,
 }
 
 impl Default for Search {
@@ -30,6 +32,7 @@ impl Default for Search {
             step: 1.6,
             rel_tol: 0.02,
             max_tests: 40,
+            k_floor: 0.0,
         }
     }
 }
@@ -99,10 +102,11 @@ pub fn largest_settling_k(
         hi = k;
         loop {
             k = hi / s.step;
-            if k < k_start * 1e-6 {
-                bail!(
+            if k < k_start * 1e-6 || k < s.k_floor {
+                return Err(super::error::NoWallPassed(format!(
                     "no stiffness down to {k:.3e} settles; the device may be unstable on its own"
-                );
+                ))
+                .into());
             }
             if run(k, &mut trials)? {
                 lo = k;

@@ -1,11 +1,12 @@
 //! Tune settings and the constants of the procedure (a leaf module: it imports no other module
-//! of the crate but the error type).
+//! of the crate but the error type and the verdict's criterion).
 //!
 //! Units: velocities m/s (rad/s for rotary devices), damping N·s/m (N·m·s/rad), seconds, ticks.
 //! Invariant: [`Settings::validate`] is the one place the settings are checked; the CLI and the
 //! live view call it before touching a device.
 
 pub use super::error::SettingsError;
+pub use super::verdict::Criterion;
 
 /// Default maximum velocity, in encoder ticks per servo period (ξ̇ of Table I; independent of K).
 pub const DEFAULT_XIDOT: f64 = 5.0;
@@ -43,6 +44,12 @@ pub struct Settings {
     /// Find and report the wall but leave the device's config as it was (default false: the
     /// wall found is set and saved).
     pub dry_run: bool,
+    /// What a passing test must do: come to rest (default), or also chatter within one count
+    /// ([`Criterion::AcceptChatter`], reported).
+    pub criterion: Criterion,
+    /// The law of the virtual damper tried and set (default: a dead band of one count, which
+    /// measured stiffest over `sim/plants/`, docs/DAMPER-LAWS.md).
+    pub damper: stiffwall_proto::DamperLaw,
 }
 
 /// How `tune` chooses the virtual damping B.
@@ -110,6 +117,8 @@ impl Default for Settings {
             rel_tol: 0.02,
             damping: Damping::Search,
             dry_run: false,
+            criterion: Criterion::Rest,
+            damper: stiffwall_proto::DamperLaw::default(),
         }
     }
 }
@@ -159,6 +168,18 @@ impl Settings {
         }
         if !(self.rel_tol.is_finite() && self.rel_tol > 0.0 && self.rel_tol < 1.0) {
             return bad("rel_tol", "in (0, 1)", self.rel_tol.to_string());
+        }
+        if let stiffwall_proto::DamperLaw::DeadBand { counts } = self.damper {
+            if !(1..=stiffwall_proto::MAX_DEADBAND_COUNTS).contains(&counts) {
+                return bad(
+                    "damper",
+                    &format!(
+                        "`difference` or `dead-band-N` with N in 1..={}",
+                        stiffwall_proto::MAX_DEADBAND_COUNTS
+                    ),
+                    self.damper.to_string(),
+                );
+            }
         }
         Ok(())
     }

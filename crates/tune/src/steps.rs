@@ -8,7 +8,7 @@ use super::launch::Delivered;
 use super::progress::Progress;
 use super::release::Verdict;
 use super::settings::*;
-use super::verify::{min_settle_run, run_test, test_set, Test, TestResult, TestRun};
+use super::verify::{min_settle_run, run_test, test_set, Judging, Test, TestResult, TestRun};
 use anyhow::Result;
 use stiffwall_client::Client;
 use stiffwall_core::params::PhysicalParams;
@@ -41,6 +41,8 @@ pub(crate) struct Run<'a> {
     /// Above this K the wall's peak force at v saturates (see `procedure::tune_inner`).
     pub(crate) k_force: f64,
     pub(crate) one_sided_wall: bool,
+    /// Force of one output code, N (N·m).
+    pub(crate) force_per_code: f64,
     pub(crate) progress: &'a dyn Fn(Progress),
     /// The slowest impact launch that passed below its asked speed (see [`Delivered::slow`]).
     pub(crate) slow_launch: std::cell::Cell<Option<Delivered>>,
@@ -64,6 +66,16 @@ pub(crate) struct Notes {
 impl Run<'_> {
     pub(crate) fn period_s(&self) -> f64 {
         self.p.period_s
+    }
+
+    /// How this run's tests are judged ([`Settings::criterion`]).
+    pub(crate) fn judging(&self) -> Judging {
+        Judging {
+            criterion: self.s.criterion,
+            period_s: self.period_s(),
+            force_per_code: self.force_per_code,
+            coulomb_n: self.p.coulomb,
+        }
     }
 
     pub(crate) fn natural_ticks(&self, k: f64) -> f64 {
@@ -101,6 +113,7 @@ impl Run<'_> {
             test,
             self.ticks_for(k, thorough, base.damping > 0.0),
             min_settle_run(self.p.mass, k, self.period_s()),
+            &self.judging(),
         )?;
         if let Some(d) = run.delivered {
             // The slowest launch that passed (as the slower impact it was) and the last one
@@ -229,13 +242,17 @@ impl Run<'_> {
         let mut results = Vec::new();
         for test in set {
             let TestRun {
-                verdict, counts, ..
+                verdict,
+                counts,
+                chatter,
+                ..
             } = self.test(c, base, k, test, thorough)?;
             results.push(TestResult {
                 test,
                 k,
                 verdict,
                 ticks_judged: counts.len(),
+                chatter,
             });
             if verdict == Verdict::NotLaunched {
                 // Judged by the releases of the set, which reach the same energy from both

@@ -16,8 +16,9 @@
 //! - when the model does not fit the device (`thorough`), also releases from ±max(2, ⌈d/4⌉)
 //!   (a sixteenth of the energy) and an impact at v_max/4, and every test runs twice as long.
 //!
-//! A K passes when every test of the set passes by [`super::verdict`]: the motion settles or
-//! stays within one count and never grows; a buzz over more than one count fails. An impact
+//! A K passes when every test of the set passes by [`super::verdict`]: the wall comes to rest
+//! (`stiffwall_core::rest`); chatter within one count, a buzz over more counts and growth fail
+//! (chatter passes, reported, only under `Criterion::AcceptChatter`). An impact
 //! whose launch did not deliver the device to the wall at the requested speed (never reached
 //! it, arrived slower than asked, or more than
 //! [`LAUNCH_EXCUSE_FACTOR`](super::launch::LAUNCH_EXCUSE_FACTOR) × faster, see
@@ -43,7 +44,7 @@ pub use super::judged::{
     DECAY_EXTENSION,
 };
 use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
-use super::verdict::{classify, Verdict, Wall, MIN_TAIL};
+use super::verdict::{classify, Criterion, Verdict, Wall, MIN_TAIL};
 use anyhow::{bail, Result};
 use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
@@ -123,6 +124,44 @@ pub struct TestResult {
     pub verdict: Verdict,
     /// Ticks judged (after the release).
     pub ticks_judged: usize,
+    /// A test that kept toggling within one count: how fast and how hard.
+    pub chatter: Option<ChatterReport>,
+}
+
+/// How a test is judged and how its chatter is measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Judging {
+    /// What passes.
+    pub criterion: Criterion,
+    /// Servo period T, s.
+    pub period_s: f64,
+    /// Force of one output code, N (N·m).
+    pub force_per_code: f64,
+    /// The identified Coulomb friction c, N (N·m): the unit of the chatter's force swing.
+    pub coulomb_n: f64,
+}
+
+/// The chatter of a test that kept toggling within one count, over its judged tail
+/// (`stiffwall_core::rest::Chatter`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ChatterReport {
+    /// Count changes per second.
+    pub toggles_per_s: f64,
+    /// Peak-to-peak force output, N (N·m).
+    pub force_pp_n: f64,
+    /// The same in units of the identified Coulomb friction c.
+    pub force_pp_c: f64,
+}
+
+impl ChatterReport {
+    /// One line for a report.
+    #[must_use]
+    pub fn describe(&self, force_unit: &str) -> String {
+        format!(
+            "{:.0} toggles/s, force swing {:.3e} {force_unit} peak to peak ({:.1} × c)",
+            self.toggles_per_s, self.force_pp_n, self.force_pp_c
+        )
+    }
 }
 
 /// The verification set for full-energy deflection `d`, maximum velocity `v_ticks` (ticks per
@@ -262,6 +301,8 @@ pub struct TestRun {
     /// The supervisor tripped before the release or contact (during the hold or launch): the
     /// record holds no motion of the wall under test.
     pub hold_tripped: bool,
+    /// A test that kept toggling within one count: how fast and how hard.
+    pub chatter: Option<ChatterReport>,
 }
 
 /// Runs one test at stiffness `k` (config `base` with that K) for a base length of `ticks`
@@ -272,6 +313,7 @@ pub struct TestRun {
 /// deliver the asked one ([`Delivered::reaimed`], at most [`LAUNCH_REAIMS`] times). The last
 /// attempt's outcome is the test's, but for a release that passed only from short of its
 /// deflection after an attempt failed from farther: that failure stands (see `run_release`).
+#[allow(clippy::too_many_arguments)]
 pub fn run_test(
     c: &mut Client,
     base: &ServoConfig,
@@ -279,17 +321,23 @@ pub fn run_test(
     test: Test,
     ticks: u32,
     min_run: usize,
+    judging: &Judging,
 ) -> Result<TestRun> {
+    let run = Attempt {
+        base,
+        k,
+        ticks,
+        min_run,
+        judging,
+    };
     match test {
-        Test::Release { deflection_ticks } => {
-            run_release(c, base, k, deflection_ticks, ticks, min_run)
-        }
+        Test::Release { deflection_ticks } => run_release(c, &run, deflection_ticks),
         Test::Impact {
             start_ticks,
             velocity_milliticks,
             one_sided,
         } => {
-            let mut result = run_once(c, base, k, test, ticks, min_run)?;
+            let mut result = run.once(c, test, None)?;
             let mut milli = velocity_milliticks;
             for _ in 0..LAUNCH_REAIMS {
                 if result.verdict.passes() {
@@ -306,7 +354,7 @@ pub fn run_test(
                 };
                 // Judged against the speed the test asks for, not the re-aimed launch's.
                 let asked = f64::from(velocity_milliticks).abs() / 1000.0;
-                let again = run_aimed(c, base, k, aimed, ticks, min_run, Some(asked))?;
+                let again = run.once(c, aimed, Some(asked))?;
                 result = again;
             }
             Ok(result)
@@ -325,17 +373,10 @@ pub fn run_test(
 /// A pass from short of the target on the first attempt stays a pass only when re-aiming
 /// cannot help: a hold that could not move the device off the wall (start 0) pulled with the
 /// wall's force at the deflection asked, which static friction held.
-fn run_release(
-    c: &mut Client,
-    base: &ServoConfig,
-    k: f64,
-    deflection_ticks: i32,
-    ticks: u32,
-    min_run: usize,
-) -> Result<TestRun> {
+fn run_release(c: &mut Client, run: &Attempt<'_>, deflection_ticks: i32) -> Result<TestRun> {
     let test = Test::Release { deflection_ticks };
     let mut target = deflection_ticks;
-    let mut result = run_once(c, base, k, test, ticks, min_run)?;
+    let mut result = run.once(c, test, None)?;
     let mut failed_farther: Option<TestRun> = None;
     for _ in 0..HOLD_REAIMS {
         let Some(start) = result.counts.first().copied() else {
@@ -352,7 +393,7 @@ fn run_release(
         let aimed = Test::Release {
             deflection_ticks: target,
         };
-        let again = run_once(c, base, k, aimed, ticks, min_run)?;
+        let again = run.once(c, aimed, None)?;
         if again.hold_tripped {
             // The hold's own step to the farther target tripped the supervisor (its
             // overshoot, not the wall, ran faster than the encoder-jump or velocity
@@ -389,18 +430,34 @@ pub fn short_of(requested: i32, start: i64) -> bool {
     start.signum() != i64::from(requested).signum() || start.abs() < want - tol
 }
 
-fn run_once(
-    c: &mut Client,
-    base: &ServoConfig,
+/// One test's settings: the wall under test, its length and how it is judged.
+struct Attempt<'a> {
+    base: &'a ServoConfig,
     k: f64,
-    test: Test,
     ticks: u32,
     min_run: usize,
-) -> Result<TestRun> {
-    run_aimed(c, base, k, test, ticks, min_run, None)
+    judging: &'a Judging,
 }
 
-/// [`run_once`], an impact judged against the speed `asked` (counts per tick; None: its own).
+impl Attempt<'_> {
+    /// One attempt at `test`, an impact judged against the speed `asked` (counts per tick;
+    /// None: its own).
+    fn once(&self, c: &mut Client, test: Test, asked: Option<f64>) -> Result<TestRun> {
+        run_aimed(
+            c,
+            self.base,
+            self.k,
+            test,
+            self.ticks,
+            self.min_run,
+            asked,
+            self.judging,
+        )
+    }
+}
+
+/// One attempt at `test` at stiffness `k` (see [`Attempt::once`]).
+#[allow(clippy::too_many_arguments)]
 fn run_aimed(
     c: &mut Client,
     base: &ServoConfig,
@@ -409,18 +466,20 @@ fn run_aimed(
     ticks: u32,
     min_run: usize,
     asked: Option<f64>,
+    judging: &Judging,
 ) -> Result<TestRun> {
     super::settings::check_cancel(c)?;
     let cfg = wall_under_test(c, base, k, test)?;
     clear_faults(c)?;
-    // A damped wall's test ends when it is within one count ([`settled_within`]): its damper
-    // answers every count change, so it often toggles between two counts instead of resting.
-    // The device runs the test with the wall under test from its first tick, ends it on the
-    // tick its counts decide it ([`judged_len_within`]'s rule, `PrepareTest`), and is back at
-    // the wall-off config on that tick: neither where a test starts or ends nor the state it
-    // leaves for the next one depends on the link's latency, so `--fast` and real time run
-    // the same tests, count for count. The host never stops a test.
-    let one_count = base.damping > 0.0;
+    // A test ends when its wall has come to rest ([`settled_within`]: the last third of the
+    // record at one count), or within one count only when chatter is accepted
+    // (`Criterion::AcceptChatter`). The device runs the test with the wall under test from
+    // its first tick, ends it on the tick its counts decide it ([`judged_len_within`]'s rule,
+    // `PrepareTest`), and is back at the wall-off config on that tick: neither where a test
+    // starts or ends nor the state it leaves for the next one depends on the link's latency,
+    // so `--fast` and real time run the same tests, count for count. The host never stops a
+    // test.
+    let one_count = judging.criterion == Criterion::AcceptChatter;
     c.prepare_test(
         &cfg,
         u32::try_from(min_run).unwrap_or(u32::MAX),
@@ -450,6 +509,7 @@ fn run_aimed(
                 counts: Vec::new(),
                 delivered: None,
                 hold_tripped: true,
+                chatter: None,
             });
         }
         Err(e) => return Err(e.into()),
@@ -464,7 +524,7 @@ fn run_aimed(
         ticks: ticks as usize,
         min_run,
         budget: budget as usize,
-        one_count,
+        judging: *judging,
         shift: base.coarsen_shift,
     };
     Ok(judged.judge(test, &rec, asked))
@@ -508,8 +568,8 @@ struct Judged {
     min_run: usize,
     /// Most ticks the test may run.
     budget: usize,
-    /// Settled within one count (a damped wall) instead of at rest.
-    one_count: bool,
+    /// What passes, and the scale of the chatter report.
+    judging: Judging,
     /// The config's coarsening shift (effective counts).
     shift: u8,
 }
@@ -526,7 +586,8 @@ impl Judged {
         let mut counts = super::release::released_counts(&rec.samples, self.shift);
         // Judge only up to where the record settled (what came after is the Stop's latency).
         let tripped = rec.faults != 0;
-        if let Some(len) = judged_len_within(&counts, self.ticks, self.min_run, self.one_count) {
+        let one_count = self.judging.criterion == Criterion::AcceptChatter;
+        if let Some(len) = judged_len_within(&counts, self.ticks, self.min_run, one_count) {
             counts.truncate(len);
         } else if !tripped {
             counts.truncate(self.budget);
@@ -549,11 +610,39 @@ impl Judged {
                 (verdict, delivered)
             }
         };
+        let chatter = verdict
+            .chatters()
+            .then(|| self.chatter(&rec.samples, &counts));
         TestRun {
             hold_tripped: tripped && counts.is_empty(),
-            verdict,
+            verdict: verdict.under(self.judging.criterion),
             counts,
             delivered,
+            chatter,
+        }
+    }
+
+    /// The chatter over the judged tail of `counts` (the released samples' first
+    /// `counts.len()`), with the force each of those samples output.
+    fn chatter(&self, samples: &[stiffwall_proto::Sample], counts: &[i64]) -> ChatterReport {
+        let forces: Vec<f64> = samples
+            .iter()
+            .filter(|s| s.flags & stiffwall_proto::flags::RELEASED != 0)
+            .take(counts.len())
+            .map(|s| f64::from(s.force_code) * self.judging.force_per_code)
+            .collect();
+        let tail = (counts.len() / 4).max(MIN_TAIL).min(counts.len());
+        let from = counts.len() - tail;
+        let ch = stiffwall_core::rest::Chatter::of_window(
+            &counts[from..],
+            forces.get(from..).unwrap_or(&[]),
+            self.judging.period_s,
+            self.judging.coulomb_n,
+        );
+        ChatterReport {
+            toggles_per_s: ch.toggles_per_s,
+            force_pp_n: ch.force_pp_n,
+            force_pp_c: ch.force_pp_c,
         }
     }
 }
@@ -601,6 +690,7 @@ mod tests {
             counts: counts.to_vec(),
             delivered: None,
             hold_tripped: false,
+            chatter: None,
         }
     }
 

@@ -38,6 +38,16 @@ pub struct Args {
     /// Find and report K, but leave the device's config as it was.
     #[arg(long)]
     pub dry_run: bool,
+    /// Also pass a wall whose count keeps toggling between two neighbouring counts (chatter:
+    /// a buzz whose force swings by KΔ and more) instead of requiring every test to come to
+    /// rest; each chattering test is reported with its toggles per second and force swing.
+    #[arg(long)]
+    pub accept_chatter: bool,
+    /// The virtual damper's law, tried and set with B: `dead-band-N` (the count difference is
+    /// no motion while |n − n_prev| ≤ N, N in 1..=8) or `difference` (the plain backward
+    /// difference, which pulses B·Δ/T at every one-count toggle).
+    #[arg(long, value_name = "LAW", default_value = "dead-band-1")]
+    pub damper: String,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -49,7 +59,11 @@ pub struct Args {
 
 /// Validates the numeric arguments (before any device is touched).
 pub fn settings(a: &Args) -> Result<Settings> {
+    let damper = a.damper.parse::<stiffwall_proto::DamperLaw>().map_err(|e| {
+        anyhow!("--damper: {e} (got {:?}); nothing was changed", a.damper)
+    })?;
     let s = Settings {
+        damper,
         damping: a
             .damping
             .map_or(procedure::Damping::Search, procedure::Damping::Fixed),
@@ -58,6 +72,11 @@ pub fn settings(a: &Args) -> Result<Settings> {
         release_ticks: a.release_ticks,
         excite_seconds: a.excite_seconds,
         dry_run: a.dry_run,
+        criterion: if a.accept_chatter {
+            procedure::Criterion::AcceptChatter
+        } else {
+            procedure::Criterion::Rest
+        },
         ..Settings::default()
     };
     s.validate().map_err(|e| anyhow!(flag_error(&e)))?;
@@ -191,6 +210,7 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report, kb: Option<&Path>) -> Str
     render_identified(&mut s, o, u);
     render_limits(&mut s, o, u);
     render_walls(&mut s, o, u.0, u.2);
+    render_rest(&mut s, o, u);
     if o.model_mismatch.is_empty() {
         let _ = writeln!(s, "model check: the identified model fits the device");
     } else {
@@ -309,7 +329,7 @@ fn render_limits(s: &mut String, o: &Outcome, u: Units) {
         .map_or("none below the cap".to_string(), |k| format!("{k:.5}"));
     let _ = writeln!(
         s,
-        "  verified: largest settling    {:>12.5}  (first failing {k_fail}, {} release tests)",
+        "  verified: largest resting     {:>12.5}  (first failing {k_fail}, {} release tests)",
         o.search.k_pass,
         o.search.trials.len()
     );
@@ -321,10 +341,44 @@ fn render_limits(s: &mut String, o: &Outcome, u: Units) {
         o.verification.len(),
         o.verification
             .iter()
-            .map(|r| format!("{} {}", r.test.describe(), r.verdict.describe()))
+            .map(|r| match &r.chatter {
+                Some(ch) => format!(
+                    "{} {} ({})",
+                    r.test.describe(),
+                    r.verdict.describe(),
+                    ch.describe(u.3)
+                ),
+                None => format!("{} {}", r.test.describe(), r.verdict.describe()),
+            })
             .collect::<Vec<_>>()
             .join("; ")
     );
+}
+
+/// Whether the set wall comes to rest, and the quiet ceiling it lies under.
+fn render_rest(s: &mut String, o: &Outcome, u: Units) {
+    let ceiling = if o.quiet_ceiling > 0.0 {
+        format!(
+            "{:.5} {} (the set K is {:.2} of it)",
+            o.quiet_ceiling,
+            u.0,
+            o.k_set / o.quiet_ceiling
+        )
+    } else {
+        "0 (no Coulomb friction identified)".to_string()
+    };
+    let _ = writeln!(
+        s,
+        "quiet ceiling 2·max(c, F_s)/Δ: {ceiling}: above it no count can hold the wall's force"
+    );
+    let line = match (&o.no_rest, o.rests) {
+        (_, true) => "rest: the set wall comes to rest in every test".to_string(),
+        (Some(why), false) => format!("rest: NO, the set wall chatters: {why}"),
+        (None, false) => "rest: NO, the set wall chatters in some tests (--accept-chatter): \
+             see the tests above"
+            .to_string(),
+    };
+    let _ = writeln!(s, "{line}");
 }
 
 /// With a virtual damper the paper's (β, σ) regions above describe the spring alone: the
@@ -385,5 +439,5 @@ fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
             None => format!("B={:.3e}: below the best K", f.b),
         })
         .collect();
-    let _ = writeln!(s, "  frontier (largest settling K): {}", tried.join("; "));
+    let _ = writeln!(s, "  frontier (largest resting K): {}", tried.join("; "));
 }
