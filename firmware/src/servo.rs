@@ -40,6 +40,19 @@ const _: () =
     assert!(monitor::GROWTH == fault::ENERGY_GROWTH && monitor::LIMIT == fault::ENERGY_LIMIT);
 const _: () = assert!(monitor::BUZZ == fault::BUZZ);
 
+/// The bit of [`Servo`]'s `halt` word that marks "no reading yet" (above every fault bit).
+const UNPRIMED: u32 = 1 << 31;
+const _: () = assert!(
+    UNPRIMED
+        & (fault::ENERGY_GROWTH
+            | fault::ENERGY_LIMIT
+            | fault::OVER_VELOCITY
+            | fault::HEARTBEAT
+            | fault::ENCODER_JUMP
+            | fault::BUZZ)
+        == 0
+);
+
 const RING: usize = 32;
 const RING_MASK: u32 = RING as u32 - 1;
 const VEL_MASK: u32 = VEL_WINDOW as u32 - 1;
@@ -57,10 +70,13 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     last_raw: u32,
     pos: i32,
     sign_shift: Shift,
-    primed: bool,
     mode: Mode,
     prev_n: i32,
     head: u32,
+    /// `faults` | [`UNPRIMED`] before the first reading: the tick's one test of "anything out
+    /// of the ordinary" (latched faults, or the first reading). Kept with `faults` by
+    /// `set_faults`.
+    halt: u32,
     faults: u32,
     ring: [i32; RING],
     vel_hist: [i32; VEL_WINDOW],
@@ -93,7 +109,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             g: Gains::from_config(cfg, &board),
             port,
             sign_shift: Shift::new(32 - bits),
-            primed: false,
+            halt: UNPRIMED,
             last_raw: 0,
             pos: 0,
             prev_n: 0,
@@ -128,7 +144,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
         self.monitor.reset();
         // The backward difference is of the count from the wall: a new wall position (or
         // coarsening) is not a motion, and must not kick the damper on the next tick.
-        if self.primed {
+        if self.halt & UNPRIMED == 0 {
             self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
         }
     }
@@ -142,6 +158,12 @@ impl<'a, N: Numeric> Servo<'a, N> {
     #[must_use]
     pub fn faults(&self) -> u32 {
         self.faults
+    }
+
+    /// Sets the latched fault bits (and the tick's `halt` word with them).
+    fn set_faults(&mut self, faults: u32) {
+        self.faults = faults;
+        self.halt = faults | (self.halt & UNPRIMED);
     }
 
     /// The energy monitor state.
@@ -212,7 +234,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
     ///
     /// No first-reading branch: `last_raw` and `pos` start at 0, so the first delta is the
     /// sign-extended raw count and `pos` becomes exactly that. Only the supervisor needs to know
-    /// that it was the first reading (see `step`), so the spring path stays branch-free.
+    /// that it was the first reading (see `step`: the `halt` word's [`UNPRIMED`] bit), so the
+    /// spring path stays branch-free.
     #[inline]
     fn read(&mut self, enc: &mut impl Encoder) -> i32 {
         let raw = enc.count();
@@ -226,20 +249,34 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// The output clamp to ±`limit`, with the [`flags::CLAMPED`] flag when it acts.
     #[inline]
     fn clamp(&self, code: i32) -> (i32, u16) {
+        let mut fl = 0;
+        let c = self.clamp_into(code, &mut fl);
+        (c, fl)
+    }
+
+    /// The output clamp to ±`limit`, or-ing the [`flags::CLAMPED`] flag into `fl` when it acts
+    /// (so that a tick's flags gather in one place on the path that sets them).
+    #[inline(always)]
+    fn clamp_into(&self, code: i32, fl: &mut u16) -> i32 {
         let l = self.g.limit;
         // 0 ≤ limit ≤ 2^24: |code| > limit as one unsigned compare (as `AbsBound`).
         if (code as u32).wrapping_add(l as u32) > (2 * l) as u32 {
+            *fl |= flags::CLAMPED;
             Self::clamped(code, l)
         } else {
-            (code, 0)
+            code
         }
     }
 
     /// `code` beyond ±`l`: the bound it passed.
     #[cold]
     #[inline(never)]
-    fn clamped(code: i32, l: i32) -> (i32, u16) {
-        (if code > l { l } else { -l }, flags::CLAMPED)
+    fn clamped(code: i32, l: i32) -> i32 {
+        if code > l {
+            l
+        } else {
+            -l
+        }
     }
 
     #[inline]
@@ -346,9 +383,10 @@ impl<'a, N: Numeric> Servo<'a, N> {
         enc: &mut impl Encoder,
         out: &mut impl ForceOutput,
     ) -> i32 {
+        // The first reading is absolute, not a motion: its tick takes the `halt` path below,
+        // which seeds the supervisor's history as if before it and drops what the jump and
+        // velocity tests made of it (with that history they see no motion).
         let d = self.read(enc);
-        // First reading: the position is absolute, not a motion; seed the supervisor's history.
-        let d = if self.primed { d } else { self.prime() };
         let rel = self.pos.saturating_sub(self.g.wall);
         let n = rel >> self.g.coarsen.get();
         // Outside a one-sided wall (one test for the monitor and the force).
@@ -402,21 +440,26 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let dn = n.saturating_sub(self.prev_n);
         self.prev_n = n;
 
-        // Force. One test of the latched and the new fault bits keeps the fault handling (the
-        // latch, safe mode) out of the normal path.
-        let (code, ff) = if (self.faults | new_faults) == 0 {
-            let (c, f) = if WALL {
-                self.wall_force(n, dn, free)
+        // Force. One test of the latched and the new fault bits (and of the first reading)
+        // keeps the fault handling (the latch, safe mode) out of the normal path.
+        // The flags gather in `fl` on the path that sets them (the wall's usual path sets
+        // none), not merged from each stage.
+        let (code, dn) = if (self.halt | new_faults) == 0 {
+            let c = if WALL {
+                self.wall_force_into(n, dn, free, &mut fl)
             } else {
-                self.force(n, dn)
+                let (c, f) = self.force(n, dn);
+                fl |= f;
+                c
             };
-            (self.delay(c), f)
+            (self.delay(c), dn)
         } else {
-            self.faulted(now, new_faults, d)
+            let (c, f, dn) = self.halted::<WALL>(now, new_faults, d, n, free);
+            fl |= f;
+            (c, dn)
         };
-        let (code, cf) = self.clamp(code);
+        let code = self.clamp_into(code, &mut fl);
         out.write(code);
-        fl |= ff | cf;
 
         if TEL {
             self.telemetry(now, rel, n, code, fl);
@@ -428,20 +471,56 @@ impl<'a, N: Numeric> Servo<'a, N> {
         code
     }
 
-    /// The first reading: seeds the supervisor's history; returns the motion it counts as (0).
+    /// The tick's force when `halt` or `new_faults` is set: the first reading (seeded, then as
+    /// any tick), or faults. Returns the code, its flags and the count difference dn the tick
+    /// counts (0 on the first reading).
     #[cold]
     #[inline(never)]
-    fn prime(&mut self) -> i32 {
-        self.primed = true;
-        self.prev_n = self.pos.saturating_sub(self.g.wall) >> self.g.coarsen.get();
+    fn halted<const WALL: bool>(
+        &mut self,
+        now: u32,
+        new_faults: u32,
+        d: i32,
+        n: i32,
+        free: bool,
+    ) -> (i32, u16, i32) {
+        let dn = n.saturating_sub(self.prev_n);
+        let (new_faults, d, dn) = if self.halt & UNPRIMED != 0 {
+            self.prime(n);
+            // With the history seeded the first reading moved 0: neither the jump test (d = 0)
+            // nor the velocity window (every entry the position) can trip; the monitor's and
+            // the heartbeat's bits stand.
+            (
+                new_faults & !(fault::ENCODER_JUMP | fault::OVER_VELOCITY),
+                0,
+                0,
+            )
+        } else {
+            (new_faults, d, dn)
+        };
+        if (self.faults | new_faults) == 0 {
+            let (c, f) = if WALL {
+                self.wall_force(n, dn, free)
+            } else {
+                self.force(n, dn)
+            };
+            (self.delay(c), f, dn)
+        } else {
+            let (c, f) = self.faulted(now, new_faults, d);
+            (c, f, dn)
+        }
+    }
+
+    /// The first reading, at effective count `n`: seeds the supervisor's history (the damper's
+    /// last count, the velocity window).
+    fn prime(&mut self, n: i32) {
+        self.halt &= !UNPRIMED;
+        self.prev_n = n;
         self.vel_hist = [self.pos; VEL_WINDOW];
-        0
     }
 
     /// A tick with fault bits latched or new: latches the new ones, then the safe-mode output
     /// and its flag (safe mode bypasses the delay line).
-    #[cold]
-    #[inline(never)]
     fn faulted(&mut self, now: u32, new_faults: u32, d: i32) -> (i32, u16) {
         if new_faults & !self.faults != 0 {
             self.latch(now, new_faults);
@@ -456,7 +535,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
                 .first_fault_tick
                 .store(now, Ordering::Relaxed);
         }
-        self.faults |= bits;
+        self.set_faults(self.faults | bits);
         self.port
             .shared
             .faults
@@ -477,8 +556,32 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// [`Mode::Wall`]'s code and flags.
     #[inline(always)]
     fn wall_force(&self, n: i32, dn: i32, free: bool) -> (i32, u16) {
-        // One test of the contact condition (`free`: n < `contact_n`) serves both the flag
-        // and the law.
+        let mut fl = 0;
+        let c = self.wall_force_into(n, dn, free, &mut fl);
+        (c, fl)
+    }
+
+    /// [`Mode::Wall`]'s code, its flags or-ed into `fl`.
+    #[inline(always)]
+    fn wall_force_into(&self, n: i32, dn: i32, free: bool, fl: &mut u16) -> i32 {
+        // Inside the spring's linear range (`spring_code`'s first test), which lies in contact
+        // (`wall_in` ≥ `contact_n`), one test gives the law; the rest (outside a one-sided
+        // wall, or the spring saturated) out of line.
+        if (n as u32).wrapping_sub(self.g.wall_in as u32) < self.g.wall_span {
+            N::spring(self.g.spring, n).saturating_add(self.damping(dn))
+        } else {
+            let (c, f) = self.wall_force_beyond(n, dn, free);
+            *fl |= f;
+            c
+        }
+    }
+
+    /// [`Self::wall_force`] outside the spring's linear range: no force and the wall-off flag
+    /// outside a one-sided wall (`free`: n < `contact_n`; one test serves both), else the law
+    /// with the spring at its bound.
+    #[cold]
+    #[inline(never)]
+    fn wall_force_beyond(&self, n: i32, dn: i32, free: bool) -> (i32, u16) {
         if free {
             (0, flags::WALL_OFF)
         } else {
@@ -1149,6 +1252,47 @@ mod tests {
             out.0, -20,
             "n=101 → −101.5 codes, clamped to the 20-code limit"
         );
+    }
+
+    /// The first reading is a position, not a motion: far from 0 it trips neither the jump
+    /// nor the velocity test and kicks no damper (the spring alone), and the next tick is an
+    /// ordinary one (a jump from there trips).
+    #[test]
+    fn the_first_reading_is_not_a_motion() {
+        let cfg = ServoConfig {
+            stiffness: 8.0,
+            damping: 1.0 / 32.0,
+            damper: DamperLaw::Difference,
+            force_limit: 20.0,
+            max_velocity: 625.0 / 1024.0,
+            encoder_jump_counts: 50,
+            heartbeat_timeout_ms: 0,
+            ..ServoConfig::default()
+        };
+        let spring_only = ServoConfig {
+            damping: 0.0,
+            ..cfg
+        };
+        let mut ch = Channels::new();
+        let (sp, _hp) = ch.split();
+        let mut s: Servo<'_> = Servo::new(board(), &cfg, sp);
+        let mut ch2 = Channels::new();
+        let (sp2, _hp2) = ch2.split();
+        let mut s2: Servo<'_> = Servo::new(board(), &spring_only, sp2);
+        let mut out = Out(0);
+        // n = 1000: ⌊−2001·0.5 + ½⌋ = −1000.
+        assert_eq!(s.tick(0, &mut Enc(1000), &mut out), -1000);
+        assert_eq!(s2.tick(0, &mut Enc(1000), &mut out), -1000);
+        assert_eq!(s.faults(), 0);
+        // At rest after it: the spring alone, no fault from the velocity window.
+        for t in 1..10 {
+            assert_eq!(s.tick(t, &mut Enc(1000), &mut out), -1000);
+        }
+        assert_eq!(s.faults(), 0);
+        // One count: the damper's −4.
+        assert_eq!(s.tick(10, &mut Enc(1001), &mut out), -1001 - 4);
+        s.tick(11, &mut Enc(1100), &mut out);
+        assert_eq!(s.faults() & fault::ENCODER_JUMP, fault::ENCODER_JUMP);
     }
 
     #[test]

@@ -76,7 +76,7 @@ impl<N: Numeric> Servo<'_, N> {
                 }
             }
             ServoCmd::ClearFaults => {
-                self.faults = 0;
+                self.set_faults(0);
                 self.port.shared.faults.store(0, Ordering::Relaxed);
                 self.ring = [0; RING];
                 self.monitor.reset();

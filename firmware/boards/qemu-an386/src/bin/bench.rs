@@ -18,22 +18,22 @@ use cortex_m_semihosting::{debug, hprintln};
 use stiffwall_firmware::{
     Channels, Encoder, ForceOutput, Fx32, Fx64, Numeric, Servo, ServoCmd, F32,
 };
-use stiffwall_proto::ServoConfig;
+use stiffwall_proto::{DamperLaw, ServoConfig};
 
 const BATCHES: u32 = 40;
 const PER_BATCH: u32 = 200;
 /// Instructions per SysTick count with `-icount shift=0` and a 25 MHz SysTick clock.
 const INSTR_PER_COUNT: u64 = 40;
 
-/// Counts of a triangle sweep of ±256 counts around the wall, one count per tick.
+/// Counts of a triangle sweep of ±256·`step` counts around the wall, `step` counts per tick.
 const SWEEP_LEN: usize = 1024;
 
-fn sweep_table() -> [u32; SWEEP_LEN] {
+fn sweep_table(step: i32) -> [u32; SWEEP_LEN] {
     let mut t = [0u32; SWEEP_LEN];
     for (i, v) in t.iter_mut().enumerate() {
         let p = i as i32;
         let tri = if p < 512 { p - 256 } else { 768 - p };
-        *v = tri as u32 & 0xffff;
+        *v = (tri * step) as u32 & 0xffff;
     }
     t
 }
@@ -152,7 +152,7 @@ fn stages<N: Numeric>(baseline: u64) {
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
-    let table = black_box(sweep_table());
+    let table = black_box(sweep_table(1));
     let (mut enc, mut out) = (
         Sweep {
             table: &table,
@@ -213,11 +213,20 @@ fn stages<N: Numeric>(baseline: u64) {
             N::NAME
         );
     }
-    // The same full tick with the virtual damper on (B > 0): the sweep moves one count per
-    // tick, so the two-sided wall computes the damper term on every tick.
+    // The same full tick with the virtual damper on (B > 0, the default law: a dead band of
+    // one count): the sweep moves two counts per tick, beyond the dead band, so the two-sided
+    // wall computes the damper term on every tick.
     let damped = ServoConfig {
         damping: DAMPING_N_S_PER_M,
         ..cfg
+    };
+    if damped.damper != (DamperLaw::DeadBand { counts: 1 }) {
+        hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
+    }
+    let table2 = black_box(sweep_table(2));
+    let mut enc = Sweep {
+        table: &table2,
+        i: 0,
     };
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
