@@ -129,8 +129,11 @@ fn check(case: &PlantCase) -> Result<Checked, String> {
     if !o.rests {
         return Err(format!("tune says its wall does not rest: {line}"));
     }
-    if !(NEAR_OPTIMAL..=1.0).contains(&ratio) {
-        return Err(format!("outside [{NEAR_OPTIMAL}, 1] K*(B): {line}"));
+    // Above K*(B) is allowed only because every run at the set wall came to rest (checked
+    // above): with a damper the quiet K need not form one interval (maxon-re35-amp-3khz at
+    // B = 4.8e-3: a release from 7 counts chatters at 3.19, every run rests at 3.90).
+    if ratio < NEAR_OPTIMAL {
+        return Err(format!("below {NEAR_OPTIMAL} K*(B): {line}"));
     }
     Ok(Checked { line, gain })
 }

@@ -14,7 +14,7 @@ use super::verify::{Test, TestResult};
 use anyhow::Result;
 use stiffwall_client::Client;
 use stiffwall_core::criteria;
-use stiffwall_proto::ServoConfig;
+use stiffwall_proto::{DamperLaw, ServoConfig};
 
 /// The wall chosen: stiffness, damping, the verification at it and the frontier tried.
 pub(crate) struct Wall {
@@ -32,9 +32,11 @@ pub(crate) struct Wall {
 impl Wall {
     /// Every test of the verification set came to rest (or left a one-sided wall).
     pub(crate) fn rests(&self) -> bool {
-        self.verification
-            .iter()
-            .all(|r| r.verdict.settled() || r.verdict == Verdict::Departs)
+        self.verification.iter().all(|r| {
+            // An impact that was not launched says nothing about the wall (judged by the
+            // releases of the same energy).
+            r.verdict.settled() || matches!(r.verdict, Verdict::Departs | Verdict::NotLaunched)
+        })
     }
 }
 
@@ -138,7 +140,9 @@ pub(crate) fn choose_wall(
     let mut frontier = vec![FrontierPoint {
         b: 0.0,
         k_verified: Some(found.k_pass),
+        damper: base.damper,
     }];
+    let mut law = base.damper;
     let best = match run.s.damping {
         Damping::Fixed(b) if b > 0.0 => fixed_damping(
             run,
@@ -159,18 +163,33 @@ pub(crate) fn choose_wall(
                 thorough,
                 margin,
             };
-            search_frontier(run, c, base, &at, notes, &mut frontier)?
+            let best = search_frontier(run, c, base, &at, notes, &mut frontier)?;
+            if best.0 > 0.0 || run.s.damper.is_some() || base.damper == DamperLaw::Difference {
+                best
+            } else {
+                // The default law bought nothing here: the plain difference is stiffer on some
+                // devices (docs/DAMPER-LAWS.md), and is tried before the spring alone is set.
+                law = DamperLaw::Difference;
+                let plain = ServoConfig {
+                    damper: law,
+                    ..*base
+                };
+                search_frontier(run, c, &plain, &at, notes, &mut frontier)?
+            }
         }
     };
     if best.0 > 0.0 {
-        let cfg = damped(base, best.0);
+        let cfg = ServoConfig {
+            damper: law,
+            ..damped(base, best.0)
+        };
         if let Some((k_set, verification)) =
             run.confirm(c, &cfg, best.1 * margin.min(DAMPED_MARGIN), thorough, notes)?
         {
             return Ok(Wall {
                 k_set,
                 b_set: best.0,
-                damper: base.damper,
+                damper: law,
                 margin: margin.min(DAMPED_MARGIN),
                 k_spring_only: k_spring,
                 verification,
@@ -235,6 +254,7 @@ fn fixed_damping(
     frontier.push(FrontierPoint {
         b,
         k_verified: Some(f.k_pass),
+        damper: base.damper,
     });
     Ok((b, f.k_pass))
 }
@@ -268,7 +288,11 @@ fn search_frontier(
         let start = (k_pred * FRONTIER_START).clamp(floor, search.k_cap);
         let f = search_at(run, c, base, b, start, floor, search, at.thorough, notes)?;
         let k = f.map(|f| f.k_pass).filter(|&k| k >= floor);
-        frontier.push(FrontierPoint { b, k_verified: k });
+        frontier.push(FrontierPoint {
+            b,
+            k_verified: k,
+            damper: base.damper,
+        });
         if let Some(k) = k {
             return Ok((b, k));
         }

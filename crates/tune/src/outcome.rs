@@ -84,8 +84,18 @@ pub struct Outcome {
 pub struct FrontierPoint {
     /// Virtual damping B, N·s/m (N·m·s/rad).
     pub b: f64,
-    /// Largest settling K found at B, N/m (N·m/rad).
+    /// Largest resting K found at B, N/m (N·m/rad).
     pub k_verified: Option<f64>,
+    /// The damper's law at this B (`difference`, `dead-band-N`).
+    #[serde(serialize_with = "law_name")]
+    pub damper: stiffwall_proto::DamperLaw,
+}
+
+fn law_name<S: serde::Serializer>(
+    law: &stiffwall_proto::DamperLaw,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    s.collect_str(law)
 }
 
 /// Identified parameters as reported.

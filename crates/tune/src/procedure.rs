@@ -234,23 +234,33 @@ fn least_chatter_settings(s: &Settings) -> Settings {
     }
 }
 
-/// The quiet ceiling 2·max(c, F_s)/Δ of the identified device (`stiffwall_core::rest`), with
-/// F_s the smaller breakaway force the ramps measured (the side that holds less), N/m
-/// (N·m/rad).
+/// The quiet ceiling 2·max(c, F_s)/Δ of the identified device (`stiffwall_core::rest`), N/m
+/// (N·m/rad). F_s, the static friction, is c plus what the breakaway ramps measured beyond the
+/// identified model's breakaway on the same ramps (the side that holds less): the ramp's own
+/// overshoot, which the model's breakaway carries too, cancels (phantom-stiction: measured
+/// 0.0685 N, model 0.0519 N with c = 0.038 N, so F_s ≈ 0.0546 N; the plant's is 0.057 N).
 fn quiet_ceiling(ident: &Identification) -> f64 {
-    let breakaway = ident
-        .evidence
-        .breakaway_measured
+    let e = &ident.evidence;
+    let smallest = |v: &[Option<f64>; 2]| {
+        v.iter()
+            .flatten()
+            .map(|f| f.abs())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let measured = smallest(&e.breakaway_measured);
+    let model = e
+        .breakaway_model
         .iter()
         .flatten()
-        .copied()
-        .fold(f64::INFINITY, f64::min);
-    let static_n = if breakaway.is_finite() {
-        breakaway
+        .map(|f| f.abs())
+        .fold(0.0, f64::max);
+    let c = ident.p.coulomb;
+    let static_n = if measured.is_finite() {
+        c + (measured - model).max(0.0)
     } else {
-        0.0
+        c
     };
-    stiffwall_core::rest::quiet_ceiling(ident.p.coulomb, static_n, ident.p.resolution)
+    stiffwall_core::rest::quiet_ceiling(c, static_n, ident.p.resolution)
 }
 
 /// Why no wall rests on this device, in words (`failure`: the search's or verification's).
@@ -309,8 +319,16 @@ fn search_walls(
         slow_launch: std::cell::Cell::new(None),
         missed_launch: std::cell::Cell::new(None),
     };
+    // Above the quiet ceiling no count can hold the wall's force KΔ/2 against friction: a test
+    // that rests there rested on a bias (a hand or cable pulling to one side of the wall, a
+    // cogging detent) that a user does not keep in place, so no K above it is tried.
+    let device_cap = f64::from(c.info.limits.max_stiffness);
     let search = Search {
-        k_cap: f64::from(c.info.limits.max_stiffness),
+        k_cap: if ceiling > 0.0 {
+            device_cap.min(ceiling)
+        } else {
+            device_cap
+        },
         rel_tol: s.rel_tol,
         // Below a quarter of both the quiet ceiling (σ ≥ 2: friction holds the wall at four
         // counts either side) and the guaranteed limit (no growth at v), a spring that still
@@ -371,7 +389,7 @@ fn identify_and_predict(
     // as configured.
     let base = ServoConfig {
         damping: 0.0,
-        damper: s.damper,
+        damper: s.damper.unwrap_or_default(),
         energy_monitor: true,
         stiffness: 0.0,
         ..*original

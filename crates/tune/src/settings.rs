@@ -47,9 +47,10 @@ pub struct Settings {
     /// What a passing test must do: come to rest (default), or also chatter within one count
     /// ([`Criterion::AcceptChatter`], reported).
     pub criterion: Criterion,
-    /// The law of the virtual damper tried and set (default: a dead band of one count, which
-    /// measured stiffest over `sim/plants/`, docs/DAMPER-LAWS.md).
-    pub damper: stiffwall_proto::DamperLaw,
+    /// The law of the virtual damper tried and set. None (default): a dead band of one count
+    /// ([`DamperLaw::default`](stiffwall_proto::DamperLaw), stiffest over `sim/plants/` by
+    /// docs/DAMPER-LAWS.md), and the plain difference where that buys no stiffness.
+    pub damper: Option<stiffwall_proto::DamperLaw>,
 }
 
 /// How `tune` chooses the virtual damping B.
@@ -118,7 +119,7 @@ impl Default for Settings {
             damping: Damping::Search,
             dry_run: false,
             criterion: Criterion::Rest,
-            damper: stiffwall_proto::DamperLaw::default(),
+            damper: None,
         }
     }
 }
@@ -169,7 +170,7 @@ impl Settings {
         if !(self.rel_tol.is_finite() && self.rel_tol > 0.0 && self.rel_tol < 1.0) {
             return bad("rel_tol", "in (0, 1)", self.rel_tol.to_string());
         }
-        if let stiffwall_proto::DamperLaw::DeadBand { counts } = self.damper {
+        if let Some(law @ stiffwall_proto::DamperLaw::DeadBand { counts }) = self.damper {
             if !(1..=stiffwall_proto::MAX_DEADBAND_COUNTS).contains(&counts) {
                 return bad(
                     "damper",
@@ -177,7 +178,7 @@ impl Settings {
                         "`difference` or `dead-band-N` with N in 1..={}",
                         stiffwall_proto::MAX_DEADBAND_COUNTS
                     ),
-                    self.damper.to_string(),
+                    law.to_string(),
                 );
             }
         }

@@ -46,8 +46,9 @@ pub struct Args {
     /// The virtual damper's law, tried and set with B: `dead-band-N` (the count difference is
     /// no motion while |n − n_prev| ≤ N, N in 1..=8) or `difference` (the plain backward
     /// difference, which pulses B·Δ/T at every one-count toggle).
-    #[arg(long, value_name = "LAW", default_value = "dead-band-1")]
-    pub damper: String,
+    /// Default: `dead-band-1`, and `difference` where that buys no stiffness.
+    #[arg(long, value_name = "LAW")]
+    pub damper: Option<String>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -59,9 +60,14 @@ pub struct Args {
 
 /// Validates the numeric arguments (before any device is touched).
 pub fn settings(a: &Args) -> Result<Settings> {
-    let damper = a.damper.parse::<stiffwall_proto::DamperLaw>().map_err(|e| {
-        anyhow!("--damper: {e} (got {:?}); nothing was changed", a.damper)
-    })?;
+    let damper = a
+        .damper
+        .as_deref()
+        .map(|law| {
+            law.parse::<stiffwall_proto::DamperLaw>()
+                .map_err(|e| anyhow!("--damper: {e} (got {law:?}); nothing was changed"))
+        })
+        .transpose()?;
     let s = Settings {
         damper,
         damping: a
@@ -435,8 +441,9 @@ fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
         .frontier
         .iter()
         .map(|f| match f.k_verified {
-            Some(k) => format!("B={:.3e}: K={k:.4}", f.b),
-            None => format!("B={:.3e}: below the best K", f.b),
+            Some(k) if f.b > 0.0 => format!("B={:.3e} ({}): K={k:.4}", f.b, f.damper),
+            Some(k) => format!("B=0: K={k:.4}"),
+            None => format!("B={:.3e} ({}): below the best K", f.b, f.damper),
         })
         .collect();
     let _ = writeln!(s, "  frontier (largest resting K): {}", tried.join("; "));
