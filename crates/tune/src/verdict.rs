@@ -108,8 +108,8 @@ impl Verdict {
     #[must_use]
     pub fn describe(self) -> &'static str {
         match self {
-            Self::Settles => "settles",
-            Self::LocallyStable => "locally stable (settles after non-monotonic decay)",
+            Self::Settles => "comes to rest",
+            Self::LocallyStable => "comes to rest (after swings that grew at times)",
             Self::Departs => "leaves the one-sided wall",
             Self::Chatter => "chatter: keeps toggling between two counts, never comes to rest",
             Self::ChatterAccepted => {

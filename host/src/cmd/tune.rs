@@ -229,14 +229,15 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report, kb: Option<&Path>) -> Str
             let _ = writeln!(s, "  - {f}");
         }
     }
-    let _ = writeln!(
-        s,
-        "operating point at the set K: μ = {:.4}, β = {:.5}, σ = {:.4}, τ_D = {:.3}",
-        r.mu, r.beta, r.sigma, r.tau_d
-    );
-    let _ = writeln!(s, "region {:?}: {}", r.region, r.region_meaning);
     if o.b_set > 0.0 {
-        render_damped_point(&mut s, o, u.0);
+        render_damped_point(&mut s, o, r, u.0);
+    } else {
+        let _ = writeln!(
+            s,
+            "operating point at the set K: μ = {:.4}, β = {:.5}, σ = {:.4}, τ_D = {:.3}",
+            r.mu, r.beta, r.sigma, r.tau_d
+        );
+        let _ = writeln!(s, "region {:?}: {}", r.region, r.region_meaning);
     }
     let _ = writeln!(
         s,
@@ -335,13 +336,13 @@ fn render_limits(s: &mut String, o: &Outcome, u: Units) {
         .map_or("none below the cap".to_string(), |k| format!("{k:.5}"));
     let _ = writeln!(
         s,
-        "  verified: largest resting     {:>12.5}  (first failing {k_fail}, {} release tests)",
+        "  spring only: largest resting  {:>12.5}  (first failing {k_fail}, {} release tests)",
         o.search.k_pass,
         o.search.trials.len()
     );
     let _ = writeln!(
         s,
-        "  set (×{:.2}, verified)         {:>12.5}  {} tests: {}",
+        "  set (×{:.2} the largest resting K at its B) {:>12.5}, verified by {} tests: {}",
         o.margin_used,
         o.k_set,
         o.verification.len(),
@@ -387,14 +388,16 @@ fn render_rest(s: &mut String, o: &Outcome, u: Units) {
     let _ = writeln!(s, "{line}");
 }
 
-/// With a virtual damper the paper's (β, σ) regions above describe the spring alone: the
-/// linear sampled boundary with the damper (`criteria::k_max_exact_linear`) is printed beside.
-fn render_damped_point(s: &mut String, o: &Outcome, k_unit: &str) {
+/// With a virtual damper the paper's (β, σ) regions describe the spring alone, not the wall
+/// that was set: said so, with the linear sampled boundary with the damper
+/// (`criteria::k_max_exact_linear`) beside.
+fn render_damped_point(s: &mut String, o: &Outcome, r: &analysis::Report, k_unit: &str) {
     let _ = writeln!(
         s,
-        "  (the regions of the paper assume no virtual damper; with B = {:.4e} the region is \
-         that of the spring alone)",
-        o.b_set
+        "the spring alone at the set K (the paper's regions assume no virtual damper): μ = \
+         {:.4}, β = {:.5}, σ = {:.4}, τ_D = {:.3}, region {:?} ({}); the set wall adds the \
+         damper B = {:.4e} ({}), which the tests above verified",
+        r.mu, r.beta, r.sigma, r.tau_d, r.region, r.region_meaning, o.b_set, o.damper
     );
     let linear = stiffwall_core::criteria::k_max_exact_linear(&o.params, o.b_set);
     if let Ok(k) = linear {
