@@ -241,7 +241,7 @@ fn fixed_damping(
     frontier: &mut Vec<FrontierPoint>,
 ) -> Result<(f64, f64)> {
     let start = predicted_k(run, found.k_pass, b).map_or(found.k_pass, |k| {
-        (k * FRONTIER_START).clamp(found.k_pass * 1e-3, search.k_cap)
+        (k * FRONTIER_START).clamp((found.k_pass * 1e-3).min(search.k_cap), search.k_cap)
     });
     let floor = found.k_pass * 1e-3;
     let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
@@ -276,6 +276,11 @@ fn search_frontier(
     // The damper must buy DAMPING_MIN_GAIN of the stiffness *set*: its wall is set at
     // DAMPED_MARGIN of its largest settling K, the spring-only one at `margin`.
     let floor = found.k_pass * (1.0 + DAMPING_MIN_GAIN) * margin / margin.min(DAMPED_MARGIN);
+    if floor >= search.k_cap {
+        // The largest K the search may try (the quiet ceiling, or the firmware's limit) leaves
+        // no room for a damper to buy stiffness.
+        return Ok((0.0, found.k_pass));
+    }
     for (b, k_pred) in predicted_frontier(run, found.k_pass, cap)
         .into_iter()
         .take(FRONTIER_TRIES)
