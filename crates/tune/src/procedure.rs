@@ -235,28 +235,23 @@ fn least_chatter_settings(s: &Settings) -> Settings {
 }
 
 /// The quiet ceiling 2·max(c, F_s)/Δ of the identified device (`stiffwall_core::rest`), N/m
-/// (N·m/rad). F_s, the static friction, is c plus what the breakaway ramps measured beyond the
-/// identified model's breakaway on the same ramps (the side that holds less): the ramp's own
-/// overshoot, which the model's breakaway carries too, cancels (phantom-stiction: measured
-/// 0.0685 N, model 0.0519 N with c = 0.038 N, so F_s ≈ 0.0546 N; the plant's is 0.057 N).
+/// (N·m/rad). F_s, the static friction, is c plus the least, over the two directions, of what
+/// the breakaway ramp measured beyond the identified model's breakaway on the same ramp: the
+/// ramp's own overshoot and a spring's preload (a hand), which the model's breakaway carries
+/// too, cancel (phantom-stiction: measured 0.0685 N, model 0.0519 N, c = 0.038 N, so F_s ≈
+/// 0.0546 N, the plant's 0.057 N; phantom-realistic, with a hand: +0.0877/−0.0558 N measured,
+/// +0.0708/−0.0389 N model, 0.0169 N beyond it either way).
 fn quiet_ceiling(ident: &Identification) -> f64 {
     let e = &ident.evidence;
-    let smallest = |v: &[Option<f64>; 2]| {
-        v.iter()
-            .flatten()
-            .map(|f| f.abs())
-            .fold(f64::INFINITY, f64::min)
-    };
-    let measured = smallest(&e.breakaway_measured);
-    let model = e
-        .breakaway_model
+    let excess = e
+        .breakaway_measured
         .iter()
-        .flatten()
-        .map(|f| f.abs())
-        .fold(0.0, f64::max);
+        .zip(&e.breakaway_model)
+        .filter_map(|(m, model)| Some(m.as_ref()?.abs() - model.as_ref()?.abs()))
+        .fold(f64::INFINITY, f64::min);
     let c = ident.p.coulomb;
-    let static_n = if measured.is_finite() {
-        c + (measured - model).max(0.0)
+    let static_n = if excess.is_finite() {
+        c + excess.max(0.0)
     } else {
         c
     };
