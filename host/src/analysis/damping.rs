@@ -47,6 +47,25 @@ pub struct DampingReport {
     pub b_opt: f64,
     /// K_max at `b_opt`.
     pub k_max_opt: f64,
+    /// The quiet ceiling 2c/Δ (`stiffwall_core::rest::quiet_ceiling`, Coulomb friction only:
+    /// static friction raises it): above it no count can hold the wall's force KΔ/2.
+    pub quiet_ceiling: f64,
+    /// Where the operating point (K, B) lies of the three regions of the (K, B) plane:
+    /// `quiet` (K ≤ 2c/Δ and K ≤ K_max(B): a wall that can come to rest), `chatter` (2c/Δ < K
+    /// ≤ K_max(B): stable but toggling for ever), `growth` (K > K_max(B)).
+    pub region: &'static str,
+}
+
+/// The region of (K, B) of the three the (K, B) plane has ([`DampingReport::region`]).
+#[must_use]
+pub fn kb_region(k: f64, k_max: f64, quiet_ceiling: f64) -> &'static str {
+    if k > k_max {
+        "growth"
+    } else if k > quiet_ceiling {
+        "chatter"
+    } else {
+        "quiet"
+    }
 }
 
 /// Computes the damper analysis of `p` at virtual damping `b_set`.
@@ -56,10 +75,14 @@ pub struct DampingReport {
 pub fn damping_report(p: &PhysicalParams, b_set: f64) -> Result<DampingReport, ParamError> {
     criteria::check_damping(b_set)?;
     let f = criteria::frontier(p, FRONTIER_B_MAX_M_PER_T * p.mass / p.period_s)?;
+    let k_max = criteria::k_max_exact_linear(p, b_set)?;
+    let quiet_ceiling = stiffwall_core::rest::quiet_ceiling(p.coulomb, 0.0, p.resolution);
     Ok(DampingReport {
+        quiet_ceiling,
+        region: kb_region(p.stiffness, k_max, quiet_ceiling),
         b_set,
         beta_v: criteria::beta_v(b_set, p.stiffness, p.period_s),
-        k_max: criteria::k_max_exact_linear(p, b_set)?,
+        k_max,
         k_max_colgate_schenkel: criteria::k_max_colgate_schenkel_damped(p, b_set)?,
         k_max_small_b: criteria::k_max_small_b(p, b_set)?,
         stable: criteria::exact_linear_stable(p, b_set)?,
@@ -114,6 +137,24 @@ pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
     );
     let _ = writeln!(
         s,
+        "  three regions of (K, B): quiet below the quiet ceiling 2c/Δ = {:.5e} {k_u} (a wall \
+         can come to rest there; the plain backward-difference damper chatters well below it, a \
+         dead band of one count does not, docs/DAMPER-LAWS.md); chatter between it and \
+         K_max(B) (stable, but the count toggles for ever); growth above K_max(B)",
+        d.quiet_ceiling
+    );
+    let _ = writeln!(
+        s,
+        "  operating point: {} ({})",
+        d.region,
+        match d.region {
+            "quiet" => "below both: it can come to rest",
+            "chatter" => "above the quiet ceiling: no count can hold the wall's force KΔ/2, it toggles for ever",
+            _ => "above the growth boundary",
+        }
+    );
+    let _ = writeln!(
+        s,
         "  K_max(B), B linear in 0 ..= {FRONTIER_B_MAX_M_PER_T}·m/T:\n  {:>12} {:>12}",
         "B", "K_max"
     );
@@ -153,10 +194,9 @@ pub fn figure(d: &DampingReport, p: &PhysicalParams, device: Option<&str>) -> Fr
             k: p.stiffness,
             label: format!(
                 "operating point B = {:.4e}, K = {:.4e} ({})",
-                d.b_set,
-                p.stiffness,
-                if d.stable { "stable" } else { "UNSTABLE" }
+                d.b_set, p.stiffness, d.region
             ),
         }),
+        quiet_ceiling: Some(d.quiet_ceiling),
     }
 }

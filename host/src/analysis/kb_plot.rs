@@ -155,6 +155,9 @@ pub struct Frontier {
     pub best: Option<Mark>,
     /// The chosen pair or operating point (highlighted).
     pub chosen: Option<Mark>,
+    /// The quiet ceiling 2·max(c, F_s)/Δ (a horizontal line): above it no wall comes to rest
+    /// (the chatter band, up to the growth boundary K_max(B)). None: not drawn.
+    pub quiet_ceiling: Option<f64>,
 }
 
 impl Frontier {
@@ -169,6 +172,7 @@ impl Frontier {
         let ks = self.boundary.iter().map(|p| p.1).filter(|k| k.is_finite());
         let ks = ks.chain(self.verified.iter().filter_map(|v| v.1));
         let ks = ks.chain(self.spring_only).chain(marks.map(|m| m.k));
+        let ks = ks.chain(self.quiet_ceiling.filter(|k| k.is_finite()));
         let k_max = 1.35 * ks.fold(0.0, f64::max);
         let pos = |x: f64| if x > 0.0 && x.is_finite() { x } else { 1.0 };
         (pos(b_max), pos(k_max))
@@ -191,6 +195,7 @@ impl Figure for Frontier {
         axes(&mut chart, self.units)?;
         let label = Some(self.boundary_label.clone());
         draw_boundary(&mut chart, &self.boundary, (0.0, y1), label)?;
+        self.draw_quiet_ceiling(&mut chart, x1)?;
         self.draw_points(&mut chart)?;
         chart
             .configure_series_labels()
@@ -204,6 +209,34 @@ impl Figure for Frontier {
 }
 
 impl Frontier {
+    /// The quiet ceiling as a dashed horizontal line over the whole B axis: below it a wall can
+    /// come to rest; between it and K_max(B) it chatters; above K_max(B) it grows.
+    fn draw_quiet_ceiling<DB: DrawingBackend>(
+        &self,
+        chart: &mut KbChart<'_, DB>,
+        x1: f64,
+    ) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let Some(k) = self.quiet_ceiling.filter(|k| k.is_finite() && *k > 0.0) else {
+            return Ok(());
+        };
+        let purple = RGBColor(130, 60, 170);
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(0.0, k), (x1, k)],
+                8,
+                5,
+                purple.stroke_width(2),
+            ))?
+            .label(format!(
+                "quiet ceiling 2c/Δ = {k:.4e}: above it every wall chatters (up to K_max(B); above that it grows)"
+            ))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], purple.stroke_width(2)));
+        Ok(())
+    }
+
     fn draw_points<DB: DrawingBackend>(&self, chart: &mut KbChart<'_, DB>) -> Result<()>
     where
         DB::ErrorType: 'static,
@@ -217,7 +250,7 @@ impl Frontier {
         if !ok.is_empty() {
             chart
                 .draw_series(ok.iter().map(|&p| Circle::new(p, 5, blue.filled())))?
-                .label("verified: largest settling K at each B tried")
+                .label("verified: largest resting K at each B tried")
                 .legend(move |(x, y)| Circle::new((x + 9, y), 5, blue.filled()));
         }
         let none: Vec<f64> = self
@@ -311,6 +344,7 @@ mod tests {
                 k: 100.0,
                 label: "set wall".into(),
             }),
+            quiet_ceiling: None,
         }
     }
 

@@ -198,10 +198,16 @@ fn kb_figure(o: &Outcome) -> kb_plot::Frontier {
             b: o.b_set,
             k: o.k_set,
             label: format!(
-                "set wall K = {:.4e} {}, B = {:.4e} {}",
-                o.k_set, u.k, o.b_set, u.b
+                "set wall K = {:.4e} {}, B = {:.4e} {} ({}{})",
+                o.k_set,
+                u.k,
+                o.b_set,
+                u.b,
+                o.damper,
+                if o.rests { ", rests" } else { ", chatters" }
             ),
         }),
+        quiet_ceiling: (o.quiet_ceiling > 0.0).then_some(o.quiet_ceiling),
     }
 }
 
