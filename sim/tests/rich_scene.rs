@@ -363,6 +363,69 @@ hand = { kind = "none" }
     assert!(e.contains("virtual_damping_ns_per_m"), "{e}");
 }
 
+/// `[controller] damper`: the virtual device's damper law, read as written (absent: `None`,
+/// the firmware's default), refused naming the key and the allowed forms when misspelt or out
+/// of range, and only in physical scenes. The solvers' trajectory does not depend on it.
+#[test]
+fn damper_law_is_read_and_checked() {
+    use stiffwall_sim::rich::{WallDamper, MAX_DAMPER_DEAD_BAND};
+    let with = |law: &str| {
+        PHYS.replace(
+            "period_s = 1e-3\n",
+            &format!("period_s = 1e-3\nvirtual_damping_ns_per_m = 1.2\ndamper = {law:?}\n"),
+        )
+    };
+    assert_eq!(PlantModel::from_scene_toml(PHYS).unwrap().1.damper, None);
+    assert_eq!(MAX_DAMPER_DEAD_BAND, 8);
+    for (law, want) in [
+        ("difference", WallDamper::Difference),
+        ("dead-band-1", WallDamper::DeadBand(1)),
+        ("dead-band-8", WallDamper::DeadBand(8)),
+    ] {
+        let (_, c) = PlantModel::from_scene_toml(&with(law)).unwrap();
+        assert_eq!(c.damper, Some(want), "{law}");
+        assert_eq!(want.to_string(), law);
+        let s = Scene::from_toml(&with(law)).unwrap();
+        assert_eq!(s.rich.unwrap().controller.damper, Some(want));
+    }
+    let plain = rows(&Scene::from_toml(&with("difference")).unwrap());
+    assert_eq!(
+        rows(&Scene::from_toml(&with("dead-band-2")).unwrap()),
+        plain
+    );
+    for bad in [
+        "dead-band-0",
+        "dead-band-9",
+        "dead-band-01",
+        "dead-band-",
+        "dead-band-256",
+        "Difference",
+        "deadband-1",
+        "",
+    ] {
+        let e = PlantModel::from_scene_toml(&with(bad))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("controller.damper")
+                && e.contains(&format!("{bad:?}"))
+                && e.contains("\"difference\" and \"dead-band-N\" with N in 1..=8"),
+            "{bad}: {e}"
+        );
+    }
+    // Not a string: refused by the TOML layer, naming the key.
+    let e = PlantModel::from_scene_toml(
+        &PHYS.replace("period_s = 1e-3\n", "period_s = 1e-3\ndamper = 1\n"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("damper"), "{e}");
+    let dimless = include_str!("../scenes/base.toml")
+        .replace("[controller]\n", "[controller]\ndamper = \"difference\"\n");
+    let e = Scene::from_toml(&dimless).unwrap_err().to_string();
+    assert!(e.contains("damper") && e.contains("physical scenes"), "{e}");
+}
+
 /// The reference integrators run a scene's virtual damper too: Dormand–Prince on the damped
 /// scene follows the exact solver on it (and not the undamped one).
 #[test]

@@ -41,5 +41,6 @@ pub mod plant;
 pub use crate::dopri::{OdeMethod, OdeStats};
 pub use model::{
     Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission,
+    WallDamper, MAX_DAMPER_DEAD_BAND,
 };
 pub use plant::{RichPlant, State, NS};

@@ -73,6 +73,53 @@ pub struct HandSi {
     pub stiffness_n_per_m: f64,
 }
 
+/// Largest dead band of [`WallDamper::DeadBand`], counts per tick (the firmware's
+/// `stiffwall_proto::MAX_DEADBAND_COUNTS`).
+pub const MAX_DAMPER_DEAD_BAND: u8 = 8;
+
+/// How the virtual device's wall damper turns the count difference dn = n_h − n_(h−1) into a
+/// velocity (`controller.damper`; the firmware's `DamperLaw`). Part of the boot configuration
+/// only: this crate's simulators damp the plain difference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WallDamper {
+    /// `"difference"`: v = dn.
+    Difference,
+    /// `"dead-band-N"`: v = 0 when |dn| ≤ N counts, else v = dn (N in
+    /// 1..=[`MAX_DAMPER_DEAD_BAND`]).
+    DeadBand(u8),
+}
+
+impl WallDamper {
+    /// Parses `"difference"` or `"dead-band-N"` (N decimal without sign or leading zeros, in
+    /// 1..=[`MAX_DAMPER_DEAD_BAND`]); `None` for anything else.
+    #[must_use]
+    pub fn parse(s: &str) -> Option<Self> {
+        if s == "difference" {
+            return Some(Self::Difference);
+        }
+        let digits = s.strip_prefix("dead-band-")?;
+        if digits.is_empty() || digits.len() > 3 || digits.starts_with('0') {
+            return None;
+        }
+        if !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        let n: u8 = digits.parse().ok()?;
+        (1..=MAX_DAMPER_DEAD_BAND)
+            .contains(&n)
+            .then_some(Self::DeadBand(n))
+    }
+}
+
+impl core::fmt::Display for WallDamper {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Difference => f.write_str("difference"),
+            Self::DeadBand(n) => write!(f, "dead-band-{n}"),
+        }
+    }
+}
+
 /// The controller of a scene (boot configuration of the virtual device).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Controller {
@@ -90,6 +137,9 @@ pub struct Controller {
     pub one_sided: bool,
     /// Quantised position in the spring law (eq. (8)); `false`: the ideal spring.
     pub quantization: bool,
+    /// The wall damper's law on the virtual device (`controller.damper`; `None`: not given,
+    /// the firmware's default). The simulators here damp the plain difference.
+    pub damper: Option<WallDamper>,
 }
 
 /// The validated physical plant.

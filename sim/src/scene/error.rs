@@ -46,6 +46,17 @@ pub enum SceneError {
     /// [`crate::scene::Scene::from_toml`]).
     #[error("solver: {0}")]
     Solver(ParamError),
+    /// `controller.damper` is not one of its forms (`"difference"`, `"dead-band-N"` with N in
+    /// 1..=[`crate::rich::MAX_DAMPER_DEAD_BAND`]).
+    #[error(
+        "controller.damper = {value:?}: allowed forms are \"difference\" and \"dead-band-N\" with N \
+         in 1..={max} (a dead band of N counts per tick; \"difference\" for none)",
+        max = crate::rich::MAX_DAMPER_DEAD_BAND
+    )]
+    Damper {
+        /// The value given.
+        value: String,
+    },
     /// A plant-effect key beyond the paper (stiction, cogging, transmission, amplifier limits,
     /// `counts_per_rev`: [`crate::rich`]) refused; the message names the key and the range.
     #[error("{0}")]

@@ -4,7 +4,9 @@
 //! `initial.xi/xidot` in ticks and ticks per period) or **physical** (`device.mass_kg`,
 //! `viscous_ns_per_m`, `coulomb_n`, `resolution_m`, `controller.stiffness_n_per_m`, `period_s`,
 //! `extra_delay_s`, the optional `controller.virtual_damping_ns_per_m` = B of the wall law
-//! F = −K·Δ·(n+½) − B·Δ·(n_h − n_(h−1))/T, default 0, solved as β_v = B/(K·T),
+//! F = −K·Δ·(n+½) − B·Δ·(n_h − n_(h−1))/T, default 0, solved as β_v = B/(K·T); the optional
+//! `controller.damper` = `"difference"` or `"dead-band-N"` is the virtual device's damper law
+//! (its boot configuration; the simulators here damp the plain difference),
 //! `initial.position_m/velocity_m_per_s`), converted once with Table I of
 //! `stiffwall_core`. Every effect is stated explicitly in `[effects]` (all keys required).
 //! Unknown keys, missing keys, mixed unit systems and out-of-range values are [`SceneError`]s
@@ -45,6 +47,7 @@ impl Scene {
     /// [`SceneError`] naming the offending key.
     pub fn from_toml(text: &str) -> Result<Self, SceneError> {
         let raw: raw::RawScene = toml::from_str(text)?;
+        let damper = raw.controller.damper.clone();
         let e = &raw.effects;
         let (force_limit_n, deadband_n) = e.amplifier.limits();
         let keys = plant_keys::RichKeys {
@@ -54,8 +57,13 @@ impl Scene {
             transmission: e.transmission,
             force_limit_n,
             deadband_n,
+            damper: None,
         };
         let (mut scene, scale) = resolve::resolve(raw)?;
+        let keys = plant_keys::RichKeys {
+            damper: resolve::damper(damper.as_deref())?,
+            ..keys
+        };
         let scale = scale.map(|s| (s.stiffness, s.period_s, s.resolution));
         scene.rich = plant_keys::attach(&scene, scale, keys)?;
         Ok(scene)

@@ -19,6 +19,7 @@ use crate::dopri::OdeMethod;
 use crate::reference::Method;
 use crate::rich::{
     Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission,
+    WallDamper,
 };
 
 /// The plant-effect keys of a scene, collected by [`crate::scene::Scene::from_toml`].
@@ -36,6 +37,8 @@ pub(super) struct RichKeys {
     pub(super) force_limit_n: Option<f64>,
     /// `effects.amplifier.deadband_n`.
     pub(super) deadband_n: Option<f64>,
+    /// `controller.damper` (the virtual device's damper law; not a plant effect).
+    pub(super) damper: Option<WallDamper>,
 }
 
 impl RichKeys {
@@ -112,6 +115,7 @@ pub(super) fn attach(
             extra_delay_s: p.tau_d * t,
             one_sided: e.one_sided,
             quantization: e.quantization,
+            damper: keys.damper,
         },
         method,
     }))

@@ -39,6 +39,9 @@ pub(super) struct RawController {
     pub stiffness_n_per_m: Option<f64>,
     /// Virtual damping B of the wall, N·s/m (N·m·s/rad for rotary files); default 0.
     pub virtual_damping_ns_per_m: Option<f64>,
+    /// The wall damper's law on the virtual device, `"difference"` or `"dead-band-N"`; default
+    /// the firmware's (a dead band of one count).
+    pub damper: Option<String>,
     pub period_s: Option<f64>,
     pub extra_delay_s: Option<f64>,
     pub tau_d: Option<f64>,

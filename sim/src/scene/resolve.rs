@@ -16,6 +16,7 @@ use crate::exact::MAX_BETA_V;
 use crate::params::{Effects, Params, MAX_TAU_D};
 use crate::plant::Motion;
 use crate::reference::{AmpFilter, Hand, Method};
+use crate::rich::WallDamper;
 use stiffwall_core::params::{amplifier_delay, check_range, PhysicalParams, Scale};
 
 /// `check_range` with the error converted to a [`SceneError`].
@@ -71,11 +72,12 @@ fn dimensionless(d: &RawDevice, c: &RawController) -> Result<(Params, Option<Sca
         || c.period_s.is_some()
         || c.extra_delay_s.is_some()
         || c.virtual_damping_ns_per_m.is_some()
+        || c.damper.is_some()
     {
         return conflict(
             "controller",
-            "stiffness_n_per_m, virtual_damping_ns_per_m, period_s, extra_delay_s belong to \
-             physical scenes; a dimensionless scene uses controller.tau_d",
+            "stiffness_n_per_m, virtual_damping_ns_per_m, damper, period_s, extra_delay_s \
+             belong to physical scenes; a dimensionless scene uses controller.tau_d",
         );
     }
     let params = Params {
@@ -180,6 +182,18 @@ fn virtual_damping(raw: &RawScene, scale: Option<Scale>) -> Result<f64, SceneErr
         "[0, 1000 K T] N s/m (beta_v = B/(K T) at most 1000)",
     )?;
     Ok(b / kt)
+}
+
+/// `controller.damper`: the virtual device's damper law, `"difference"` or `"dead-band-N"`
+/// (`None` when not given: the firmware's default).
+pub(super) fn damper(value: Option<&str>) -> Result<Option<WallDamper>, SceneError> {
+    value
+        .map(|v| {
+            WallDamper::parse(v).ok_or_else(|| SceneError::Damper {
+                value: v.to_owned(),
+            })
+        })
+        .transpose()
 }
 
 /// Largest amplifier bandwidth ω, rad per sampling period: the reference solvers resolve the
