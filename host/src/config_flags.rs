@@ -10,7 +10,7 @@
 use crate::device::client::Client;
 use crate::device::connect::ConnectArgs;
 use anyhow::{bail, Context, Result};
-use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
+use stiffwall_proto::{DamperLaw, ParseDamperLawError, SafeMode, ServoConfig, WallMode};
 
 /// `on` / `off`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Deserialize)]
@@ -97,6 +97,30 @@ pub struct Overrides {
     /// Virtual damping in safe mode `damping` [N·s/m or N·m·s/rad], >= 0.
     #[arg(long, allow_negative_numbers = true)]
     pub safe_damping: Option<f32>,
+    /// How the wall's virtual damper turns the count difference dn into a velocity:
+    /// `difference` (v = dn) or `dead-band-N` (v = 0 while |dn| <= N counts per tick, N in
+    /// 1..=8).
+    #[arg(long, value_name = "difference|dead-band-N", value_parser = parse_damper)]
+    #[serde(default, deserialize_with = "deserialize_damper")]
+    pub damper: Option<DamperLaw>,
+}
+
+/// `--damper`'s value: exactly `difference` or `dead-band-N` (N in 1..=8).
+///
+/// # Errors
+/// The allowed forms, or the dead band's range.
+pub fn parse_damper(s: &str) -> Result<DamperLaw, ParseDamperLawError> {
+    s.parse()
+}
+
+/// `damper` of a JSON `set` (`hostctl ui`): the flag's text form, `"dead-band-1"`.
+fn deserialize_damper<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<DamperLaw>, D::Error> {
+    let s = <String as serde::Deserialize>::deserialize(d)?;
+    parse_damper(&s)
+        .map(Some)
+        .map_err(|e| serde::de::Error::custom(format!("{s:?}: {e}")))
 }
 
 /// The `hostctl` flag that sets a config field (`--stiffness` for `ConfigField::Stiffness`), or
@@ -121,6 +145,7 @@ pub fn flag_name(field: stiffwall_proto::ConfigField) -> &'static str {
         F::HeartbeatTimeoutMs => "--heartbeat-timeout-ms",
         F::SafeMode => "--safe-mode",
         F::SafeDamping => "--safe-damping",
+        F::Damper => "--damper",
         F::Argument => "argument",
     }
 }
@@ -137,6 +162,14 @@ pub enum FlagError {
         value: f32,
         /// The allowed range, `> 0` or `>= 0`.
         range: &'static str,
+    },
+    /// A damper law outside the firmware's (a dead band out of range).
+    #[error("--damper {value}: {reason}")]
+    Damper {
+        /// The law given.
+        value: DamperLaw,
+        /// What is wrong with it.
+        reason: ParseDamperLawError,
     },
     /// An integer field.
     #[error("--{flag} must be within [{lo}, {hi}] (got {value})")]
@@ -198,6 +231,7 @@ impl Overrides {
             && self.heartbeat_timeout_ms.is_none()
             && self.safe_mode.is_none()
             && self.safe_damping.is_none()
+            && self.damper.is_none()
     }
 
     /// `base` with the given fields changed; host-side validation of each given number.
@@ -270,6 +304,11 @@ impl Overrides {
         if let Some(v) = self.safe_damping {
             c.safe_damping = real("safe-damping", v, false)?;
         }
+        if let Some(d) = self.damper {
+            // Parsed values are in range; a value built otherwise is checked as the text is.
+            c.damper = parse_damper(&d.to_string())
+                .map_err(|reason| FlagError::Damper { value: d, reason })?;
+        }
         Ok(c)
     }
 
@@ -302,5 +341,83 @@ impl Overrides {
                 .context("applying the config changes")?
         };
         Ok((client, cfg))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn damper_flag_takes_exactly_the_laws_text_forms() {
+        assert_eq!(parse_damper("difference"), Ok(DamperLaw::Difference));
+        assert_eq!(
+            parse_damper("dead-band-3"),
+            Ok(DamperLaw::DeadBand { counts: 3 })
+        );
+        let e = parse_damper("dead-band-0").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "dead band 0 counts is outside 1..=8 (use `difference` for no dead band)"
+        );
+        let e = parse_damper("deadband").unwrap_err().to_string();
+        assert!(e.contains("`difference` and `dead-band-N`"), "{e}");
+        assert_eq!(flag_name(stiffwall_proto::ConfigField::Damper), "--damper");
+    }
+
+    #[test]
+    fn damper_override_sets_the_law_and_nothing_else() {
+        let base = ServoConfig {
+            damper: DamperLaw::Difference,
+            ..ServoConfig::default()
+        };
+        let o = Overrides {
+            damper: Some(DamperLaw::DeadBand { counts: 2 }),
+            ..Overrides::default()
+        };
+        assert!(!o.is_empty());
+        let got = o.apply(&base).unwrap();
+        assert_eq!(
+            got,
+            ServoConfig {
+                damper: DamperLaw::DeadBand { counts: 2 },
+                ..base
+            }
+        );
+        // A law built past the parser is checked as its text would be.
+        let bad = Overrides {
+            damper: Some(DamperLaw::DeadBand { counts: 9 }),
+            ..Overrides::default()
+        };
+        assert_eq!(
+            bad.apply(&base).unwrap_err().to_string(),
+            "--damper dead-band-9: dead band 9 counts is outside 1..=8 (use `difference` for no \
+             dead band)"
+        );
+    }
+
+    /// `hostctl ui`'s JSON `set` spells the law as the flag does.
+    #[test]
+    fn damper_reads_from_json_as_text() {
+        let o: Overrides =
+            serde_json::from_value(serde_json::json!({"damper": "difference"})).unwrap();
+        assert_eq!(o.damper, Some(DamperLaw::Difference));
+        let o: Overrides = serde_json::from_value(serde_json::json!({})).unwrap();
+        assert_eq!(o.damper, None);
+        for bad in [
+            serde_json::json!({"damper": "dead-band-0"}),
+            serde_json::json!({"damper": "Difference"}),
+            serde_json::json!({"damper": 1}),
+            serde_json::json!({"damper": {"DeadBand": {"counts": 1}}}),
+        ] {
+            let e = serde_json::from_value::<Overrides>(bad.clone())
+                .unwrap_err()
+                .to_string();
+            assert!(!e.is_empty(), "{bad}");
+        }
+        let e = serde_json::from_value::<Overrides>(serde_json::json!({"damper": "dead-band-0"}))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("dead-band-0") && e.contains("1..=8"), "{e}");
     }
 }

@@ -235,3 +235,49 @@ fn virtual_damping_is_the_boot_damping_and_is_range_checked() {
         );
     }
 }
+
+/// `[controller] damper` is the virtual device's boot damper law (`config get` shows it, as
+/// text and in the JSON); without it the firmware's default, a dead band of one count; a
+/// misspelt or out-of-range law is refused naming the key and the allowed forms.
+#[test]
+fn damper_is_the_boot_damper_law_and_is_checked() {
+    let with = |law: &str| {
+        PLANT.replace(
+            "period_s = 1e-3\n",
+            &format!("period_s = 1e-3\nvirtual_damping_ns_per_m = 0.002\ndamper = {law:?}\n"),
+        )
+    };
+    let get = |p: &PathBuf, json: bool| {
+        let mut args = vec!["config", "get", "--plant", p.to_str().unwrap(), "--fast"];
+        if json {
+            args.push("--json");
+        }
+        ok(&args)
+    };
+    let p = file("rig-difference.toml", &with("difference"));
+    let text = get(&p, false);
+    assert!(
+        text.lines()
+            .any(|l| l.split_whitespace().collect::<Vec<_>>() == ["damper", "difference"]),
+        "{text}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&get(&p, true)).unwrap();
+    assert_eq!(v["damper"], "Difference", "{v}");
+    let p = file("rig-dead-band-3.toml", &with("dead-band-3"));
+    let v: serde_json::Value = serde_json::from_str(&get(&p, true)).unwrap();
+    assert_eq!(v["damper"]["DeadBand"]["counts"], 3, "{v}");
+    let p = file("rig-default-damper.toml", PLANT);
+    assert!(get(&p, false).contains("dead-band-1"));
+    for (i, bad) in ["dead-band-0", "dead-band-9", "Difference"]
+        .iter()
+        .enumerate()
+    {
+        let p = file(&format!("rig-damper-bad{i}.toml"), &with(bad));
+        let err = fails(&["info", "--plant", p.to_str().unwrap(), "--fast"]);
+        assert!(
+            err.contains("controller.damper")
+                && err.contains("\"difference\" and \"dead-band-N\" with N in 1..=8"),
+            "{bad}: {err}"
+        );
+    }
+}

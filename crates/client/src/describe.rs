@@ -33,7 +33,15 @@ pub fn describe_error_named(code: ErrorCode, detail: &ErrorDetail, label: FieldL
         ErrorDetail::Field { field, min, max } => {
             // The device sends f32 bounds; a lower bound of f32::MIN_POSITIVE means "> 0".
             let name = label(*field);
-            if *min == f64::from(f32::MIN_POSITIVE) {
+            if *field == ConfigField::Damper {
+                // The range is the dead band's, in counts.
+                format!(
+                    "{what}: {name}: the dead band must be within [{}, {}] counts (use \
+                     `difference` for no dead band)",
+                    readable(*min),
+                    readable(*max)
+                )
+            } else if *min == f64::from(f32::MIN_POSITIVE) {
                 format!("{what}: {name} must be > 0 and ≤ {}", readable(*max))
             } else {
                 format!(
@@ -87,4 +95,28 @@ pub(crate) fn is_framing(code: ErrorCode) -> bool {
 /// A device reply to a frame that did not decode (see [`is_framing`]).
 pub(crate) fn is_framing_reply(m: &DeviceMsg) -> bool {
     matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refused_damper_names_its_dead_band_in_counts() {
+        let detail = ErrorDetail::Field {
+            field: ConfigField::Damper,
+            min: 1.0,
+            max: 8.0,
+        };
+        assert_eq!(
+            describe_error(ErrorCode::InvalidConfig, &detail),
+            "configuration refused: damper: the dead band must be within [1, 8] counts (use \
+             `difference` for no dead band)"
+        );
+        assert_eq!(
+            describe_error_named(ErrorCode::InvalidConfig, &detail, |_| "--damper"),
+            "configuration refused: --damper: the dead band must be within [1, 8] counts (use \
+             `difference` for no dead band)"
+        );
+    }
 }

@@ -548,6 +548,28 @@ mod tests {
         assert_eq!(r.segments(), [0..2, 2..3]);
     }
 
+    /// A recording written before protocol 2 has no `damper` in its config line: it reads as
+    /// the plain difference it ran with (so `hostctl replay` replays it bit for bit).
+    #[test]
+    fn a_config_line_without_damper_reads_as_the_plain_difference() {
+        let text = sample_file();
+        let line = text.lines().find(|l| l.starts_with("# config: ")).unwrap();
+        assert!(
+            line.contains(r#","damper":{"DeadBand":{"counts":1}}}"#),
+            "{line}"
+        );
+        let old = text.replace(r#","damper":{"DeadBand":{"counts":1}}}"#, "}");
+        assert_ne!(old, text);
+        let r = parse(&old).unwrap();
+        assert_eq!(
+            r.header.config,
+            ServoConfig {
+                damper: stiffwall_proto::DamperLaw::Difference,
+                ..ServoConfig::default()
+            }
+        );
+    }
+
     fn err_of(text: &str) -> String {
         format!("{:#}", parse(text).unwrap_err())
     }

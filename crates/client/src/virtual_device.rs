@@ -30,8 +30,12 @@ use stiffwall_firmware::{
     BoardInfo, ByteLink, Channels, ConfigStore, Device, HeldCode, MemStorage, SampledCount, Servo,
 };
 use stiffwall_proto::ServoConfig;
-use stiffwall_proto::WallMode;
-use stiffwall_sim::rich::{Controller, PlantModel, RichPlant};
+use stiffwall_proto::{DamperLaw, WallMode};
+use stiffwall_sim::rich::{Controller, PlantModel, RichPlant, WallDamper};
+
+// A plant file's `controller.damper` takes the firmware's dead bands.
+const _: () =
+    assert!(stiffwall_sim::rich::MAX_DAMPER_DEAD_BAND == stiffwall_proto::MAX_DEADBAND_COUNTS);
 
 /// Bytes waiting for the host above which the fast virtual device pauses its servo.
 pub const FAST_BACKLOG: usize = 2048;
@@ -70,6 +74,14 @@ pub struct ScenePlant {
     pub model: PlantModel,
     /// `[controller]`: the boot configuration.
     pub controller: Controller,
+}
+
+/// A plant file's `controller.damper` as the firmware's law.
+fn damper_law(d: WallDamper) -> DamperLaw {
+    match d {
+        WallDamper::Difference => DamperLaw::Difference,
+        WallDamper::DeadBand(counts) => DamperLaw::DeadBand { counts },
+    }
 }
 
 impl Spec {
@@ -117,6 +129,7 @@ impl Spec {
                 ),
                 F::ServoRateHz => ("controller.period_s", 1.0 / e.max, 1.0 / e.min, "s"),
                 F::ExtraDelayTicks => ("controller.extra_delay_s", e.min * t, e.max * t, "s"),
+                F::Damper => ("controller.damper's dead band", e.min, e.max, "counts"),
                 _ => ("the boot configuration", e.min, e.max, ""),
             };
             return Err(plant_error(format!(
@@ -158,7 +171,8 @@ impl Spec {
     }
 
     /// Boot configuration: wall off (a plant file: its controller's stiffness, virtual damping
-    /// `controller.virtual_damping_ns_per_m`, extra delay in
+    /// `controller.virtual_damping_ns_per_m`, damper law `controller.damper` (when given; else
+    /// the firmware's default), extra delay in
     /// whole ticks and wall mode), the spec's servo rate, force limit at full scale. In fast
     /// mode the heartbeat watchdog is off: device time then runs many times faster than the
     /// host's clock, so a heartbeat timeout counted in servo ticks would trip spuriously.
@@ -178,6 +192,7 @@ impl Spec {
             Some(c) => ServoConfig {
                 stiffness: c.stiffness_n_per_m as f32,
                 damping: c.virtual_damping_ns_per_m as f32,
+                damper: c.damper.map_or(base.damper, damper_law),
                 extra_delay_ticks: (c.extra_delay_s / c.period_s).round().clamp(0.0, 255.0) as u8,
                 wall: if c.one_sided {
                     WallMode::OneSided

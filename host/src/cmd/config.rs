@@ -17,7 +17,7 @@ use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
 /// Arguments of `hostctl config`.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Examples:\n  hostctl config get --json\n  hostctl config set --stiffness 2.5 --delay-ticks 1\n  hostctl config set --rate 5000 --energy-monitor off\n  hostctl config save\n  hostctl config defaults\n\nThe built-in virtual device starts afresh with every hostctl run, so a `config set` on it\nlasts for that run only: `stream` and `record` take the same field flags (e.g.\n`hostctl record out.csv --stiffness 2 --rate 5000`)."
+    after_help = "Examples:\n  hostctl config get --json\n  hostctl config set --stiffness 2.5 --delay-ticks 1\n  hostctl config set --damping 0.01 --damper dead-band-1\n  hostctl config set --rate 5000 --energy-monitor off\n  hostctl config save\n  hostctl config defaults\n\nThe built-in virtual device starts afresh with every hostctl run, so a `config set` on it\nlasts for that run only: `stream` and `record` take the same field flags (e.g.\n`hostctl record out.csv --stiffness 2 --rate 5000`)."
 )]
 pub struct Args {
     /// What to do.
@@ -48,9 +48,10 @@ pub enum Action {
 #[must_use]
 pub fn render(c: &ServoConfig) -> String {
     let mut s = String::new();
-    let rows: [(&str, String); 16] = [
+    let rows: [(&str, String); 17] = [
         ("stiffness", format!("{} N/m (N·m/rad)", c.stiffness)),
         ("damping", format!("{} N·s/m (N·m·s/rad)", c.damping)),
+        ("damper", c.damper.to_string()),
         ("rate", format!("{} Hz", c.servo_rate_hz)),
         ("delay-ticks", c.extra_delay_ticks.to_string()),
         ("coarsen-shift", c.coarsen_shift.to_string()),

@@ -9,7 +9,8 @@
 //! τ_D = T_D/T and β_v = B/(KT), then simulated by the same exact solver, horizon and classes
 //! as the (β, σ) map (quantization, Coulomb, viscous, delay, two-sided wall, ξ₀ = 0). That
 //! solver knows only the paper's rigid plant: a plant file's stiction, cogging, transmission,
-//! amplifier filter/dead band/saturation, hand and one-sided wall are NOT simulated (they are
+//! amplifier filter/dead band/saturation, hand, one-sided wall and a damper law with a dead
+//! band (`controller.damper`; B damps the plain difference here) are NOT simulated (they are
 //! listed under `plant.ignored` in the JSON and on standard error). The predicted boundary is
 //! core's exact sampled linear K_max(B) (`criteria::k_max_exact_linear`: ZOH, backward
 //! difference, b, T_D; no quantization or Coulomb).
@@ -134,6 +135,7 @@ fn point(plant: &Plant, spec: &KbSpec, index: usize) -> KbPoint {
         h0: o.h0,
         h_end: o.h_end,
         tail_amplitude: o.tail_amplitude,
+        chatter: super::kb_file::is_chatter(o.class, o.tail_amplitude),
         linear_stable: criteria::exact_linear_stable(&phys, b).unwrap_or(false),
     }
 }
@@ -180,8 +182,9 @@ pub fn compute(plant: &Plant, spec: &KbSpec, progress: &(dyn Fn() + Sync)) -> Kb
     }
 }
 
-fn class_char(c: Class) -> char {
+fn class_char(c: Class, chatter: bool) -> char {
     match c {
+        Class::Persistent if chatter => 'c',
         Class::Growing => '#',
         Class::Persistent => 'o',
         Class::NonMonotoneDecay => '~',
@@ -199,12 +202,13 @@ pub fn render(m: &KbFile) -> String {
         let _ = writeln!(out, "not simulated: {}", m.plant.ignored.join(", "));
     }
     let count = |c: Class| m.points.iter().filter(|p| p.class == c).count();
+    let chatter = m.points.iter().filter(|p| p.chatter).count();
     let _ = writeln!(
         out,
-        "{} points: growing {} (#), persistent {} (o), non-monotone decay {} (~), monotone decay {} (.); linear-stable {}",
+        "{} points: growing {} (#), persistent {} (o), chatter within one count {chatter} (c), non-monotone decay {} (~), monotone decay {} (.); linear-stable {}",
         m.points.len(),
         count(Class::Growing),
-        count(Class::Persistent),
+        count(Class::Persistent) - chatter,
         count(Class::NonMonotoneDecay),
         count(Class::MonotoneDecay),
         m.points.iter().filter(|p| p.linear_stable).count()
@@ -215,7 +219,7 @@ pub fn render(m: &KbFile) -> String {
         u.k, s.k.hi, u.b, s.b.lo, s.b.hi
     );
     for row in m.points.chunks(s.b.n).rev() {
-        let cells: String = row.iter().map(|p| class_char(p.class)).collect();
+        let cells: String = row.iter().map(|p| class_char(p.class, p.chatter)).collect();
         let _ = writeln!(out, "{:>12.4e} {cells}", row[0].k);
     }
     let _ = writeln!(out, "predicted exact linear K_max(B):");

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use stiffwall_core::params::check_positive;
 use stiffwall_core::PhysicalParams;
 use stiffwall_sim::params::{Params, MAX_TAU_D};
-use stiffwall_sim::rich::PlantModel;
+use stiffwall_sim::rich::{PlantModel, WallDamper};
 
 /// Flags of the (K, B) map (`hostctl map --k-b`).
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -114,7 +114,7 @@ impl Plant {
     }
 }
 
-fn ignored_effects(m: &PlantModel, one_sided: bool) -> Vec<String> {
+fn ignored_effects(m: &PlantModel, one_sided: bool, damper: Option<WallDamper>) -> Vec<String> {
     let mut v = Vec::new();
     let mut add = |on: bool, name: &str| {
         if on {
@@ -139,6 +139,11 @@ fn ignored_effects(m: &PlantModel, one_sided: bool) -> Vec<String> {
     );
     add(m.hand.is_some(), "hand");
     add(one_sided, "one-sided wall");
+    // The maps damp the plain difference of the paper's wall law.
+    add(
+        matches!(damper, Some(WallDamper::DeadBand(_))),
+        "damper dead band",
+    );
     v
 }
 
@@ -156,7 +161,7 @@ fn from_file(path: &Path) -> Result<Plant> {
         period_s: ctl.period_s,
         delay_s: ctl.extra_delay_s,
         rotational: m.counts_per_rev.is_some(),
-        ignored: ignored_effects(&m, ctl.one_sided),
+        ignored: ignored_effects(&m, ctl.one_sided, ctl.damper),
     })
 }
 
