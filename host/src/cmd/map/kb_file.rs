@@ -18,7 +18,8 @@ pub const BOUNDARY_POINTS: usize = 101;
 /// What the (K, B) map simulates (stated in the JSON `model` key).
 pub const MODEL_NOTE: &str = "rigid plant m, b, c, resolution, T, T_D of the device mapped by \
 Table I to (mu, beta, sigma, tau_d, beta_v = B/(K*T)) and simulated by the exact solver of the \
-(beta, sigma) map (quantization, Coulomb, viscous, delay, two-sided wall); a plant file's \
+(beta, sigma) map (quantization, Coulomb, viscous, delay, two-sided wall; the damper is the \
+plain backward difference, the firmware's `difference` law); a plant file's \
 stiction, cogging, transmission, amplifier, hand and one-sided wall are not simulated; boundary: \
 exact sampled linear K_max(B) (no quantization, no Coulomb)";
 
@@ -66,8 +67,19 @@ pub struct KbPoint {
     pub h_end: f64,
     /// Largest |ξ| over the tail.
     pub tail_amplitude: f64,
+    /// Chatter: a persistent run whose tail stays within the two counts around the wall (|ξ| ≤
+    /// 1): it never comes to rest (`stiffwall_core::rest`), and never grows or buzzes wider; a
+    /// class of its own in the text grid (`c`) and the figure (purple).
+    pub chatter: bool,
     /// Stable by core's exact sampled linear test (`criteria::exact_linear_stable`).
     pub linear_stable: bool,
+}
+
+/// Whether a run of class `class` with tail amplitude `tail_amplitude` (|ξ|, counts) is
+/// chatter: persistent within the two counts either side of the wall.
+#[must_use]
+pub fn is_chatter(class: Class, tail_amplitude: f64) -> bool {
+    class == Class::Persistent && tail_amplitude <= 1.0
 }
 
 /// One point of the predicted boundary.

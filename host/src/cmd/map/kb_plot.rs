@@ -40,7 +40,7 @@ impl Figure for KbFigure<'_> {
         let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
-                    "(K, B) map, xidot0 = {}, {} periods; red: exact linear K_max(B)",
+                    "(K, B) map, xidot0 = {}, {} periods; purple: chatter; red: exact linear K_max(B)",
                     m.spec.xidot0, m.spec.periods
                 ),
                 ("sans-serif", 16),
@@ -56,7 +56,11 @@ impl Figure for KbFigure<'_> {
                     (p.b - db / 2.0, p.k - dk / 2.0),
                     (p.b + db / 2.0, p.k + dk / 2.0),
                 ],
-                class_color(p.class).filled(),
+                if p.chatter {
+                    RGBColor(150, 90, 200).filled()
+                } else {
+                    class_color(p.class).filled()
+                },
             )
         }))?;
         let line: Vec<(f64, f64)> = m.boundary.iter().map(|p| (p.b, p.k_max)).collect();
