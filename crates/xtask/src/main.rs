@@ -52,6 +52,46 @@ pub fn run(cmd: &mut Command) -> Result<()> {
     Ok(())
 }
 
+/// Runs the `#[ignore]`d tests of `--test test` in package `pkg` (release build), with
+/// `extra` test arguments; fails when they fail, or when fewer than `min` ran (a filter or a
+/// rename that leaves nothing to run must not pass in silence).
+pub fn run_ignored(pkg: &str, test: &str, extra: &[&str], min: usize) -> Result<()> {
+    let mut cmd = cargo();
+    cmd.args([
+        "test",
+        "--release",
+        "-p",
+        pkg,
+        "--test",
+        test,
+        "--",
+        "--ignored",
+    ])
+    .args(extra)
+    .stderr(std::process::Stdio::inherit());
+    eprintln!("xtask: running {cmd:?}");
+    let out = cmd.output().with_context(|| format!("starting {cmd:?}"))?;
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    print!("{stdout}");
+    if !out.status.success() {
+        bail!("{cmd:?} failed with {}", out.status);
+    }
+    let ran = ran_tests(&stdout);
+    if ran < min {
+        bail!("{cmd:?} ran {ran} ignored test(s), fewer than the {min} it must run");
+    }
+    Ok(())
+}
+
+/// Tests that passed, from libtest's `test result: ok. N passed; …` lines.
+fn ran_tests(stdout: &str) -> usize {
+    stdout
+        .lines()
+        .filter_map(|l| l.strip_prefix("test result: ok. "))
+        .filter_map(|l| l.split(' ').next()?.parse::<usize>().ok())
+        .sum()
+}
+
 /// A `cargo` command in the repository root.
 pub fn cargo() -> Command {
     let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
@@ -164,6 +204,8 @@ fn ci() -> Result<()> {
     firmware::firmware(&[])?;
     step("host tests (unit, SIL, end to end against the virtual device)");
     run(cargo().args(["test", "--workspace"]))?;
+    step("tune on every plant, the holdout and the random launch plants (quiet walls, docs/TUNE.md's bounds)");
+    run_ignored("stiffwall-tests", "tune_plants", &[], 3)?;
     step("hostctl ui in a real browser (chromium + chromedriver)");
     ui::browser_test(None)?;
     step("QEMU scenarios");
@@ -172,6 +214,18 @@ fn ci() -> Result<()> {
     bench_firmware::bench_firmware(&["--no-write".to_string()])?;
     step("done");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn ran_tests_counts_the_passed_tests_of_every_result_line() {
+        let out = "running 2 tests\ntest a ... ok\ntest b ... ok\n\ntest result: ok. 2 passed; 0 \
+                   failed; 0 ignored\n\ntest result: ok. 1 passed; 0 failed\n";
+        assert_eq!(super::ran_tests(out), 3);
+        assert_eq!(super::ran_tests("test result: ok. 0 passed; 0 failed"), 0);
+        assert_eq!(super::ran_tests(""), 0);
+    }
 }
 
 fn main() -> Result<()> {
