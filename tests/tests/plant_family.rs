@@ -183,7 +183,7 @@ fn k_star_is_not_below_the_papers_guaranteed_limit() {
             free_exit: false,
             force_limit_n: 1e6,
             damping: 0.0,
-        deadband_counts: 0,
+            deadband_counts: 0,
             v_max: v,
             moving_mass_kg: p.mass,
             wall_offsets: vec![0],
@@ -211,7 +211,10 @@ fn the_rest_verdict_fails_chatter_buzz_and_growth() {
         !run(toggle.clone()).rests(),
         "toggling between two counts for ever is chatter, not rest"
     );
-    assert!(run(toggle).within_one_count(), "but it stays within one count");
+    assert!(
+        run(toggle).within_one_count(),
+        "but it stays within one count"
+    );
     // Two changes in the window (one excursion and back) still rest; four do not.
     let mut blip = vec![0i64; 300];
     blip[280] = 1;
