@@ -379,9 +379,15 @@ fn static_friction_is_reported_and_makes_the_verification_thorough() {
 /// it an impact through the two-sided wall grows (the verdict, not only the release, fails K).
 #[test]
 fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
-    use stiffwall_host::tune::verify::{impact, run_test, Test};
+    use stiffwall_host::tune::verify::{impact, run_test, Judging, Test};
     let truth = preset("maxon-re35");
     let mut c = connect(truth);
+    let judging = Judging {
+        criterion: Default::default(),
+        period_s: truth.period_s,
+        force_per_code: f64::from(c.info.force_per_code),
+        coulomb_n: truth.coulomb,
+    };
     let base = stiffwall_proto::ServoConfig {
         energy_monitor: true,
         ..c.get_config().unwrap()
@@ -395,7 +401,7 @@ fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
                 continue;
             }
             let test = impact(v, natural(k), one_sided);
-            let run = run_test(&mut c, &base, k, test, 3000, 100).unwrap();
+            let run = run_test(&mut c, &base, k, test, 3000, 100, &judging).unwrap();
             let (verdict, counts) = (run.verdict, run.counts);
             assert!(verdict.passes(), "K {k} {test:?}: {verdict:?}");
             let d = run.delivered.expect("an impact that reached the wall");
@@ -411,7 +417,7 @@ fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
     }
     let test = impact(v_ticks, natural(3.0), false);
     assert!(matches!(test, Test::Impact { .. }));
-    let verdict = run_test(&mut c, &base, 3.0, test, 3000, 100)
+    let verdict = run_test(&mut c, &base, 3.0, test, 3000, 100, &judging)
         .unwrap()
         .verdict;
     assert!(!verdict.passes(), "K = 3 (above 2 K*): {verdict:?}");

@@ -462,6 +462,15 @@ fn the_page_in_chromium() {
         .await;
 
         step("cleared");
+        // The chatter readout (the rule of stiffwall_core::rest over the last second): with the
+        // wall off the device coasts to a stop, and the trace says it is at rest.
+        wait("the trace's chatter readout at rest", long, || async {
+            attr(&c, "traces", "data-chatter")
+                .await
+                .filter(|s| s == "rest")
+        })
+        .await;
+        assert!(text_of(&c, "trace-info").await.contains("at rest"));
 
         // Tune aborted from the page: the log says so, the pill says "not live" while it runs.
         click(&c, "tune-run").await;

@@ -319,7 +319,38 @@ function drawTraces() {
   const speed = st.status ? st.status.samples_per_s / r : 1;
   const fast = speed > 1.5 ? ` · device time: the virtual device runs ×${speed.toFixed(1)} real time` : '';
   cv.dataset.speed = speed.toFixed(2);
-  $('trace-info').textContent = `${st.paused ? 'paused' : (st.running === 'tune' ? 'not live (tune has the link)' : 'live')} · ${st.windowS} s window · ${used.toLocaleString('en')} samples in ${cols} columns${fast}`;
+  const ch = chatter(end, r, fpc);
+  cv.dataset.chatter = ch.state;
+  cv.dataset.togglesPerS = ch.toggles.toFixed(1);
+  $('trace-info').textContent = `${st.paused ? 'paused' : (st.running === 'tune' ? 'not live (tune has the link)' : 'live')} · ${st.windowS} s window · ${used.toLocaleString('en')} samples in ${cols} columns${fast} · ${ch.text}`;
+}
+
+// Chatter over the last second of device time before `end` (the rule of stiffwall_core::rest:
+// more than 2 count changes is not at rest; within one count, max − min ≤ 1, it is chatter):
+// toggles per second and the force's peak to peak, in the force unit and in units of c.
+function chatter(end, r, fpc) {
+  const span = Math.max(2, Math.round(r)); const start = end - span;
+  let changes = 0; let prev = null; let nmin = Infinity; let nmax = -Infinity;
+  let fmin = Infinity; let fmax = -Infinity; let n = 0;
+  const have = Math.min(ring.n, RING);
+  for (let j = Math.max(ring.n - have, ring.n - span - 1); j < ring.n; j++) {
+    const k = j % RING; const s = ring.seq[k];
+    if (s < start) continue;
+    if (s >= end) break;
+    const c = ring.count[k]; const f = ring.force[k] * fpc;
+    if (prev !== null && c !== prev) changes++;
+    prev = c; n++;
+    if (c < nmin) nmin = c; if (c > nmax) nmax = c;
+    if (f < fmin) fmin = f; if (f > fmax) fmax = f;
+  }
+  const toggles = n > 1 ? changes * r / n : 0;
+  if (n < 2) return { state: 'none', toggles: 0, text: 'no samples' };
+  if (changes <= 2) return { state: 'rest', toggles, text: 'at rest (≤ 2 count changes in the last second)' };
+  if (nmax - nmin > 1) return { state: 'moving', toggles, text: `moving over ${nmax - nmin + 1} counts` };
+  const c = st.plane && st.plane.model ? st.plane.model.coulomb : 0;
+  const unit = st.hello ? st.hello.units.force : '';
+  const pp = fmax - fmin;
+  return { state: 'chatter', toggles, text: `CHATTER: ${toggles.toFixed(0)} toggles/s, force swing ${fmt(pp)} ${unit}${c > 0 ? ` (${(pp / c).toFixed(1)} × c)` : ''}` };
 }
 
 // ---------- (β, σ) plane ----------
@@ -401,7 +432,8 @@ function drawFrontier() {
   if (!f || !f.b) { info.textContent = f && f.note ? f.note : 'no (B, K) frontier (no device model)'; return; }
   const pt = f.point;
   const bmax = f.b_axis;
-  const kmax = 1.15 * Math.max(f.k_max_opt, pt ? pt.k : 0, 1e-300);
+  const qc = f.quiet_ceiling > 0 ? f.quiet_ceiling : 0;
+  const kmax = 1.15 * Math.max(Math.min(f.k_max_opt, 4 * Math.max(qc, pt ? pt.k : 0)), qc, pt ? pt.k : 0, 1e-300);
   const L = 60; const B = 32; const T = 10; const R = 10;
   const X = (b) => L + b / bmax * (w - L - R);
   const Y = (k) => h - B - Math.min(k, kmax) / kmax * (h - B - T);
@@ -409,6 +441,18 @@ function drawFrontier() {
   g.fillStyle = REGION_COLORS.A; g.globalAlpha = 0.45; g.beginPath(); g.moveTo(X(0), Y(0));
   f.b.forEach((b, i) => g.lineTo(X(b), Y(f.k_max[i])));
   g.lineTo(X(f.b[f.b.length - 1]), Y(0)); g.closePath(); g.fill(); g.globalAlpha = 1;
+  // The chatter band: stable by the linear test but above the quiet ceiling 2c/Δ, where no
+  // count can hold the wall's force KΔ/2 and the count toggles for ever.
+  if (qc > 0) {
+    g.save(); g.beginPath(); g.moveTo(X(0), Y(0));
+    f.b.forEach((b, i) => g.lineTo(X(b), Y(f.k_max[i])));
+    g.lineTo(X(f.b[f.b.length - 1]), Y(0)); g.closePath(); g.clip();
+    g.fillStyle = '#9660c8'; g.globalAlpha = 0.35; g.fillRect(X(0), T, w - L - R, Y(qc) - T); g.restore();
+    g.strokeStyle = '#6a2c9a'; g.setLineDash([6, 4]); g.beginPath(); g.moveTo(X(0), Y(qc)); g.lineTo(w - R, Y(qc)); g.stroke(); g.setLineDash([]);
+    g.fillStyle = '#6a2c9a'; g.font = '12px DejaVu Sans, sans-serif';
+    g.fillText(`quiet ceiling 2c/Δ = ${fmt(qc)}: chatter band above`, X(0) + 6, Math.max(Y(qc) - 4, T + 12));
+    cv.dataset.quietCeiling = String(qc);
+  }
   g.strokeStyle = '#000'; g.lineWidth = 2; g.beginPath();
   f.b.forEach((b, i) => (i ? g.lineTo(X(b), Y(f.k_max[i])) : g.moveTo(X(b), Y(f.k_max[i]))));
   g.stroke(); g.lineWidth = 1;
@@ -430,7 +474,9 @@ function drawFrontier() {
   g.fillStyle = pt.stable ? '#000' : '#b71c1c'; g.beginPath(); g.arc(px, py, 6, 0, 2 * Math.PI); g.fill();
   cv.dataset.b = String(pt.b); cv.dataset.k = String(pt.k); cv.dataset.stable = String(pt.stable);
   cv.dataset.px = px.toFixed(1); cv.dataset.py = py.toFixed(1);
-  info.textContent = `B = ${fmt(pt.b)} ${u.b || ''}, K = ${fmt(pt.k)} ${u.k || ''}: K_max(B) = ${fmt(pt.k_max)} — ${pt.stable ? 'inside' : 'outside'} the linear frontier (the friction-free loop; Coulomb friction is in the (β, σ) plane)`;
+  cv.dataset.region = pt.region || '';
+  const where = { quiet: 'below the quiet ceiling: it can come to rest', chatter: 'in the chatter band: stable, but above the quiet ceiling no count holds the wall, it toggles for ever', growth: 'above K_max(B): it grows' }[pt.region] || '';
+  info.textContent = `B = ${fmt(pt.b)} ${u.b || ''}, K = ${fmt(pt.k)} ${u.k || ''}: K_max(B) = ${fmt(pt.k_max)}, quiet ceiling ${fmt(qc)} — ${where} (the friction-free linear loop and 2c/Δ; the (β, σ) plane has the paper's regions)`;
 }
 
 // ---------- release ----------

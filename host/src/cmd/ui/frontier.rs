@@ -20,8 +20,11 @@ pub const B_AXIS_OVER_SET: f64 = 2.0;
 
 /// The `frontier` part of the plane message for the device `p` (its `stiffness` is the
 /// configured K; 0 when the wall is off) and the configured virtual damping `b_set`:
-/// `{"b": [...], "k_max": [...], "b_axis", "b_opt", "k_max_opt", "point"}` with `point` =
-/// `{"b", "k", "k_max", "stable"}` or `null` (wall off), or `{"note": ...}` when core refuses.
+/// `{"b": [...], "k_max": [...], "b_axis", "b_opt", "k_max_opt", "quiet_ceiling", "point"}` with
+/// `point` = `{"b", "k", "k_max", "stable", "region"}` (`region`: quiet, chatter or growth, as
+/// `hostctl analyze --damping`) or `null` (wall off), or `{"note": ...}` when core refuses. The
+/// quiet ceiling 2c/Δ splits the stable side of K_max(B) into the quiet region below it and the
+/// chatter band above it.
 #[must_use]
 pub fn frontier(p: &PhysicalParams, b_set: f64) -> Value {
     match compute(p, b_set) {
@@ -41,9 +44,12 @@ fn compute(p: &PhysicalParams, b_set: f64) -> Result<Value, stiffwall_core::Para
     };
     let b_axis = (B_AXIS_M_PER_T * p.mass / p.period_s).max(B_AXIS_OVER_SET * b_set);
     let f = criteria::frontier(&curve_p, b_axis)?;
+    let quiet_ceiling = stiffwall_core::rest::quiet_ceiling(p.coulomb, 0.0, p.resolution);
     let point = if on {
-        json!({"b": b_set, "k": k, "k_max": criteria::k_max_exact_linear(p, b_set)?,
-               "stable": criteria::exact_linear_stable(p, b_set)?})
+        let k_max = criteria::k_max_exact_linear(p, b_set)?;
+        json!({"b": b_set, "k": k, "k_max": k_max,
+               "stable": criteria::exact_linear_stable(p, b_set)?,
+               "region": crate::analysis::damping::kb_region(k, k_max, quiet_ceiling)})
     } else {
         Value::Null
     };
@@ -53,6 +59,7 @@ fn compute(p: &PhysicalParams, b_set: f64) -> Result<Value, stiffwall_core::Para
         "b_axis": b_axis,
         "b_opt": f.b_opt_n_s_per_m,
         "k_max_opt": f.k_max_opt,
+        "quiet_ceiling": quiet_ceiling,
         "point": point,
     }))
 }
@@ -103,5 +110,22 @@ mod tests {
             let n = v["note"].as_str().unwrap();
             assert!(n.contains("damping"), "{n}");
         }
+    }
+
+    #[test]
+    fn the_point_is_quiet_in_the_chatter_band_or_growing() {
+        let phantom = |k: f64| PhysicalParams {
+            stiffness: k,
+            ..stiffwall_core::devices::find("phantom-1.0").unwrap().params
+        };
+        // 2c/Δ = 2·0.038/29.1e-6 = 2611.7 N/m.
+        let v = frontier(&phantom(2000.0), 4.1);
+        assert!((v["quiet_ceiling"].as_f64().unwrap() - 2611.7).abs() < 0.1);
+        assert_eq!(v["point"]["region"], "quiet");
+        assert_eq!(
+            frontier(&phantom(3000.0), 4.1)["point"]["region"],
+            "chatter"
+        );
+        assert_eq!(frontier(&phantom(3000.0), 0.0)["point"]["region"], "growth");
     }
 }
