@@ -264,8 +264,8 @@ impl PlantCase {
     }
 
     /// A trial of the K* criterion at stiffness `k` under the firmware supervisor (the
-    /// virtual device's board and boot config, with the rig's virtual damping), one K* trial
-    /// long.
+    /// virtual device's board and boot config, with the rig's virtual damping and dead band),
+    /// two K* trials long.
     #[must_use]
     pub fn supervised(&self, k: f64, trial: Trial) -> SupervisedRun {
         let c = &self.controller;
@@ -276,6 +276,10 @@ impl PlantCase {
         );
         let cfg = ServoConfig {
             damping: self.rig.damping as f32,
+            damper: match u8::try_from(self.rig.deadband_counts) {
+                Ok(0) | Err(_) => stiffwall_proto::DamperLaw::Difference,
+                Ok(counts) => stiffwall_proto::DamperLaw::DeadBand { counts },
+            },
             ..supervise::config(
                 &b,
                 k,
@@ -291,7 +295,10 @@ impl PlantCase {
             c.period_s,
             trial,
             self.model.resolution_m,
-            self.rig.trial_ticks(k),
+            // Twice a K* trial (120 natural periods, as before the trials were shortened to
+            // the rest rule's 60): the supervisor gets the time its buzz window needs after a
+            // decay from a full-energy release.
+            (2 * self.rig.trial_ticks(k)).min(kstar::TRIAL_TICKS.1 as usize),
         )
     }
 

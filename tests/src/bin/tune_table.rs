@@ -491,7 +491,8 @@ fn summary(rows: &[Row]) -> Option<String> {
 }
 
 /// What makes the table a failure: a tune that failed, a set wall that does not rest in every
-/// run or is unstable, K set outside [0.7, 1] × K*(B set), a supervisor that did not stop a
+/// run or is unstable, K set below 0.7 × K*(B set) (above K*(B set) only where every run at
+/// the set wall rests: the quiet K need not form one interval), a supervisor that did not stop a
 /// run, and (over all of `sim/plants/`) a median gain below 2. Empty when the table holds.
 fn failures(rows: &[Row], whole_family: bool, quick: bool) -> Vec<String> {
     let mut out = Vec::new();
@@ -524,12 +525,13 @@ fn failures(rows: &[Row], whole_family: bool, quick: bool) -> Vec<String> {
             }
         }
         match &r.k_star_set {
+            // Above K*(B) (the top of the first quiet interval) is allowed only because every
+            // run at the set wall came to rest (checked above): with a damper the quiet K need
+            // not form one interval.
             Some(Ok(k)) => {
                 let q = t.k_set / k.k_star;
-                if !(NEAR_OPTIMAL..=1.0).contains(&q) {
-                    out.push(format!(
-                        "{name}: K set / K*(B set) = {q:.3}, outside [{NEAR_OPTIMAL}, 1]"
-                    ));
+                if q < NEAR_OPTIMAL {
+                    out.push(format!("{name}: K set / K*(B set) = {q:.3} < {NEAR_OPTIMAL}"));
                 }
             }
             Some(Err(e)) => out.push(format!("{name}: {e}")),
@@ -558,7 +560,7 @@ law (`damper`), is compared with the true largest **quiet** stiffness K*(B) at t
 run at the set wall: \"rests in every run\" counts those that come to rest; a trial that keeps\n\
 toggling within one count is chatter (worst toggles per second and force swing in units of the\n\
 Coulomb friction c listed), one that buzzes over more counts or grows is unstable. The generator\n\
-exits non-zero when a set wall does not rest in every run, K set lies outside [0.7, 1] × K*(B set),\n\
+exits non-zero when a set wall does not rest in every run, K set lies below 0.7 × K*(B set),\n\
 the supervisor does not stop a run, or the median gain over `sim/plants/` is below 2.\n\
 K*(0) is the spring alone; the best K*(B) is the stiffest of the frontier (with the law tune set;\n\
 dead band 1 when it set no damper) over\n\
