@@ -307,7 +307,7 @@ fn search_walls(
         s,
         p: ident.p,
         v: ident.v,
-        k_force: force_regime_k(&ident),
+        k_force: force_regime_k(ident),
         one_sided_wall: original.wall == stiffwall_proto::WallMode::OneSided,
         force_per_code: f64::from(c.info.force_per_code),
         progress: &report,
@@ -348,7 +348,7 @@ fn search_walls(
     for f in &model_mismatch {
         progress.report(Progress::Finding { text: f.clone() });
     }
-    let margin_used = margin_for(s, thorough, &notes, &ident);
+    let margin_used = margin_for(s, thorough, &notes, ident);
     // Step 4b: the (K, B) frontier and the verification set of the chosen wall.
     let base = ident.base;
     let wall = choose_wall(

@@ -67,8 +67,14 @@ pub fn run_ignored(pkg: &str, test: &str, extra: &[&str], min: usize) -> Result<
         "--",
         "--ignored",
     ])
-    .args(extra)
-    .stderr(std::process::Stdio::inherit());
+    .args(extra);
+    run_counting(&mut cmd, min)
+}
+
+/// Runs the `cargo test` command `cmd` (its stdout shown), failing when it fails or when fewer
+/// than `min` tests passed.
+pub fn run_counting(cmd: &mut Command, min: usize) -> Result<()> {
+    cmd.stderr(std::process::Stdio::inherit());
     eprintln!("xtask: running {cmd:?}");
     let out = cmd.output().with_context(|| format!("starting {cmd:?}"))?;
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -78,7 +84,7 @@ pub fn run_ignored(pkg: &str, test: &str, extra: &[&str], min: usize) -> Result<
     }
     let ran = ran_tests(&stdout);
     if ran < min {
-        bail!("{cmd:?} ran {ran} ignored test(s), fewer than the {min} it must run");
+        bail!("{cmd:?} ran {ran} test(s), fewer than the {min} it must run");
     }
     Ok(())
 }
@@ -216,18 +222,6 @@ fn ci() -> Result<()> {
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn ran_tests_counts_the_passed_tests_of_every_result_line() {
-        let out = "running 2 tests\ntest a ... ok\ntest b ... ok\n\ntest result: ok. 2 passed; 0 \
-                   failed; 0 ignored\n\ntest result: ok. 1 passed; 0 failed\n";
-        assert_eq!(super::ran_tests(out), 3);
-        assert_eq!(super::ran_tests("test result: ok. 0 passed; 0 failed"), 0);
-        assert_eq!(super::ran_tests(""), 0);
-    }
-}
-
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
@@ -248,5 +242,17 @@ fn main() -> Result<()> {
         Some("atlas") => atlas::atlas(&args[1..]),
         Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
         other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges]"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn ran_tests_counts_the_passed_tests_of_every_result_line() {
+        let out = "running 2 tests\ntest a ... ok\ntest b ... ok\n\ntest result: ok. 2 passed; 0 \
+                   failed; 0 ignored\n\ntest result: ok. 1 passed; 0 failed\n";
+        assert_eq!(super::ran_tests(out), 3);
+        assert_eq!(super::ran_tests("test result: ok. 0 passed; 0 failed"), 0);
+        assert_eq!(super::ran_tests(""), 0);
     }
 }

@@ -4,7 +4,9 @@
 //! needs no QEMU): each boots the image under `qemu-system-arm -serial pty` inside a timeout,
 //! talks to it through hostctl's own serial client, ends it through semihosting exit, and
 //! compares its transcript with `firmware/boards/qemu-an386/scenarios/<name>.expected`.
-//! `--bless` rewrites the expected files from this run.
+//! `--bless` rewrites the expected files from this run. Then the QEMU recording test of
+//! `host/tests/device_cmds.rs` runs on the same image. Each step fails when fewer tests ran
+//! than it has.
 
 use crate::firmware::{self, root, IMAGES};
 use crate::toolchain;
@@ -39,5 +41,25 @@ pub fn qemu(args: &[String]) -> Result<()> {
     if bless {
         cmd.env("STIFFWALL_BLESS", "1");
     }
-    crate::run(&mut cmd)
+    crate::run_counting(&mut cmd, QEMU_SCENARIOS)?;
+    // The QEMU recording of `host/tests/device_cmds.rs`: recorded on the image, replayed bit
+    // for bit through the host build of the servo core.
+    let mut rec = crate::cargo();
+    rec.args([
+        "test",
+        "-p",
+        "stiffwall-host",
+        "--test",
+        "device_cmds",
+        "--",
+        "--ignored",
+        "--exact",
+        "qemu_recording_replays_bit_for_bit",
+    ])
+    .env("STIFFWALL_QEMU_IMAGE", &elf)
+    .current_dir(root());
+    crate::run_counting(&mut rec, 1)
 }
+
+/// The scenarios of `host/tests/qemu.rs` (all must run).
+const QEMU_SCENARIOS: usize = 6;
