@@ -131,7 +131,7 @@ pub enum HostMsg {
     /// `SetConfig` and then starts a test lets the wall act for the link's latency first).
     /// With L the released phase's length so far, the test ends at the first L at which
     /// - it has *settled*: the last max(`min_run_ticks`, ⌈L/3⌉) effective counts are all
-    ///   equal (with `within_one_count`: all within one count, max − min ≤ 1, a damped wall
+    ///   equal (with `within_one_count`: all within one count, max − min ≤ 1, a wall
     ///   toggling between two neighbouring counts); or
     /// - with `decay_base_ticks` = b > 0, L is a *decay checkpoint* L_j = b + j·max(⌊b/8⌋, 1)
     ///   (j = 0..=[`DECAY_LAST_CHECK`]) at which the oscillation no longer shrinks: with

@@ -4,7 +4,8 @@
 //! below checks the two agree).
 //!
 //! - *Settled* ([`settled_within`]): the first length L at which the last
-//!   max(`min_run`, ⌈L/3⌉) counts are all equal, or within one count for a damped wall.
+//!   max(`min_run`, ⌈L/3⌉) counts are all equal, or within one count under
+//!   `Criterion::AcceptChatter`.
 //! - *Decided by decay* ([`judged_len`]): from the base length on, at checkpoints every
 //!   base/8 ticks up to [`DECAY_EXTENSION`] × the base, the first at which the oscillation no
 //!   longer shrinks ([`decaying`]).
@@ -22,9 +23,8 @@ pub fn settled_at(counts: &[i64], min_run: usize) -> Option<usize> {
 }
 
 /// [`settled_at`], or with `one_count` the first L at which that tail lies within one count
-/// (max − min ≤ 1: at rest or toggling between two neighbouring counts, the limit cycle that
-/// passes, as in the K* criterion). A damped wall ends there: its backward-difference damper
-/// answers every count change, so it often toggles between two counts instead of resting.
+/// (max − min ≤ 1: at rest or toggling between two neighbouring counts, the chatter that
+/// passes only under `Criterion::AcceptChatter`, where a test ends there).
 #[must_use]
 pub fn settled_within(counts: &[i64], min_run: usize, one_count: bool) -> Option<usize> {
     // Longest suffixes ending here with values in {n − 1, n} (`below`) and {n, n + 1} (`above`).

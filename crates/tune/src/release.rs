@@ -2,9 +2,10 @@
 //! with zero velocity, released, and its encoder counts are recorded.
 //!
 //! Positions are in effective encoder ticks relative to the wall's origin (the encoder
-//! boundary between counts −1 and 0). The verdict (settles / locally stable / limit cycle
-//! within one count / buzz / growing) lives in [`super::verdict`] and is re-exported here: limit
-//! cycles within one count pass, a buzz over more than one count fails like growth.
+//! boundary between counts −1 and 0). The verdict (settles / locally stable / chatter within
+//! one count / buzz / growing) lives in [`super::verdict`] and is re-exported here: a wall
+//! passes when it comes to rest; chatter within one count, a buzz over more counts and growth
+//! fail.
 
 /// The counts recorded after the release (samples flagged `RELEASED`), in effective ticks
 /// (raw counts shifted right by the coarsening shift).
