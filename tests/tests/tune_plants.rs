@@ -329,3 +329,35 @@ fn the_presets_walls_come_to_rest_in_every_run() {
         );
     }
 }
+
+/// The wall `tune` set on the default device before walls had to come to rest (K = 4.0776
+/// N·m/rad, B = 5.2791e-3 N·m·s/rad, README): with the plain backward difference most runs of
+/// the criterion chatter (an independent simulator found 20 of its 22 runs toggling at up to
+/// 500 per second); with a dead band of one count the same (K, B) rests in every run.
+#[test]
+fn the_former_default_wall_chatters_with_the_plain_difference_and_rests_with_the_dead_band() {
+    let (plant, rig) = preset_case("maxon-re35");
+    let c = stiffwall_core::devices::find("maxon-re35")
+        .unwrap()
+        .params
+        .coulomb;
+    let at = |deadband_counts| kstar::Rig {
+        damping: 5.2791e-3,
+        deadband_counts,
+        ..rig.clone()
+    };
+    let plain = kstar::run_all(&plant, &at(0), 4.0776);
+    let chatter: Vec<_> = plain
+        .iter()
+        .filter_map(|(_, r)| r.chatter(rig.period_s, c))
+        .collect();
+    let worst = chatter.iter().fold(0.0f64, |a, ch| a.max(ch.toggles_per_s));
+    eprintln!(
+        "difference: {} of {} runs chatter, up to {worst:.0} toggles/s",
+        chatter.len(),
+        plain.len()
+    );
+    assert!(chatter.len() >= 20 && worst >= 400.0, "{chatter:?}");
+    let dead_band = kstar::run_all(&plant, &at(1), 4.0776);
+    assert!(dead_band.iter().all(|(_, r)| r.rests()));
+}
