@@ -535,7 +535,10 @@ function onTune(m) {
   $('tune-guaranteed').textContent = `${fmt(m.guaranteed)} ${u}`;
   $('tune-expected').textContent = `${fmt(m.expected)} ${u}`;
   $('tune-verified').textContent = `${fmt(m.verified)} ${u} (${m.trials.length} release tests)`;
-  $('tune-set').textContent = `${fmt(m.set)} ${u} ${m.saved ? '(set and saved)' : '(dry run: not set)'}`;
+  const wall = m.damping > 0 ? `, B = ${fmt(m.damping)} (${m.damper})` : '';
+  const rest = m.rests ? 'comes to rest in every test' : `CHATTERS: ${m.no_rest || 'chatter accepted'}`;
+  $('tune-set').textContent = `${fmt(m.set)} ${u}${wall} ${m.saved ? '(set and saved)' : '(dry run: not set)'}; ${rest}; quiet ceiling 2c/Δ ${fmt(m.quiet_ceiling)}`;
+  $('tune-set').dataset.rests = String(m.rests);
   for (const t of m.trials) {
     const li = document.createElement('li');
     li.textContent = `release at K = ${fmt(t.k)}: ${typeof t.verdict === 'string' ? t.verdict : JSON.stringify(t.verdict)}`;

@@ -142,7 +142,7 @@ fn done_event(o: &crate::tune::Outcome) -> Value {
         "state": "done",
         "guaranteed": o.predicted.guaranteed,
         "expected": o.predicted.expected,
-        // The largest settling K at the damping set (the spring-only search's when B = 0), of
+        // The largest resting K at the damping set (the spring-only search's when B = 0), of
         // which the set K is the margin's fraction.
         "verified": o
             .frontier
@@ -152,6 +152,10 @@ fn done_event(o: &crate::tune::Outcome) -> Value {
             .unwrap_or(o.search.k_pass),
         "set": o.k_set,
         "damping": o.b_set,
+        "damper": o.damper,
+        "rests": o.rests,
+        "quiet_ceiling": o.quiet_ceiling,
+        "no_rest": o.no_rest,
         "spring_only": o.k_spring_only,
         "frontier": o.frontier,
         "saved": o.saved,
