@@ -614,3 +614,23 @@ fn slow_launch_finding(d: &Delivered) -> String {
         d.contact, d.asked
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn where_no_wall_rests_the_search_accepts_chatter_without_a_damper_unless_one_is_fixed() {
+        let s = least_chatter_settings(&Settings::default());
+        assert_eq!(s.criterion, Criterion::AcceptChatter);
+        assert_eq!(s.damping, Damping::Fixed(0.0));
+        let fixed = Settings {
+            damping: Damping::Fixed(2.5e-3),
+            margin: 0.7,
+            ..Settings::default()
+        };
+        let s = least_chatter_settings(&fixed);
+        assert_eq!(s.damping, Damping::Fixed(2.5e-3));
+        assert_eq!((s.criterion, s.margin), (Criterion::AcceptChatter, 0.7));
+    }
+}
