@@ -188,6 +188,67 @@ fn bad_max_velocity_is_refused_before_touching_the_device() {
 /// flag and its range; one above the firmware's limit is refused before any test, and the
 /// device's config is unchanged.
 #[test]
+fn a_bad_damper_law_is_refused_naming_the_flag_and_the_allowed_forms() {
+    let bin = env!("CARGO_BIN_EXE_hostctl");
+    for law in ["dead-band-0", "dead-band-9", "deadband-1", "Difference", ""] {
+        let out = std::process::Command::new(bin)
+            .args(["tune", "--fast", "--dry-run", "--damper", law])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{law}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--damper"), "{law}: {err}");
+        assert!(err.contains("1..=8"), "{law}: {err}");
+        assert!(
+            !err.contains("connecting"),
+            "{law}: refused after connecting: {err}"
+        );
+    }
+}
+
+/// `--accept-chatter` with the plain difference on the default device: the old criterion, whose
+/// damped wall chatters (the README's former default), reported test by test; the default
+/// criterion's wall rests.
+#[test]
+fn accept_chatter_reports_the_chatter_it_accepted() {
+    let bin = env!("CARGO_BIN_EXE_hostctl");
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = std::process::Command::new(bin)
+            .args(["tune", "--fast", "--dry-run", "--json"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let loud = json(&["--accept-chatter", "--damper", "difference"]);
+    let t = &loud["tune"];
+    assert_eq!(t["criterion"], "accept-chatter");
+    assert_eq!(t["damper"], "difference");
+    let chattering: Vec<&serde_json::Value> = t["verification"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["verdict"] == "chatter-accepted")
+        .collect();
+    // The wall it sets is the former default (4.0776 N·m/rad, B = 5.2791e-3), which an
+    // independent simulator found toggling at up to 500 per second with a 5.6 c force swing.
+    assert!(!chattering.is_empty(), "{t}");
+    assert_eq!(t["rests"], false, "{t}");
+    for r in &chattering {
+        assert!(r["chatter"]["toggles_per_s"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["chatter"]["force_pp_c"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    let quiet = json(&[]);
+    assert_eq!(quiet["tune"]["rests"], true, "{}", quiet["tune"]);
+    assert_eq!(quiet["tune"]["criterion"], "rest");
+}
+
+#[test]
 fn bad_damping_is_refused_naming_the_flag_and_its_range() {
     let bin = env!("CARGO_BIN_EXE_hostctl");
     for b in ["-1", "NaN", "inf", "-0.001"] {
