@@ -301,7 +301,7 @@ fn the_page_in_chromium() {
             .await
             .unwrap();
         assert_eq!(state, "pass", "{text}");
-        assert!(text.contains("verdict: settles"), "{text}");
+        assert!(text.contains("verdict: comes to rest"), "{text}");
         // The release is in the live trace too (samples flagged RELEASED in the window).
         let released = wait("the release in the trace", long, || async {
             number(&c, "traces", "data-released")
