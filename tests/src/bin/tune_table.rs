@@ -531,7 +531,9 @@ fn failures(rows: &[Row], whole_family: bool, quick: bool) -> Vec<String> {
             Some(Ok(k)) => {
                 let q = t.k_set / k.k_star;
                 if q < NEAR_OPTIMAL {
-                    out.push(format!("{name}: K set / K*(B set) = {q:.3} < {NEAR_OPTIMAL}"));
+                    out.push(format!(
+                        "{name}: K set / K*(B set) = {q:.3} < {NEAR_OPTIMAL}"
+                    ));
                 }
             }
             Some(Err(e)) => out.push(format!("{name}: {e}")),
