@@ -210,8 +210,25 @@ fn ci() -> Result<()> {
     firmware::firmware(&[])?;
     step("host tests (unit, SIL, end to end against the virtual device)");
     run(cargo().args(["test", "--workspace"]))?;
-    step("tune on every plant, the holdout and the random launch plants (quiet walls, docs/TUNE.md's bounds)");
-    run_ignored("stiffwall-tests", "tune_plants", &[], 3)?;
+    step("the 10 s flood of bad frames, real time and fast (the issue's acceptance run; debug build of the step above)");
+    run_counting(
+        cargo().args([
+            "test",
+            "-p",
+            "stiffwall-host",
+            "--test",
+            "link_flood",
+            "--",
+            "--ignored",
+        ]),
+        1,
+    )?;
+    step("docs/TUNE.md and docs/TUNE-holdout.md against a fresh run: every set wall rests, K ≥ 0.7 K*(B), supervisor rows stop, median ≥ 2, K* columns not stale");
+    tune_table::ci_checks()?;
+    step("tune on the random launch plants (quiet walls)");
+    run_ignored("stiffwall-tests", "tune_plants", &["random_launch"], 1)?;
+    step("the supervisor on every plant: 1.5 K*(0), and 1.5 K*(B) at the B and law tune sets (docs/TUNE.md's supervisor column)");
+    run_ignored("stiffwall-tests", "supervisor_plants", &[], 2)?;
     step("hostctl ui in a real browser (chromium + chromedriver)");
     ui::browser_test(None)?;
     step("QEMU scenarios");

@@ -677,6 +677,9 @@ fn main() -> Result<()> {
             skipped.join("\n")
         );
     }
+    if let Some(doc) = &o.check {
+        check_against(doc, &table, o.only.is_empty())?;
+    }
     if o.write {
         let (cmd, source) = provenance(&rows, extra_given, &root_abs, &o);
         std::fs::write(&o.out, document(&table, &cmd, &source))
@@ -692,6 +695,66 @@ fn main() -> Result<()> {
             failed.join("\n")
         );
     }
+    Ok(())
+}
+
+/// The columns of a table row that a fresh run must reproduce exactly: the plant, its effects,
+/// K*(0), the first failure above it and the best K*(B) of the grid (the brute force from the
+/// plant file alone, deterministic). Tune's own columns vary from run to run on plants whose
+/// state between tests is not reproducible (rotary-belt-60hz) and are checked by the rules of
+/// [`failures`] instead.
+const STABLE_COLUMNS: [usize; 5] = [1, 2, 3, 4, 5];
+
+/// The table rows of a Markdown document, by plant: the cells of [`STABLE_COLUMNS`].
+fn stable_cells(doc: &str) -> Vec<(String, Vec<String>)> {
+    doc.lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| plant") && !l.starts_with("|---"))
+        .map(|l| {
+            let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+            let pick = STABLE_COLUMNS
+                .iter()
+                .map(|&c| cells.get(c).copied().unwrap_or("").to_string())
+                .collect();
+            (cells.get(1).copied().unwrap_or("").to_string(), pick)
+        })
+        .collect()
+}
+
+/// Fails when the committed document `doc` is stale: its rows' [`STABLE_COLUMNS`] differ from
+/// the fresh `table`'s, or (with `all`: the run covered every plant) the plants differ.
+fn check_against(doc: &Path, table: &str, all: bool) -> Result<()> {
+    let text =
+        std::fs::read_to_string(doc).with_context(|| format!("reading {}", doc.display()))?;
+    let (old, new) = (stable_cells(&text), stable_cells(table));
+    let mut stale = Vec::new();
+    for (plant, cells) in &new {
+        match old.iter().find(|(p, _)| p == plant) {
+            None => stale.push(format!("{plant}: not in {}", doc.display())),
+            Some((_, was)) if was != cells => {
+                stale.push(format!(
+                    "{plant}: {} says {was:?}, a fresh run {cells:?}",
+                    doc.display()
+                ));
+            }
+            Some(_) => {}
+        }
+    }
+    for (plant, _) in old.iter().filter(|_| all) {
+        if !new.iter().any(|(p, _)| p == plant) {
+            stale.push(format!(
+                "{plant}: in {} but not in a fresh run",
+                doc.display()
+            ));
+        }
+    }
+    if !stale.is_empty() {
+        bail!(
+            "{} is stale (regenerate it with `cargo xtask tune-table`):\n{}",
+            doc.display(),
+            stale.join("\n")
+        );
+    }
+    eprintln!("{}: its K* columns match a fresh run", doc.display());
     Ok(())
 }
 
@@ -711,6 +774,8 @@ struct Options {
     quick: bool,
     /// Write the document (else print only).
     write: bool,
+    /// Compare the fresh table with this document's (`--check FILE`, implies `--no-write`).
+    check: Option<PathBuf>,
 }
 
 impl Options {
@@ -723,6 +788,7 @@ impl Options {
             extra: Vec::new(),
             quick: false,
             write: true,
+            check: None,
         };
         let mut i = 0;
         while i < args.len() {
@@ -751,8 +817,13 @@ impl Options {
                 }
                 "--quick" => o.quick = true,
                 "--no-write" => o.write = false,
+                "--check" => {
+                    o.check = Some(PathBuf::from(value(i)?));
+                    o.write = false;
+                    i += 1;
+                }
                 other => bail!(
-                    "unknown option {other:?}; available: --hostctl PATH, --out FILE, --only NAME, --plant FILE, --quick, --no-write"
+                    "unknown option {other:?}; available: --hostctl PATH, --out FILE, --only NAME, --plant FILE, --quick, --no-write, --check FILE"
                 ),
             }
             i += 1;
