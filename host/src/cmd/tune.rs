@@ -315,7 +315,7 @@ fn render_limits(s: &mut String, o: &Outcome, u: Units) {
         "max velocity: {:.4} {} ({:.2} ticks/period)",
         o.max_velocity, u.4, o.xidot
     );
-    let _ = writeln!(s, "stiffness limits ({}):", u.0);
+    let _ = writeln!(s, "stiffness limits of the spring alone ({}):", u.0);
     let _ = writeln!(
         s,
         "  passive (region A)            {:>12.5}",
@@ -433,11 +433,12 @@ fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
     if o.b_set > 0.0 {
         let _ = writeln!(
             s,
-            "  {:<22} {:>12.5} {:>12.4e} {:>10.3}  (×{:.2} the spring only)",
+            "  {:<22} {:>12.5} {:>12.4e} {:>10.3}  ({}, ×{:.2} the spring only)",
             "spring + damper (set)",
             o.k_set,
             o.b_set,
             o.b_set / (o.k_set * t),
+            o.damper,
             o.k_set / o.k_spring_only
         );
     } else {
