@@ -5,7 +5,7 @@
 //! recording plus the samples its `# gap:` notes account for.
 //!
 //! The default run records 3 s per mode; `cargo test -p stiffwall-host --test link_flood --
-//! --ignored` runs the 10 s versions of the acceptance test.
+//! --ignored` runs the 10 s versions of the acceptance test (`cargo xtask ci` does).
 
 use serialport::SerialPort as _;
 use std::io::{Read, Write};
@@ -153,7 +153,7 @@ fn flood_of_bad_frames_loses_nothing_in_fast_mode() {
 
 /// The acceptance test as stated: `record --seconds 10`.
 #[test]
-#[ignore = "10 s of real time per mode: run with --ignored"]
+#[ignore = "10 s of real time: run by `cargo xtask ci`, or with --ignored"]
 fn flood_acceptance_ten_seconds() {
     let run = record_under_flood(false, 10.0, 40_000.0);
     check(&run, 0.99, "real time, 10 s, 40 KB/s");

@@ -1,6 +1,8 @@
 //! Simulated classes against the analytic regions of Fig. 3 (τ_D = 0) and Fig. 5 (τ_D = 1.25)
 //! on a coarse grid (μ = 100, ξ₀ = 0, 2×10⁴ periods). The full 714-point × 5×10⁴-period maps
-//! are `hostctl map` (docs/figures/) and the opt-in `full_fig6_set_under_5_s` below.
+//! are `hostctl map` (docs/figures/). Their speed (the Fig. 6 set, ≤ 0.5 s; the base scene,
+//! ≥ 20 M periods/s on one core) is a benchmark, not a test: `cargo xtask bench`
+//! (`sim/examples/bench_table.rs`, docs/BENCHMARKS-sim.md's headline).
 
 use stiffwall_sim::classify::Class;
 use stiffwall_sim::map::{region_no_delay, simulate_point};
@@ -93,64 +95,4 @@ fn delay_1_25_grows_everywhere_below_beta_1_2_for_fast_starts() {
         assert_eq!(o.class, Class::Persistent, "xidot0 {v}: {o:?}");
         assert!(o.tail_amplitude < 1.0, "xidot0 {v}: {o:?}");
     }
-}
-
-/// The full Fig. 6 set (4 × 714 points × 5×10⁴ periods) must take < 5 s on this 2-core
-/// machine. Opt-in: `cargo test --release -p stiffwall-sim --test regions -- --ignored --test-threads 1`.
-#[test]
-#[ignore = "timing, release build only"]
-fn full_fig6_set_under_5_s() {
-    use stiffwall_sim::map::{run, Axis, MapSpec};
-    let t = std::time::Instant::now();
-    for v in [1.0, 5.0, 10.0, 20.0] {
-        let spec = MapSpec {
-            mu: 100.0,
-            tau_d: 0.0,
-            xidot0: v,
-            beta: Axis {
-                lo: 0.0,
-                hi: 1.0,
-                n: 34,
-            },
-            sigma: Axis {
-                lo: 0.0,
-                hi: 2.0,
-                n: 21,
-            },
-            periods: 50_000,
-            history: stiffwall_sim::History::HoldInitial,
-            damping: 0.0,
-        };
-        let idx: Vec<usize> = (0..spec.len()).collect();
-        assert_eq!(run(&spec, &idx, &|| {}).len(), 714);
-    }
-    let s = t.elapsed().as_secs_f64();
-    assert!(s < 5.0, "{s} s");
-}
-
-/// ≥ 20 M simulated periods per second on one core for the paper's base scene with all effects.
-/// Opt-in: `cargo test --release -p stiffwall-sim --test regions -- --ignored --test-threads 1`.
-#[test]
-#[ignore = "timing, release build only"]
-fn base_scene_at_least_20_million_periods_per_second() {
-    use stiffwall_sim::exact::{ExactSim, Full, History};
-    use stiffwall_sim::{Motion, Params};
-    let runs = 200u64;
-    let t = std::time::Instant::now();
-    let mut acc = 0.0;
-    for _ in 0..runs {
-        let mut s = Full::new(
-            Params::BASE,
-            Motion { x: 0.0, v: 5.0 },
-            History::HoldInitial,
-        )
-        .unwrap();
-        for _ in 0..50_000 {
-            s.step_period();
-        }
-        acc += s.state().x;
-    }
-    let rate = (runs * 50_000) as f64 / t.elapsed().as_secs_f64();
-    assert!(acc.is_finite());
-    assert!(rate >= 20e6, "{:.1} M periods/s", rate / 1e6);
 }
