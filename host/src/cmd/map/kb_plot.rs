@@ -40,7 +40,7 @@ impl Figure for KbFigure<'_> {
         let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
-                    "(K, B) map, xidot0 = {}, {} periods; purple: chatter; red: exact linear K_max(B)",
+                    "(K, B) map, xidot0 = {}, {} periods; purple: chatter; dashed: quiet ceiling 2c/Δ; red: exact linear K_max(B)",
                     m.spec.xidot0, m.spec.periods
                 ),
                 ("sans-serif", 16),
@@ -65,6 +65,17 @@ impl Figure for KbFigure<'_> {
         }))?;
         let line: Vec<(f64, f64)> = m.boundary.iter().map(|p| (p.b, p.k_max)).collect();
         kb_plot::draw_boundary(&mut chart, &line, (y0, y1), None)?;
+        // The quiet ceiling 2c/Δ (dashed): above it no count can hold the wall's force KΔ/2, so
+        // between it and K_max(B) lies the chatter band.
+        let qc = stiffwall_core::rest::quiet_ceiling(m.plant.coulomb, 0.0, m.plant.resolution);
+        if qc > y0 && qc < y1 {
+            chart.draw_series(DashedLineSeries::new(
+                vec![(x0, qc), (x1, qc)],
+                8,
+                5,
+                RGBColor(106, 44, 154).stroke_width(2),
+            ))?;
+        }
         Ok(())
     }
 }
