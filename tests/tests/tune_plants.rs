@@ -57,31 +57,12 @@ struct Checked {
 fn check(case: &PlantCase) -> Result<Checked, String> {
     let ks0 = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
         .map_err(|e| format!("{}: K*: {e}", case.name))?;
-    let spec = ConnectSpec::plant_file(&case.path, true);
     let t0 = std::time::Instant::now();
-    let mut client =
-        stiffwall_client::connect(&spec).map_err(|e| format!("{}: connect: {e:#}", case.name))?;
-    let o = procedure::tune(
-        &mut client,
-        &Settings {
-            dry_run: true,
-            ..Settings::default()
-        },
-        &stiffwall_client::Cancel::default(),
-        &mut |_| {},
-    )
-    .map_err(|e| format!("{}: tune failed: {e:#}", case.name))?;
+    let o = tune_dry_run(&ConnectSpec::plant_file(&case.path, true))
+        .map_err(|e| format!("{}: {e}", case.name))?;
     let tune_s = t0.elapsed().as_secs_f64();
-    let law: stiffwall_proto::DamperLaw = o
-        .damper
-        .parse()
-        .map_err(|e| format!("{}: tune.damper {:?}: {e}", case.name, o.damper))?;
     // The truth at the set damping and law (the same brute force with the firmware's damper).
-    let at_set = kstar::Rig {
-        damping: o.b_set,
-        deadband_counts: i64::from(law.dead_band()),
-        ..case.rig.clone()
-    };
+    let at_set = at_set_wall(&case.rig, &o).map_err(|e| format!("{}: {e}", case.name))?;
     let ks = if o.b_set > 0.0 {
         kstar::k_star(&case.proto, &at_set, ks0.k_star * 0.5, 1e12)
             .map_err(|e| format!("{}: K*(B = {:.4e}): {e}", case.name, o.b_set))?
@@ -135,6 +116,34 @@ fn check(case: &PlantCase) -> Result<Checked, String> {
         return Err(format!("below {NEAR_OPTIMAL} K*(B): {line}"));
     }
     Ok(Checked { line, gain })
+}
+
+/// `tune --dry-run` (the default settings) on the device of `spec`.
+fn tune_dry_run(spec: &ConnectSpec) -> Result<procedure::Outcome, String> {
+    let mut client = stiffwall_client::connect(spec).map_err(|e| format!("connect: {e:#}"))?;
+    procedure::tune(
+        &mut client,
+        &Settings {
+            dry_run: true,
+            ..Settings::default()
+        },
+        &stiffwall_client::Cancel::default(),
+        &mut |_| {},
+    )
+    .map_err(|e| format!("tune failed: {e:#}"))
+}
+
+/// The K* rig `rig` with the damping and the damper law tune set.
+fn at_set_wall(rig: &kstar::Rig, o: &procedure::Outcome) -> Result<kstar::Rig, String> {
+    let law: stiffwall_proto::DamperLaw = o
+        .damper
+        .parse()
+        .map_err(|e| format!("tune.damper {:?}: {e}", o.damper))?;
+    Ok(kstar::Rig {
+        damping: o.b_set,
+        deadband_counts: i64::from(law.dead_band()),
+        ..rig.clone()
+    })
 }
 
 /// Checks every case; returns the gains K set / K*(0).
@@ -256,23 +265,9 @@ fn preset_case(name: &str) -> (stiffwall_sim::PhysicalPlant, kstar::Rig) {
 fn the_presets_walls_come_to_rest_in_every_run() {
     for name in ["maxon-re35", "phantom-1.0"] {
         let (plant, rig) = preset_case(name);
-        let mut client = stiffwall_client::connect(&ConnectSpec::preset(name, true)).unwrap();
-        let o = procedure::tune(
-            &mut client,
-            &Settings {
-                dry_run: true,
-                ..Settings::default()
-            },
-            &stiffwall_client::Cancel::default(),
-            &mut |_| {},
-        )
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
-        let law: stiffwall_proto::DamperLaw = o.damper.parse().unwrap();
-        let at_set = kstar::Rig {
-            damping: o.b_set,
-            deadband_counts: i64::from(law.dead_band()),
-            ..rig.clone()
-        };
+        let o = tune_dry_run(&ConnectSpec::preset(name, true))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let at_set = at_set_wall(&rig, &o).unwrap();
         let k0 = kstar::k_star(&plant, &rig, 1e-3 * o.k_set, 1e12).unwrap();
         let ks = kstar::k_star(&plant, &at_set, k0.k_star * 0.5, 1e12).unwrap();
         let runs = kstar::run_all(&plant, &at_set, o.k_set);
