@@ -364,20 +364,22 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("stiffwall-kb-unit-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("f.svg");
-        let f = frontier(
+        let mut f = frontier(
             vec![(0.0, Some(100.0)), (1.0, None), (2.0, Some(300.0))],
             boundary(
                 &stiffwall_core::devices::find("phantom-1.0").unwrap().params,
                 3.0,
             ),
         );
+        f.quiet_ceiling = Some(250.0);
         write(&path, &f).unwrap();
         let svg = std::fs::read_to_string(&path).unwrap();
         for needle in [
             "B [N·s/m]",
             "K [N/m]",
             "boundary",
-            "verified: largest settling K",
+            "verified: largest resting K",
+            "quiet ceiling 2c/Δ = 2.5000e2",
             "no K at or above the best so far (on the B axis)",
             "spring-only wall K = 1.0000e2",
             "set wall",
