@@ -22,7 +22,7 @@ pub(crate) struct Wall {
     pub(crate) b_set: f64,
     /// The damper's law (the tune's [`Settings::damper`]).
     pub(crate) damper: stiffwall_proto::DamperLaw,
-    /// The margin applied to the chosen wall's largest settling K.
+    /// The margin applied to the chosen wall's largest resting K.
     pub(crate) margin: f64,
     pub(crate) k_spring_only: f64,
     pub(crate) verification: Vec<TestResult>,
@@ -54,7 +54,7 @@ fn damped(base: &ServoConfig, b: f64) -> ServoConfig {
     }
 }
 
-/// The largest settling K at damping `b`: from `start` down by [`FRONTIER_STEP`] until a step
+/// The largest resting K at damping `b`: from `start` down by [`FRONTIER_STEP`] until a step
 /// passes, then up and bisected ([`FRONTIER_REL_TOL`]); None when no K above `floor` passes.
 #[allow(clippy::too_many_arguments)]
 fn search_at(
@@ -225,7 +225,7 @@ struct Searched<'a> {
     margin: f64,
 }
 
-/// The largest settling K at the fixed damping `b` (`--damping B`), searched from the K the
+/// The largest resting K at the fixed damping `b` (`--damping B`), searched from the K the
 /// linear boundary predicts there, added to `frontier`: (B, K), or an error naming B when no K
 /// down to 10⁻³ of the spring-only one settles.
 #[allow(clippy::too_many_arguments)]
@@ -261,7 +261,7 @@ fn fixed_damping(
 
 /// The frontier search: the predicted levels, stiffest first (at most [`FRONTIER_TRIES`]), each
 /// searched from [`FRONTIER_START`] × its predicted K, added to `frontier`; the first whose
-/// largest settling K buys [`DAMPING_MIN_GAIN`] of the stiffness set is (B, K), else
+/// largest resting K buys [`DAMPING_MIN_GAIN`] of the stiffness set is (B, K), else
 /// (0, the spring-only K).
 fn search_frontier(
     run: &Run<'_>,
@@ -274,7 +274,7 @@ fn search_frontier(
     let (found, search, margin) = (at.found, at.search, at.margin);
     let cap = b_cap(c, base, run.period_s());
     // The damper must buy DAMPING_MIN_GAIN of the stiffness *set*: its wall is set at
-    // DAMPED_MARGIN of its largest settling K, the spring-only one at `margin`.
+    // DAMPED_MARGIN of its largest resting K, the spring-only one at `margin`.
     let floor = found.k_pass * (1.0 + DAMPING_MIN_GAIN) * margin / margin.min(DAMPED_MARGIN);
     if floor >= search.k_cap {
         // The largest K the search may try (the quiet ceiling, or the firmware's limit) leaves

@@ -43,7 +43,7 @@ pub struct Outcome {
     /// The virtual damping set, N·s/m (N·m·s/rad).
     pub b_set: f64,
     /// The spring-only stiffness of the same run: verified when it is the one set, otherwise
-    /// the one it would set (largest settling K at B = 0 × the margin).
+    /// the one it would set (largest resting K at B = 0 × the margin).
     pub k_spring_only: f64,
     /// The B values tried with their largest verified (settling) K (None: none at or above
     /// the best K so far), B = 0 first.
@@ -72,7 +72,7 @@ pub struct Outcome {
     pub model_mismatch: Vec<String>,
     /// What the model checks measured.
     pub model_evidence: Evidence,
-    /// Margin applied to the set wall's largest settling K (the requested one, times
+    /// Margin applied to the set wall's largest resting K (the requested one, times
     /// [`crate::settings::MISMATCH_MARGIN`] on a mismatch; at most [`crate::settings::DAMPED_MARGIN`] with a damper).
     pub margin_used: f64,
     /// Whether the config was saved.

@@ -453,7 +453,7 @@ fn force_regime_k(ident: &Identification) -> f64 {
     (f_lim / (ident.v * ident.id.mass.sqrt())).powi(2)
 }
 
-/// Step 4a: the largest settling K at B = 0, from the prediction (the expected limit, not below
+/// Step 4a: the largest resting K at B = 0, from the prediction (the expected limit, not below
 /// half the guaranteed one); the release frequency of its best test goes into the evidence.
 fn spring_search(
     run: &Run<'_>,
@@ -480,7 +480,7 @@ fn spring_search(
     Ok(found)
 }
 
-/// The margin applied to the largest settling K: the user's, times [`MISMATCH_MARGIN`] when
+/// The margin applied to the largest resting K: the user's, times [`MISMATCH_MARGIN`] when
 /// the model does not fit (or an impact could not be launched), [`FRICTION_MISMATCH_MARGIN`]
 /// when only the friction does not fit.
 fn margin_for(s: &Settings, thorough: bool, notes: &Notes, ident: &Identification) -> f64 {

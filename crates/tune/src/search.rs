@@ -57,7 +57,7 @@ pub struct Found {
     pub trials: Vec<Trial>,
 }
 
-/// Brackets and bisects the largest settling K, starting at `k_start` (> 0).
+/// Brackets and bisects the largest resting K, starting at `k_start` (> 0).
 pub fn largest_settling_k(
     k_start: f64,
     s: &Search,

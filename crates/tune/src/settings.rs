@@ -31,7 +31,7 @@ pub const RAMP_SECONDS: f64 = 0.3;
 pub struct Settings {
     /// Expected maximum velocity, m/s (rad/s); None = [`DEFAULT_XIDOT`] ticks per period.
     pub max_velocity: Option<f64>,
-    /// Fraction of the largest settling K that is set, in (0, 1].
+    /// Fraction of the largest resting K that is set, in (0, 1].
     pub margin: f64,
     /// Ticks per release test; None = 60 natural periods (at least 1500, at most 30000).
     pub release_ticks: Option<u32>,
@@ -84,7 +84,7 @@ pub const FRONTIER_START: f64 = 0.85;
 /// predicted limit).
 pub const FRONTIER_STEP: f64 = 1.2;
 
-/// Largest fraction of the damped search's largest settling K that is set (the smaller of it
+/// Largest fraction of the damped search's largest resting K that is set (the smaller of it
 /// and the margin in use): near its edge a damped wall's stable K are speckled with persistent
 /// limit cycles that only some starts reach (maxon-re35-amp-3khz at B = 4.4e-3 N·m·s/rad: a
 /// release from 4 counts buzzes at 0.96 K*(B), one from 6 at 0.90, none below 0.89), which a

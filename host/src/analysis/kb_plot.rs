@@ -146,7 +146,7 @@ pub struct Frontier {
     pub boundary: Vec<(f64, f64)>,
     /// Legend text of the boundary.
     pub boundary_label: String,
-    /// Verified points (B, largest settling K); None: none verified at that B (drawn as a
+    /// Verified points (B, largest resting K); None: none verified at that B (drawn as a
     /// cross on the B axis).
     pub verified: Vec<(f64, Option<f64>)>,
     /// The spring-only wall's K (drawn at B = 0).

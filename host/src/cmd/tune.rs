@@ -21,7 +21,7 @@ pub struct Args {
     /// ticks per servo period (ξ̇ = 5 of Table I).
     #[arg(long, value_name = "V", allow_hyphen_values = true)]
     pub max_velocity: Option<f64>,
-    /// Fraction of the largest settling stiffness that is set, in (0, 1].
+    /// Fraction of the largest resting stiffness that is set, in (0, 1].
     #[arg(long, default_value_t = 0.9, allow_hyphen_values = true)]
     pub margin: f64,
     /// Servo ticks per release test (default: 60 natural periods, 1500–30000).

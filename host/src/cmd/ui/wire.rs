@@ -94,7 +94,7 @@ fn default_ticks() -> u32 {
 pub struct TuneTest {
     /// Expected maximum velocity (default: 5 ticks per period).
     pub max_velocity: Option<f64>,
-    /// Fraction of the largest settling K that is set.
+    /// Fraction of the largest resting K that is set.
     pub margin: Option<f64>,
     /// Ticks per release test.
     pub release_ticks: Option<u32>,
