@@ -150,7 +150,7 @@ fn tune_plot_writes_the_frontier_with_verified_points_and_the_set_wall() {
             "B [N·m·s/rad]",
             "K [N·m/rad]",
             "predicted K_max(B)",
-            "verified: largest settling K",
+            "verified: largest resting K",
             "spring-only wall K = ",
             "set wall K = ",
         ],
