@@ -543,7 +543,9 @@ impl<N: Numeric> Gains<N> {
     /// values saturate).
     #[must_use]
     pub fn from_config(cfg: &ServoConfig, board: &BoardInfo) -> Self {
-        // Derived in f64 (config time only, not in the servo path).
+        // Derived in f64, in software on the M4F (about 7000 instructions): only in the tick
+        // that applies a config (a change, a prepared test's first and last tick), the worst
+        // tick of `cargo xtask bench-firmware` (docs/BENCHMARKS.md), never in a tick without one.
         let de = f64::from(board.delta_eff(cfg.coarsen_shift));
         let fs = f64::from(board.force_per_code);
         let rate = f64::from(cfg.servo_rate_hz.max(1));

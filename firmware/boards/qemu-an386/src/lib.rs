@@ -1,7 +1,8 @@
 //! Shared pieces of the QEMU mps2-an386 images: the UART driver and the simulated bench.
 //!
 //! Binaries: `stiffwall-qemu-an386` (the device: protocol on UART0, servo in SysTick),
-//! `stiffwall-qemu-an386-bench` (instruction counts per servo stage under `-icount shift=0`),
+//! `stiffwall-qemu-an386-bench` (instruction counts per servo stage and the worst single tick
+//! under `-icount shift=7`),
 //! `stiffwall-qemu-an386-panic-check` (links only if the servo tick has no panic path).
 #![no_std]
 

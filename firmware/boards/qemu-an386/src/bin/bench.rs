@@ -1,13 +1,22 @@
 //! Instruction counts of the servo tick, stage by stage and per numeric back-end.
 //!
-//! Run under `qemu-system-arm ... -icount shift=0` (`cargo xtask bench-firmware`): the virtual
-//! clock then advances 1 ns per instruction and SysTick (25 MHz core clock) one count per 40
-//! instructions, deterministically. Each stage runs `BATCHES × PER_BATCH` ticks; the SysTick
-//! counter is read around every batch, and the telemetry queue is drained between batches
-//! (outside the measured windows). Subtracted from every stage: the loop itself and the bench's
-//! encoder and output stand-ins (a table walk and a store, measured alone in the same loop); on
-//! hardware those are one counter-register load and one DAC/PWM-register store. Output lines, on
-//! the semihosting console: `BENCH <stage> <numeric> <instructions per tick ×100>`.
+//! Run under `qemu-system-arm ... -icount shift=S` (`cargo xtask bench-firmware`, S = 7): the
+//! virtual clock then advances 2^S ns per instruction and SysTick (25 MHz core clock) one count
+//! per 40 ns, deterministically; with S = 7 one instruction is 3.2 counts, so a single tick is
+//! resolved to a third of an instruction. Each stage runs `BATCHES × PER_BATCH` ticks; the
+//! SysTick counter is read around every batch, and the telemetry queue is drained between
+//! batches (outside the measured windows). Subtracted from every stage: the loop itself and the
+//! bench's encoder and output stand-ins (a table walk and a store, measured alone in the same
+//! loop); on hardware those are one counter-register load and one DAC/PWM-register store. Output
+//! lines, on the semihosting console: `BENCH <stage> <numeric> <virtual ns per tick ×100>`
+//! (instructions × 100 · 2^S).
+//!
+//! Then the worst tick ([`worst`]): one run of the full tick with the damper, each tick timed
+//! alone, through a config change, a prepared release test and a prepared impact test
+//! (`HostMsg::PrepareTest`: the test's own config applied on its first tick, the active one
+//! parked back on its last), a latched fault (an encoder jump) in safe-mode damping and the
+//! clearing of it: `BENCH-TICK <phase> <numeric> <virtual ns of the phase's longest tick>
+//! <its tick> <ticks in the phase>`, the per-tick stand-ins subtracted.
 #![no_std]
 #![no_main]
 
@@ -22,8 +31,9 @@ use stiffwall_proto::{DamperLaw, ServoConfig};
 
 const BATCHES: u32 = 40;
 const PER_BATCH: u32 = 200;
-/// Instructions per SysTick count with `-icount shift=0` and a 25 MHz SysTick clock.
-const INSTR_PER_COUNT: u64 = 40;
+/// Virtual ns per SysTick count (a 25 MHz SysTick clock); one instruction is 2^S ns under
+/// `-icount shift=S`.
+const NS_PER_COUNT: u64 = 40;
 
 /// Counts of a triangle sweep of ±256·`step` counts around the wall, `step` counts per tick.
 const SWEEP_LEN: usize = 1024;
@@ -99,8 +109,8 @@ fn measure(mut f: impl FnMut(u32), mut between: impl FnMut()) -> u64 {
 
 fn report(stage: &str, numeric: &str, counts: u64, baseline: u64) {
     let ticks = u64::from(BATCHES * PER_BATCH);
-    let instr_x100 = counts.saturating_sub(baseline) * INSTR_PER_COUNT * 100 / ticks;
-    hprintln!("BENCH {} {} {}", stage, numeric, instr_x100);
+    let ns_x100 = counts.saturating_sub(baseline) * NS_PER_COUNT * 100 / ticks;
+    hprintln!("BENCH {} {} {}", stage, numeric, ns_x100);
 }
 
 // Each stage is measured as its own function, called once per tick, as the board's servo
@@ -252,6 +262,235 @@ fn stages<N: Numeric>(baseline: u64) {
             N::NAME
         );
     }
+    worst::<N>(board, &damped, &table2);
+}
+
+/// The worst tick's encoder: the sweep shifted by `offset` counts (a jump), or held still at
+/// `still` (a device at rest during a test's hold).
+struct Script<'t> {
+    table: &'t [u32; SWEEP_LEN],
+    i: usize,
+    offset: u32,
+    still: Option<u32>,
+}
+impl Encoder for Script<'_> {
+    fn count(&mut self) -> u32 {
+        if let Some(c) = self.still {
+            return c;
+        }
+        self.i = (self.i + 1) & (SWEEP_LEN - 1);
+        self.table[self.i].wrapping_add(self.offset) & 0xffff
+    }
+}
+
+#[inline(never)]
+fn io_script(enc: &mut Script<'_>, out: &mut Sink) -> i32 {
+    let c = enc.count() as i32;
+    out.write(c);
+    c
+}
+
+#[inline(never)]
+fn full_script<N: Numeric>(
+    servo: &mut Servo<'_, N>,
+    now: u32,
+    enc: &mut Script<'_>,
+    out: &mut Sink,
+) -> i32 {
+    servo.tick(now, enc, out)
+}
+
+/// Virtual ns of one call of `f`, the SysTick counter read around it.
+#[inline(always)]
+fn window(f: impl FnOnce()) -> u64 {
+    let start = SYST::get_current();
+    f();
+    elapsed(start, SYST::get_current()) * NS_PER_COUNT
+}
+
+/// The phases of the worst-tick run, in the order of [`WORST_PHASES`].
+const FIRST: usize = 0;
+const WALL: usize = 1;
+const CONFIG: usize = 2;
+const PREPARED_START: usize = 3;
+const EXPERIMENT: usize = 4;
+const TEST_END: usize = 5;
+const FAULT: usize = 6;
+const FAULTED: usize = 7;
+const CLEAR: usize = 8;
+/// Phase names as printed (`BENCH-TICK <phase> …`).
+const WORST_PHASES: [&str; 9] = [
+    "first-reading",
+    "wall",
+    "config-change",
+    "prepared-test-start",
+    "test-running",
+    "test-end",
+    "fault-latch",
+    "faulted",
+    "clear-faults",
+];
+/// Ticks of the worst-tick run.
+const WORST_TICKS: u32 = 16_000;
+/// Ticks at which the run's events are queued (config change, prepared release, prepared
+/// impact, encoder jump, clear faults).
+const AT_CONFIG: u32 = 1000;
+const AT_RELEASE: u32 = 2000;
+const AT_IMPACT: u32 = 4000;
+const AT_JUMP: u32 = 12_000;
+const AT_CLEAR: u32 = 13_000;
+
+/// The worst tick of the full tick with the damper over one run that changes the config,
+/// runs a prepared release and a prepared impact test (each with its own config and a decided
+/// end), latches a fault and clears it; every tick timed alone (`window`), the per-tick
+/// stand-ins (the call, `io_script`) subtracted. Prints one `BENCH-TICK` line per phase.
+fn worst<N: Numeric>(
+    board: stiffwall_firmware::BoardInfo,
+    damped: &ServoConfig,
+    table: &[u32; SWEEP_LEN],
+) {
+    use stiffwall_firmware::channels::DecidedEnd;
+    use stiffwall_firmware::ServoEvent;
+    use stiffwall_proto::SafeMode;
+    // The supervisor on every path: a jump limit the sweep stays under, safe-mode damping after
+    // a fault, the heartbeat watchdog armed (it runs during tests; the run is shorter than it).
+    let cfg = ServoConfig {
+        encoder_jump_counts: 1000,
+        safe_mode: SafeMode::Damping,
+        safe_damping: DAMPING_N_S_PER_M,
+        heartbeat_timeout_ms: 60_000,
+        ..*damped
+    };
+    let changed = ServoConfig {
+        stiffness: 1.5 * cfg.stiffness,
+        damping: 0.5 * cfg.damping,
+        ..cfg
+    };
+    let test_cfg = ServoConfig {
+        stiffness: 0.8 * cfg.stiffness,
+        ..changed
+    };
+    let end = DecidedEnd {
+        min_run: 100,
+        one_count: true,
+        decay_base: 200,
+        run: test_cfg,
+        park: changed,
+    };
+    let mut channels = Channels::new();
+    let (servo_port, mut host) = channels.split();
+    let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
+    let mut enc = Script {
+        table,
+        i: 0,
+        offset: 0,
+        still: None,
+    };
+    let mut out = Sink;
+    // The per-tick window around the stand-ins alone: the least of many (its true cost is fixed;
+    // the least reading subtracts least, so a phase's figure errs high, never low).
+    let mut io = u64::MAX;
+    for _ in 0..256 {
+        io = io.min(window(|| {
+            black_box(io_script(&mut enc, &mut out));
+        }));
+    }
+    if host
+        .commands
+        .enqueue(ServoCmd::Stream { decimation: 1 })
+        .is_err()
+    {
+        hprintln!("BENCH-ERROR command queue full");
+    }
+    let mut worst = [(0u64, 0u32); WORST_PHASES.len()];
+    let mut seen = [0u32; WORST_PHASES.len()];
+    let mut tests_done = 0;
+    for t in 0..WORST_TICKS {
+        // Unmeasured: the main loop's side (queue a command, move the device).
+        let cmd = match t {
+            AT_CONFIG => Some(ServoCmd::Config(changed)),
+            AT_RELEASE => {
+                // A device at rest 20 counts into the wall: the hold settles, the release runs
+                // until the decided end (still for `min_run` ticks).
+                enc.still = Some(20);
+                Some(ServoCmd::Release {
+                    deflection: 20,
+                    ticks: 2000,
+                    end: Some(end),
+                })
+            }
+            AT_IMPACT => {
+                // At rest 30 counts out: the hold settles, the launch moves its target toward
+                // the wall; the device stays, so the launch's time limit releases it.
+                enc.still = Some((-30i32) as u32 & 0xffff);
+                Some(ServoCmd::Impact {
+                    start: -30,
+                    velocity_milli: 2000,
+                    ticks: 2000,
+                    end: Some(end),
+                })
+            }
+            AT_CLEAR => Some(ServoCmd::ClearFaults),
+            _ => None,
+        };
+        if t == AT_JUMP {
+            enc.offset = 5000;
+        }
+        let queued = cmd.is_some();
+        if let Some(c) = cmd {
+            if host.commands.enqueue(c).is_err() {
+                hprintln!("BENCH-ERROR command queue full");
+            }
+        }
+        let (faults_before, running_before) = (servo.faults(), servo.experiment_running());
+        let ns = window(|| {
+            black_box(full_script(&mut servo, t, &mut enc, &mut out));
+        });
+        while host.telemetry.dequeue().is_some() {}
+        let mut ended = false;
+        while let Some(ServoEvent::ExperimentDone { .. }) = host.events.dequeue() {
+            ended = true;
+            tests_done += 1;
+            // Back to the sweep once a test is over.
+            enc.still = None;
+        }
+        let phase = match (queued, t) {
+            (_, 0) => FIRST,
+            (true, AT_CONFIG) => CONFIG,
+            (true, AT_RELEASE | AT_IMPACT) => PREPARED_START,
+            (true, AT_CLEAR) => CLEAR,
+            _ if ended => TEST_END,
+            _ if faults_before == 0 && servo.faults() != 0 => FAULT,
+            _ if faults_before != 0 => FAULTED,
+            _ if running_before => EXPERIMENT,
+            _ => WALL,
+        };
+        seen[phase] += 1;
+        let ns = ns.saturating_sub(io);
+        if ns > worst[phase].0 {
+            worst[phase] = (ns, t);
+        }
+    }
+    if tests_done != 2 || servo.faults() != 0 || seen.contains(&0) {
+        hprintln!(
+            "BENCH-ERROR worst-tick run of {}: {} tests ended (2 expected), faults {:#x} at the end, ticks per phase {:?}",
+            N::NAME,
+            tests_done,
+            servo.faults(),
+            seen
+        );
+    }
+    // `BENCH-TICK <phase> <numeric> <ns of its longest tick> <that tick> <ticks in the phase>`.
+    for (i, name) in WORST_PHASES.iter().enumerate() {
+        hprintln!(
+            "BENCH-TICK {} {} {} {} {}",
+            name,
+            N::NAME,
+            worst[i].0,
+            worst[i].1,
+            seen[i]
+        );
+    }
 }
 
 #[entry]
@@ -272,7 +511,7 @@ fn main() -> ! {
     );
     hprintln!(
         "BENCH baseline loop {}",
-        baseline * INSTR_PER_COUNT * 100 / u64::from(BATCHES * PER_BATCH)
+        baseline * NS_PER_COUNT * 100 / u64::from(BATCHES * PER_BATCH)
     );
     stages::<Fx64>(baseline);
     stages::<Fx32>(baseline);
