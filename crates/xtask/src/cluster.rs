@@ -1,5 +1,6 @@
 //! `cargo xtask cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node
-//! cluster on this machine (opt-in; not part of `ci`).
+//! cluster on this machine (also the last step of `cargo xtask ci`: about 140 s with the install
+//! on 2 cores).
 //!
 //! Steps: install Debian's `slurm-wlm` and `munge` when missing ([`toolchain::apt_install`]:
 //! `--no-remove`, never removes anything); build `hostctl` (release); start `munged` with a
@@ -10,7 +11,9 @@
 //! $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`, and the `afterok` merge job); wait; submit
 //! the array again (must be a no-op), an array numbered 1..n (must be refused), and a long
 //! shard cancelled while it runs (must leave nothing merge accepts, and complete when
-//! re-submitted); and check that the merged map equals the single-process map point for point. The daemons are stopped
+//! re-submitted; without cycle detection, its horizon sized from a measurement on this machine
+//! to run about 30 s, so that it cannot finish within the second before the cancel however fast
+//! the solver is); and check that the merged map equals the single-process map point for point. The daemons are stopped
 //! (`scontrol shutdown`, `munged --stop`, then only the recorded pids) however the run ends.
 //!
 //! Units: seconds of wall time. Needs root (slurmd and munged run as the invoking user, which
@@ -305,12 +308,62 @@ fn resubmissions(c: &Cluster, dir: &Path, sweep: &Path, hostctl: &Path) -> Resul
 /// Submits `map-array.sbatch`: (sweep directory, MAP_ARGS, array, SHARDS) → job id.
 type Submit<'a> = dyn Fn(&Path, &str, &str, Option<usize>) -> Result<String> + 'a;
 
+/// How long the pre-empted shard is planned to run, s: far beyond the 1 s after which it must
+/// still be running, short enough to complete when submitted again.
+const LONG_SHARD_S: f64 = 30.0;
+
+/// The `hostctl map` flags of the pre-emption step's long sweep: the panel without cycle
+/// detection (its persistent points run every period of the horizon, however fast the solver
+/// finds their cycle), with a horizon sized from a measurement on this machine so that its
+/// shard 0 of [`SHARDS`] runs about [`LONG_SHARD_S`] on one thread (as the array task does);
+/// where even the largest horizon would be quicker, a finer β axis adds points. Returns the
+/// flags and the planned seconds.
+fn long_sweep(hostctl: &Path, dir: &Path) -> Result<(String, f64)> {
+    let base = MAP_ARGS.replace("--periods 50000", "");
+    let time = |args: &str, periods: u64| -> Result<f64> {
+        let t0 = Instant::now();
+        output(
+            Command::new(hostctl)
+                .arg("map")
+                .args(args.split_whitespace())
+                .args(["--periods", &periods.to_string(), "--no-cycle-detection"])
+                .args(["--quiet", "--threads", "1", "--force"])
+                .args(["--shard", &format!("0/{SHARDS}")])
+                .arg("--out")
+                .arg(dir.join("long-sweep-probe.json")),
+        )?;
+        Ok(t0.elapsed().as_secs_f64())
+    };
+    // t(P) = a + b·P: the persistent points cost b per period, the rest end early.
+    let (p1, p2) = (200_000u64, 1_000_000u64);
+    let (t1, t2) = (time(&base, p1)?, time(&base, p2)?);
+    let b = ((t2 - t1) / (p2 - p1) as f64).max(1e-12);
+    let a = (t1 - b * p1 as f64).max(0.0);
+    let max = 100_000_000u64; // stiffwall_sim::map::MAX_PERIODS
+    let fine = ((LONG_SHARD_S / (a + b * max as f64)).ceil() as usize).max(1);
+    let args = if fine > 1 {
+        base.replace("--beta 0:1:34", &format!("--beta 0:1:{}", 34 * fine))
+    } else {
+        base
+    };
+    let b = b * fine as f64;
+    let periods = ((LONG_SHARD_S - a).max(1.0) / b).clamp(p2 as f64, max as f64) as u64;
+    let planned = a + b * periods as f64;
+    eprintln!(
+        "xtask: long sweep for pre-emption: shard 0/{SHARDS} measured {t1:.2} s at {p1} periods and {t2:.2} s at {p2}, without cycle detection: {periods} periods{} planned {planned:.0} s",
+        if fine > 1 { format!(", β axis × {fine},") } else { ",".into() }
+    );
+    Ok((
+        format!("{args} --periods {periods} --no-cycle-detection"),
+        planned,
+    ))
+}
+
 /// A shard cancelled while it runs (as pre-emption does) leaves no shard file that merge
 /// accepts; submitted again, it completes.
 fn preempted_shard(c: &Cluster, dir: &Path, hostctl: &Path, submit_to: &Submit) -> Result<()> {
     let sweep = dir.join("sweep-preempted");
-    // The same panel with a 100 times longer horizon: its persistent points run for seconds.
-    let long = MAP_ARGS.replace("--periods 50000", "--periods 5000000");
+    let (long, planned) = long_sweep(hostctl, dir)?;
     let shard = sweep.join(format!("shard-0-of-{SHARDS}.json"));
     let job = submit_to(&sweep, &long, "0", Some(SHARDS))?;
     let t0 = Instant::now();
@@ -321,7 +374,7 @@ fn preempted_shard(c: &Cluster, dir: &Path, hostctl: &Path, submit_to: &Submit) 
     std::thread::sleep(Duration::from_secs(1));
     ensure!(
         !shard.exists(),
-        "the long shard finished before it could be cancelled"
+        "the long shard (planned {planned:.0} s) finished before it could be cancelled"
     );
     output(c.slurm("scancel").arg(&job))?;
     wait_for(c, &job)?;
@@ -343,7 +396,7 @@ fn preempted_shard(c: &Cluster, dir: &Path, hostctl: &Path, submit_to: &Submit) 
         ensure!(!o.status.success(), "merge accepted the leftover {name}");
     }
     eprintln!(
-        "xtask: shard 0/{SHARDS} (5e6 periods) cancelled while running: no shard file; merge refuses what it left ({left:?})"
+        "xtask: shard 0/{SHARDS} (planned {planned:.0} s) cancelled while running: no shard file; merge refuses what it left ({left:?})"
     );
     let t1 = Instant::now();
     let again = submit_to(&sweep, &long, "0", Some(SHARDS))?;

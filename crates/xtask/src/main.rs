@@ -19,7 +19,7 @@
 //! - `ui-screenshots`: the real-browser test of `hostctl ui`, writing `docs/figures/ui-*.png`
 //!   (installs Debian's chromium and chromium-driver if missing, as `ci` does).
 //! - `cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node cluster
-//!   (installs slurm-wlm and munge; opt-in, not in `ci`; docs/cluster.md).
+//!   (installs slurm-wlm and munge; also in `ci`, about 2.5 min; docs/cluster.md).
 //! - `module-cycles [--edges]`: no import cycle between the files of `sim/src`, `host/src`,
 //!   `tests/src`, `firmware/src` and `crates/{tune,client,proto,core}/src` (the graph of
 //!   `crate::`/`super::`/child paths; `--edges` prints it).
@@ -235,6 +235,8 @@ fn ci() -> Result<()> {
     qemu::qemu(&[])?;
     step("servo instruction budget under QEMU -icount");
     bench_firmware::bench_firmware(&["--no-write".to_string()])?;
+    step("a Fig. 6 panel as a Slurm job array on a throw-away cluster (Debian's slurm-wlm and munge; root), with pre-emption");
+    cluster::cluster_test(&[])?;
     step("done");
     Ok(())
 }
