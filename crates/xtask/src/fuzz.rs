@@ -4,9 +4,10 @@
 //! (garbage frames into the virtual device's pty while recording) with a chosen budget;
 //! prints their counts.
 //!
-//! Units: N mutated frames (chunks N/10, power cuts N/100, pty frames N/10). Default CI runs
-//! the same harnesses with their built-in short budgets (20 000 frames each) through
-//! `cargo test --workspace`.
+//! Units: N mutated frames (chunks N/10, power cuts N/100, pty frames N/10). `cargo test
+//! --workspace` runs the same harnesses with their built-in short budgets (20 000 frames each);
+//! `cargo xtask ci` then runs this campaign with N = 10⁷, seed 1 (docs/RELIABILITY.md's
+//! figures; about 20 s on 2 cores).
 
 use anyhow::{bail, Result};
 

@@ -1,17 +1,19 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
 //! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
-//!   module cycles,
-//!   host tests, the real-browser test of `hostctl ui`, no_std checks for the Cortex-M target, firmware cross-builds with the size
-//!   report, QEMU scenarios.
+//!   module cycles, no_std checks for the Cortex-M target, firmware cross-builds with the size
+//!   report, host tests, the fuzz campaign (10⁷ frames), the 10 s link flood, the tune tables
+//!   against a fresh run, the every-plant supervisor, the real-browser test of `hostctl ui`,
+//!   QEMU scenarios, the instruction budgets (mean and worst tick) and the Slurm cluster test.
+//!   Every step that runs `#[ignore]`d tests fails when fewer ran than it has.
 //! - `unused-deps`: every declared dependency of the root workspace is used (also in `ci`).
 //! - `firmware [--update-size-report]`: builds every board image.
 //! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
 //! - `flash BOARD --features dac|pwm[,defmt]`: builds a real board's image and flashes it with
 //!   probe-rs (the board's runner; docs/toolchain.md).
 //! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
-//! - `fuzz [--frames N] [--seed S]`: the fuzz campaign with a chosen budget (CI runs a short
-//!   one with the host tests).
+//! - `fuzz [--frames N] [--seed S]`: the fuzz campaign with a chosen budget (CI runs 10⁷
+//!   frames, seed 1, docs/RELIABILITY.md's figures).
 //! - `bench [--quick] [--no-criterion]`: the simulator's accuracy-vs-time tables
 //!   (docs/BENCHMARKS-sim.md, docs/figures/pareto-sim.png).
 //! - `tune-table [--quick] [--only NAME]`: K* vs the K `hostctl tune` sets on the plants of
@@ -210,6 +212,8 @@ fn ci() -> Result<()> {
     firmware::firmware(&[])?;
     step("host tests (unit, SIL, end to end against the virtual device)");
     run(cargo().args(["test", "--workspace"]))?;
+    step("the fuzz campaign of docs/RELIABILITY.md: 1e7 frames, 1e6 chunks, 1e5 power cuts, 1e6 pty frames (seed 1)");
+    fuzz::fuzz(&["--frames".to_string(), "10000000".to_string()])?;
     step("the 10 s flood of bad frames, real time and fast (the issue's acceptance run; debug build of the step above)");
     run_counting(
         cargo().args([
