@@ -365,7 +365,7 @@ fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
     };
     let v_ticks = DEFAULT_XIDOT;
     let natural = |k: f64| std::f64::consts::TAU * (truth.mass / k).sqrt() / truth.period_s;
-    // The true limit of this plant at ξ̇ = 5 is about 1.3 (see the first test).
+    // The true limit of this plant at ξ̇ = 5: K*(0) = 1.316 (tests/tests/tune_truth.rs).
     for (k, one_sided) in [(1.0, true), (1.0, false)] {
         for v in [v_ticks, -v_ticks] {
             if one_sided && v < 0.0 {
