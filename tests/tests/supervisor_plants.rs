@@ -16,6 +16,7 @@
 //! the wall tune sets (its B and damper law) at 1.5 K*(B set), as docs/TUNE.md's supervisor
 //! column.
 
+use rayon::prelude::*;
 use stiffwall_tests::family::{plant_files, plants_dir, PlantCase};
 use stiffwall_tests::kstar;
 
@@ -55,7 +56,7 @@ fn damped(case: &PlantCase) -> Option<(PlantCase, f64)> {
 
 fn check_all(cases: &[PlantCase]) {
     let with_k: Vec<(PlantCase, f64)> = cases
-        .iter()
+        .par_iter()
         .map(|case| {
             let ks = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
                 .unwrap_or_else(|e| panic!("{}: K*: {e}", case.name));
@@ -65,12 +66,16 @@ fn check_all(cases: &[PlantCase]) {
     check_at(&with_k);
 }
 
-/// The supervisor at 1.5 K with each case's own damping (its rig's) and K*.
+/// The supervisor at 1.5 K with each case's own damping (its rig's) and K* (the cases run in
+/// parallel, reported in order).
 fn check_at(cases: &[(PlantCase, f64)]) {
     let mut failures = Vec::new();
     let mut summary = Vec::new();
-    for (case, k_star) in cases {
-        let rep = case.supervisor_report(1.5 * k_star);
+    let reports: Vec<_> = cases
+        .par_iter()
+        .map(|(case, k_star)| case.supervisor_report(1.5 * k_star))
+        .collect();
+    for ((case, _), rep) in cases.iter().zip(reports) {
         let trip = |s: &stiffwall_tests::family::Supervised| match s.run.trip_tick {
             Some(t) => t.to_string(),
             None if s.unsupervised_settles => "settles".into(),
@@ -226,9 +231,12 @@ fn the_supervisor_stops_every_plant_at_one_and_a_half_k_star_of_tunes_b() {
     assert!(files.len() >= 21, "{} plants", files.len());
     let mut cases = Vec::new();
     let mut errors = Vec::new();
-    for p in &files {
-        let case = PlantCase::load(p).unwrap_or_else(|e| panic!("{e}"));
-        match tuned(&case) {
+    let tuned: Vec<_> = files
+        .par_iter()
+        .map(|p| tuned(&PlantCase::load(p).unwrap_or_else(|e| panic!("{e}"))))
+        .collect();
+    for t in tuned {
+        match t {
             Ok((c, k, k_set, law)) => {
                 eprintln!(
                     "{}: tune sets K = {k_set:.5}, B = {:.4e} ({law}); K*(B set) = {k:.5}",
