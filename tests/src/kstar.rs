@@ -102,6 +102,32 @@ impl SampledPlant for stiffwall_sim::PhysicalPlant {
     }
 }
 
+/// The rigid plant and the K* rig of a preset (`hostctl --device NAME`): the virtual device's
+/// plant (m, b, c, Δ, T of the preset, its published peak force as the amplifier's range), the
+/// spring alone on a two-sided wall at v_max = [`DEFAULT_XIDOT`] counts per period. None for an
+/// unknown name.
+#[must_use]
+pub fn preset(name: &str) -> Option<(stiffwall_sim::PhysicalPlant, Rig)> {
+    let d = stiffwall_core::devices::find(name)?;
+    let p = d.params;
+    let plant =
+        stiffwall_sim::PhysicalPlant::new(p.mass, p.viscous, p.coulomb, p.resolution).ok()?;
+    let rig = Rig {
+        period_s: p.period_s,
+        resolution_m: p.resolution,
+        delay_ticks: 0,
+        one_sided: false,
+        free_exit: false,
+        force_limit_n: d.force_limit,
+        damping: 0.0,
+        deadband_counts: 0,
+        v_max: DEFAULT_XIDOT * p.resolution / p.period_s,
+        moving_mass_kg: p.mass,
+        wall_offsets: vec![0],
+    };
+    Some((plant, rig))
+}
+
 /// The controller side of a plant and the trial envelope.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rig {

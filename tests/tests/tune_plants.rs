@@ -234,29 +234,6 @@ fn tune_is_safe_and_near_optimal_on_random_launch_plants() {
     let _ = check_all(&cases);
 }
 
-/// The rigid plant and the K* rig of a preset (`hostctl --device NAME`): the virtual device's
-/// plant (m, b, c, Δ, T of the preset, its published peak force as the amplifier's range).
-fn preset_case(name: &str) -> (stiffwall_sim::PhysicalPlant, kstar::Rig) {
-    let d = stiffwall_core::devices::find(name).unwrap_or_else(|| panic!("no preset {name}"));
-    let p = d.params;
-    let plant =
-        stiffwall_sim::PhysicalPlant::new(p.mass, p.viscous, p.coulomb, p.resolution).unwrap();
-    let rig = kstar::Rig {
-        period_s: p.period_s,
-        resolution_m: p.resolution,
-        delay_ticks: 0,
-        one_sided: false,
-        free_exit: false,
-        force_limit_n: d.force_limit,
-        damping: 0.0,
-        deadband_counts: 0,
-        v_max: kstar::DEFAULT_XIDOT * p.resolution / p.period_s,
-        moving_mass_kg: p.mass,
-        wall_offsets: vec![0],
-    };
-    (plant, rig)
-}
-
 /// The README's first command (the default `maxon-re35`) and phantom-1.0: the wall tune sets
 /// comes to rest in every run of the K* criterion by the simulator alone (ten impact speeds
 /// up to v_max from both sides, releases from four deflections, 60 natural periods each), and
@@ -264,7 +241,7 @@ fn preset_case(name: &str) -> (stiffwall_sim::PhysicalPlant, kstar::Rig) {
 #[test]
 fn the_presets_walls_come_to_rest_in_every_run() {
     for name in ["maxon-re35", "phantom-1.0"] {
-        let (plant, rig) = preset_case(name);
+        let (plant, rig) = kstar::preset(name).expect("a preset");
         let o = tune_dry_run(&ConnectSpec::preset(name, true))
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let at_set = at_set_wall(&rig, &o).unwrap();
@@ -305,7 +282,7 @@ fn the_presets_walls_come_to_rest_in_every_run() {
 /// 500 per second); with a dead band of one count the same (K, B) rests in every run.
 #[test]
 fn the_former_default_wall_chatters_with_the_plain_difference_and_rests_with_the_dead_band() {
-    let (plant, rig) = preset_case("maxon-re35");
+    let (plant, rig) = kstar::preset("maxon-re35").expect("a preset");
     let c = stiffwall_core::devices::find("maxon-re35")
         .unwrap()
         .params

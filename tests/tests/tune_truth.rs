@@ -12,30 +12,6 @@ use stiffwall_client::{Cancel, ConnectSpec};
 use stiffwall_host::tune::procedure::{self, Settings};
 use stiffwall_tests::kstar;
 
-/// The rigid plant and the K* rig of a preset (`hostctl --device NAME`): the virtual device's
-/// plant (m, b, c, Δ, T of the preset, its published peak force as the amplifier's range), the
-/// spring alone.
-fn preset_case(name: &str) -> (stiffwall_sim::PhysicalPlant, kstar::Rig) {
-    let d = stiffwall_core::devices::find(name).unwrap_or_else(|| panic!("no preset {name}"));
-    let p = d.params;
-    let plant =
-        stiffwall_sim::PhysicalPlant::new(p.mass, p.viscous, p.coulomb, p.resolution).unwrap();
-    let rig = kstar::Rig {
-        period_s: p.period_s,
-        resolution_m: p.resolution,
-        delay_ticks: 0,
-        one_sided: false,
-        free_exit: false,
-        force_limit_n: d.force_limit,
-        damping: 0.0,
-        deadband_counts: 0,
-        v_max: kstar::DEFAULT_XIDOT * p.resolution / p.period_s,
-        moving_mass_kg: p.mass,
-        wall_offsets: vec![0],
-    };
-    (plant, rig)
-}
-
 #[test]
 fn the_spring_only_tune_identifies_the_rig_and_sets_k_within_80_to_100_percent_of_k_star() {
     let name = "maxon-re35";
@@ -63,7 +39,7 @@ fn the_spring_only_tune_identifies_the_rig_and_sets_k_within_80_to_100_percent_o
         "Coulomb friction off by {:.1} %",
         100.0 * c_err
     );
-    let (plant, rig) = preset_case(name);
+    let (plant, rig) = kstar::preset(name).expect("a preset");
     let ks = kstar::k_star(&plant, &rig, 1e-3 * o.k_set, 1e12).unwrap();
     let ratio = o.k_set / ks.k_star;
     eprintln!(
