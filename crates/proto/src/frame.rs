@@ -290,6 +290,7 @@ impl FrameDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::damper::DamperLaw;
     use crate::msg::*;
 
     #[test]

@@ -4,6 +4,7 @@
 //! - [`msg`]: the messages ([`HostMsg`] host → device, [`DeviceMsg`] device → host) and the
 //!   servo configuration, serialized with postcard. Physical quantities are SI (`f32`); force
 //!   and position on the device side are output codes and encoder counts, named as such.
+//! - [`damper`]: the virtual damper's law in the servo configuration and its text form.
 //! - [`frame`]: the framing. One frame on the wire is
 //!   `COBS( version:u8 ++ postcard(msg) ++ CRC-32/ISO-HDLC(version ++ postcard) as 4 LE bytes ) ++ 0x00`.
 //!   [`encode`] writes one frame into a caller buffer; [`FrameDecoder`] is fed byte by byte and
@@ -17,8 +18,10 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod damper;
 pub mod frame;
 pub mod msg;
 
+pub use damper::{DamperLaw, ParseDamperLawError, LAW_NAME_LEN, MAX_DEADBAND_COUNTS};
 pub use frame::{encode, FrameDecoder, FrameError, Message, MAX_FRAME, MAX_PAYLOAD};
 pub use msg::*;
