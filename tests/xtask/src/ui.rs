@@ -1,4 +1,4 @@
-//! The real-browser test of `hostctl ui` (host/tests/ui_browser.rs, `#[ignore]`d in plain
+//! The real-browser test of `hostctl ui` (host/hostctl/tests/ui_browser.rs, `#[ignore]`d in plain
 //! `cargo test` because it needs Debian's chromium and chromium-driver, which this installs)
 //! and the screenshots it writes to docs/figures/ui-*.png.
 

@@ -58,7 +58,7 @@ pub struct Size {
 
 const REPORT: &str = "firmware/size-report.txt";
 
-/// Repository root (the xtask crate lives at crates/xtask).
+/// Repository root (the xtask crate lives at tests/xtask).
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .ancestors()

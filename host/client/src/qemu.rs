@@ -70,7 +70,7 @@ pub fn find_image(explicit: Option<&Path>) -> Result<PathBuf> {
             p.display()
         )));
     }
-    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     for base in [PathBuf::from("."), repo] {
         let p = base.join(DEFAULT_IMAGE);
         if p.is_file() {

@@ -1,6 +1,6 @@
 //! `cargo xtask fuzz [--frames N] [--seed S]`: the fuzz campaign of `firmware/tests/fuzz.rs`
 //! (mutated frames against the decoder, hostile chunks into the firmware `Device` + `Servo`,
-//! power cuts during config saves) and the end-to-end harness of `host/tests/fuzz_pty.rs`
+//! power cuts during config saves) and the end-to-end harness of `host/hostctl/tests/fuzz_pty.rs`
 //! (garbage frames into the virtual device's pty while recording) with a chosen budget;
 //! prints their counts.
 //!

@@ -1,11 +1,11 @@
 //! `cargo xtask qemu [--bless]`: builds the QEMU board image and runs the QEMU scenarios.
 //!
-//! The scenarios live in `host/tests/qemu.rs` (opt-in `#[ignore]` tests, so plain `cargo test`
+//! The scenarios live in `host/hostctl/tests/qemu.rs` (opt-in `#[ignore]` tests, so plain `cargo test`
 //! needs no QEMU): each boots the image under `qemu-system-arm -serial pty` inside a timeout,
 //! talks to it through hostctl's own serial client, ends it through semihosting exit, and
 //! compares its transcript with `firmware/boards/qemu-an386/scenarios/<name>.expected`.
 //! `--bless` rewrites the expected files from this run. Then the QEMU recording test of
-//! `host/tests/device_cmds.rs` runs on the same image. Each step fails when fewer tests ran
+//! `host/hostctl/tests/device_cmds.rs` runs on the same image. Each step fails when fewer tests ran
 //! than it has.
 
 use crate::firmware::{self, root, IMAGES};
@@ -42,7 +42,7 @@ pub fn qemu(args: &[String]) -> Result<()> {
         cmd.env("STIFFWALL_BLESS", "1");
     }
     crate::run_counting(&mut cmd, QEMU_SCENARIOS)?;
-    // The QEMU recording of `host/tests/device_cmds.rs`: recorded on the image, replayed bit
+    // The QEMU recording of `host/hostctl/tests/device_cmds.rs`: recorded on the image, replayed bit
     // for bit through the host build of the servo core.
     let mut rec = crate::cargo();
     rec.args([
@@ -61,5 +61,5 @@ pub fn qemu(args: &[String]) -> Result<()> {
     crate::run_counting(&mut rec, 1)
 }
 
-/// The scenarios of `host/tests/qemu.rs` (all must run).
+/// The scenarios of `host/hostctl/tests/qemu.rs` (all must run).
 const QEMU_SCENARIOS: usize = 6;

@@ -32,7 +32,7 @@ fn finish(mut q: qemu::Qemu, mut c: Client) {
 /// Compares a transcript with its expected file (or writes it when blessing).
 fn check(name: &str, transcript: &str) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../firmware/boards/qemu-an386/scenarios")
+        .join("../../firmware/boards/qemu-an386/scenarios")
         .join(format!("{name}.expected"));
     if std::env::var_os("STIFFWALL_BLESS").is_some() {
         std::fs::write(&path, transcript).expect("write expected transcript");

@@ -265,7 +265,7 @@ fn fast_and_real_time_tunes_set_the_same_k_on_four_plants() {
             "phantom-stiction",
             Box::new(|f| {
                 let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                    .join("../sim/plants/phantom-stiction.toml");
+                    .join("../../sim/plants/phantom-stiction.toml");
                 connect_plant_file(&std::fs::read_to_string(path).unwrap(), f)
             }),
         ),

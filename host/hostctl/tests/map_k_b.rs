@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 
 const PLANT: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../sim/plants/phantom-realistic.toml"
+    "/../../sim/plants/phantom-realistic.toml"
 );
 // [device] and [controller] of that file.
 const M: f64 = 0.03;

@@ -164,7 +164,7 @@ fn simulate_reports_divergence_and_every_keeps_the_last_row() {
     assert!(std::fs::read_to_string(&csv).unwrap().lines().count() > 2);
 
     // --every 7 on a 100-period run: rows 0, 7, ..., 98 and the last one, 100.
-    let base = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes/base.toml");
+    let base = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes/base.toml");
     let text = std::fs::read_to_string(&base).unwrap();
     let short = tmp("short.toml");
     std::fs::write(
@@ -196,7 +196,7 @@ fn simulate_reports_divergence_and_every_keeps_the_last_row() {
 fn unwritable_plot_is_refused_before_the_run() {
     let bad = tmp("no/such/dir/f.svg");
     let bad = bad.to_str().unwrap();
-    let base = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes/base.toml");
+    let base = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes/base.toml");
     let out = tmp("never.csv");
     let err = refused(
         &[

@@ -8,7 +8,7 @@ fn hostctl() -> Command {
 }
 
 fn scenes() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../sim/scenes")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../sim/scenes")
 }
 
 fn tmp(name: &str) -> PathBuf {

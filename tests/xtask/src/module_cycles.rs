@@ -1,5 +1,5 @@
 //! `cargo xtask module-cycles [--edges]`: the file-level dependency graph of `sim/src` and of
-//! `host/src/cmd/map`, `crates/tune/src` and `tests/src`, and a failure when
+//! `host/hostctl/src/cmd/map`, `host/tune/src` and `tests/src`, and a failure when
 //! it has a cycle.
 //!
 //! An edge A → B means file A names a path that resolves into file B: `crate::…`, `super::…`,
@@ -21,19 +21,19 @@ struct Scope {
     under: &'static str,
 }
 
-// Checked today: every file of `sim/src`, `host/src` (its `main.rs` is the binary crate, left
-// out, see `graph`), `crates/{tune,client,proto,core}/src`, `firmware/src` and `tests/src`.
+// Checked today: every file of `sim/src`, `host/hostctl/src` (its `main.rs` is the binary crate, left
+// out, see `graph`), `crates/{proto,core}, host/{tune,client}/src`, `firmware/src` and `tests/src`.
 const SCOPES: [Scope; 10] = [
     Scope {
         root: "sim/src",
         under: "",
     },
     Scope {
-        root: "host/src",
+        root: "host/hostctl/src",
         under: "cmd/map",
     },
     Scope {
-        root: "crates/tune/src",
+        root: "host/tune/src",
         under: "",
     },
     Scope {
@@ -41,15 +41,15 @@ const SCOPES: [Scope; 10] = [
         under: "",
     },
     Scope {
-        root: "host/src",
+        root: "host/hostctl/src",
         under: "cmd/ui",
     },
     Scope {
-        root: "crates/client/src",
+        root: "host/client/src",
         under: "",
     },
     Scope {
-        root: "host/src",
+        root: "host/hostctl/src",
         under: "",
     },
     Scope {

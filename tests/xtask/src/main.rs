@@ -22,8 +22,8 @@
 //!   (installs Debian's chromium and chromium-driver if missing, as `ci` does).
 //! - `cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node cluster
 //!   (installs slurm-wlm and munge; also in `ci`, about 2.5 min; docs/cluster.md).
-//! - `module-cycles [--edges]`: no import cycle between the files of `sim/src`, `host/src`,
-//!   `tests/src`, `firmware/src` and `crates/{tune,client,proto,core}/src` (the graph of
+//! - `module-cycles [--edges]`: no import cycle between the files of `sim/src`, `host/hostctl/src`,
+//!   `tests/src`, `firmware/src` and `crates/{proto,core}, host/{tune,client}/src` (the graph of
 //!   `crate::`/`super::`/child paths; `--edges` prints it).
 //! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
 //!   μ × τ_D, then `hostctl map atlas`).
