@@ -6,7 +6,8 @@
 //! Units: those of `hostctl map` (dimensionless, Table I). Invariant: every number in
 //! docs/ATLAS.md comes from this command; the map JSON itself stays in target/ (large).
 
-use crate::{firmware, run};
+use crate::firmware;
+use crate::process::run;
 use anyhow::{ensure, Result};
 use std::process::Command;
 
@@ -20,7 +21,7 @@ pub const MAP_ARGS: &str = "--mu 1:1000:7:log --tau-d 0,0.5,1,1.25,2 --xidot0 5 
 /// A failed build, sweep or atlas.
 pub fn atlas(args: &[String]) -> Result<()> {
     ensure!(args.is_empty(), "atlas takes no arguments (got {args:?})");
-    let hostctl = crate::build_hostctl()?;
+    let hostctl = crate::process::build_hostctl()?;
     let root = firmware::root();
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map_or_else(|| root.join("target"), std::path::PathBuf::from);

@@ -41,10 +41,16 @@ pub fn bench(args: &[String]) -> Result<()> {
         i += 1;
     }
     if criterion {
-        crate::run(crate::cargo().args(["bench", "-p", "stiffwall-sim", "--bench", "solvers"]))?;
+        crate::process::run(crate::process::cargo().args([
+            "bench",
+            "-p",
+            "stiffwall-sim",
+            "--bench",
+            "solvers",
+        ]))?;
     }
-    crate::run(
-        crate::cargo()
+    crate::process::run(
+        crate::process::cargo()
             .args([
                 "run",
                 "--release",

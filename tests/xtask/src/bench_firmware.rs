@@ -13,7 +13,8 @@
 //! [`WORST_BUDGET`] (see docs/BENCHMARKS.md).
 
 use crate::firmware::{root, IMAGES};
-use crate::{toolchain, update_section};
+use crate::process::update_section;
+use crate::toolchain;
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::process::Command;

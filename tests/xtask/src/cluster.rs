@@ -19,7 +19,8 @@
 //! Units: seconds of wall time. Needs root (slurmd and munged run as the invoking user, which
 //! Slurm requires to be root to launch jobs) and Debian (for the install).
 
-use crate::{firmware, run, toolchain};
+use crate::process::run;
+use crate::{firmware, toolchain};
 use anyhow::{bail, ensure, Context, Result};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -525,7 +526,7 @@ pub fn cluster_test(args: &[String]) -> Result<()> {
     );
     let t0 = Instant::now();
     ensure_tools_and_root()?;
-    let hostctl = crate::build_hostctl()?;
+    let hostctl = crate::process::build_hostctl()?;
     let dir = std::env::temp_dir().join(format!("stiffwall-cluster-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir)?;

@@ -58,14 +58,8 @@ pub struct Size {
 
 const REPORT: &str = "firmware/size-report.txt";
 
-/// Repository root (the xtask crate lives at tests/xtask).
-pub fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .ancestors()
-        .nth(2)
-        .expect("xtask sits two levels below the root")
-        .to_path_buf()
-}
+/// Repository root (kept here for the tasks that name it `firmware::root`).
+pub use crate::process::root;
 
 /// Builds one image and returns the path of its ELF file.
 pub fn build(cross: Cross, image: &Image, extra_features: &[&str]) -> Result<PathBuf> {
@@ -73,7 +67,7 @@ pub fn build(cross: Cross, image: &Image, extra_features: &[&str]) -> Result<Pat
     let mut features: Vec<&str> = image.features.to_vec();
     features.extend_from_slice(extra_features);
     let mut cmd = toolchain::board_build(cross, &dir, &features)?;
-    crate::run(&mut cmd)?;
+    crate::process::run(&mut cmd)?;
     let elf = dir
         .join("target")
         .join(TARGET)
@@ -90,7 +84,7 @@ pub fn panic_check(cross: Cross) -> Result<()> {
     let dir = root().join("firmware/boards/qemu-an386");
     let mut cmd = toolchain::board_build(cross, &dir, &["panic-check"])?;
     cmd.args(["--bin", "stiffwall-qemu-an386-panic-check"]);
-    crate::run(&mut cmd).map_err(|e| {
+    crate::process::run(&mut cmd).map_err(|e| {
         e.context(
             "the servo tick has a panic path: the no-panic proof image did not link \
              (look for `servo_path_must_not_panic` above)",

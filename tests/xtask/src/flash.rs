@@ -152,7 +152,7 @@ pub fn flash(args: &[String]) -> Result<()> {
     };
     let features: Vec<&str> = req.features.iter().map(String::as_str).collect();
     let elf = firmware::build(cross, &image, &features)?;
-    crate::run(
+    crate::process::run(
         Command::new(&runner[0])
             .args(&runner[1..])
             .arg(&elf)

@@ -31,8 +31,8 @@ pub fn fuzz(args: &[String]) -> Result<()> {
             }
         }
     }
-    crate::run(
-        crate::cargo()
+    crate::process::run(
+        crate::process::cargo()
             .args([
                 "test",
                 "-p",
@@ -45,8 +45,8 @@ pub fn fuzz(args: &[String]) -> Result<()> {
             .env("STIFFWALL_FUZZ_FRAMES", frames.to_string())
             .env("STIFFWALL_FUZZ_SEED", seed.to_string()),
     )?;
-    crate::run(
-        crate::cargo()
+    crate::process::run(
+        crate::process::cargo()
             .args([
                 "test",
                 "-p",

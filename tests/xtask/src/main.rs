@@ -22,14 +22,17 @@
 //!   (installs Debian's chromium and chromium-driver if missing, as `ci` does).
 //! - `cluster-test`: a Fig. 6 panel as a Slurm job array on a throw-away single-node cluster
 //!   (installs slurm-wlm and munge; also in `ci`, about 2.5 min; docs/cluster.md).
-//! - `module-cycles [--edges]`: no import cycle between the files of `sim/src`, `host/hostctl/src`,
-//!   `tests/src`, `firmware/src` and `crates/{proto,core}, host/{tune,client}/src` (the graph of
-//!   `crate::`/`super::`/child paths; `--edges` prints it).
+//! - `module-cycles [--edges]`: no import cycle between the files of any crate's `src` (the
+//!   graph of `crate::`/`super::`/child paths; `--edges` prints it).
+//! - `arch [--print]`: docs/ARCHITECTURE.md's crate diagram, crate table (layer, folder,
+//!   dependencies, modules) and folder order against the code; every arrow runs down (also in
+//!   `ci`; `--print` prints the sections as built).
 //! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
 //!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
-use std::process::Command;
+use process::{cargo, run, run_counting, run_ignored, update_section};
 
+mod arch;
 mod atlas;
 mod bench;
 mod bench_firmware;
@@ -38,89 +41,12 @@ mod firmware;
 mod flash;
 mod fuzz;
 mod module_cycles;
+mod process;
 mod qemu;
 mod toolchain;
 mod tune_table;
 mod ui;
 mod unused_deps;
-
-/// Runs a command, echoing it, and fails when it fails.
-pub fn run(cmd: &mut Command) -> Result<()> {
-    eprintln!("xtask: running {cmd:?}");
-    let status = cmd.status().with_context(|| format!("starting {cmd:?}"))?;
-    if !status.success() {
-        bail!("{cmd:?} failed with {status}");
-    }
-    Ok(())
-}
-
-/// Runs the `#[ignore]`d tests of `--test test` in package `pkg` (release build), with
-/// `extra` test arguments; fails when they fail, or when fewer than `min` ran (a filter or a
-/// rename that leaves nothing to run must not pass in silence).
-pub fn run_ignored(pkg: &str, test: &str, extra: &[&str], min: usize) -> Result<()> {
-    let mut cmd = cargo();
-    cmd.args([
-        "test",
-        "--release",
-        "-p",
-        pkg,
-        "--test",
-        test,
-        "--",
-        "--ignored",
-    ])
-    .args(extra);
-    run_counting(&mut cmd, min)
-}
-
-/// Runs the `cargo test` command `cmd` (its stdout shown), failing when it fails or when fewer
-/// than `min` tests passed.
-pub fn run_counting(cmd: &mut Command, min: usize) -> Result<()> {
-    cmd.stderr(std::process::Stdio::inherit());
-    eprintln!("xtask: running {cmd:?}");
-    let out = cmd.output().with_context(|| format!("starting {cmd:?}"))?;
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    print!("{stdout}");
-    if !out.status.success() {
-        bail!("{cmd:?} failed with {}", out.status);
-    }
-    let ran = ran_tests(&stdout);
-    if ran < min {
-        bail!("{cmd:?} ran {ran} test(s), fewer than the {min} it must run");
-    }
-    Ok(())
-}
-
-/// Tests that passed, from libtest's `test result: ok. N passed; …` lines.
-fn ran_tests(stdout: &str) -> usize {
-    stdout
-        .lines()
-        .filter_map(|l| l.strip_prefix("test result: ok. "))
-        .filter_map(|l| l.split(' ').next()?.parse::<usize>().ok())
-        .sum()
-}
-
-/// A `cargo` command in the repository root.
-pub fn cargo() -> Command {
-    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-    c.current_dir(firmware::root());
-    c
-}
-
-/// Builds the release `hostctl` and returns its path (under `CARGO_TARGET_DIR` when set).
-pub fn build_hostctl() -> Result<std::path::PathBuf> {
-    run(cargo().args([
-        "build",
-        "--release",
-        "-p",
-        "stiffwall-host",
-        "--bin",
-        "hostctl",
-    ]))?;
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map_or_else(|| firmware::root().join("target"), std::path::PathBuf::from);
-    Ok(target.join("release").join("hostctl"))
-}
 
 /// no_std crates that must build for the Cortex-M target.
 const NO_STD_CRATES: &[(&str, &[&str])] = &[
@@ -129,20 +55,6 @@ const NO_STD_CRATES: &[(&str, &[&str])] = &[
     ("stiffwall-firmware", &[]),
     ("stiffwall-sim", &["--no-default-features"]),
 ];
-
-/// Replaces the text between `<!-- NAME:start -->` and `<!-- NAME:end -->` in a Markdown file
-/// (appending the section when absent, creating the file when missing).
-pub fn update_section(path: &std::path::Path, name: &str, body: &str) -> Result<()> {
-    let start = format!("<!-- {name}:start -->");
-    let end = format!("<!-- {name}:end -->");
-    let old = std::fs::read_to_string(path).unwrap_or_else(|_| "# Benchmarks\n".into());
-    let block = format!("{start}\n{body}\n{end}");
-    let new = match (old.find(&start), old.find(&end)) {
-        (Some(a), Some(b)) if b > a => format!("{}{block}{}", &old[..a], &old[b + end.len()..]),
-        _ => format!("{}\n{block}\n", old.trim_end()),
-    };
-    std::fs::write(path, new).with_context(|| format!("writing {}", path.display()))
-}
 
 /// Copies the simulator's tables (docs/BENCHMARKS-sim.md, written by `bench`) into their
 /// section of docs/BENCHMARKS.md, one level down in the heading hierarchy.
@@ -196,8 +108,10 @@ fn ci() -> Result<()> {
     ]))?;
     step("every declared dependency is used");
     unused_deps::unused_deps()?;
-    step("no import cycle between the files of sim, host, tests, firmware and crates/*");
+    step("no import cycle between the files of any crate");
     module_cycles::module_cycles(&[])?;
+    step("docs/ARCHITECTURE.md's crate diagram, layers and module lists against the code");
+    arch::arch(&[])?;
     if cross == toolchain::Cross::Rustup {
         step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {
@@ -264,18 +178,7 @@ fn main() -> Result<()> {
         Some("cluster-test") => cluster::cluster_test(&args[1..]),
         Some("atlas") => atlas::atlas(&args[1..]),
         Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges]"),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn ran_tests_counts_the_passed_tests_of_every_result_line() {
-        let out = "running 2 tests\ntest a ... ok\ntest b ... ok\n\ntest result: ok. 2 passed; 0 \
-                   failed; 0 ignored\n\ntest result: ok. 1 passed; 0 failed\n";
-        assert_eq!(super::ran_tests(out), 3);
-        assert_eq!(super::ran_tests("test result: ok. 0 passed; 0 failed"), 0);
-        assert_eq!(super::ran_tests(""), 0);
+        Some("arch") => arch::arch(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print]"),
     }
 }

@@ -1,6 +1,6 @@
-//! `cargo xtask module-cycles [--edges]`: the file-level dependency graph of `sim/src` and of
-//! `host/hostctl/src/cmd/map`, `host/tune/src` and `tests/src`, and a failure when
-//! it has a cycle.
+//! `cargo xtask module-cycles [--edges]`: the file-level dependency graph of the `src` folder of
+//! every crate (the crates `cargo xtask arch` reads: the root workspace's members and the
+//! packages below its `exclude` entries), and a failure when one of them has a cycle.
 //!
 //! An edge A → B means file A names a path that resolves into file B: `crate::…`, `super::…`,
 //! `self::…` (in `use` declarations, with `{…}` groups expanded, and inline in code), and a
@@ -15,72 +15,16 @@ use anyhow::{bail, Context, Result};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// A crate root directory and the subtree whose files are checked.
-struct Scope {
-    root: &'static str,
-    under: &'static str,
-}
-
-// Checked today: every file of `sim/src`, `host/hostctl/src` (its `main.rs` is the binary crate, left
-// out, see `graph`), `crates/{proto,core}, host/{tune,client}/src`, `firmware/src` and `tests/src`.
-const SCOPES: [Scope; 10] = [
-    Scope {
-        root: "sim/src",
-        under: "",
-    },
-    Scope {
-        root: "host/hostctl/src",
-        under: "cmd/map",
-    },
-    Scope {
-        root: "host/tune/src",
-        under: "",
-    },
-    Scope {
-        root: "tests/src",
-        under: "",
-    },
-    Scope {
-        root: "host/hostctl/src",
-        under: "cmd/ui",
-    },
-    Scope {
-        root: "host/client/src",
-        under: "",
-    },
-    Scope {
-        root: "host/hostctl/src",
-        under: "",
-    },
-    Scope {
-        root: "crates/proto/src",
-        under: "",
-    },
-    Scope {
-        root: "crates/core/src",
-        under: "",
-    },
-    Scope {
-        root: "firmware/src",
-        under: "",
-    },
-];
-
 /// Runs the check; `--edges` also prints every edge.
 pub fn module_cycles(args: &[String]) -> Result<()> {
     let print_edges = args.iter().any(|a| a == "--edges");
     let repo = crate::firmware::root();
     let mut cycles = 0;
-    for s in &SCOPES {
-        let graph = graph(&repo.join(s.root), s.under)?;
+    for folder in crate::arch::crate_folders(&repo)? {
+        let src = format!("{folder}/src");
+        let graph = graph(&repo.join(&src), "")?;
         let n_edges: usize = graph.values().map(BTreeSet::len).sum();
-        println!(
-            "{}/{}: {} files, {} edges",
-            s.root,
-            s.under,
-            graph.len(),
-            n_edges
-        );
+        println!("{src}/: {} files, {} edges", graph.len(), n_edges);
         if print_edges {
             for (a, bs) in &graph {
                 for b in bs {

@@ -25,7 +25,7 @@ pub fn qemu(args: &[String]) -> Result<()> {
         .find(|i| i.name == "qemu-an386")
         .expect("the QEMU image is in the image table");
     let elf = firmware::build(cross, image, &[])?;
-    let mut cmd = crate::cargo();
+    let mut cmd = crate::process::cargo();
     cmd.args([
         "test",
         "-p",
@@ -41,10 +41,10 @@ pub fn qemu(args: &[String]) -> Result<()> {
     if bless {
         cmd.env("STIFFWALL_BLESS", "1");
     }
-    crate::run_counting(&mut cmd, QEMU_SCENARIOS)?;
+    crate::process::run_counting(&mut cmd, QEMU_SCENARIOS)?;
     // The QEMU recording of `host/hostctl/tests/device_cmds.rs`: recorded on the image, replayed bit
     // for bit through the host build of the servo core.
-    let mut rec = crate::cargo();
+    let mut rec = crate::process::cargo();
     rec.args([
         "test",
         "-p",
@@ -58,7 +58,7 @@ pub fn qemu(args: &[String]) -> Result<()> {
     ])
     .env("STIFFWALL_QEMU_IMAGE", &elf)
     .current_dir(root());
-    crate::run_counting(&mut rec, 1)
+    crate::process::run_counting(&mut rec, 1)
 }
 
 /// The scenarios of `host/hostctl/tests/qemu.rs` (all must run).

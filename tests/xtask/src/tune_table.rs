@@ -49,12 +49,12 @@ pub fn tune_table(args: &[String]) -> Result<()> {
         i += 1;
     }
     if !quick {
-        let hostctl = crate::build_hostctl()?;
+        let hostctl = crate::process::build_hostctl()?;
         pass.push("--hostctl".into());
         pass.push(hostctl.to_string_lossy().into_owned());
     }
-    crate::run(
-        crate::cargo()
+    crate::process::run(
+        crate::process::cargo()
             .args([
                 "run",
                 "--release",

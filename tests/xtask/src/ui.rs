@@ -2,7 +2,8 @@
 //! `cargo test` because it needs Debian's chromium and chromium-driver, which this installs)
 //! and the screenshots it writes to docs/figures/ui-*.png.
 
-use crate::{cargo, firmware, toolchain};
+use crate::process::cargo;
+use crate::{firmware, toolchain};
 use anyhow::Result;
 use std::path::Path;
 
@@ -23,7 +24,7 @@ pub fn browser_test(screenshots: Option<&Path>) -> Result<()> {
         c.env("STIFFWALL_UI_SCREENSHOTS", dir);
     }
     // A filter or a rename that leaves no browser test to run must not pass in silence.
-    crate::run_counting(&mut c, 1)
+    crate::process::run_counting(&mut c, 1)
 }
 
 /// `cargo xtask ui-screenshots`: docs/figures/ui-overview.png, ui-fault.png, ui-map.png.

@@ -139,7 +139,7 @@ fn unused_member_deps() -> Result<Vec<String>> {
 
 /// The workspace members and their dependencies, from `cargo metadata`.
 fn member_deps() -> Result<Members> {
-    let out = crate::cargo()
+    let out = crate::process::cargo()
         .args(["metadata", "--format-version", "1", "--no-deps"])
         .output()
         .context("running cargo metadata")?;
@@ -184,7 +184,7 @@ fn member_deps() -> Result<Members> {
 /// One clippy pass with `unused-crate-dependencies`: the units compiled per member and the
 /// crates each reports unused.
 fn clippy_unused(deps: &Members) -> Result<(Units, Unused)> {
-    let mut child = crate::cargo()
+    let mut child = crate::process::cargo()
         .args([
             "clippy",
             "--workspace",
