@@ -21,7 +21,7 @@
 //! `W`all, energy `A`udit): [`dispatch`] resolves a runtime [`Effects`] once into one of 32
 //! monomorphised solvers, so a disabled effect costs nothing per step.
 //!
-//! **Virtual damper** ([`Exact::with_damping`]): the rendered law becomes
+//! **Virtual damper** ([`Exact::with_beta_v`]): the rendered law becomes
 //! φ_C(h) = −(n_h + ½) − β_v·(n_h − n_(h−1)) with β_v = B/(K·T) (dimensionless), n_h = ⌊ξ(h)⌋
 //! (ξ(h) without quantization): a backward difference of the counts, constant over each period,
 //! through the same delay line as the spring. The first sample uses n_(−1) = n_0 (no damper kick
@@ -239,10 +239,10 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
     /// Adds the virtual damper of dimensionless damping β_v = B/(K·T) (see the module header).
     ///
     /// # Errors
-    /// [`ParamError`] naming `damping` unless β_v is finite and in [0, [`MAX_BETA_V`]].
-    pub fn with_damping(mut self, beta_v: f64) -> Result<Self, ParamError> {
+    /// [`ParamError`] naming `beta_v` unless β_v is finite and in [0, [`MAX_BETA_V`]].
+    pub fn with_beta_v(mut self, beta_v: f64) -> Result<Self, ParamError> {
         self.beta_v = check_range(
-            "damping",
+            "beta_v",
             beta_v,
             0.0,
             false,
@@ -254,7 +254,7 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
 
     /// Dimensionless virtual damping β_v in use.
     #[must_use]
-    pub fn damping(&self) -> f64 {
+    pub fn beta_v(&self) -> f64 {
         self.beta_v
     }
 
@@ -347,7 +347,7 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             (l, 0.5 * l * l, l * l * l / 3.0)
         };
         let iv2 = v * v * i0 + 2.0 * v * acc * i1 + acc * acc * i2;
-        self.e_d += self.body.damping * iv2 + sigma * dx.abs();
+        self.e_d += self.body.viscous * iv2 + sigma * dx.abs();
         self.w_a += f * dx;
     }
 
@@ -358,7 +358,7 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
         let x0 = self.st.x;
         let r = advance_traced::<A, T>(&self.body, &mut self.st, f, len, tr);
         if A {
-            self.e_d += self.body.damping * r.int_v2 + self.body.coulomb * r.int_abs_v;
+            self.e_d += self.body.viscous * r.int_v2 + self.body.coulomb * r.int_abs_v;
             self.w_a += f * (self.st.x - x0);
         }
     }
@@ -513,7 +513,7 @@ pub trait Visitor {
 
 macro_rules! pick {
     ($vis:ident, $p:ident, $i:ident, $hi:ident, $bv:ident, [$($acc:tt)*]) => {
-        $vis.visit(Exact::<$($acc)* AUDIT>::new($p, $i, $hi)?.with_damping($bv)?)
+        $vis.visit(Exact::<$($acc)* AUDIT>::new($p, $i, $hi)?.with_beta_v($bv)?)
     };
     ($vis:ident, $p:ident, $i:ident, $hi:ident, $bv:ident, [$($acc:tt)*] $b:expr $(, $rest:expr)*) => {
         if $b {
@@ -537,10 +537,10 @@ pub fn dispatch<V: Visitor, const AUDIT: bool>(
 }
 
 /// [`dispatch`] with the virtual damper of dimensionless damping `beta_v` = B/(K·T)
-/// ([`Exact::with_damping`]; 0 gives exactly [`dispatch`]).
+/// ([`Exact::with_beta_v`]; 0 gives exactly [`dispatch`]).
 ///
 /// # Errors
-/// [`ParamError`] naming the offending field (`damping` for β_v).
+/// [`ParamError`] naming the offending field (`beta_v` for β_v).
 pub fn dispatch_damped<V: Visitor, const AUDIT: bool>(
     params: Params,
     effects: Effects,
@@ -599,7 +599,7 @@ mod tests {
     }
 
     #[test]
-    fn damping_is_validated_by_name() {
+    fn beta_v_is_validated_by_name() {
         let s = Full::new(
             Params::BASE,
             Motion { x: 0.0, v: 1.0 },
@@ -607,10 +607,10 @@ mod tests {
         )
         .unwrap();
         for bad in [f64::NAN, -0.1, 1000.5, f64::INFINITY] {
-            let e = s.clone().with_damping(bad).unwrap_err();
-            assert_eq!(e.name(), "damping", "{bad}");
+            let e = s.clone().with_beta_v(bad).unwrap_err();
+            assert_eq!(e.name(), "beta_v", "{bad}");
         }
-        assert_eq!(s.with_damping(1000.0).unwrap().damping(), 1000.0);
+        assert_eq!(s.with_beta_v(1000.0).unwrap().beta_v(), 1000.0);
     }
 
     /// Linear sampled spring, no Coulomb, no delay, β = 0: the ZOH spring acts as a negative
@@ -630,7 +630,7 @@ mod tests {
         let run = |beta_v: f64| {
             let mut s = Lin::new(p, init, History::HoldInitial)
                 .unwrap()
-                .with_damping(beta_v)
+                .with_beta_v(beta_v)
                 .unwrap();
             let mut worst: f64 = 0.0;
             for _ in 0..2000 {

@@ -10,7 +10,7 @@
 //! from outside (a file) is checked with [`MapSpec::validate`] before any use: axes of
 //! 1..=[`MAX_AXIS_POINTS`] points, at most [`MAX_GRID_POINTS`] grid points, ≥ 1 period.
 //! [`MapSpec::damping`] is the dimensionless virtual damping β_v = B/(K·T) of the wall law
-//! (the exact solver's [`crate::exact::Exact::with_damping`]); 0 (the default) is the paper's
+//! (the exact solver's [`crate::exact::Exact::with_beta_v`]); 0 (the default) is the paper's
 //! spring-only wall, bit for bit, and is not serialised.
 
 use crate::classify::{classify, Class, Cycle, Outcome, Thresholds};
@@ -311,12 +311,12 @@ pub fn simulate_point_damped_th(
 ) -> Outcome {
     let init = Motion { x: 0.0, v: xidot0 };
     if p.tau_d == 0.0 {
-        match NoDelay::new(p, init, history).and_then(|s| s.with_damping(beta_v)) {
+        match NoDelay::new(p, init, history).and_then(|s| s.with_beta_v(beta_v)) {
             Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
     } else {
-        match Full::new(p, init, history).and_then(|s| s.with_damping(beta_v)) {
+        match Full::new(p, init, history).and_then(|s| s.with_beta_v(beta_v)) {
             Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }

@@ -23,8 +23,8 @@ use stiffwall_core::params::{check_non_negative, check_positive};
 pub struct Body {
     /// Mass m (or μ).
     pub mass: f64,
-    /// Viscous coefficient b (or β), ≥ 0.
-    pub damping: f64,
+    /// Viscous coefficient b (or β), ≥ 0 (the device's own friction, not the virtual damper).
+    pub viscous: f64,
     /// Dynamic Coulomb force c (or σ), ≥ 0.
     pub coulomb: f64,
     /// 1/m.
@@ -36,13 +36,13 @@ pub struct Body {
 impl Body {
     /// A body; the caller guarantees m > 0, b ≥ 0, c ≥ 0 (validated at the API boundaries).
     #[must_use]
-    pub fn new(mass: f64, damping: f64, coulomb: f64) -> Self {
+    pub fn new(mass: f64, viscous: f64, coulomb: f64) -> Self {
         Self {
             mass,
-            damping,
+            viscous,
             coulomb,
             inv_mass: 1.0 / mass,
-            rate: damping / mass,
+            rate: viscous / mass,
         }
     }
 }

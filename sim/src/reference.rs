@@ -263,13 +263,13 @@ impl RefSim {
     }
 
     /// Adds the virtual damper −β_v·(n_h − n_(h−1)) of the exact solver
-    /// ([`crate::exact::Exact::with_damping`]: same law, n_(−1) = n_0, one-sided only in contact).
+    /// ([`crate::exact::Exact::with_beta_v`]: same law, n_(−1) = n_0, one-sided only in contact).
     ///
     /// # Errors
-    /// [`ParamError`] naming `damping` unless β_v is finite and in [0, 1000].
-    pub fn with_damping(mut self, beta_v: f64) -> Result<Self, ParamError> {
+    /// [`ParamError`] naming `beta_v` unless β_v is finite and in [0, 1000].
+    pub fn with_beta_v(mut self, beta_v: f64) -> Result<Self, ParamError> {
         self.beta_v = stiffwall_core::params::check_range(
-            "damping",
+            "beta_v",
             beta_v,
             0.0,
             false,

@@ -204,7 +204,7 @@ fn damped_and_delayed_solvers_classify_alike() {
                     let (a, b) = if tau_d == 0.0 {
                         let s = NoDelay::new(p, init, History::HoldInitial)
                             .unwrap()
-                            .with_damping(beta_v)
+                            .with_beta_v(beta_v)
                             .unwrap();
                         (
                             classify(&mut s.clone(), periods, &on),
@@ -213,7 +213,7 @@ fn damped_and_delayed_solvers_classify_alike() {
                     } else {
                         let s = Full::new(p, init, History::HoldInitial)
                             .unwrap()
-                            .with_damping(beta_v)
+                            .with_beta_v(beta_v)
                             .unwrap();
                         (
                             classify(&mut s.clone(), periods, &on),

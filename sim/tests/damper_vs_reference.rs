@@ -68,7 +68,7 @@ fn damped_exact_matches_damped_dormand_prince() {
             init,
         )
         .unwrap()
-        .with_damping(beta_v)
+        .with_beta_v(beta_v)
         .unwrap();
         let mut moved = false;
         for (h, (a, res)) in ex.iter().enumerate() {
@@ -107,11 +107,11 @@ fn reference_damper_changes_the_trajectory() {
         )
         .unwrap()
     };
-    let (mut a, mut b) = (mk(), mk().with_damping(1.0).unwrap());
+    let (mut a, mut b) = (mk(), mk().with_beta_v(1.0).unwrap());
     for _ in 0..50 {
         a.step_period();
         b.step_period();
     }
     assert!((a.state().x - b.state().x).abs() > 1e-3);
-    assert_eq!(mk().with_damping(-1.0).unwrap_err().name(), "damping");
+    assert_eq!(mk().with_beta_v(-1.0).unwrap_err().name(), "beta_v");
 }

@@ -90,7 +90,7 @@ fn hand_and_clamped_filter_match_dopri() {
     // A 300 Hz filter that overshoots (ζ = 0.3) into a 0.1 N clamp.
     m.amplifier = Some(Amplifier {
         cutoff_hz: Some(300.0),
-        damping: 0.3,
+        damping_ratio: 0.3,
         force_limit_n: Some(0.1),
         deadband_n: None,
     });
@@ -127,7 +127,7 @@ fn everything_linear_together_matches_dopri() {
     });
     m.amplifier = Some(Amplifier {
         cutoff_hz: Some(1000.0),
-        damping: 0.7,
+        damping_ratio: 0.7,
         force_limit_n: Some(0.2),
         deadband_n: Some(0.004),
     });

@@ -19,7 +19,7 @@ fn base() -> PlantModel {
 fn amp(limit: Option<f64>, deadband: Option<f64>) -> Option<Amplifier> {
     Some(Amplifier {
         cutoff_hz: None,
-        damping: 0.7,
+        damping_ratio: 0.7,
         force_limit_n: limit,
         deadband_n: deadband,
     })
@@ -245,7 +245,7 @@ fn force_limit_saturates_and_deadband_cuts_small_commands() {
     // With a second-order filter the settled output is the limit too.
     m.amplifier = Some(Amplifier {
         cutoff_hz: Some(500.0),
-        damping: 0.3,
+        damping_ratio: 0.3,
         force_limit_n: Some(2.0),
         deadband_n: None,
     });
@@ -357,7 +357,7 @@ fn a_held_plant_is_in_static_equilibrium_under_its_holding_force() {
     let mut m = link_with_hand();
     m.amplifier = Some(Amplifier {
         cutoff_hz: Some(500.0),
-        damping: 0.7,
+        damping_ratio: 0.7,
         force_limit_n: None,
         deadband_n: None,
     });

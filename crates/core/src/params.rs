@@ -375,8 +375,8 @@ fn ratio(num: f64, den: f64, step_by_step: impl FnOnce() -> f64) -> f64 {
 /// acts, at low frequency, as the pure delay T_A = 2δ_A/ω_A. With ω_A in rad per period the
 /// result is in periods; with rad/s, in seconds.
 #[must_use]
-pub fn amplifier_delay(omega: f64, damping: f64) -> f64 {
-    2.0 * damping / omega
+pub fn amplifier_delay(omega: f64, damping_ratio: f64) -> f64 {
+    2.0 * damping_ratio / omega
 }
 
 impl PhysicalParams {

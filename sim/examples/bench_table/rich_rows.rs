@@ -49,13 +49,13 @@ fn effect_sets() -> Vec<(&'static str, PlantModel)> {
     });
     let limit = Some(Amplifier {
         cutoff_hz: None,
-        damping: 0.7,
+        damping_ratio: 0.7,
         force_limit_n: Some(0.5),
         deadband_n: Some(0.002),
     });
     let filter = Some(Amplifier {
         cutoff_hz: Some(1000.0),
-        damping: 0.7,
+        damping_ratio: 0.7,
         force_limit_n: Some(0.5),
         deadband_n: None,
     });
@@ -174,7 +174,7 @@ fn accuracy_rows(md: &mut String, min_s: f64) {
         }),
         amplifier: Some(Amplifier {
             cutoff_hz: None,
-            damping: 0.7,
+            damping_ratio: 0.7,
             force_limit_n: Some(0.5),
             deadband_n: Some(0.002),
         }),

@@ -55,7 +55,7 @@ pub struct Amplifier {
     /// Filter cut-off ω/2π, Hz; `None` = ideal (no filter).
     pub cutoff_hz: Option<f64>,
     /// Filter damping ratio ζ (> 0; unused without a filter).
-    pub damping: f64,
+    pub damping_ratio: f64,
     /// Output saturation, N (N·m), > 0.
     pub force_limit_n: Option<f64>,
     /// Dead band, N (N·m), ≥ 0.
@@ -211,7 +211,7 @@ fn validate_amplifier(a: &Amplifier) -> Result<(), ModelError> {
             "(0, 1e7] Hz",
         )?;
         chk(
-            pos(a.damping) && a.damping <= 100.0,
+            pos(a.damping_ratio) && a.damping_ratio <= 100.0,
             "effects.amplifier.damping",
             "(0, 100]",
         )?;

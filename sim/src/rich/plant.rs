@@ -79,7 +79,7 @@ impl Derived {
         };
         let (amp_w, amp_z) = match m
             .amplifier
-            .and_then(|a| a.cutoff_hz.map(|f| (f, a.damping)))
+            .and_then(|a| a.cutoff_hz.map(|f| (f, a.damping_ratio)))
         {
             Some((f, z)) => (2.0 * core::f64::consts::PI * f, z),
             None => (0.0, 0.0),

@@ -103,7 +103,7 @@ impl Scene {
                     history: self.history,
                 };
                 let sim = RefSim::new(model, method, self.init)
-                    .and_then(|s| s.with_damping(self.beta_v))
+                    .and_then(|s| s.with_beta_v(self.beta_v))
                     .map_err(SceneError::Solver)?;
                 Drive {
                     periods: self.periods,

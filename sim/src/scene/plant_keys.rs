@@ -132,7 +132,7 @@ fn plant_model(scene: &Scene, (k, t, delta): (f64, f64, f64), keys: &RichKeys) -
         if amp_filter.is_some() || keys.force_limit_n.is_some() || keys.deadband_n.is_some() {
             Some(Amplifier {
                 cutoff_hz: amp_filter.map(|a| a.0),
-                damping: amp_filter.map_or(0.7, |a| a.1),
+                damping_ratio: amp_filter.map_or(0.7, |a| a.1),
                 force_limit_n: keys.force_limit_n,
                 deadband_n: keys.deadband_n,
             })
