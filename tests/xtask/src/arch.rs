@@ -19,6 +19,12 @@
 //! 4. no arrow runs from a lower folder to a higher one, with the folders in the order the
 //!    line after `<!-- arch:folders -->` lists them (bottom first).
 //!
+//! 5. every Rust path the page names from a crate's root (`core::rest::quiet_ceiling`,
+//!    `stiffwall_tune::frontier`, `sim::exact::{Exact, PeriodAudit}`) resolves: its modules are
+//!    files (or folders) of that crate, and the first item after them is defined in that module;
+//!    every repository path in backquotes (`host/hostctl/src/cli_error.rs`) exists. Rule 5 also
+//!    holds for README.md, docs/UI.md and docs/model-notes-sim.md.
+//!
 //! `--print` prints the table and the diagram as the code is (layers taken from the doc,
 //! `?` for a new crate), to paste after a deliberate change.
 use anyhow::{bail, Context, Result};
@@ -64,7 +70,17 @@ pub fn arch(args: &[String]) -> Result<()> {
     let rows = parse_table(&doc)?;
     let folders = parse_folders(&doc)?;
     let edges = parse_diagram(&doc)?;
-    let problems = check(&crates, &rows, &edges, &folders);
+    let mut problems = check(&crates, &rows, &edges, &folders);
+    problems.extend(references(&doc, &root));
+    for other in ["README.md", "docs/UI.md", "docs/model-notes-sim.md"] {
+        let text = std::fs::read_to_string(root.join(other))
+            .with_context(|| format!("reading {other}"))?;
+        problems.extend(
+            references(&text, &root)
+                .into_iter()
+                .map(|p| format!("{other}: {p}")),
+        );
+    }
     if !problems.is_empty() {
         for p in &problems {
             eprintln!("xtask arch: {p}");
@@ -187,6 +203,141 @@ pub fn crate_folders(root: &Path) -> Result<Vec<String>> {
     let mut f: Vec<String> = read_crates(root)?.into_values().map(|c| c.folder).collect();
     f.sort();
     Ok(f)
+}
+
+/// Crate-root aliases the page uses, and each crate's `src` folder.
+const ROOTS: &[(&str, &str)] = &[
+    ("core", "crates/core/src"),
+    ("stiffwall_core", "crates/core/src"),
+    ("proto", "crates/proto/src"),
+    ("stiffwall_proto", "crates/proto/src"),
+    ("sim", "sim/src"),
+    ("stiffwall_sim", "sim/src"),
+    ("firmware", "firmware/src"),
+    ("stiffwall_firmware", "firmware/src"),
+    ("stiffwall_client", "host/client/src"),
+    ("stiffwall_tune", "host/tune/src"),
+    ("host", "host/hostctl/src"),
+    ("stiffwall_host", "host/hostctl/src"),
+];
+
+/// Folders whose paths in backquotes must exist.
+const TOP: &[&str] = &["crates/", "sim/", "firmware/", "host/", "tests/", "docs/"];
+
+/// Rule 5: the Rust paths and repository paths the page names.
+fn references(doc: &str, root: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for span in doc.split('`').skip(1).step_by(2) {
+        let span = span.trim();
+        if TOP.iter().any(|t| span.starts_with(t)) && !span.contains([' ', '*', '{', '<']) {
+            let path = span.split(':').next().unwrap_or(span);
+            if !root.join(path).exists() {
+                out.push(format!("`{span}`: no such file or folder"));
+            }
+            continue;
+        }
+        for path in expand(span) {
+            if let Err(e) = resolve_path(&path, root) {
+                out.push(format!("`{path}`: {e}"));
+            }
+        }
+    }
+    out
+}
+
+/// `a::b::{c, d::e}` → `a::b::c`, `a::b::d::e`; a span that is not a path → nothing.
+fn expand(span: &str) -> Vec<String> {
+    let ok = |p: &str| {
+        !p.is_empty()
+            && p.split("::")
+                .all(|s| !s.is_empty() && s.chars().all(|c| c.is_alphanumeric() || c == '_'))
+    };
+    if let Some((head, rest)) = span.split_once("::{") {
+        let Some(inner) = rest.strip_suffix('}') else {
+            return Vec::new();
+        };
+        return inner
+            .split(',')
+            .map(|x| format!("{head}::{}", x.trim()))
+            .filter(|p| ok(p))
+            .collect();
+    }
+    let span = span.trim_end_matches("::*");
+    if span.contains("::") && ok(span) {
+        vec![span.to_string()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Walks a path from a crate root: module files first, then one defined item.
+fn resolve_path(path: &str, root: &Path) -> Result<(), String> {
+    let mut segs = path.split("::");
+    let first = segs.next().unwrap_or_default();
+    let Some((_, src)) = ROOTS.iter().find(|(alias, _)| *alias == first) else {
+        return Ok(()); // not a path from a crate root of this repository
+    };
+    let mut dir = root.join(src);
+    let mut file = ["lib.rs", "main.rs"]
+        .iter()
+        .map(|f| dir.join(f))
+        .find(|f| f.is_file())
+        .ok_or_else(|| format!("{src} has no crate root"))?;
+    for seg in segs {
+        let as_file = dir.join(format!("{seg}.rs"));
+        let as_dir = dir.join(seg);
+        if as_file.is_file() || as_dir.join("mod.rs").is_file() {
+            file = if as_file.is_file() {
+                as_file
+            } else {
+                as_dir.join("mod.rs")
+            };
+            dir = as_dir;
+            continue;
+        }
+        let text = std::fs::read_to_string(&file).map_err(|e| e.to_string())?;
+        return if defines(&text, seg) || glob_defines(&text, &dir, seg) {
+            Ok(())
+        } else {
+            Err(format!(
+                "`{seg}` is neither a module nor an item of {}",
+                file.strip_prefix(root).unwrap_or(&file).display()
+            ))
+        };
+    }
+    Ok(())
+}
+
+/// Whether a `pub use child::*;` of the module (folder `dir`) brings in `name`.
+fn glob_defines(text: &str, dir: &Path, name: &str) -> bool {
+    text.lines()
+        .filter_map(|l| l.trim().strip_prefix("pub use ")?.strip_suffix("::*;"))
+        .any(|child| {
+            let child = child.trim_start_matches("self::");
+            [
+                dir.join(format!("{child}.rs")),
+                dir.join(child).join("mod.rs"),
+            ]
+            .iter()
+            .any(|f| std::fs::read_to_string(f).is_ok_and(|t| defines(&t, name)))
+        })
+}
+
+/// Whether `text` defines or re-exports `name` (an fn, type, const, static, macro or `use`).
+fn defines(text: &str, name: &str) -> bool {
+    const KINDS: [&str; 8] = [
+        "fn ", "struct ", "enum ", "trait ", "const ", "static ", "type ", "mod ",
+    ];
+    text.lines().map(str::trim).any(|l| {
+        let word_at = |i: usize| {
+            l[i..].starts_with(name)
+                && !l[i + name.len()..].starts_with(|c: char| c.is_alphanumeric() || c == '_')
+        };
+        KINDS
+            .iter()
+            .any(|k| l.match_indices(k).any(|(i, _)| word_at(i + k.len())))
+            || (l.contains("use ") && l.match_indices(name).any(|(i, _)| word_at(i)))
+    })
 }
 
 /// `stiffwall-core` → `core`, `stiffwall-board-qemu-an386` → `board_qemu_an386` (a mermaid id).
@@ -538,6 +689,21 @@ mod tests {
         let mut stale = rows.clone();
         stale.get_mut("stiffwall-sim").unwrap().deps.clear();
         assert_eq!(check(&crates, &stale, &edges, &folders).len(), 1);
+    }
+
+    #[test]
+    fn paths_expand_and_resolve_against_the_real_crates() {
+        assert_eq!(expand("core::rest::{comes_to_rest, Chatter}").len(), 2);
+        assert_eq!(expand("core::describing::*"), ["core::describing"]);
+        assert!(expand("a b").is_empty());
+        let root = crate::process::root();
+        assert!(resolve_path("core::rest::quiet_ceiling", &root).is_ok());
+        assert!(resolve_path("core::rest::no_such_fn", &root).is_err());
+        assert!(resolve_path("stiffwall_tune::procedure::frontier_search", &root).is_err());
+        assert!(resolve_path("elsewhere::x", &root).is_ok());
+        assert!(defines("pub fn quiet_ceiling(c: f64)", "quiet_ceiling"));
+        assert!(!defines("pub fn quiet_ceiling_x()", "quiet_ceiling"));
+        assert!(defines("pub use crate::a::{B, quiet};", "quiet"));
     }
 
     #[test]
