@@ -1,0 +1,127 @@
+//! The experiment path of the tick: the forces a running experiment commands (hold, release,
+//! impact launch, excitation), its advance from tick to tick, and its end (the active config
+//! restored, the decided end reported once).
+//!
+//! Units: effective counts, output codes, ticks. Invariants: bounded work per tick, no
+//! allocation or panic; the experiment's state lives in the servo (`exp`, `end`, `settle`).
+
+use super::Servo;
+use crate::channels::ServoEvent;
+use crate::experiment::{EndWatch, Experiment, Mode};
+use crate::hal::{Encoder, ForceOutput};
+use crate::numeric::Numeric;
+use core::sync::atomic::Ordering;
+use stiffwall_proto::{flags, ExperimentKind};
+
+impl<N: Numeric> Servo<'_, N> {
+    pub(super) fn set_exp(&mut self, e: Experiment) {
+        self.mode = e.mode();
+        self.exp = e;
+    }
+
+    /// The tick while an experiment runs: [`Self::step`] for every mode but the wall's, out of
+    /// line so the wall's tick is compiled for the wall alone.
+    #[inline(never)]
+    pub(super) fn step_experiment<const TEL: bool>(
+        &mut self,
+        now: u32,
+        enc: &mut impl Encoder,
+        out: &mut impl ForceOutput,
+    ) -> i32 {
+        self.step::<TEL, false>(now, enc, out)
+    }
+
+    /// Hold and excitation forces (out of the wall's hot path).
+    #[inline(never)]
+    pub(super) fn experiment_force(&mut self, n: i32, dn: i32) -> (i32, u16) {
+        let hold_damp = self.damper(self.g.hold_damp, dn);
+        // The launch itself (the target moving toward the wall) keeps β = 2, whose lag behind
+        // the target the launch's speed was tuned with.
+        let launch_damp = self.damper(self.g.launch_damp, dn);
+        match &mut self.exp {
+            Experiment::None | Experiment::Released { .. } => (0, 0),
+            Experiment::Hold(h) => {
+                let e = n.saturating_sub(h.target);
+                (self.spring_raw(e).saturating_add(hold_damp), flags::HOLD)
+            }
+            Experiment::Launch(l) => {
+                let e = n.saturating_sub(l.target());
+                let d = if l.launched() { launch_damp } else { hold_damp };
+                (self.spring_raw(e).saturating_add(d), flags::HOLD)
+            }
+            Experiment::Excite(x) => (
+                x.next_code(&self.table, self.g.rate_hz),
+                flags::EXCITE | flags::WALL_OFF,
+            ),
+        }
+    }
+
+    /// Experiment bookkeeping after the output.
+    #[inline]
+    pub(super) fn advance(&mut self, n: i32, dn: i32) {
+        if self.mode != Mode::Wall {
+            self.advance_experiment(n, dn);
+        }
+    }
+
+    #[inline(never)]
+    pub(super) fn advance_experiment(&mut self, n: i32, dn: i32) {
+        let mut release = None;
+        let mut done = false;
+        match &mut self.exp {
+            Experiment::None => {}
+            Experiment::Hold(h) => {
+                release = h
+                    .advance(n, dn, self.g.rate_hz)
+                    .map(|t| (t, ExperimentKind::Release));
+            }
+            Experiment::Launch(l) => {
+                release = l
+                    .advance(n, dn, self.g.rate_hz)
+                    .map(|t| (t, ExperimentKind::Impact));
+            }
+            Experiment::Released { remaining, .. } => {
+                *remaining = remaining.saturating_sub(1);
+                let settled = self.settle.as_mut().is_some_and(|w| w.push(n));
+                done = *remaining == 0 || settled;
+            }
+            Experiment::Excite(x) => done = x.advance(),
+        }
+        if let Some((ticks, kind)) = release {
+            self.set_exp(Experiment::Released {
+                remaining: ticks,
+                kind,
+            });
+            self.settle = self
+                .end
+                .map(|e| EndWatch::new(e.min_run, e.one_count, e.decay_base));
+            self.monitor.reset();
+        }
+        if done {
+            self.end_experiment(true);
+        }
+    }
+
+    /// Ends the running experiment (if any); a prepared test's active config is back.
+    pub(super) fn end_experiment(&mut self, completed: bool) {
+        let Some(kind) = self.exp.kind() else {
+            return;
+        };
+        self.set_exp(Experiment::None);
+        self.settle = None;
+        if let Some(e) = self.end.take() {
+            self.apply_config(&e.park);
+        }
+        self.monitor.reset();
+        self.decimation = self.user_decimation;
+        // An experiment streams every tick (`decimation` 1), so its count was at the start.
+        self.decim_left = u32::from(self.decimation);
+        self.port.shared.experiment.store(false, Ordering::Relaxed);
+        let _ = self.port.events.enqueue(ServoEvent::ExperimentDone {
+            kind,
+            completed,
+            faults: self.faults,
+            next_seq: self.seq,
+        });
+    }
+}
