@@ -1,0 +1,205 @@
+//! `stiffwall-board-emu`: runs the Nucleo-F446RE firmware ELF on an emulated STM32F446 whose
+//! encoder (TIM2), force output (DAC1 or TIM1 PWM + DIR), servo timer (TIM7), UART (USART2),
+//! flash config store and watchdog are coupled to the simulated plant of `stiffwall-sim`.
+//!
+//! Units: emulated time in seconds at the CLI, 1/720 MHz units inside (`periph::UNITS_PER_S`);
+//! the plant in SI (rad, N·m for the rotary rig). Invariants: the image is checked before
+//! anything runs (`image`); runs are deterministic for a given image, plant and host byte
+//! stream timing; a register the emulator does not model stops the run with its name.
+//!
+//! Modes: `--seconds S` runs S emulated seconds with no host and prints a report (clock tree,
+//! servo rate, cycles per tick, CPU load); `--pty` serves USART2 on a pseudo-terminal (its path
+//! printed on stdout as `pty: PATH`), paced to the wall clock, or as fast as the host keeps up
+//! with `--fast`. License: GPL-2.0-or-later (it links unicorn, GPL-2.0).
+
+mod emu;
+mod image;
+mod periph;
+mod plant;
+mod pty;
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use periph::{Periph, UNITS_PER_S};
+use std::path::PathBuf;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "stiffwall-board-emu",
+    about = "Runs the Nucleo-F446RE image on an emulated STM32F446 coupled to the simulated plant"
+)]
+struct Args {
+    /// The firmware ELF (`cargo xtask firmware` output for nucleo-f446re).
+    #[arg(long)]
+    elf: PathBuf,
+    /// Refuse the ELF unless its SHA-256 (hex) is this.
+    #[arg(long)]
+    sha256: Option<String>,
+    /// Device preset for the plant (see `stiffwall_core::devices`).
+    #[arg(long, conflicts_with = "plant")]
+    device: Option<String>,
+    /// Scene / plant file (its [device] and [effects]).
+    #[arg(long)]
+    plant: Option<PathBuf>,
+    /// Run this many emulated seconds without a host and print a report.
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Serve USART2 on a pseudo-terminal.
+    #[arg(long)]
+    pty: bool,
+    /// With --pty: run ahead of the wall clock while the host keeps up.
+    #[arg(long)]
+    fast: bool,
+    /// Stop the main loop (thread mode) after this many emulated seconds: for the watchdog test.
+    #[arg(long)]
+    hang_main_after: Option<f64>,
+    /// Load the config store (sectors 6-7, 256 KiB) from this file and save it back on exit.
+    #[arg(long)]
+    store: Option<PathBuf>,
+}
+
+fn build_plant(args: &Args) -> Result<stiffwall_sim::rich::RichPlant> {
+    use stiffwall_sim::rich::{PlantModel, RichPlant};
+    let model = if let Some(path) = &args.plant {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("reading plant file {}", path.display()))?;
+        PlantModel::from_scene_toml(&text)
+            .map(|(m, _)| m)
+            .map_err(|e| anyhow::anyhow!("plant file {}: {e}", path.display()))?
+    } else {
+        let name = args.device.as_deref().unwrap_or("maxon-re35");
+        let d = stiffwall_core::devices::find(name).with_context(|| {
+            format!(
+                "unknown device {name:?} (allowed: {})",
+                stiffwall_core::devices::NAMES
+            )
+        })?;
+        let p = d.params;
+        PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution)
+            .map_err(|e| anyhow::anyhow!("device {name}: {e}"))?
+    };
+    RichPlant::new(&model).map_err(|e| anyhow::anyhow!("plant: {e}"))
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("stiffwall-board-emu: error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    let img = image::load(&args.elf)?;
+    if let Some(want) = &args.sha256 {
+        if !want.eq_ignore_ascii_case(&img.sha256) {
+            bail!(
+                "refusing {}: SHA-256 {} is not the expected {want}",
+                args.elf.display(),
+                img.sha256
+            );
+        }
+    }
+    eprintln!(
+        "stiffwall-board-emu: {} ({:?} output), sha256 {}",
+        args.elf.display(),
+        img.output,
+        img.sha256
+    );
+    let plant = build_plant(&args)?;
+    let mut p = Periph::new(plant::Coupling::new(Some(plant)));
+    if let Some(path) = &args.store {
+        if let Ok(bytes) = std::fs::read(path) {
+            if bytes.len() != p.store.len() {
+                bail!(
+                    "--store {}: {} bytes, allowed exactly {} (sectors 6-7)",
+                    path.display(),
+                    bytes.len(),
+                    p.store.len()
+                );
+            }
+            p.store = bytes;
+        }
+    }
+    let mut m = emu::Machine::new(img, p)?;
+    let result = if args.pty {
+        pty::serve(&mut m, args.fast, args.hang_main_after)
+    } else {
+        let secs = args.seconds.unwrap_or(1.0);
+        if !(secs > 0.0 && secs <= 3600.0) {
+            bail!("--seconds {secs}: allowed 0 < S <= 3600");
+        }
+        let end = (secs * UNITS_PER_S as f64) as u64;
+        let r = m.run_until(end);
+        report(&mut m);
+        r
+    };
+    if let Some(path) = &args.store {
+        std::fs::write(path, &m.periph().store)
+            .with_context(|| format!("saving the config store to {}", path.display()))?;
+    }
+    result
+}
+
+/// Prints what the run measured: clocks, servo rate, cycles per tick, CPU load, resets.
+pub fn report(m: &mut emu::Machine<'_>) {
+    let now = m.now();
+    let asleep = m.asleep;
+    let insns = m.insns();
+    let ticks = m.ticks.clone();
+    let resets = m.resets.clone();
+    let pc = m.pc();
+    let p = m.periph();
+    let c = p.clocks();
+    let t = now as f64 / UNITS_PER_S as f64;
+    eprintln!("emulated time: {t:.6} s, {insns} instructions, pc {pc:#010x}");
+    eprintln!(
+        "clocks: SYSCLK {:.3} MHz, HCLK {:.3} MHz, PCLK1 {:.3} MHz, PCLK2 {:.3} MHz, APB1 timers {:.3} MHz, APB2 timers {:.3} MHz, flash {} wait states",
+        c.sysclk / 1e6,
+        c.hclk / 1e6,
+        c.pclk1 / 1e6,
+        c.pclk2 / 1e6,
+        c.tim1clk_apb1 / 1e6,
+        c.timclk_apb2 / 1e6,
+        p.flash[0] & 0xF
+    );
+    let tim7 = &p.tim7;
+    if let (Some(first), true) = (tim7.first_update, tim7.updates > 1) {
+        let span = (tim7.last_update - first) as f64 / UNITS_PER_S as f64;
+        eprintln!(
+            "TIM7: {} update events, {:.3} Hz (PSC {}, ARR {})",
+            tim7.updates,
+            (tim7.updates - 1) as f64 / span,
+            tim7.r[10],
+            tim7.r[11]
+        );
+    }
+    if ticks.count > 0 {
+        eprintln!(
+            "servo tick: {} handler runs, mean {:.0} cycles, max {} cycles (instructions, CPI 1, plus 24 cycles entry/exit)",
+            ticks.count,
+            ticks.insns as f64 / ticks.count as f64,
+            ticks.max
+        );
+    }
+    eprintln!(
+        "CPU load: {:.2} % awake",
+        100.0 * (1.0 - asleep as f64 / now.max(1) as f64)
+    );
+    eprintln!(
+        "USART2: {} bytes sent, {} overruns; IWDG: {} feeds; flash: {} erases, {} words programmed",
+        p.usart.sent, p.usart.overruns, p.iwdg_feeds, p.erases, p.programs
+    );
+    eprintln!(
+        "plant: position {:.6} rad, force {:.6} N·m, {} output changes",
+        p.plant.position(),
+        p.plant.force(),
+        p.plant.changes
+    );
+    for (at, cause) in resets {
+        eprintln!(
+            "reset at {:.6} s: {cause:?}",
+            at as f64 / UNITS_PER_S as f64
+        );
+    }
+}
