@@ -73,6 +73,9 @@ pub struct Machine<'a> {
     pub resets: Vec<(u64, ResetCause)>,
     /// Servo tick statistics.
     pub ticks: TickStats,
+    /// From this time on, thread mode makes no progress (a hung main loop; the watchdog
+    /// test): interrupts are still taken.
+    pub hang_main_at: Option<u64>,
 }
 
 impl std::fmt::Debug for Machine<'_> {
@@ -282,6 +285,7 @@ impl<'a> Machine<'a> {
             asleep: 0,
             resets: Vec::new(),
             ticks: TickStats::default(),
+            hang_main_at: None,
         };
         m.cpu_reset()?;
         Ok(m)
@@ -556,6 +560,13 @@ impl<'a> Machine<'a> {
                     p.now = deadline;
                     p.plant.advance_to(deadline);
                 }
+                continue;
+            }
+            if self.active.is_empty() && self.hang_main_at.is_some_and(|h| now >= h) {
+                // A hung main loop: thread mode spins in place until the next event.
+                let p = self.periph();
+                p.now = deadline;
+                p.plant.advance_to(deadline);
                 continue;
             }
             if pending.is_some() {
