@@ -703,7 +703,8 @@ impl Periph {
         let oc1m = (t.r[CCMR1] >> 4) & 7;
         let pwm_on = t.running()
             && t.r[CCER] & 1 != 0
-            && t.r[BDTR] & (1 << 15) != 0
+            // MOE, or AOE (bit 14): MOE is set by the next update event of the running timer.
+            && t.r[BDTR] & (3 << 14) != 0
             && (pa[0] >> 16) & 3 == 2
             && pa[9] & 0xF == 1
             && (oc1m == 6 || oc1m == 7);
@@ -1288,6 +1289,12 @@ impl Periph {
     /// before the new one applies.
     fn output_changed(&mut self, before: ForceState) {
         let after = self.force_output();
+        if std::env::var_os("STIFFWALL_EMU_TRACE").is_some() && after != before {
+            eprintln!(
+                "output {after:?} tim1 {:x?} gpioa {:x?}",
+                self.tim1.r, self.gpio[0]
+            );
+        }
         if after != before {
             self.plant.set_force(self.now, after);
         }
