@@ -35,6 +35,12 @@ struct Args {
     /// Refuse the ELF unless its SHA-256 (hex) is this.
     #[arg(long)]
     sha256: Option<String>,
+    /// The force output the image must be built for: `dac` or `pwm` (refused otherwise).
+    #[arg(long, value_parser = ["dac", "pwm"])]
+    output: Option<String>,
+    /// With --seconds: fail unless TIM7 (the servo tick) ran at this rate, Hz (±0.01 %).
+    #[arg(long)]
+    expect_servo_hz: Option<f64>,
     /// Device preset for the plant (see `stiffwall_core::devices`).
     #[arg(long, conflicts_with = "plant")]
     device: Option<String>,
@@ -100,6 +106,18 @@ fn run() -> Result<()> {
             );
         }
     }
+    if let Some(want) = args.output.as_deref() {
+        let have = match img.output {
+            image::Output::Dac => "dac",
+            image::Output::Pwm => "pwm",
+        };
+        if want != have {
+            bail!(
+                "refusing {}: it is the {have} build, --output asks for {want}",
+                args.elf.display()
+            );
+        }
+    }
     eprintln!(
         "stiffwall-board-emu: {} ({:?} output), sha256 {}",
         args.elf.display(),
@@ -122,6 +140,14 @@ fn run() -> Result<()> {
         }
     }
     let mut m = emu::Machine::new(img, p)?;
+    if args.pty {
+        // The host holds our stdin: when it goes away (even killed), stdin closes and we exit.
+        std::thread::spawn(|| {
+            let mut sink = Vec::new();
+            let _ = std::io::Read::read_to_end(&mut std::io::stdin(), &mut sink);
+            std::process::exit(0);
+        });
+    }
     let result = if args.pty {
         pty::serve(&mut m, args.fast, args.hang_main_after)
     } else {
@@ -130,15 +156,40 @@ fn run() -> Result<()> {
             bail!("--seconds {secs}: allowed 0 < S <= 3600");
         }
         let end = (secs * UNITS_PER_S as f64) as u64;
+        if let Some(h) = args.hang_main_after {
+            m.hang_main_at = Some((h * UNITS_PER_S as f64) as u64);
+        }
         let r = m.run_until(end);
         report(&mut m);
-        r
+        r.and_then(|()| check_servo_rate(&mut m, args.expect_servo_hz))
     };
     if let Some(path) = &args.store {
         std::fs::write(path, &m.periph().store)
             .with_context(|| format!("saving the config store to {}", path.display()))?;
     }
     result
+}
+
+/// The TIM7 update rate over the run, Hz.
+fn servo_rate(m: &mut emu::Machine<'_>) -> Option<f64> {
+    let t = &m.periph().tim7;
+    let first = t.first_update?;
+    (t.updates > 1)
+        .then(|| (t.updates - 1) as f64 / ((t.last_update - first) as f64 / UNITS_PER_S as f64))
+}
+
+fn check_servo_rate(m: &mut emu::Machine<'_>, want: Option<f64>) -> Result<()> {
+    let Some(want) = want else { return Ok(()) };
+    let have = servo_rate(m).unwrap_or(0.0);
+    if (have / want - 1.0).abs() > 1e-4 {
+        let (psc, arr) = (m.periph().tim7.r[10], m.periph().tim7.r[11]);
+        bail!(
+            "TIM7 (servo tick) runs at {have:.3} Hz, expected {want} Hz +/- 0.01 % \
+             (TIM7_PSC = {psc}, TIM7_ARR = {arr}, APB1 timer clock {:.3} MHz)",
+            m.periph().clocks().tim1clk_apb1 / 1e6
+        );
+    }
+    Ok(())
 }
 
 /// Prints what the run measured: clocks, servo rate, cycles per tick, CPU load, resets.

@@ -1056,7 +1056,12 @@ impl Periph {
                         self.usart.r[U_SR] &= keep;
                     }
                     U_DR => self.usart_tx(v as u8),
-                    U_BRR => self.usart.r[U_BRR] = v,
+                    U_BRR => {
+                        self.usart.r[U_BRR] = v;
+                        if self.usart.enabled() {
+                            self.check_baud();
+                        }
+                    }
                     U_CR1 => {
                         self.usart.r[U_CR1] = v;
                         if v & (1 << 13) != 0 {
