@@ -52,6 +52,9 @@ pub enum ConnectSpec {
         /// The image (None: `$STIFFWALL_QEMU_IMAGE` or the `cargo xtask firmware` output).
         image: Option<PathBuf>,
     },
+    /// The Nucleo-F446RE image on the board emulator (host/board-emu, a separate process).
+    #[cfg(feature = "qemu")]
+    BoardEmulator(crate::board_emu::Spec),
 }
 
 impl ConnectSpec {
@@ -88,6 +91,12 @@ impl ConnectSpec {
             Self::Serial { path, baud } => format!("serial port {path} at {baud} baud"),
             #[cfg(feature = "qemu")]
             Self::Qemu { .. } => "QEMU board image (mps2-an386)".into(),
+            #[cfg(feature = "qemu")]
+            Self::BoardEmulator(s) => format!(
+                "board emulator (nucleo-f446re-{}{})",
+                s.output.as_deref().unwrap_or("dac"),
+                if s.fast { ", fast" } else { "" }
+            ),
         }
     }
 
@@ -163,6 +172,12 @@ pub fn connect(spec: &ConnectSpec) -> Result<Client> {
             let q = crate::qemu::boot(&image)?;
             let port = transport::open_port(&q.pty, transport::DEFAULT_BAUD)?;
             Client::connect(port, Some(Box::new(q)))
+        }
+        #[cfg(feature = "qemu")]
+        ConnectSpec::BoardEmulator(s) => {
+            let e = crate::board_emu::start(s)?;
+            let port = transport::open_port(&e.pty, transport::DEFAULT_BAUD)?;
+            Client::connect(port, Some(Box::new(e)))
         }
     }
 }

@@ -36,6 +36,8 @@
 //! # Ok::<(), ClientError>(())
 //! ```
 
+#[cfg(feature = "qemu")]
+pub mod board_emu;
 pub mod cancel;
 pub mod client;
 pub mod connect;

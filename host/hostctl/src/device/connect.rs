@@ -1,6 +1,7 @@
-//! `--port/--baud/--device/--plant/--fast/--qemu` options shared by every device command, and
-//! the connection they describe ([`ConnectSpec`] of `stiffwall-client`): a real serial port,
-//! QEMU, or (default) the built-in virtual device running a preset (`--device NAME`) or a scene
+//! `--port/--baud/--device/--plant/--fast/--qemu/--board-emulator` options shared by every
+//! device command, and the connection they describe ([`ConnectSpec`] of `stiffwall-client`): a
+//! real serial port, QEMU, the board emulator (the Nucleo image on an emulated STM32F446), or
+//! (default) the built-in virtual device running a preset (`--device NAME`) or a scene
 //! file's plant (`--plant FILE.toml`). The options only convert into a [`ConnectSpec`]
 //! ([`ConnectArgs::spec`]); `stiffwall_client::connect` does the rest.
 
@@ -43,6 +44,18 @@ pub struct ConnectArgs {
     /// QEMU image (default: $STIFFWALL_QEMU_IMAGE or the `cargo xtask firmware` output).
     #[arg(long, global = true, value_name = "ELF")]
     pub qemu_image: Option<PathBuf>,
+    /// Run the Nucleo-F446RE image on the board emulator (a separate process, host/board-emu,
+    /// built by `cargo xtask board-emu --build`) with the plant of --device/--plant.
+    #[arg(long, global = true, conflicts_with_all = ["qemu", "port"])]
+    pub board_emulator: bool,
+    /// The board emulator's image: its force output, `dac` (default) or `pwm`.
+    #[arg(
+        long,
+        global = true,
+        value_name = "dac|pwm",
+        requires = "board_emulator"
+    )]
+    pub features: Option<String>,
 }
 
 impl ConnectArgs {
@@ -71,6 +84,15 @@ impl ConnectArgs {
             ConnectSpec::Qemu {
                 image: self.qemu_image.clone(),
             }
+        } else if self.board_emulator {
+            let ConnectSpec::Virtual { plant, fast } = self.virtual_target() else {
+                unreachable!("virtual_target is a virtual device")
+            };
+            ConnectSpec::BoardEmulator(stiffwall_client::board_emu::Spec {
+                output: self.features.clone(),
+                plant,
+                fast,
+            })
         } else {
             self.virtual_target()
         }
@@ -105,6 +127,11 @@ impl ConnectArgs {
         }
         if self.plant.is_some() && self.device.is_some() {
             bail!("--device and --plant both pick the virtual device's plant; give one");
+        }
+        if let Some(f) = self.features.as_deref() {
+            if !stiffwall_client::board_emu::OUTPUTS.contains(&f) {
+                bail!("--features {f}: allowed dac or pwm (the board emulator's force output)");
+            }
         }
         if self.plant.is_none() {
             let name = self.device.as_deref().unwrap_or(DEFAULT_VIRTUAL_DEVICE);
