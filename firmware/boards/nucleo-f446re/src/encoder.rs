@@ -35,6 +35,9 @@ impl QuadEncoder {
         let regs = unsafe { &*TIM2::ptr() };
         regs.ccmr1_input()
             .modify(|_, w| w.ic1f().set(INPUT_FILTER).ic2f().set(INPUT_FILTER));
+        // Mutation check (board emulator): channel 1 inverted, so the count runs backwards.
+        #[cfg(feature = "mutant-encoder-polarity")]
+        regs.ccer().modify(|_, w| w.cc1p().set_bit());
         qei.set_count(0);
         Self { qei }
     }

@@ -92,7 +92,17 @@ mod imp {
         #[inline(always)]
         pub fn set(&mut self, cmd: i32) {
             let code = Self::code_for(cmd);
+            #[cfg(not(feature = "mutant-dac-alignment"))]
             self.ch.set_value(code);
+            // Mutation check (board emulator): the right-aligned code in the left-aligned
+            // holding register.
+            #[cfg(feature = "mutant-dac-alignment")]
+            // SAFETY: one write of the DAC's holding register, which this driver owns.
+            unsafe {
+                (*stm32f4xx_hal::pac::DAC::ptr())
+                    .dhr12l1()
+                    .write(|w| w.bits(u32::from(code)));
+            }
         }
     }
 

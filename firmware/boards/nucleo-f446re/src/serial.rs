@@ -75,6 +75,12 @@ pub fn new(usart: USART2, pa2: PA2, pa3: PA3, rcc: &mut Rcc) -> Option<(SerialPo
         rcc,
     )
     .ok()?;
+    // Mutation check (board emulator): the baud-rate divider doubled (460 800 baud).
+    #[cfg(feature = "mutant-usart-brr")]
+    // SAFETY: USART2 is owned by `serial`; one write of its divider.
+    unsafe {
+        (*USART2::ptr()).brr().write(|w| w.bits(2 * 0x31));
+    }
     let (usart_tx, mut usart_rx) = serial.split();
     usart_rx.listen();
     Some((

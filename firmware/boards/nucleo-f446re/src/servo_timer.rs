@@ -44,6 +44,15 @@ impl ServoTimer {
         }
         let mut counter = tim.counter_hz(rcc);
         counter.start(rate_hz.Hz()).ok()?;
+        // Mutation check (board emulator): the prescaler doubled, so the tick runs at half rate.
+        #[cfg(feature = "mutant-tim7-prescaler")]
+        // SAFETY: TIM7 is owned by `counter`; one prescaler write and an update event.
+        unsafe {
+            let t = &*TIM7::ptr();
+            let psc = t.psc().read().bits();
+            t.psc().write(|w| w.bits(2 * psc + 1));
+            t.egr().write(|w| w.ug().set_bit());
+        }
         counter.listen(Event::Update);
         Some(Self { counter, rate_hz })
     }
