@@ -67,8 +67,10 @@ pub struct Machine<'a> {
     /// S0–S31 and FPSCR saved at each exception entry.
     fp_saved: Vec<[u64; 33]>,
     sleeping: bool,
-    /// Time spent asleep, units.
+    /// Time spent asleep since `stats_since`, units.
     pub asleep: u64,
+    /// Start of the statistics window, units.
+    pub stats_since: u64,
     /// Resets so far and why.
     pub resets: Vec<(u64, ResetCause)>,
     /// Servo tick statistics.
@@ -283,6 +285,7 @@ impl<'a> Machine<'a> {
             fp_saved: Vec::new(),
             sleeping: false,
             asleep: 0,
+            stats_since: 0,
             resets: Vec::new(),
             ticks: TickStats::default(),
             hang_main_at: None,
@@ -299,6 +302,13 @@ impl<'a> Machine<'a> {
     /// Instructions executed since power-on.
     pub fn insns(&self) -> u64 {
         self.uc.get_data().insns
+    }
+
+    /// Restarts the statistics (servo ticks, time asleep) from now.
+    pub fn reset_stats(&mut self) {
+        self.ticks = TickStats::default();
+        self.asleep = 0;
+        self.stats_since = self.now();
     }
 
     /// The program counter.

@@ -141,15 +141,23 @@ fn run() -> Result<()> {
     }
     let mut m = emu::Machine::new(img, p)?;
     if args.pty {
-        // The host holds our stdin: when it goes away (even killed), stdin closes and we exit.
+        // The host holds our stdin: when it goes away (even killed), stdin closes and the run
+        // ends with a report.
         std::thread::spawn(|| {
             let mut sink = Vec::new();
             let _ = std::io::Read::read_to_end(&mut std::io::stdin(), &mut sink);
-            std::process::exit(0);
+            pty::STOP.store(true, std::sync::atomic::Ordering::Relaxed);
         });
     }
     let result = if args.pty {
-        pty::serve(&mut m, args.fast, args.hang_main_after)
+        let r = pty::serve(
+            &mut m,
+            args.fast,
+            args.hang_main_after,
+            args.store.as_deref(),
+        );
+        report(&mut m);
+        r
     } else {
         let secs = args.seconds.unwrap_or(1.0);
         if !(secs > 0.0 && secs <= 3600.0) {
@@ -196,6 +204,7 @@ fn check_servo_rate(m: &mut emu::Machine<'_>, want: Option<f64>) -> Result<()> {
 pub fn report(m: &mut emu::Machine<'_>) {
     let now = m.now();
     let asleep = m.asleep;
+    let since = m.stats_since;
     let insns = m.insns();
     let ticks = m.ticks.clone();
     let resets = m.resets.clone();
@@ -233,9 +242,11 @@ pub fn report(m: &mut emu::Machine<'_>) {
             ticks.max
         );
     }
+    let window = now.saturating_sub(since).max(1);
     eprintln!(
-        "CPU load: {:.2} % awake",
-        100.0 * (1.0 - asleep as f64 / now.max(1) as f64)
+        "CPU load: {:.2} % awake over {:.3} s",
+        100.0 * (1.0 - asleep as f64 / window as f64),
+        window as f64 / UNITS_PER_S as f64
     );
     eprintln!(
         "USART2: {} bytes sent, {} overruns; IWDG: {} feeds; flash: {} erases, {} words programmed",

@@ -290,6 +290,9 @@ pub struct Periph {
     /// Whether the IWDG runs.
     pub iwdg_on: bool,
     iwdg_reload_at: u64,
+    /// Time from the last reload to the reset: RLR and PR as they were at that reload (a new
+    /// RLR or PR only counts from the next reload, as on the chip).
+    iwdg_period: u64,
     iwdg_unlocked: bool,
     /// Feeds so far.
     pub iwdg_feeds: u64,
@@ -313,6 +316,8 @@ pub struct Periph {
     pub reset: Option<ResetCause>,
     /// Extra time the CPU is stalled (flash erase/program), to add to the clock.
     pub stall: u64,
+    /// All stall time so far, units (fast pacing does not hold it against the host).
+    pub stalled_total: u64,
     /// Time now.
     pub now: u64,
     /// Time units per CPU cycle.
@@ -424,6 +429,7 @@ impl Periph {
             iwdg: [0; 4],
             iwdg_on: false,
             iwdg_reload_at: 0,
+            iwdg_period: 0,
             iwdg_unlocked: false,
             iwdg_feeds: 0,
             dbgmcu: [0; 3],
@@ -436,6 +442,7 @@ impl Periph {
             stop: None,
             reset: None,
             stall: 0,
+            stalled_total: 0,
             now: 0,
             cpu_units: UNITS_PER_S / 16_000_000,
             plant,
@@ -569,8 +576,7 @@ impl Periph {
 
     /// When the watchdog runs out, if it runs.
     pub fn iwdg_deadline(&self) -> Option<u64> {
-        self.iwdg_on
-            .then(|| self.iwdg_reload_at + (u64::from(self.iwdg[2] & 0xFFF) + 1) * self.iwdg_step())
+        self.iwdg_on.then(|| self.iwdg_reload_at + self.iwdg_period)
     }
 
     /// The next time something happens by itself (timer update, UART byte, watchdog).
@@ -1075,9 +1081,11 @@ impl Periph {
                 0xCCCC => {
                     self.iwdg_on = true;
                     self.iwdg_reload_at = now;
+                    self.iwdg_period = (u64::from(self.iwdg[2] & 0xFFF) + 1) * self.iwdg_step();
                 }
                 0xAAAA => {
                     self.iwdg_reload_at = now;
+                    self.iwdg_period = (u64::from(self.iwdg[2] & 0xFFF) + 1) * self.iwdg_step();
                     self.iwdg_feeds += 1;
                     self.iwdg_unlocked = false;
                 }
@@ -1097,6 +1105,13 @@ impl Periph {
                     ));
                 }
                 self.iwdg[((a - 0x4000_3000) / 4) as usize] = v;
+                if std::env::var_os("STIFFWALL_EMU_TRACE").is_some() {
+                    eprintln!(
+                        "iwdg: {} = {v} at {:.6} s",
+                        if a == 0x4000_3004 { "PR" } else { "RLR" },
+                        self.now as f64 / UNITS_PER_S as f64
+                    );
+                }
             }
             0xE004_2004..=0xE004_200C => self.dbgmcu[((a - 0xE004_2004) / 4) as usize] = v,
             0xE000_E100..=0xE000_E11F => set_bits(&mut self.nvic_en, a, v, true),
@@ -1240,7 +1255,14 @@ impl Periph {
                         let at = (start - STORE_SECTORS[0].1) as usize;
                         self.store[at..at + len as usize].fill(0xFF);
                         self.erases += 1;
+                        if std::env::var_os("STIFFWALL_EMU_TRACE").is_some() {
+                            eprintln!(
+                                "flash: erase sector {snb} at {:.6} s",
+                                self.now as f64 / UNITS_PER_S as f64
+                            );
+                        }
                         self.stall += (ERASE_S * UNITS_PER_S as f64) as u64;
+                        self.stalled_total += (ERASE_S * UNITS_PER_S as f64) as u64;
                         self.flash[3] |= 1; // EOP
                     }
                     None => self.fail(format!(
@@ -1288,6 +1310,7 @@ impl Periph {
         }
         self.programs += 1;
         self.stall += (PROGRAM_S * UNITS_PER_S as f64) as u64;
+        self.stalled_total += (PROGRAM_S * UNITS_PER_S as f64) as u64;
     }
 
     /// Notes a change of the force output: the plant is brought up to now under the old force

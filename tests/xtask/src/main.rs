@@ -4,11 +4,16 @@
 //!   module cycles, no_std checks for the Cortex-M target, firmware cross-builds with the size
 //!   report, host tests, the fuzz campaign (10⁷ frames), the 10 s link flood, the tune tables
 //!   against a fresh run, the every-plant supervisor, the real-browser test of `hostctl ui`,
-//!   QEMU scenarios, the instruction budgets (mean and worst tick) and the Slurm cluster test.
+//!   QEMU scenarios, the emulated Nucleo board's tests and mutation checks, the instruction
+//!   budgets (mean and worst tick) and the Slurm cluster test.
 //!   Every step that runs `#[ignore]`d tests fails when fewer ran than it has.
 //! - `unused-deps`: every declared dependency of the root workspace is used (also in `ci`).
 //! - `firmware [--update-size-report]`: builds every board image.
 //! - `qemu [--bless]`: runs the QEMU scenarios against their expected transcripts.
+//! - `board-emu [--build] [--bench]`: the Nucleo-F446RE images on the board emulator
+//!   (host/board-emu): builds images, mutants and emulator, then runs the emulated-board tests
+//!   (also in `ci`); `--build` only builds (for `hostctl --board-emulator`), `--bench` prints
+//!   cycles per servo tick and CPU load for docs/BENCHMARKS.md.
 //! - `flash BOARD --features dac|pwm[,defmt]`: builds a real board's image and flashes it with
 //!   probe-rs (the board's runner; docs/toolchain.md).
 //! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
@@ -36,6 +41,7 @@ mod arch;
 mod atlas;
 mod bench;
 mod bench_firmware;
+mod board_emu;
 mod cluster;
 mod firmware;
 mod flash;
@@ -151,6 +157,8 @@ fn ci() -> Result<()> {
     ui::browser_test(None)?;
     step("QEMU scenarios");
     qemu::qemu(&[])?;
+    step("the Nucleo images on the board emulator (unicorn): boot, pty, tune vs the virtual device, flash store, watchdog, mutation checks");
+    board_emu::board_emu(&[])?;
     step("servo instruction budget under QEMU -icount");
     bench_firmware::bench_firmware(&["--no-write".to_string()])?;
     step("a Fig. 6 panel as a Slurm job array on a throw-away cluster (Debian's slurm-wlm and munge; root), with pre-emption");
@@ -169,6 +177,7 @@ fn main() -> Result<()> {
             sync_sim_benchmarks()
         }
         Some("qemu") => qemu::qemu(&args[1..]),
+        Some("board-emu") => board_emu::board_emu(&args[1..]),
         Some("flash") => flash::flash(&args[1..]),
         Some("unused-deps") => unused_deps::unused_deps(),
         Some("bench-firmware") => bench_firmware::bench_firmware(&args[1..]),
@@ -179,6 +188,6 @@ fn main() -> Result<()> {
         Some("atlas") => atlas::atlas(&args[1..]),
         Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
         Some("arch") => arch::arch(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print]"),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print]"),
     }
 }

@@ -6,7 +6,8 @@
 //! 2. Debian's `rustc-web`/`cargo-web`/`rust-web-src` building `core` from source
 //!    (`-Z build-std=core`), linked by `arm-none-eabi-ld`.
 //!
-//! Debian's `chromium` and `chromium-driver` drive the real-browser test of `hostctl ui`.
+//! Debian's `chromium` and `chromium-driver` drive the real-browser test of `hostctl ui`;
+//! `cmake` and `libclang-dev` build the board emulator's unicorn core (host/board-emu).
 //!
 //! Missing Debian packages are installed with `apt-get` when running as root on Debian;
 //! elsewhere the error names the one command the user needs.
@@ -233,6 +234,37 @@ pub fn ensure_chromium() -> Result<()> {
     )?;
     if !(which("chromium") && which("chromedriver")) {
         bail!("chromium or chromedriver still not on PATH after installing them");
+    }
+    Ok(())
+}
+
+/// Makes sure the board emulator's C core (unicorn, built by its `-sys` crate) can build:
+/// `cmake` and libclang (for bindgen), with [`apt_install`]: nothing is removed.
+pub fn ensure_board_emu_deps() -> Result<()> {
+    let libclang = || {
+        [
+            "/usr/lib/llvm-14/lib",
+            "/usr/lib/llvm-15/lib",
+            "/usr/lib/llvm-16/lib",
+            "/usr/lib/x86_64-linux-gnu",
+        ]
+        .iter()
+        .any(|d| {
+            std::fs::read_dir(d).is_ok_and(|rd| {
+                rd.flatten()
+                    .any(|e| e.file_name().to_string_lossy() == "libclang.so")
+            })
+        })
+    };
+    if which("cmake") && libclang() {
+        return Ok(());
+    }
+    apt_install(
+        &["cmake", "libclang-dev"],
+        "cmake and libclang-dev (the board emulator's unicorn core and its bindings)",
+    )?;
+    if !which("cmake") {
+        bail!("cmake still not on PATH after installing it");
     }
     Ok(())
 }

@@ -1,0 +1,402 @@
+//! The emulated-board tests: the Nucleo-F446RE images (`dac` and `pwm`) run on the board
+//! emulator, driven through `hostctl` as a user would drive a real board, compared with the
+//! virtual device; and the mutation checks (each flipped hardware setting must fail a test).
+//!
+//! Opt-in (`#[ignore]`): `cargo xtask board-emu` builds the images (and the mutants) into
+//! `target/board-emu/`, builds hostctl, and runs these with `--ignored`. Units: stiffness in
+//! N·m/rad (the rig is rotary), time in emulated seconds. Invariants: every test starts its own
+//! emulator process(es) and ends them; nothing depends on test order.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn emulator() -> &'static str {
+    env!("CARGO_BIN_EXE_stiffwall-board-emu")
+}
+
+/// An image built by `cargo xtask board-emu` (`nucleo-f446re-dac`, `nucleo-f446re-pwm`,
+/// `qemu-an386`, `mutant-…`).
+fn image(name: &str) -> PathBuf {
+    let p = root().join("target/board-emu").join(format!("{name}.elf"));
+    assert!(
+        p.is_file(),
+        "{} is missing: run `cargo xtask board-emu`",
+        p.display()
+    );
+    p
+}
+
+fn hostctl() -> Command {
+    let exe = std::env::var_os("STIFFWALL_HOSTCTL")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("target/debug/hostctl"));
+    let mut c = Command::new(exe);
+    c.env("STIFFWALL_BOARD_EMU", emulator())
+        .env_remove("STIFFWALL_NUCLEO_ELF")
+        .current_dir(root());
+    c
+}
+
+/// Runs `cmd`; returns (success, stdout, stderr).
+fn run(cmd: &mut Command) -> (bool, String, String) {
+    let out = cmd.output().expect("spawning");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn run_ok(cmd: &mut Command) -> (String, String) {
+    let (ok, o, e) = run(cmd);
+    assert!(ok, "{cmd:?} failed:\n{o}\n{e}");
+    (o, e)
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
+}
+
+/// The emulator serving a pty, with a config-store file.
+struct Served {
+    child: Child,
+    pty: String,
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn serve(elf: &Path, store: &Path) -> Served {
+    let mut child = Command::new(emulator())
+        .arg("--elf")
+        .arg(elf)
+        .args(["--pty", "--fast", "--store"])
+        .arg(store)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("starting the emulator");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().expect("stdout"))
+        .read_line(&mut line)
+        .expect("reading the pty line");
+    let pty = line
+        .trim()
+        .strip_prefix("pty: ")
+        .expect("pty line")
+        .to_string();
+    Served { child, pty }
+}
+
+const OUTPUTS: [&str; 2] = ["dac", "pwm"];
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn boots_at_180_mhz_with_a_1_khz_servo_tick_on_both_outputs() {
+    for out in OUTPUTS {
+        let (_, e) = run_ok(
+            Command::new(emulator())
+                .arg("--elf")
+                .arg(image(&format!("nucleo-f446re-{out}")))
+                .args([
+                    "--output",
+                    out,
+                    "--seconds",
+                    "1",
+                    "--expect-servo-hz",
+                    "1000",
+                ]),
+        );
+        for want in [
+            "SYSCLK 180.000 MHz",
+            "PCLK1 45.000 MHz",
+            "PCLK2 90.000 MHz",
+            "APB1 timers 90.000 MHz",
+            "flash 5 wait states",
+            "TIM7: ",
+            "(PSC 1, ARR 44999)",
+        ] {
+            assert!(e.contains(want), "{out}: no {want:?} in\n{e}");
+        }
+        assert!(!e.contains("reset at"), "{out}: an unexpected reset\n{e}");
+    }
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn info_over_the_emulated_usart2_on_both_outputs() {
+    for out in OUTPUTS {
+        let (o, _) = run_ok(hostctl().args(["info", "--board-emulator", "--features", out]));
+        assert!(
+            o.contains(&format!("board:       nucleo-f446re-{out}")),
+            "{o}"
+        );
+        assert!(o.contains("8192 counts/rev"), "{o}");
+        assert!(o.contains("faults:      none"), "{o}");
+    }
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn refuses_other_boards_and_corrupt_files_before_running() {
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(image("qemu-an386"))
+        .args(["--seconds", "0.01"]));
+    assert!(!ok && e.contains("outside the image flash"), "{e}");
+    let bytes = std::fs::read(image("nucleo-f446re-dac")).unwrap();
+    let dir = std::env::temp_dir().join(format!("board-emu-refuse-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cut = dir.join("truncated.elf");
+    std::fs::write(&cut, &bytes[..bytes.len() / 3]).unwrap();
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(&cut)
+        .args(["--seconds", "0.01"]));
+    assert!(!ok && e.contains("refusing"), "{e}");
+    let mut bad = bytes.clone();
+    bad[..4].copy_from_slice(b"JUNK");
+    let junk = dir.join("corrupt.elf");
+    std::fs::write(&junk, &bad).unwrap();
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(&junk)
+        .args(["--seconds", "0.01"]));
+    assert!(!ok && e.contains("truncated or corrupt"), "{e}");
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(image("nucleo-f446re-dac"))
+        .args(["--sha256", "00", "--seconds", "0.01"]));
+    assert!(!ok && e.contains("SHA-256"), "{e}");
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(image("nucleo-f446re-dac"))
+        .args(["--output", "pwm", "--seconds", "0.01"]));
+    assert!(!ok && e.contains("it is the dac build"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `hostctl tune --json` on `target`: (set K, every set wall rests).
+fn tune(target: &[&str]) -> (f64, bool) {
+    let (o, _) = run_ok(hostctl().args(["tune", "--fast", "--json"]).args(target));
+    let t = &json(&o)["tune"];
+    (
+        t["k_set"].as_f64().expect("k_set"),
+        t["rests"].as_bool().expect("rests"),
+    )
+}
+
+/// The spring-only tune (`--damping 0`, the paper's wall) on the board and on the virtual
+/// device: the same verdict and K within 10 %. The default tune (spring + damper) is checked
+/// to set a wall that rests, not against the virtual device's K: its frontier sits at the quiet
+/// ceiling 2c/Δ, where one release test's verdict, and so one step (≈ 11 %) of the search,
+/// turns on a fraction of an output code, and the board's codes are 18× (DAC) or 3.7× (PWM)
+/// coarser than the virtual device's 16-bit ones (docs: the board README).
+fn tune_matches(plant: &[&str], out: &str) {
+    let spring = |t: &[&str]| {
+        let mut a = t.to_vec();
+        a.extend(["--damping", "0"]);
+        tune(&a)
+    };
+    let (k_virtual, rests_virtual) = spring(plant);
+    let mut board = plant.to_vec();
+    board.extend(["--board-emulator", "--features", out]);
+    let (k_board, rests_board) = spring(&board);
+    eprintln!("tune --damping 0 {plant:?} {out}: virtual K = {k_virtual}, board K = {k_board}");
+    assert!(
+        rests_board && rests_virtual,
+        "verdicts: virtual {rests_virtual}, board {rests_board}"
+    );
+    assert!(
+        (k_board / k_virtual - 1.0).abs() <= 0.10,
+        "{plant:?} {out}: board K {k_board} vs virtual K {k_virtual}: more than 10 % apart"
+    );
+    let (k_damped, rests_damped) = tune(&board);
+    eprintln!("tune {plant:?} {out}: board K = {k_damped} (spring + damper)");
+    assert!(
+        rests_damped && k_damped > k_board,
+        "{plant:?} {out}: damped K {k_damped}"
+    );
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn tune_sets_the_virtual_devices_wall_maxon_re35_dac() {
+    tune_matches(&["--device", "maxon-re35"], "dac");
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn tune_sets_the_virtual_devices_wall_maxon_re35_pwm() {
+    tune_matches(&["--device", "maxon-re35"], "pwm");
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn tune_sets_the_virtual_devices_wall_rotary_plant_file() {
+    tune_matches(&["--plant", "sim/plants/rotary-realistic.toml"], "dac");
+}
+
+/// `hostctl experiment release --json` fields that describe the counts.
+fn release(target: &[&str], k: &str, deflection: &str) -> serde_json::Value {
+    let (o, _) = run_ok(
+        hostctl()
+            .args([
+                "experiment",
+                "release",
+                "--fast",
+                "--json",
+                "--ticks",
+                "2000",
+            ])
+            .args(["--stiffness", k, "--deflection", deflection])
+            .args(target),
+    );
+    json(&o)
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn release_counts_match_the_virtual_device() {
+    // Region A-ish (settles) and region D (grows until the supervisor trips).
+    for (k, d) in [("0.5", "10"), ("1.2", "10"), ("1.0", "20")] {
+        let v = release(&[], k, d);
+        for out in OUTPUTS {
+            let b = release(&["--board-emulator", "--features", out], k, d);
+            eprintln!("release K={k} d={d} {out}: virtual {v}\nboard {b}");
+            for field in ["verdict", "completed", "faults", "start_ticks"] {
+                assert_eq!(v[field], b[field], "K={k} d={d} {out}: {field}");
+            }
+            // Within the output quantization: one DAC LSB is 1/1800 and one PWM count 1/8820
+            // of full scale against the virtual device's 1/32767, a force difference of at most
+            // half a code, so a settling release's tail peak stays within one count. A growing
+            // one (region D) is stopped by the supervisor at a size that amplifies any such
+            // difference (seen: 39.5 vs 43.5 counts, one tick later); there only the verdict,
+            // the start and the fault are compared.
+            if v["verdict"] == "settles" {
+                let pv = v["tail_peak_ticks"].as_f64().unwrap();
+                let pb = b["tail_peak_ticks"].as_f64().unwrap();
+                assert!(
+                    (pv - pb).abs() <= 1.0,
+                    "K={k} d={d} {out}: tail peak {pv} vs {pb}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn a_saved_config_comes_back_after_a_power_cycle() {
+    let dir = std::env::temp_dir().join(format!("board-emu-store-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let store = dir.join("store.bin");
+    let _ = std::fs::remove_file(&store);
+    {
+        let s = serve(&image("nucleo-f446re-dac"), &store);
+        run_ok(hostctl().args(["config", "set", "--stiffness", "0.75", "--port", &s.pty]));
+        run_ok(hostctl().args(["config", "save", "--port", &s.pty]));
+        // A second save rewrites the other slot (an erase of a written sector comes later).
+        run_ok(hostctl().args(["config", "set", "--stiffness", "0.8", "--port", &s.pty]));
+        run_ok(hostctl().args(["config", "save", "--port", &s.pty]));
+        run_ok(hostctl().args(["config", "set", "--stiffness", "0.85", "--port", &s.pty]));
+        run_ok(hostctl().args(["config", "save", "--port", &s.pty]));
+    }
+    let s = serve(&image("nucleo-f446re-dac"), &store);
+    let (o, _) = run_ok(hostctl().args(["config", "get", "--json", "--port", &s.pty]));
+    let k = json(&o)["stiffness"].as_f64().expect("stiffness");
+    assert!(
+        (k - 0.85).abs() < 1e-6,
+        "after the power cycle K = {k}\n{o}"
+    );
+    drop(s);
+    let fresh = dir.join("fresh.bin");
+    let s = serve(&image("nucleo-f446re-dac"), &fresh);
+    let (o, _) = run_ok(hostctl().args(["config", "get", "--json", "--port", &s.pty]));
+    assert_eq!(
+        json(&o)["stiffness"].as_f64(),
+        Some(0.0),
+        "a blank store boots the defaults"
+    );
+    drop(s);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn the_watchdog_resets_a_board_whose_main_loop_stops() {
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(image("nucleo-f446re-dac"))
+        .args(["--seconds", "1", "--hang-main-after", "0.3"]));
+    assert!(ok, "{e}");
+    // IWDG: /64 prescaler, reload 50 → (50 + 1) × 2 ms = 102 ms after the last feed.
+    let line = e
+        .lines()
+        .find(|l| l.starts_with("reset at"))
+        .unwrap_or_else(|| panic!("no reset\n{e}"));
+    assert!(line.ends_with("Watchdog"), "{line}");
+    let at: f64 = line.split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert!((0.39..0.41).contains(&at), "reset at {at} s");
+}
+
+fn mutant(name: &str) -> PathBuf {
+    image(&format!("mutant-{name}"))
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn mutant_tim7_prescaler_fails_the_servo_rate_check() {
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(mutant("tim7-prescaler"))
+        .args(["--seconds", "0.5", "--expect-servo-hz", "1000"]));
+    assert!(
+        !ok && e.contains("TIM7 (servo tick) runs at 500.000 Hz"),
+        "{e}"
+    );
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn mutant_usart_brr_stops_the_board() {
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(mutant("usart-brr"))
+        .args(["--seconds", "0.5"]));
+    assert!(!ok && e.contains("USART2_BRR = 0x62"), "{e}");
+}
+
+fn mutant_fails_tune(name: &str) -> String {
+    let (ok, o, e) = run(hostctl().env("STIFFWALL_NUCLEO_ELF", mutant(name)).args([
+        "tune",
+        "--fast",
+        "--board-emulator",
+    ]));
+    assert!(!ok, "tune passed on mutant {name}:\n{o}\n{e}");
+    e
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn mutant_encoder_polarity_fails_tune() {
+    let e = mutant_fails_tune("encoder-polarity");
+    assert!(e.contains("tune failed"), "{e}");
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn mutant_dac_alignment_fails_tune() {
+    let e = mutant_fails_tune("dac-alignment");
+    assert!(e.contains("tune failed"), "{e}");
+}

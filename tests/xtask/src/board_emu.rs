@@ -1,0 +1,176 @@
+//! `cargo xtask board-emu [--build] [--bench]`: the Nucleo-F446RE images on the board emulator
+//! (host/board-emu, its own GPL-2.0-or-later workspace around unicorn).
+//!
+//! Steps: installs `cmake` and `libclang-dev` when missing (root on Debian, as QEMU is
+//! installed); builds the `dac` and `pwm` images exactly as `cargo xtask firmware` and `cargo
+//! xtask flash` do, plus the QEMU image (for the other-board refusal) and the four mutants
+//! (features `mutant-*` of the board crate: encoder polarity, DAC alignment, TIM7 prescaler,
+//! USART2 BRR), and copies each ELF to `target/board-emu/NAME.elf` (`nucleo-f446re-dac`,
+//! `nucleo-f446re-pwm`, `qemu-an386`, `mutant-…`); builds the emulator
+//! (release). `--build` stops there (what `hostctl --board-emulator` needs). Otherwise it builds
+//! hostctl and runs the emulated-board tests (`host/board-emu/tests/board.rs`, `#[ignore]`d,
+//! all must run): boot and clock tree, info over the pty, tune against the virtual device,
+//! release counts, config across a power cycle, the watchdog, refusals, and the mutation checks
+//! (each mutant must fail its test). `--bench` prints the cycles per servo tick and the CPU load
+//! at 1, 5 and 10 kHz for docs/BENCHMARKS.md.
+
+use crate::firmware::{self, root, Image, IMAGES};
+use crate::process::{run, run_counting};
+use crate::toolchain;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The mutation features of the board crate (each must make an emulated-board test fail).
+pub const MUTANTS: &[&str] = &[
+    "mutant-encoder-polarity",
+    "mutant-dac-alignment",
+    "mutant-tim7-prescaler",
+    "mutant-usart-brr",
+];
+
+/// Tests in host/board-emu/tests/board.rs (all must run).
+const TESTS: usize = 13;
+
+fn image(name: &str) -> &'static Image {
+    IMAGES
+        .iter()
+        .find(|i| i.name == name)
+        .expect("the image is in the image table")
+}
+
+fn copy(elf: &Path, out: &Path, name: &str) -> Result<PathBuf> {
+    let to = out.join(format!("{name}.elf"));
+    std::fs::copy(elf, &to)
+        .with_context(|| format!("copying {} to {}", elf.display(), to.display()))?;
+    Ok(to)
+}
+
+/// The emulator's cargo command (its own workspace, never the host's target dir).
+fn emu_cargo(args: &[&str]) -> Command {
+    let mut c = Command::new("cargo");
+    c.env_remove("CARGO_TARGET_DIR")
+        .args(args)
+        .current_dir(root().join("host/board-emu"));
+    c
+}
+
+/// Builds the images (with mutants unless `images_only`) and the emulator.
+fn build(mutants: bool) -> Result<PathBuf> {
+    toolchain::ensure_board_emu_deps()?;
+    let cross = toolchain::ensure_cross()?;
+    let out = root().join("target/board-emu");
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let qemu = firmware::build(cross, image("qemu-an386"), &[])?;
+    copy(&qemu, &out, "qemu-an386")?;
+    if mutants {
+        for m in MUTANTS {
+            let elf = firmware::build(cross, image("nucleo-f446re-dac"), &[m])?;
+            copy(&elf, &out, m)?;
+        }
+    }
+    let pwm = firmware::build(cross, image("nucleo-f446re-pwm"), &[])?;
+    copy(&pwm, &out, "nucleo-f446re-pwm")?;
+    // The dac image last: the board crate's own output path keeps the default build.
+    let dac = firmware::build(cross, image("nucleo-f446re-dac"), &[])?;
+    copy(&dac, &out, "nucleo-f446re-dac")?;
+    run(&mut emu_cargo(&["build", "--release", "--locked"]))?;
+    Ok(out)
+}
+
+/// Runs the subcommand.
+pub fn board_emu(args: &[String]) -> Result<()> {
+    let build_only = args.iter().any(|a| a == "--build");
+    let bench = args.iter().any(|a| a == "--bench");
+    if let Some(bad) = args.iter().find(|a| *a != "--build" && *a != "--bench") {
+        bail!("unknown argument {bad:?} for `cargo xtask board-emu` (allowed: --build, --bench)");
+    }
+    let out = build(!build_only && !bench)?;
+    if build_only {
+        eprintln!(
+            "xtask: images in {}, emulator in host/board-emu/target/release; try \
+             `hostctl tune --board-emulator --fast`",
+            out.display()
+        );
+        return Ok(());
+    }
+    run(crate::process::cargo().args(["build", "-p", "stiffwall-host", "--bin", "hostctl"]))?;
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root().join("target"), PathBuf::from);
+    if bench {
+        return figures(&out, &target.join("debug/hostctl"));
+    }
+    let mut test = emu_cargo(&[
+        "test",
+        "--release",
+        "--locked",
+        "--test",
+        "board",
+        "--",
+        "--ignored",
+        "--test-threads=1",
+    ]);
+    test.env("STIFFWALL_HOSTCTL", target.join("debug/hostctl"));
+    run_counting(&mut test, TESTS)
+}
+
+/// Measures cycles per servo tick and CPU load at 1, 5 and 10 kHz: the emulator serves its
+/// pty, hostctl sets the rate and a wall (K = 1 N·m/rad) and records 2 s of telemetry (the
+/// telemetry stream is part of the load); the emulator's statistics start at the rate change.
+fn figures(out: &Path, hostctl: &Path) -> Result<()> {
+    use std::io::BufRead;
+    let exe = root().join("host/board-emu/target/release/stiffwall-board-emu");
+    let csv = std::env::temp_dir().join(format!("board-emu-bench-{}.csv", std::process::id()));
+    println!("| image | servo rate | servo tick | CPU load (telemetry streaming) |");
+    println!("|---|---|---|---|");
+    for name in ["dac", "pwm"] {
+        for hz in [1000, 5000, 10000] {
+            let mut child = Command::new(&exe)
+                .arg("--elf")
+                .arg(out.join(format!("nucleo-f446re-{name}.elf")))
+                .args(["--pty", "--fast"])
+                .stdin(std::process::Stdio::piped())
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .with_context(|| format!("starting {}", exe.display()))?;
+            let mut line = String::new();
+            std::io::BufReader::new(child.stdout.take().context("emulator stdout")?)
+                .read_line(&mut line)?;
+            let pty = line.trim().trim_start_matches("pty: ").to_string();
+            let rate = hz.to_string();
+            run(Command::new(hostctl).args([
+                "config",
+                "set",
+                "--rate",
+                &rate,
+                "--stiffness",
+                "1",
+                "--port",
+                &pty,
+            ]))?;
+            run(Command::new(hostctl)
+                .args(["record", "--seconds", "2", "--port", &pty])
+                .arg(&csv))?;
+            drop(child.stdin.take());
+            let o = child.wait_with_output()?;
+            let e = String::from_utf8_lossy(&o.stderr);
+            if !o.status.success() {
+                bail!("the emulator failed:\n{e}");
+            }
+            let find = |p: &str| {
+                e.lines()
+                    .find(|l| l.starts_with(p))
+                    .unwrap_or("")
+                    .to_string()
+            };
+            println!(
+                "| nucleo-f446re-{name} | {hz} Hz | {} | {} |",
+                find("servo tick:").trim_start_matches("servo tick: "),
+                find("CPU load:").trim_start_matches("CPU load: ")
+            );
+        }
+    }
+    let _ = std::fs::remove_file(&csv);
+    Ok(())
+}
