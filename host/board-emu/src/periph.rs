@@ -1354,3 +1354,62 @@ fn set_bits(arr: &mut [bool; IRQS], a: u32, v: u32, to: bool) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unmodelled_register_stops_the_run_with_its_name_and_address() {
+        let mut p = Periph::new(Coupling::new(None));
+        let _ = p.read(0x4000_0400, 4);
+        let why = p.stop.take().expect("a stop");
+        assert!(why.contains("TIM3+0x000 (0x40000400)"), "{why}");
+        p.write(0x4000_0800, 4, 1);
+        let why = p.stop.take().expect("a stop");
+        assert!(why.contains("write of 0x1 to TIM4+0x000 (0x40000800)"), "{why}");
+    }
+
+    #[test]
+    fn ready_bits_follow_enables_and_the_baud_rate_is_checked() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4002_3800, 4, (1 << 16) | (1 << 18) | (1 << 24));
+        let cr = p.read(0x4002_3800, 4) as u32;
+        assert!(cr & (1 << 17) != 0 && cr & (1 << 25) != 0, "{cr:#x}");
+        p.write(0x4002_3808, 4, 2);
+        assert_eq!((p.read(0x4002_3808, 4) >> 2) & 3, 2, "SWS follows SW");
+        p.stop = None; // SYSCLK from the reset PLL config: not the point here
+        p.write(0x4000_4408, 4, 0x11);
+        p.write(0x4000_440C, 4, 1 << 13);
+        let why = p.stop.take().expect("a bad BRR stops the run");
+        assert!(why.contains("USART2_BRR = 0x11"), "{why}");
+    }
+
+    #[test]
+    fn flash_store_is_nor_and_needs_pg() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.store_write(0, 4, 0);
+        assert!(
+            p.stop.take().is_some(),
+            "programming without PG on a locked controller"
+        );
+        p.write(0x4002_3C04, 4, 0x4567_0123);
+        p.write(0x4002_3C04, 4, 0xCDEF_89AB);
+        p.write(0x4002_3C10, 4, (2 << 8) | 1);
+        p.store_write(0, 4, 0xFFFF_00F0);
+        p.store_write(0, 4, 0x0F0F_FFFF);
+        assert_eq!(
+            p.store_read(0, 4),
+            0x0F0F_00F0,
+            "programming only clears bits"
+        );
+        p.write(0x4002_3C10, 4, (2 << 8) | (6 << 3) | 2 | (1 << 16));
+        assert_eq!(p.store_read(0, 4), 0xFFFF_FFFF, "erase sets 0xFF");
+        p.write(0x4002_3C10, 4, (2 << 8) | (3 << 3) | 2 | (1 << 16));
+        let why = p
+            .stop
+            .take()
+            .expect("erasing an image sector stops the run");
+        assert!(why.contains("FLASH_CR.SNB = 3"), "{why}");
+    }
+}
