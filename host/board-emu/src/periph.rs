@@ -1367,7 +1367,10 @@ mod tests {
         assert!(why.contains("TIM3+0x000 (0x40000400)"), "{why}");
         p.write(0x4000_0800, 4, 1);
         let why = p.stop.take().expect("a stop");
-        assert!(why.contains("write of 0x1 to TIM4+0x000 (0x40000800)"), "{why}");
+        assert!(
+            why.contains("write of 0x1 to TIM4+0x000 (0x40000800)"),
+            "{why}"
+        );
     }
 
     #[test]
