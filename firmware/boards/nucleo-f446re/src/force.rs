@@ -97,11 +97,15 @@ mod imp {
             // Mutation check (board emulator): the right-aligned code in the left-aligned
             // holding register.
             #[cfg(feature = "mutant-dac-alignment")]
-            // SAFETY: one write of the DAC's holding register, which this driver owns.
-            unsafe {
-                (*stm32f4xx_hal::pac::DAC::ptr())
-                    .dhr12l1()
-                    .write(|w| w.bits(u32::from(code)));
+            {
+                // The driver still owns the channel; only this write bypasses it.
+                let _ = &self.ch;
+                // SAFETY: one write of the DAC's holding register, which this driver owns.
+                unsafe {
+                    (*stm32f4xx_hal::pac::DAC::ptr())
+                        .dhr12l1()
+                        .write(|w| w.bits(u32::from(code)));
+                }
             }
         }
     }
