@@ -66,12 +66,15 @@ struct Args {
 
 fn build_plant(args: &Args) -> Result<stiffwall_sim::rich::RichPlant> {
     use stiffwall_sim::rich::{PlantModel, RichPlant};
-    let model = if let Some(path) = &args.plant {
+    // (the model, whether the device is rotary)
+    let (model, rotary) = if let Some(path) = &args.plant {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("reading plant file {}", path.display()))?;
-        PlantModel::from_scene_toml(&text)
+        let m = PlantModel::from_scene_toml(&text)
             .map(|(m, _)| m)
-            .map_err(|e| anyhow::anyhow!("plant file {}: {e}", path.display()))?
+            .map_err(|e| anyhow::anyhow!("plant file {}: {e}", path.display()))?;
+        let rotary = m.counts_per_rev.is_some();
+        (m, rotary)
     } else {
         let name = args.device.as_deref().unwrap_or("maxon-re35");
         let d = stiffwall_core::devices::find(name).with_context(|| {
@@ -81,9 +84,32 @@ fn build_plant(args: &Args) -> Result<stiffwall_sim::rich::RichPlant> {
             )
         })?;
         let p = d.params;
-        PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution)
-            .map_err(|e| anyhow::anyhow!("device {name}: {e}"))?
+        let m = PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution)
+            .map_err(|e| anyhow::anyhow!("device {name}: {e}"))?;
+        (m, p.rotational)
     };
+    // The image reports the rig of its src/rig.rs (rotary, 8192 counts/rev) to the host; a
+    // plant with another encoder would be read through the wrong resolution.
+    let rig_delta = std::f64::consts::TAU / plant::RIG_COUNTS_PER_REV;
+    let what = args.plant.as_ref().map_or_else(
+        || format!("device {}", args.device.as_deref().unwrap_or("maxon-re35")),
+        |p| format!("plant file {}", p.display()),
+    );
+    let counts = (std::f64::consts::TAU / model.resolution_m).round();
+    match rotary {
+        true if (model.resolution_m / rig_delta - 1.0).abs() < 1e-9 => {}
+        true => bail!(
+            "{what}: {counts} counts/rev, but the nucleo-f446re image's rig (src/rig.rs) has 8192: \
+             allowed only rotary plants with 8192 counts/rev (a device of its own needs its \
+             rig.rs constants and a rebuilt image)"
+        ),
+        false => bail!(
+            "{what} is linear (resolution {} m), but the nucleo-f446re image's rig (src/rig.rs) \
+             is rotary with 8192 counts/rev: allowed only rotary plants with 8192 counts/rev \
+             (a device of its own needs its rig.rs constants and a rebuilt image)",
+            model.resolution_m
+        ),
+    }
     RichPlant::new(&model).map_err(|e| anyhow::anyhow!("plant: {e}"))
 }
 

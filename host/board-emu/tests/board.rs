@@ -183,6 +183,15 @@ fn refuses_other_boards_and_corrupt_files_before_running() {
         .arg(image("nucleo-f446re-dac"))
         .args(["--output", "pwm", "--seconds", "0.01"]));
     assert!(!ok && e.contains("it is the dac build"), "{e}");
+    // A plant the image's rig (rotary, 8192 counts/rev) does not describe.
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(image("nucleo-f446re-dac"))
+        .args(["--device", "phantom-1.0", "--seconds", "0.01"]));
+    assert!(
+        !ok && e.contains("is linear") && e.contains("8192 counts/rev"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
