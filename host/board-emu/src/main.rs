@@ -10,7 +10,8 @@
 //! Modes: `--seconds S` runs S emulated seconds with no host and prints a report (clock tree,
 //! servo rate, cycles per tick, CPU load); `--pty` serves USART2 on a pseudo-terminal (its path
 //! printed on stdout as `pty: PATH`), paced to the wall clock, or as fast as the host keeps up
-//! with `--fast`. License: GPL-2.0-or-later (it links unicorn, GPL-2.0).
+//! with `--fast`. `STIFFWALL_EMU_TRACE=1` logs pty traffic, output changes, IWDG and flash
+//! operations on stderr. License: GPL-2.0-or-later (it links unicorn, GPL-2.0).
 
 mod emu;
 mod image;

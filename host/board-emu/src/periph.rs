@@ -1389,6 +1389,35 @@ mod tests {
     }
 
     #[test]
+    fn tim2_follows_the_encoder_with_direction_polarity_and_wrap() {
+        use stiffwall_sim::rich::{PlantModel, RichPlant};
+        let delta = std::f64::consts::TAU / 8192.0;
+        let model = PlantModel::rigid(1e-5, 1e-5, 1e-3, delta).unwrap();
+        let mut plant = RichPlant::new(&model).unwrap();
+        plant.set_state(0.0, 0.0);
+        let mut p = Periph::new(Coupling::new(Some(plant)));
+        p.write(0x4000_0008, 4, 3); // SMCR.SMS = 3: encoder mode 3
+        p.write(0x4000_0018, 4, 0x0101); // CC1S = CC2S = 1
+        p.write(0x4000_0024, 4, 0); // CNT = 0
+        p.write(0x4000_0000, 4, 1); // CEN
+                                    // The plant moves backwards 5.5 counts: floor gives -6, the 32-bit counter wraps.
+        p.plant = {
+            let mut pl = RichPlant::new(&model).unwrap();
+            pl.set_state(-5.5 * delta, 0.0);
+            Coupling::new(Some(pl))
+        };
+        assert_eq!(p.read(0x4000_0024, 4), u64::from(u32::MAX - 5));
+        assert_eq!(
+            p.read(0x4000_0000, 4) & 0x10,
+            0x10,
+            "CR1.DIR: counting down"
+        );
+        p.write(0x4000_0020, 4, 0b10); // CC1P: channel 1 inverted, the count runs the other way
+        assert_eq!(p.read(0x4000_0024, 4), 6);
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+    }
+
+    #[test]
     fn flash_store_is_nor_and_needs_pg() {
         let mut p = Periph::new(Coupling::new(None));
         p.store_write(0, 4, 0);

@@ -100,6 +100,14 @@ pub fn board_emu(args: &[String]) -> Result<()> {
     if bench {
         return figures(&out, &target.join("debug/hostctl"));
     }
+    // The emulator's own unit tests (register models, image checks, output stage).
+    run(&mut emu_cargo(&[
+        "test",
+        "--release",
+        "--locked",
+        "--bin",
+        "stiffwall-board-emu",
+    ]))?;
     let mut test = emu_cargo(&[
         "test",
         "--release",
