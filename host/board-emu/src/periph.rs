@@ -12,10 +12,9 @@
 //! interrupt lines are levels computed from flag & enable bits, plus NVIC software pends.
 
 use crate::plant::Coupling;
+pub use crate::plant::{ForceState, UNITS_PER_S};
 use std::collections::VecDeque;
 
-/// Time units per second.
-pub const UNITS_PER_S: u64 = 720_000_000;
 /// Interrupt numbers (RM0390 Table 38).
 pub const IRQ_TIM2: usize = 28;
 /// USART2 global interrupt.
@@ -1327,19 +1326,6 @@ impl Periph {
             self.plant.set_force(self.now, after);
         }
     }
-}
-
-/// What the board drives at its force output.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ForceState {
-    /// Amplifier / bridge enable (PB10 high, push-pull output).
-    pub enabled: bool,
-    /// DAC output register when the DAC drives PA4.
-    pub dac_code: Option<u32>,
-    /// PWM duty (0..1) on PA8 when TIM1 drives it.
-    pub duty: Option<f64>,
-    /// DIR (PA9) high.
-    pub dir_high: bool,
 }
 
 fn bits(f: impl Fn(usize) -> bool) -> u32 {

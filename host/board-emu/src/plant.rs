@@ -15,8 +15,23 @@
 //! ±full scale × duty / 0.98, negative when DIR (PA9) is high. Both are zero while the enable
 //! pin (PB10) is low.
 
-use crate::periph::{ForceState, UNITS_PER_S};
 use stiffwall_sim::rich::RichPlant;
+
+/// Time units per second: 1/720 MHz, which divides evenly into every clock of the 180 MHz tree.
+pub const UNITS_PER_S: u64 = 720_000_000;
+
+/// What the board drives at its force output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ForceState {
+    /// Amplifier / bridge enable (PB10 high, push-pull output).
+    pub enabled: bool,
+    /// DAC output register when the DAC drives PA4.
+    pub dac_code: Option<u32>,
+    /// PWM duty (0..1) on PA8 when TIM1 drives it.
+    pub duty: Option<f64>,
+    /// DIR (PA9) high.
+    pub dir_high: bool,
+}
 
 /// Rig encoder counts per revolution (rig.rs `DEVICE_COUNTS_PER_REV`).
 pub const RIG_COUNTS_PER_REV: f64 = 8192.0;

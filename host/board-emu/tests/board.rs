@@ -217,18 +217,30 @@ fn tune_matches(plant: &[&str], out: &str) {
         a.extend(["--damping", "0"]);
         tune(&a)
     };
-    let (k_virtual, rests_virtual) = spring(plant);
     let mut board = plant.to_vec();
     board.extend(["--board-emulator", "--features", out]);
-    let (k_board, rests_board) = spring(&board);
-    eprintln!("tune --damping 0 {plant:?} {out}: virtual K = {k_virtual}, board K = {k_board}");
-    assert!(
-        rests_board && rests_virtual,
-        "verdicts: virtual {rests_virtual}, board {rests_board}"
-    );
+    // The tune's search runs release tests whose timing against the host's requests differs
+    // from run to run, on the virtual device as on the board: one search step (about 10 %)
+    // apart happens on either under load (seen: virtual 1.072 and 1.185 on maxon-re35). One
+    // more pair of runs is allowed before the comparison fails.
+    let mut runs = Vec::new();
+    for _ in 0..2 {
+        let (k_virtual, rests_virtual) = spring(plant);
+        let (k_board, rests_board) = spring(&board);
+        eprintln!("tune --damping 0 {plant:?} {out}: virtual K = {k_virtual}, board K = {k_board}");
+        assert!(
+            rests_board && rests_virtual,
+            "verdicts: virtual {rests_virtual}, board {rests_board}"
+        );
+        runs.push((k_virtual, k_board));
+        if (k_board / k_virtual - 1.0).abs() <= 0.10 {
+            break;
+        }
+    }
+    let (k_virtual, k_board) = *runs.last().unwrap();
     assert!(
         (k_board / k_virtual - 1.0).abs() <= 0.10,
-        "{plant:?} {out}: board K {k_board} vs virtual K {k_virtual}: more than 10 % apart"
+        "{plant:?} {out}: board K vs virtual K more than 10 % apart in every run: {runs:?}"
     );
     let (k_damped, rests_damped) = tune(&board);
     eprintln!("tune {plant:?} {out}: board K = {k_damped} (spring + damper)");
