@@ -24,8 +24,10 @@ pub const OUTPUTS: &[&str] = &["dac", "pwm"];
 pub struct Spec {
     /// `dac` or `pwm` (None: `dac`).
     pub output: Option<String>,
-    /// The plant: a preset name (`--device`) or a scene file (`--plant`).
-    pub plant: crate::VirtualPlant,
+    /// The plant's preset name (`--device`; None with `plant_file`: `maxon-re35`).
+    pub device: Option<String>,
+    /// The plant's scene file (`--plant`), instead of a preset.
+    pub plant_file: Option<PathBuf>,
     /// Let emulated time run ahead of the wall clock while the host keeps up.
     pub fast: bool,
 }
@@ -125,9 +127,10 @@ pub fn start(spec: &Spec) -> Result<BoardEmulator> {
     if spec.fast {
         cmd.arg("--fast");
     }
-    match &spec.plant {
-        crate::VirtualPlant::Preset(name) => cmd.args(["--device", name]),
-        crate::VirtualPlant::File(path) => cmd.arg("--plant").arg(path),
+    match (&spec.plant_file, &spec.device) {
+        (Some(path), _) => cmd.arg("--plant").arg(path),
+        (None, Some(name)) => cmd.args(["--device", name]),
+        (None, None) => &mut cmd,
     };
     let mut child = cmd
         .stdin(Stdio::piped())

@@ -85,13 +85,11 @@ impl ConnectArgs {
                 image: self.qemu_image.clone(),
             }
         } else if self.board_emulator {
-            let ConnectSpec::Virtual { plant, fast } = self.virtual_target() else {
-                unreachable!("virtual_target is a virtual device")
-            };
             ConnectSpec::BoardEmulator(stiffwall_client::board_emu::Spec {
                 output: self.features.clone(),
-                plant,
-                fast,
+                device: self.device.clone(),
+                plant_file: self.plant.clone(),
+                fast: self.fast,
             })
         } else {
             self.virtual_target()
