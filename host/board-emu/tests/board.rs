@@ -195,22 +195,28 @@ fn refuses_other_boards_and_corrupt_files_before_running() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `hostctl tune --json` on `target`: (set K, every set wall rests).
-fn tune(target: &[&str]) -> (f64, bool) {
+/// `hostctl tune --json` on `target`: (set K, every set wall rests, the largest resting K its
+/// release search found).
+fn tune(target: &[&str]) -> (f64, bool, f64) {
     let (o, _) = run_ok(hostctl().args(["tune", "--fast", "--json"]).args(target));
     let t = &json(&o)["tune"];
     (
         t["k_set"].as_f64().expect("k_set"),
         t["rests"].as_bool().expect("rests"),
+        t["search"]["k_pass"].as_f64().expect("search.k_pass"),
     )
 }
 
 /// The spring-only tune (`--damping 0`, the paper's wall) on the board and on the virtual
-/// device: the same verdict and K within 10 %. The default tune (spring + damper) is checked
-/// to set a wall that rests, not against the virtual device's K: its frontier sits at the quiet
-/// ceiling 2c/Δ, where one release test's verdict, and so one step (≈ 11 %) of the search,
-/// turns on a fraction of an output code, and the board's codes are 18× (DAC) or 3.7× (PWM)
-/// coarser than the virtual device's 16-bit ones (docs: the board README).
+/// device: the same verdict (every set wall rests), and the largest resting K the release search
+/// finds within 10 %. The set K is that K × 0.9, backed off ×0.95 for each verification test
+/// that fails; the verification's impact tests are marginal near that K and come out either
+/// way from run to run, on the virtual device as on the board (seen on maxon-re35: virtual 1.072
+/// and 1.188, board 1.070 and 1.185, with the searched K within 0.3 %), so the set K is held to
+/// 25 %, two back-off steps. The default tune (spring + damper) is checked to set a wall that
+/// rests, stiffer than the spring alone; its frontier sits at the quiet ceiling 2c/Δ, where one
+/// release verdict turns on a fraction of an output code, and the board's codes are 18× (DAC)
+/// or 3.7× (PWM) coarser than the virtual device's 16-bit ones (the board README).
 fn tune_matches(plant: &[&str], out: &str) {
     let spring = |t: &[&str]| {
         let mut a = t.to_vec();
@@ -219,30 +225,25 @@ fn tune_matches(plant: &[&str], out: &str) {
     };
     let mut board = plant.to_vec();
     board.extend(["--board-emulator", "--features", out]);
-    // The tune's search runs release tests whose timing against the host's requests differs
-    // from run to run, on the virtual device as on the board: one search step (about 10 %)
-    // apart happens on either under load (seen: virtual 1.072 and 1.185 on maxon-re35). One
-    // more pair of runs is allowed before the comparison fails.
-    let mut runs = Vec::new();
-    for _ in 0..2 {
-        let (k_virtual, rests_virtual) = spring(plant);
-        let (k_board, rests_board) = spring(&board);
-        eprintln!("tune --damping 0 {plant:?} {out}: virtual K = {k_virtual}, board K = {k_board}");
-        assert!(
-            rests_board && rests_virtual,
-            "verdicts: virtual {rests_virtual}, board {rests_board}"
-        );
-        runs.push((k_virtual, k_board));
-        if (k_board / k_virtual - 1.0).abs() <= 0.10 {
-            break;
-        }
-    }
-    let (k_virtual, k_board) = *runs.last().unwrap();
-    assert!(
-        (k_board / k_virtual - 1.0).abs() <= 0.10,
-        "{plant:?} {out}: board K vs virtual K more than 10 % apart in every run: {runs:?}"
+    let (k_virtual, rests_virtual, pass_virtual) = spring(plant);
+    let (k_board, rests_board, pass_board) = spring(&board);
+    eprintln!(
+        "tune --damping 0 {plant:?} {out}: virtual K = {k_virtual} (search {pass_virtual}), \
+         board K = {k_board} (search {pass_board})"
     );
-    let (k_damped, rests_damped) = tune(&board);
+    assert!(
+        rests_board && rests_virtual,
+        "verdicts: virtual {rests_virtual}, board {rests_board}"
+    );
+    assert!(
+        (pass_board / pass_virtual - 1.0).abs() <= 0.10,
+        "{plant:?} {out}: searched K: board {pass_board} vs virtual {pass_virtual}, more than 10 % apart"
+    );
+    assert!(
+        (k_board / k_virtual - 1.0).abs() <= 0.25,
+        "{plant:?} {out}: set K: board {k_board} vs virtual {k_virtual}, more than 25 % apart"
+    );
+    let (k_damped, rests_damped, _) = tune(&board);
     eprintln!("tune {plant:?} {out}: board K = {k_damped} (spring + damper)");
     assert!(
         rests_damped && k_damped > k_board,
@@ -265,7 +266,7 @@ fn tune_sets_the_virtual_devices_wall_maxon_re35_pwm() {
 #[test]
 #[ignore = "needs the images: run `cargo xtask board-emu`"]
 fn tune_sets_the_virtual_devices_wall_rotary_plant_file() {
-    tune_matches(&["--plant", "sim/plants/rotary-realistic.toml"], "dac");
+    tune_matches(&["--plant", "sim/plants/rotary-belt-60hz.toml"], "dac");
 }
 
 /// `hostctl experiment release --json` fields that describe the counts.
