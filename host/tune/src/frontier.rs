@@ -11,7 +11,7 @@ use super::search::{largest_settling_k, Found, Search};
 use super::settings::*;
 use super::steps::{df_equivalent, Notes, Run};
 use super::verify::{Test, TestResult};
-use anyhow::Result;
+use super::error::Result;
 use stiffwall_client::Client;
 use stiffwall_core::criteria;
 use stiffwall_proto::{DamperLaw, ServoConfig};

@@ -41,7 +41,7 @@ use super::progress::{Progress, Reporter};
 use super::search::{largest_settling_k, Search};
 use super::steps::{Notes, Run};
 use super::verify::rest_position;
-use anyhow::{Context, Result};
+use super::error::{Context, Result, StepError};
 use stiffwall_client::{Cancel, Client};
 use stiffwall_core::criteria;
 use stiffwall_core::params::PhysicalParams;
@@ -184,7 +184,7 @@ fn tune_inner(
             ident = tried;
             (found, None)
         }
-        Some(Err(e)) if e.downcast_ref::<super::error::NoWallPassed>().is_some() => {
+        Some(Err(e)) if matches!(e.root(), StepError::NoWallPassed(_)) => {
             let why = no_rest_reason(&ident, ceiling, Some(&e));
             progress.report(Progress::Finding { text: why.clone() });
             let chatter = least_chatter_settings(s);
@@ -268,7 +268,7 @@ fn quiet_ceiling(ident: &Identification) -> f64 {
 }
 
 /// Why no wall rests on this device, in words (`failure`: the search's or verification's).
-fn no_rest_reason(ident: &Identification, ceiling: f64, failure: Option<&anyhow::Error>) -> String {
+fn no_rest_reason(ident: &Identification, ceiling: f64, failure: Option<&StepError>) -> String {
     let (f, k) = ident.units;
     let head = if ceiling <= 0.0 {
         format!(

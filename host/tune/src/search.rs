@@ -8,7 +8,7 @@
 //! Nothing here talks to a device: the caller supplies the release test as a closure.
 
 use super::release::Verdict;
-use anyhow::{bail, Result};
+use super::error::{bail, Result};
 
 /// Search settings.
 #[derive(Debug, Clone, Copy)]

@@ -188,7 +188,7 @@ impl Settings {
 
 /// Fails with [`stiffwall_client::ClientError::Cancelled`] once the client's cancel token
 /// (the caller's, for a tune) was cancelled.
-pub(crate) fn check_cancel(c: &stiffwall_client::Client) -> anyhow::Result<()> {
+pub(crate) fn check_cancel(c: &stiffwall_client::Client) -> super::error::Result<()> {
     if c.cancel_token().is_cancelled() {
         return Err(stiffwall_client::ClientError::Cancelled.into());
     }

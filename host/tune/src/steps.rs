@@ -9,7 +9,7 @@ use super::progress::Progress;
 use super::release::Verdict;
 use super::settings::*;
 use super::verify::{min_settle_run, run_test, test_set, Judging, Test, TestResult, TestRun};
-use anyhow::Result;
+use super::error::Result;
 use stiffwall_client::Client;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;

@@ -45,7 +45,7 @@ pub use super::judged::{
 };
 use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
 use super::verdict::{classify, Criterion, Verdict, Wall, MIN_TAIL};
-use anyhow::{bail, Result};
+use super::error::{bail, Result, StepError};
 use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
 
@@ -212,8 +212,8 @@ pub fn rest_position(c: &mut Client) -> Result<i32> {
     let (mut last, mut same) = (i32::MIN, 0u32);
     let result = loop {
         if std::time::Instant::now() > deadline {
-            break Err(anyhow::anyhow!(
-                "the device did not come to rest within 20 s with the wall off"
+            break Err(StepError::Failed(
+                "the device did not come to rest within 20 s with the wall off".into(),
             ));
         }
         if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
