@@ -17,7 +17,7 @@
 //! is reported at the tick where the device (with its monitor on) latched it. It runs even when
 //! the recording's config had the monitor off, and then says what *would* have latched.
 
-use crate::recording::{Recording, Row};
+use stiffwall_client::{Recording, Row};
 use anyhow::{bail, Result};
 use serde::Serialize;
 use std::fmt::Write as _;

@@ -48,10 +48,9 @@ use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
 
 use super::excite::identify;
-pub use super::outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
+pub use super::outcome::{IdentifiedReport, Outcome, Predicted};
 pub use super::settings::*;
-pub use super::steps::{deflection_for, df_equivalent};
-pub use super::verify::Test;
+pub use super::steps::df_equivalent;
 
 /// Step 2: predictions for the identified device.
 pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {

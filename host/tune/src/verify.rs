@@ -39,10 +39,7 @@
 //! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
 //! decays, and a persistent buzz is still judged at the base length.
 
-pub use super::judged::{
-    decaying, judged_len, judged_len_within, max_test_len, settled_at, settled_within,
-    DECAY_EXTENSION,
-};
+use super::judged::{judged_len_within, max_test_len};
 use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
 use super::verdict::{classify, Criterion, Verdict, Wall, MIN_TAIL};
 use super::error::{bail, Result, StepError};
@@ -580,7 +577,7 @@ impl Judged {
     fn judge(
         &self,
         test: Test,
-        rec: &stiffwall_client::client::Record,
+        rec: &stiffwall_client::Record,
         asked: Option<f64>,
     ) -> TestRun {
         let mut counts = super::release::released_counts(&rec.samples, self.shift);

@@ -8,7 +8,7 @@
 use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;
 use crate::output::emit;
-use crate::session::{pump, End, Plan};
+use stiffwall_client::{pump, End, Plan};
 use anyhow::{bail, Result};
 use std::io::IsTerminal as _;
 use std::time::{Duration, Instant};

@@ -6,8 +6,8 @@
 //! (device-dropped vs link-lost) as `hostctl record` does; the file is flushed at least every
 //! [`super::device::FLUSH_PERIOD`]; files are written only inside the record directory.
 
-use crate::recording::Writer;
-use crate::session::Stats;
+use stiffwall_client::Writer;
+use stiffwall_client::Stats;
 use anyhow::{bail, Result};
 use serde_json::{json, Value};
 use std::io::BufWriter;

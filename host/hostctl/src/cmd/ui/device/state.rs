@@ -7,7 +7,7 @@ use crate::cmd::ui::control::Control;
 use crate::cmd::ui::plane::Model;
 use crate::cmd::ui::record::Recorder;
 use crate::cmd::ui::wire::{Command, Reply};
-use crate::device::client::Client;
+use stiffwall_client::Client;
 use crate::device::connect::ConnectArgs;
 use axum::extract::ws::Message;
 use serde_json::Value;
