@@ -54,7 +54,7 @@ pub struct Settings {
 }
 
 /// How `tune` chooses the virtual damping B.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Damping {
     /// Search the (K, B) frontier ([`DAMPING_BETAS`]) for the stiffest verified pair.
     Search,

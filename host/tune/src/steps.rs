@@ -180,7 +180,7 @@ impl Run<'_> {
                 (self.progress)(Progress::ImpactStep {
                     k,
                     test: test.describe(),
-                    reason: why,
+                    reason: why.into(),
                 });
                 let impact = self.test(c, base, k, test, thorough)?.verdict;
                 if impact == Verdict::NotLaunched {

@@ -47,7 +47,7 @@ use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
 
 /// One test of the verification set.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Test {
     /// Hold at `deflection_ticks` effective ticks from the wall, release.
@@ -111,7 +111,7 @@ pub fn impact(v_ticks: f64, natural_ticks: f64, one_sided: bool) -> Test {
 }
 
 /// A test with its stiffness and verdict.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TestResult {
     /// The test.
     pub test: Test,
