@@ -58,6 +58,7 @@ mod verdict;
 mod verify;
 
 pub use error::{NoWallPassed, SettingsError, StepError, TuneError};
+pub use launch::Delivered;
 pub use model_check::Evidence;
 pub use outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
 pub use procedure::{predict, tune};
