@@ -29,7 +29,7 @@ pub struct Spec {
     /// The plant's scene file (`--plant`), instead of a preset.
     pub plant_file: Option<PathBuf>,
     /// Let emulated time run ahead of the wall clock while the host keeps up.
-    pub pace: crate::Pace,
+    pub pace: crate::pace::Pace,
 }
 
 /// A running emulator; killed when dropped.

@@ -6,7 +6,7 @@
 use crate::client::Client;
 use crate::error::Result;
 use crate::transport;
-use crate::Pace;
+use crate::pace::Pace;
 use std::path::PathBuf;
 
 /// The virtual device's plant when none is named: the paper's own rig (Sec. V).

@@ -55,7 +55,7 @@ pub struct Spec {
     /// Encoder counts per revolution for rotary devices (0 for linear).
     pub counts_per_rev: u32,
     /// In real time, or as fast as the host reads.
-    pub pace: crate::Pace,
+    pub pace: crate::pace::Pace,
     /// Initial position of the plant, m (rad).
     pub initial_position: f64,
     /// The amplifier's output range, N (N·m), when known (a preset's published peak force);
@@ -87,7 +87,7 @@ fn damper_law(d: WallDamper) -> DamperLaw {
 impl Spec {
     /// The virtual device of a scene file: `[device]` and `[effects]` are the plant,
     /// `[controller]` the boot configuration. Errors name the key and its allowed range.
-    pub fn from_plant_file(path: &std::path::Path, pace: crate::Pace) -> Result<Self> {
+    pub fn from_plant_file(path: &std::path::Path, pace: crate::pace::Pace) -> Result<Self> {
         let plant_error = |message: String| ClientError::Plant {
             path: Some(path.to_path_buf()),
             message,
