@@ -15,9 +15,9 @@
 //! against) are checked by `cargo xtask tune-table --check` in `cargo xtask ci`.
 
 use stiffwall_client::ConnectSpec;
-use stiffwall_tune::{Outcome, Settings};
 use stiffwall_tests::family::PlantCase;
 use stiffwall_tests::kstar;
+use stiffwall_tune::{Outcome, Settings};
 
 /// The plants of the default run (quick K*): stiction, amplifier filter, compliant
 /// transmission, cogging, a hand (the spring-like force tune's identification fits beside m,
@@ -58,8 +58,11 @@ fn check(case: &PlantCase) -> Result<Checked, String> {
     let ks0 = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
         .map_err(|e| format!("{}: K*: {e}", case.name))?;
     let t0 = std::time::Instant::now();
-    let o = tune_dry_run(&ConnectSpec::plant_file(&case.path, stiffwall_client::Pace::Fast))
-        .map_err(|e| format!("{}: {e}", case.name))?;
+    let o = tune_dry_run(&ConnectSpec::plant_file(
+        &case.path,
+        stiffwall_client::Pace::Fast,
+    ))
+    .map_err(|e| format!("{}: {e}", case.name))?;
     let tune_s = t0.elapsed().as_secs_f64();
     // The truth at the set damping and law (the same brute force with the firmware's damper).
     let at_set = at_set_wall(&case.rig, &o).map_err(|e| format!("{}: {e}", case.name))?;

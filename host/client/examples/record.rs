@@ -4,7 +4,9 @@
 //!
 //! `cargo run -p stiffwall-client --example record [-- FILE.csv]`
 
-use stiffwall_client::{connect, header_for_target, read_recording, record, ConnectSpec, Pace, Plan};
+use stiffwall_client::{
+    connect, header_for_target, read_recording, record, ConnectSpec, Pace, Plan,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).map_or_else(

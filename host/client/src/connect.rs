@@ -5,8 +5,8 @@
 
 use crate::client::Client;
 use crate::error::Result;
-use crate::transport;
 use crate::pace::Pace;
+use crate::transport;
 use std::path::PathBuf;
 
 /// The virtual device's plant when none is named: the paper's own rig (Sec. V).
@@ -208,7 +208,11 @@ mod tests {
         let e = connect(&ConnectSpec::preset("nope", Pace::Fast)).unwrap_err();
         assert!(matches!(e, ClientError::Plant { path: None, .. }), "{e:?}");
         assert!(e.to_string().contains("unknown device \"nope\""), "{e}");
-        let e = connect(&ConnectSpec::plant_file("/nonexistent/plant.toml", Pace::Fast)).unwrap_err();
+        let e = connect(&ConnectSpec::plant_file(
+            "/nonexistent/plant.toml",
+            Pace::Fast,
+        ))
+        .unwrap_err();
         assert!(
             matches!(&e, ClientError::Plant { path: Some(_), .. }),
             "{e:?}"

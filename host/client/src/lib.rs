@@ -93,6 +93,6 @@ pub use transport::{
 };
 #[cfg(feature = "virtual")]
 pub use virtual_device::{
-    spawn as spawn_virtual_device, ScenePlant, Spec as VirtualSpec, VirtualDevice,
-    FAST_BACKLOG, MAX_CODE, RX_LIMIT,
+    spawn as spawn_virtual_device, ScenePlant, Spec as VirtualSpec, VirtualDevice, FAST_BACKLOG,
+    MAX_CODE, RX_LIMIT,
 };

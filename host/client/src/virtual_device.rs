@@ -326,7 +326,13 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
             ticks_since_epoch = 0;
         }
         // Servo ticks due now.
-        let due = ticks_due(spec.pace.is_fast(), &link, epoch, period_s, ticks_since_epoch);
+        let due = ticks_due(
+            spec.pace.is_fast(),
+            &link,
+            epoch,
+            period_s,
+            ticks_since_epoch,
+        );
         for _ in 0..due {
             tick = tick.wrapping_add(1);
             ticks_since_epoch += 1;
@@ -341,7 +347,11 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
         if !transmit(pty, &mut link) {
             break;
         }
-        if due == 0 && (link.rx.is_empty() || room == 0) && link.tx.is_empty() && !spec.pace.is_fast() {
+        if due == 0
+            && (link.rx.is_empty() || room == 0)
+            && link.tx.is_empty()
+            && !spec.pace.is_fast()
+        {
             std::thread::sleep(Duration::from_micros(200));
         }
     }

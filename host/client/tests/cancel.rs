@@ -7,7 +7,11 @@ use stiffwall_client::{connect, Cancel, ClientError, ConnectSpec};
 
 #[test]
 fn a_cancelled_release_stops_the_device_and_the_client_stays_usable() {
-    let mut c = connect(&ConnectSpec::preset("maxon-re35", stiffwall_client::Pace::Fast)).unwrap();
+    let mut c = connect(&ConnectSpec::preset(
+        "maxon-re35",
+        stiffwall_client::Pace::Fast,
+    ))
+    .unwrap();
     let cfg = stiffwall_proto::ServoConfig {
         stiffness: 0.5,
         ..c.get_config().unwrap()

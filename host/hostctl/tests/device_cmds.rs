@@ -6,9 +6,9 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
-use stiffwall_host::cmd::record::{header, record, End, Plan};
 use stiffwall_client::Client;
 use stiffwall_client::{spawn_virtual_device as spawn, Pace, VirtualSpec as Spec};
+use stiffwall_host::cmd::record::{header, record, End, Plan};
 
 fn hostctl(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_hostctl"))
@@ -585,7 +585,10 @@ fn corrupted_csv_is_a_clear_error() {
     ok(&["record", f.to_str().unwrap(), "--seconds", "0.2", "--fast"]);
     let text = std::fs::read_to_string(&f).unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    let header_at = lines.iter().position(|l| *l == stiffwall_client::RECORDING_COLUMNS).unwrap();
+    let header_at = lines
+        .iter()
+        .position(|l| *l == stiffwall_client::RECORDING_COLUMNS)
+        .unwrap();
     let row_line = header_at + 5; // 0-based index of some data row
     let mut bad_lines: Vec<String> = lines.iter().map(|l| (*l).to_string()).collect();
     let fields: Vec<&str> = lines[row_line].split(',').collect();

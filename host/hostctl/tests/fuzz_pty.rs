@@ -166,7 +166,8 @@ fn garbage_through_the_pty_while_recording_changes_nothing_and_loses_nothing() {
         let outcome = stiffwall_client::record(&mut c, &plan, &header, &mut text, |_| {})
             .expect("recording under garbage");
         assert_eq!(outcome.end, End::Complete, "recording {recordings}");
-        let rec = stiffwall_client::parse_recording(&String::from_utf8(text).unwrap()).expect("parses");
+        let rec =
+            stiffwall_client::parse_recording(&String::from_utf8(text).unwrap()).expect("parses");
         assert_eq!(
             rec.rows.len() as u64,
             plan.samples.unwrap(),

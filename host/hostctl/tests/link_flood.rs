@@ -12,8 +12,8 @@ use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use stiffwall_client::Client;
 use stiffwall_client::pty_pair;
+use stiffwall_client::Client;
 use stiffwall_client::{spawn_virtual_device as spawn, Pace, VirtualSpec as Spec};
 use stiffwall_client::{End, Plan};
 

@@ -14,7 +14,8 @@ mod flood;
 fn boot() -> (Qemu, Client) {
     let image = find_qemu_image(None).expect("QEMU image (run `cargo xtask qemu`)");
     let q = boot_qemu(&image).expect("boot QEMU");
-    let port = stiffwall_client::open_port(&q.pty, stiffwall_client::DEFAULT_BAUD).expect("open QEMU pty");
+    let port =
+        stiffwall_client::open_port(&q.pty, stiffwall_client::DEFAULT_BAUD).expect("open QEMU pty");
     let client = Client::connect(port, None).expect("handshake with the QEMU image");
     (q, client)
 }

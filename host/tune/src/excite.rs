@@ -7,12 +7,12 @@
 //! every experiment starts from rest with the wall off, so its record depends on the device's
 //! counts only (the determinism of [`super::procedure`]).
 
+use super::error::{bail, Context, Result, StepError};
 use super::ident::{self, Identified};
 use super::model_check::{self, Evidence};
 use super::progress::{Progress, Reporter};
 use super::settings::{check_cancel, Settings, RAMP_SECONDS};
 use super::verify::rest_position;
-use super::error::{bail, Context, Result, StepError};
 use stiffwall_client::Client;
 use stiffwall_proto::{flags, ExciteProfile, HostMsg, ServoConfig, TABLE_CHUNK};
 

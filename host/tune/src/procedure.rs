@@ -33,6 +33,7 @@
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
 use super::error::TuneError;
+use super::error::{Context, Result, StepError};
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
 use super::launch::Delivered;
@@ -41,7 +42,6 @@ use super::progress::{Progress, Reporter};
 use super::search::{largest_settling_k, Search};
 use super::steps::{Notes, Run};
 use super::verify::rest_position;
-use super::error::{Context, Result, StepError};
 use stiffwall_client::{Cancel, Client};
 use stiffwall_core::criteria;
 use stiffwall_core::params::PhysicalParams;

@@ -7,8 +7,8 @@
 //! above `k_cap` (the firmware's force and energy limits) and gives up after `max_tests` tests.
 //! Nothing here talks to a device: the caller supplies the release test as a closure.
 
-use super::release::Verdict;
 use super::error::{bail, Result};
+use super::release::Verdict;
 
 /// Search settings.
 #[derive(Debug, Clone, Copy)]

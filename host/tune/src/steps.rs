@@ -4,12 +4,12 @@
 //!
 //! Units: SI (N/m, N·s/m, kg, m/s; rotary N·m/rad, N·m·s/rad, kg·m², rad/s), ticks.
 
+use super::error::Result;
 use super::launch::Delivered;
 use super::progress::Progress;
 use super::release::Verdict;
 use super::settings::*;
 use super::verify::{min_settle_run, run_test, test_set, Judging, Test, TestResult, TestRun};
-use super::error::Result;
 use stiffwall_client::Client;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;

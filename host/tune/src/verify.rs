@@ -39,10 +39,10 @@
 //! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
 //! decays, and a persistent buzz is still judged at the base length.
 
+use super::error::{bail, Result, StepError};
 use super::judged::{judged_len_within, max_test_len};
 use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
 use super::verdict::{classify, Criterion, Verdict, Wall, MIN_TAIL};
-use super::error::{bail, Result, StepError};
 use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
 
@@ -574,12 +574,7 @@ struct Judged {
 impl Judged {
     /// The verdict of `test`'s record; an impact judged against the speed `asked` (counts per
     /// tick; None: its own).
-    fn judge(
-        &self,
-        test: Test,
-        rec: &stiffwall_client::Record,
-        asked: Option<f64>,
-    ) -> TestRun {
+    fn judge(&self, test: Test, rec: &stiffwall_client::Record, asked: Option<f64>) -> TestRun {
         let mut counts = super::release::released_counts(&rec.samples, self.shift);
         // Judge only up to where the record settled (what came after is the Stop's latency).
         let tripped = rec.faults != 0;

@@ -103,7 +103,9 @@ fn connect_plant_file(text: &str, fast: bool) -> Client {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("sticky.toml");
     std::fs::write(&path, text).unwrap();
-    let (vd, port) = spawn_virtual_device(VirtualSpec::from_plant_file(&path, Pace::fast_if(fast)).unwrap()).unwrap();
+    let (vd, port) =
+        spawn_virtual_device(VirtualSpec::from_plant_file(&path, Pace::fast_if(fast)).unwrap())
+            .unwrap();
     Client::connect(port, Some(Box::new(vd))).unwrap()
 }
 

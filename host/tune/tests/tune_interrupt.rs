@@ -5,8 +5,8 @@
 //! progress callback when the phase starts.
 
 use stiffwall_client::{spawn_virtual_device, Cancel, Client, Pace, VirtualSpec};
-use stiffwall_tune::{tune, Settings, TuneError};
 use stiffwall_proto::ServoConfig;
+use stiffwall_tune::{tune, Settings, TuneError};
 
 fn connect() -> Client {
     let p = stiffwall_core::devices::find("maxon-re35").unwrap().params;

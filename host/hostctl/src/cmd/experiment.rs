@@ -9,7 +9,6 @@ use crate::analysis;
 use crate::device::connect::ConnectArgs;
 use crate::figure::{self, Figure};
 use crate::output::{emit, emit_json};
-use stiffwall_tune::{classify, Verdict};
 use anyhow::{bail, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -17,6 +16,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::{flags, Sample, ServoConfig};
+use stiffwall_tune::{classify, Verdict};
 
 /// Arguments of `hostctl experiment`.
 #[derive(Debug, clap::Args)]

@@ -15,9 +15,9 @@ use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;
 use crate::output::emit;
 pub use crate::session::header;
-pub use stiffwall_client::{pump, record, End, Plan, SessionOutcome as Outcome, Stats};
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
+pub use stiffwall_client::{pump, record, End, Plan, SessionOutcome as Outcome, Stats};
 
 /// Arguments of `hostctl record`.
 #[derive(Debug, clap::Args)]

@@ -35,13 +35,13 @@
 use crate::figure::{self, Figure};
 use crate::output::emit_report;
 use crate::plant_args::{PlantArgs, PlantArgsError};
-use stiffwall_client::{read_recording, Recording, Row};
 use anyhow::{anyhow, bail, Context, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use stiffwall_client::{read_recording, Recording, Row};
 use stiffwall_firmware::{BoardInfo, Channels, HeldCode, SampledCount, Servo};
 use stiffwall_proto::{flags, ServoConfig};
 use stiffwall_sim::rich::{PlantModel, RichPlant};

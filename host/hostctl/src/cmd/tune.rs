@@ -5,11 +5,11 @@ use crate::analysis::{self, kb_plot};
 use crate::device::connect::ConnectArgs;
 use crate::output::{emit, emit_json};
 use crate::session;
-use stiffwall_tune::{Criterion, Damping, Outcome, Settings, SettingsError, TuneError};
 use anyhow::{anyhow, Result};
 use std::fmt::Write as _;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
+use stiffwall_tune::{Criterion, Damping, Outcome, Settings, SettingsError, TuneError};
 
 /// Arguments of `hostctl tune`.
 #[derive(Debug, clap::Args)]
@@ -69,9 +69,7 @@ pub fn settings(a: &Args) -> Result<Settings> {
         .transpose()?;
     let s = Settings {
         damper,
-        damping: a
-            .damping
-            .map_or(Damping::Search, Damping::Fixed),
+        damping: a.damping.map_or(Damping::Search, Damping::Fixed),
         max_velocity: a.max_velocity,
         margin: a.margin,
         release_ticks: a.release_ticks,

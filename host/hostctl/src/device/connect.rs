@@ -5,9 +5,9 @@
 //! file's plant (`--plant FILE.toml`). The options only convert into a [`ConnectSpec`]
 //! ([`ConnectArgs::spec`]); `stiffwall_client::connect` does the rest.
 
-use stiffwall_client::Client;
 use anyhow::{anyhow, bail, Result};
 use std::path::PathBuf;
+use stiffwall_client::Client;
 pub use stiffwall_client::DEFAULT_VIRTUAL_DEVICE;
 use stiffwall_client::{Cancel, ConnectSpec, Pace, VirtualPlant};
 

@@ -11,9 +11,9 @@ use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use stiffwall_host::cmd::replay::trailing_gap;
 use stiffwall_client::Client;
 use stiffwall_client::{End, Plan};
+use stiffwall_host::cmd::replay::trailing_gap;
 
 /// A second, non-blocking writer on the host side of a pty the client already holds (as
 /// another program on the same serial line would be). The client's port is opened exclusive

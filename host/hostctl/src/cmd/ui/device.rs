@@ -27,10 +27,7 @@ use super::plane::{self};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
 use super::wire::{self, Command, Reply};
 use crate::config_flags::Overrides;
-use stiffwall_client::Client;
-use stiffwall_client::Writer;
 use crate::session;
-use stiffwall_client::Stats;
 use anyhow::{bail, Context, Result};
 use axum::extract::ws::Message;
 use serde_json::{json, Value};
@@ -38,6 +35,9 @@ use std::io::BufWriter;
 use std::sync::atomic::Ordering;
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
+use stiffwall_client::Client;
+use stiffwall_client::Stats;
+use stiffwall_client::Writer;
 use stiffwall_proto::{flags, DeviceMsg, ExperimentKind, Sample, ServoConfig};
 
 /// Period of the binary telemetry frames sent to the pages.

@@ -12,12 +12,12 @@ use super::state::{Dev, Release};
 use crate::cmd::experiment::release_config;
 use crate::cmd::ui::wire::ReleaseTest;
 use crate::cmd::ui::{trace, wire};
-use stiffwall_client::HEARTBEAT_PERIOD;
-use stiffwall_tune::classify;
 use anyhow::{bail, Result};
 use serde_json::json;
 use std::time::{Duration, Instant};
+use stiffwall_client::HEARTBEAT_PERIOD;
 use stiffwall_proto::HostMsg;
+use stiffwall_tune::classify;
 
 /// Longest release test the page runs, s of device time (duration ≤ this × the servo rate):
 /// a release settles or fails within a few hundred natural periods (well under a minute on

@@ -7,10 +7,10 @@
 use super::state::Dev;
 use crate::cmd::ui::plane::Model;
 use crate::cmd::ui::wire::{Reply, TuneTest};
-use stiffwall_tune::{Settings, SettingsError, TuneError};
 use anyhow::{anyhow, bail, Result};
 use serde_json::{json, Value};
 use std::sync::Arc;
+use stiffwall_tune::{Settings, SettingsError, TuneError};
 
 /// The page's label of a tune setting.
 fn page_label(field: &str) -> &str {
