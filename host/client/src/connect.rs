@@ -5,6 +5,7 @@
 
 use crate::client::Client;
 use crate::error::Result;
+#[cfg(feature = "virtual")]
 use crate::pace::Pace;
 use crate::transport;
 use std::path::PathBuf;
