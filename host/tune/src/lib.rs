@@ -72,5 +72,5 @@ pub use settings::{
 pub use steps::{deflection_for, df_equivalent};
 pub use verify::{
     clear_faults, impact, rest_position, run_test, ChatterReport, Judging, Test, TestResult,
-    TestRun,
+    TestRun, WallSides,
 };

@@ -170,8 +170,15 @@ impl Run<'_> {
             };
             for &dir in dirs {
                 let v_ticks = dir * self.v * self.period_s() / self.p.resolution;
-                let test =
-                    super::verify::impact(v_ticks, self.natural_ticks(k), self.one_sided_wall);
+                let test = super::verify::impact(
+                    v_ticks,
+                    self.natural_ticks(k),
+                    if self.one_sided_wall {
+                        super::verify::WallSides::OneSided
+                    } else {
+                        super::verify::WallSides::Both
+                    },
+                );
                 let why = if k > self.k_force {
                     "force saturates"
                 } else {

@@ -96,10 +96,21 @@ pub fn launch_distance(v_ticks: f64, natural_ticks: f64) -> i32 {
         .clamp(3.0, f64::from(1 << 20)) as i32
 }
 
+/// Where the wall of an impact test is: on both sides of the wall position (the bidirectional
+/// wall), or only on the side of counts ≥ 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WallSides {
+    /// The bidirectional wall.
+    Both,
+    /// A one-sided wall, occupying counts ≥ 0.
+    OneSided,
+}
+
 /// An impact test at `v_ticks` ticks per tick (sign: direction of motion), launched from the
-/// side it moves away from.
+/// side it moves away from, into a wall on `sides`.
 #[must_use]
-pub fn impact(v_ticks: f64, natural_ticks: f64, one_sided: bool) -> Test {
+pub fn impact(v_ticks: f64, natural_ticks: f64, sides: WallSides) -> Test {
+    let one_sided = sides == WallSides::OneSided;
     let milli = ((v_ticks * 1000.0).round() as i32).clamp(-1_000_000, 1_000_000);
     let milli = if milli == 0 { 1 } else { milli };
     let d = launch_distance(v_ticks, natural_ticks);
@@ -186,14 +197,14 @@ pub fn test_set(
         .collect();
     if impacts {
         let v = v_ticks.abs();
-        set.push(impact(v, natural_ticks, true));
-        set.push(impact(v / 2.0, natural_ticks, true));
+        set.push(impact(v, natural_ticks, WallSides::OneSided));
+        set.push(impact(v / 2.0, natural_ticks, WallSides::OneSided));
         if thorough {
-            set.push(impact(v / 4.0, natural_ticks, true));
+            set.push(impact(v / 4.0, natural_ticks, WallSides::OneSided));
         }
         if !one_sided_wall {
-            set.push(impact(v, natural_ticks, false));
-            set.push(impact(-v, natural_ticks, false));
+            set.push(impact(v, natural_ticks, WallSides::Both));
+            set.push(impact(-v, natural_ticks, WallSides::Both));
         }
     }
     set

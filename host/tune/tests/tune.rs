@@ -7,7 +7,8 @@
 use stiffwall_client::{spawn_virtual_device, Cancel, Client, Pace, VirtualSpec};
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_tune::{
-    impact, run_test, tune, Damping, Judging, Outcome, Settings, Test, TuneError, DEFAULT_XIDOT,
+    impact, run_test, tune, Damping, Judging, Outcome, Settings, Test, TuneError, WallSides,
+    DEFAULT_XIDOT,
 };
 
 fn preset(name: &str) -> PhysicalParams {
@@ -230,12 +231,12 @@ fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
     let v_ticks = DEFAULT_XIDOT;
     let natural = |k: f64| std::f64::consts::TAU * (truth.mass / k).sqrt() / truth.period_s;
     // The true limit of this plant at ξ̇ = 5: K*(0) = 1.316 (tests/tests/tune_truth.rs).
-    for (k, one_sided) in [(1.0, true), (1.0, false)] {
+    for (k, sides) in [(1.0, WallSides::OneSided), (1.0, WallSides::Both)] {
         for v in [v_ticks, -v_ticks] {
-            if one_sided && v < 0.0 {
+            if sides == WallSides::OneSided && v < 0.0 {
                 continue;
             }
-            let test = impact(v, natural(k), one_sided);
+            let test = impact(v, natural(k), sides);
             let run = run_test(&mut c, &base, k, test, 3000, 100, &judging).unwrap();
             let (verdict, counts) = (run.verdict, run.counts);
             assert!(verdict.passes(), "K {k} {test:?}: {verdict:?}");
@@ -250,7 +251,7 @@ fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
             );
         }
     }
-    let test = impact(v_ticks, natural(3.0), false);
+    let test = impact(v_ticks, natural(3.0), WallSides::Both);
     assert!(matches!(test, Test::Impact { .. }));
     let verdict = run_test(&mut c, &base, 3.0, test, 3000, 100, &judging)
         .unwrap()
