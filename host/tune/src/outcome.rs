@@ -73,7 +73,7 @@ pub struct Outcome {
     /// What the model checks measured.
     pub model_evidence: Evidence,
     /// Margin applied to the set wall's largest resting K (the requested one, times
-    /// [`crate::settings::MISMATCH_MARGIN`] on a mismatch; at most [`crate::settings::DAMPED_MARGIN`] with a damper).
+    /// [`crate::settings::MISMATCH_MARGIN`] on a mismatch; at most `crate::settings::DAMPED_MARGIN` with a damper).
     pub margin_used: f64,
     /// Whether the config was saved.
     pub saved: bool,

@@ -315,10 +315,10 @@ pub struct TestRun {
 
 /// Runs one test at stiffness `k` (config `base` with that K) for a base length of `ticks`
 /// ticks after the release, longer while its oscillation still decays (at most
-/// [`max_test_len`]); the record ends at [`judged_len`] (settled: run `min_run`). A release
-/// whose hold stopped off target is re-aimed ([`reaim`], at most [`HOLD_REAIMS`] times); an
+/// `max_test_len`); the record ends at `judged_len` (settled: run `min_run`). A release
+/// whose hold stopped off target is re-aimed (`reaim`, at most `HOLD_REAIMS` times); an
 /// impact whose launch arrived too fast and failed is re-aimed at a launch speed that should
-/// deliver the asked one ([`Delivered::reaimed`], at most [`LAUNCH_REAIMS`] times). The last
+/// deliver the asked one ([`Delivered::reaimed`], at most `LAUNCH_REAIMS` times). The last
 /// attempt's outcome is the test's, but for a release that passed only from short of its
 /// deflection after an attempt failed from farther: that failure stands (see `run_release`).
 #[allow(clippy::too_many_arguments)]
