@@ -179,11 +179,11 @@ fn the_supervisor_stops_six_damped_plants_at_one_and_a_half_k_star_b() {
 /// `case` with tune's B and damper law, and its K*(B set) by the brute force (K*(0) when tune
 /// set no damper), with tune's K set.
 fn tuned(case: &PlantCase) -> Result<(PlantCase, f64, f64, String), String> {
-    use stiffwall_host::tune::procedure::{self, Settings};
-    let spec = stiffwall_client::ConnectSpec::plant_file(&case.path, true);
+    use stiffwall_tune::Settings;
+    let spec = stiffwall_client::ConnectSpec::plant_file(&case.path, stiffwall_client::Pace::Fast);
     let mut client =
         stiffwall_client::connect(&spec).map_err(|e| format!("{}: connect: {e:#}", case.name))?;
-    let o = procedure::tune(
+    let o = stiffwall_tune::tune(
         &mut client,
         &Settings {
             dry_run: true,

@@ -15,9 +15,9 @@
 //! against) are checked by `cargo xtask tune-table --check` in `cargo xtask ci`.
 
 use stiffwall_client::ConnectSpec;
-use stiffwall_host::tune::procedure::{self, Settings};
 use stiffwall_tests::family::PlantCase;
 use stiffwall_tests::kstar;
+use stiffwall_tune::{Outcome, Settings};
 
 /// The plants of the default run (quick K*): stiction, amplifier filter, compliant
 /// transmission, cogging, a hand (the spring-like force tune's identification fits beside m,
@@ -58,8 +58,11 @@ fn check(case: &PlantCase) -> Result<Checked, String> {
     let ks0 = kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12)
         .map_err(|e| format!("{}: K*: {e}", case.name))?;
     let t0 = std::time::Instant::now();
-    let o = tune_dry_run(&ConnectSpec::plant_file(&case.path, true))
-        .map_err(|e| format!("{}: {e}", case.name))?;
+    let o = tune_dry_run(&ConnectSpec::plant_file(
+        &case.path,
+        stiffwall_client::Pace::Fast,
+    ))
+    .map_err(|e| format!("{}: {e}", case.name))?;
     let tune_s = t0.elapsed().as_secs_f64();
     // The truth at the set damping and law (the same brute force with the firmware's damper).
     let at_set = at_set_wall(&case.rig, &o).map_err(|e| format!("{}: {e}", case.name))?;
@@ -119,9 +122,9 @@ fn check(case: &PlantCase) -> Result<Checked, String> {
 }
 
 /// `tune --dry-run` (the default settings) on the device of `spec`.
-fn tune_dry_run(spec: &ConnectSpec) -> Result<procedure::Outcome, String> {
+fn tune_dry_run(spec: &ConnectSpec) -> Result<Outcome, String> {
     let mut client = stiffwall_client::connect(spec).map_err(|e| format!("connect: {e:#}"))?;
-    procedure::tune(
+    stiffwall_tune::tune(
         &mut client,
         &Settings {
             dry_run: true,
@@ -134,7 +137,7 @@ fn tune_dry_run(spec: &ConnectSpec) -> Result<procedure::Outcome, String> {
 }
 
 /// The K* rig `rig` with the damping and the damper law tune set.
-fn at_set_wall(rig: &kstar::Rig, o: &procedure::Outcome) -> Result<kstar::Rig, String> {
+fn at_set_wall(rig: &kstar::Rig, o: &Outcome) -> Result<kstar::Rig, String> {
     let law: stiffwall_proto::DamperLaw = o
         .damper
         .parse()
@@ -242,7 +245,7 @@ fn tune_is_safe_and_near_optimal_on_random_launch_plants() {
 fn the_presets_walls_come_to_rest_in_every_run() {
     for name in ["maxon-re35", "phantom-1.0"] {
         let (plant, rig) = kstar::preset(name).expect("a preset");
-        let o = tune_dry_run(&ConnectSpec::preset(name, true))
+        let o = tune_dry_run(&ConnectSpec::preset(name, stiffwall_client::Pace::Fast))
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let at_set = at_set_wall(&rig, &o).unwrap();
         let k0 = kstar::k_star(&plant, &rig, 1e-3 * o.k_set, 1e12).unwrap();

@@ -9,21 +9,22 @@
 //! Units: the preset's (maxon-re35: rotary, kg·m², N·m, N·m/rad).
 
 use stiffwall_client::{Cancel, ConnectSpec};
-use stiffwall_host::tune::procedure::{self, Settings};
 use stiffwall_tests::kstar;
+use stiffwall_tune::{Damping, Settings};
 
 #[test]
 fn the_spring_only_tune_identifies_the_rig_and_sets_k_within_80_to_100_percent_of_k_star() {
     let name = "maxon-re35";
     let truth = stiffwall_core::devices::find(name).unwrap().params;
-    let mut c = stiffwall_client::connect(&ConnectSpec::preset(name, true)).unwrap();
+    let mut c = stiffwall_client::connect(&ConnectSpec::preset(name, stiffwall_client::Pace::Fast))
+        .unwrap();
     let before = c.get_config().unwrap();
     // The spring-only tune (`--damping 0`), against the spring-only truth.
-    let o = procedure::tune(
+    let o = stiffwall_tune::tune(
         &mut c,
         &Settings {
             dry_run: true,
-            damping: procedure::Damping::Fixed(0.0),
+            damping: Damping::Fixed(0.0),
             ..Settings::default()
         },
         &Cancel::default(),

@@ -29,7 +29,7 @@ pub struct Spec {
     /// The plant's scene file (`--plant`), instead of a preset.
     pub plant_file: Option<PathBuf>,
     /// Let emulated time run ahead of the wall clock while the host keeps up.
-    pub fast: bool,
+    pub pace: crate::pace::Pace,
 }
 
 /// A running emulator; killed when dropped.
@@ -124,7 +124,7 @@ pub fn start(spec: &Spec) -> Result<BoardEmulator> {
     cmd.arg("--elf")
         .arg(&image)
         .args(["--output", output, "--pty"]);
-    if spec.fast {
+    if spec.pace.is_fast() {
         cmd.arg("--fast");
     }
     match (&spec.plant_file, &spec.device) {

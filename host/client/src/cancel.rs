@@ -5,7 +5,9 @@
 //! [`Cancel::child`] is cancelled when it or any ancestor is (cancelling a child never cancels
 //! its parent), so one operation of a long-running program can be aborted without ending the
 //! program. [`ctrl_c`] is the process's root token: a front end's signal handler sets it, and
-//! [`Cancel::default`] tokens are its children, so Ctrl-C stops whatever runs.
+//! tokens made by [`Cancel::on_ctrl_c`] are its children, so Ctrl-C stops whatever checks them.
+//! [`Cancel::default`] is detached (as [`Cancel::detached`]): nothing but its own
+//! [`Cancel::cancel`] reaches it.
 //!
 //! What checks it: [`crate::Client`] between the messages of an experiment (it then sends
 //! `Stop`, lets the device end the test and returns [`crate::ClientError::Cancelled`]), the
@@ -31,6 +33,13 @@ impl Cancel {
         }
     }
 
+    /// A child of [`ctrl_c`]: cancelled by Ctrl-C (once a front end's signal handler cancels
+    /// [`ctrl_c`]) and by its own [`Cancel::cancel`].
+    #[must_use]
+    pub fn on_ctrl_c() -> Self {
+        ctrl_c().child()
+    }
+
     /// A new token cancelled with this one (and by its own [`Cancel::cancel`]).
     #[must_use]
     pub fn child(&self) -> Self {
@@ -53,10 +62,9 @@ impl Cancel {
 }
 
 impl Default for Cancel {
-    /// A child of [`ctrl_c`]: cancelled by Ctrl-C (once a front end installed a handler) and by
-    /// its own [`Cancel::cancel`].
+    /// A detached token ([`Cancel::detached`]): Ctrl-C does not reach it.
     fn default() -> Self {
-        ctrl_c().child()
+        Self::detached()
     }
 }
 
@@ -81,6 +89,12 @@ mod tests {
         assert!(!parent.is_cancelled() && !sibling.is_cancelled());
         parent.cancel();
         assert!(sibling.is_cancelled());
+    }
+
+    #[test]
+    fn a_default_token_is_detached_from_ctrl_c() {
+        assert!(Cancel::default().parent.is_none());
+        assert!(Cancel::on_ctrl_c().parent.is_some());
     }
 
     #[test]

@@ -18,7 +18,7 @@ use stiffwall_proto::{
 
 mod experiment;
 
-pub use crate::describe::{describe_error, describe_error_named, readable, FieldLabel};
+use crate::describe::describe_error;
 use crate::describe::{is_framing, is_framing_reply};
 
 /// How long a request waits for its answer.
@@ -148,7 +148,8 @@ impl Client {
     /// once it is cancelled, a running or starting release, impact or excitation sends `Stop`,
     /// lets the device end the test and fails with [`ClientError::Cancelled`]. Requests
     /// (config, faults) are not affected, so a front end can restore a config after a cancel.
-    /// A new client checks a child of [`crate::cancel::ctrl_c`].
+    /// A new client checks a detached token (Ctrl-C does not reach it unless the front end
+    /// gives it one made by [`Cancel::on_ctrl_c`]).
     pub fn set_cancel(&mut self, cancel: Cancel) -> Cancel {
         std::mem::replace(&mut self.cancel, cancel)
     }

@@ -5,6 +5,8 @@
 
 use crate::client::Client;
 use crate::error::Result;
+#[cfg(feature = "virtual")]
+use crate::pace::Pace;
 use crate::transport;
 use std::path::PathBuf;
 
@@ -36,8 +38,8 @@ pub enum ConnectSpec {
     Virtual {
         /// Its plant.
         plant: VirtualPlant,
-        /// Run as fast as the host reads, not in real time.
-        fast: bool,
+        /// In real time, or as fast as the host reads.
+        pace: Pace,
     },
     /// A real board on a serial port.
     Serial {
@@ -61,20 +63,20 @@ impl ConnectSpec {
     /// The virtual device running the plant of a scene file.
     #[cfg(feature = "virtual")]
     #[must_use]
-    pub fn plant_file(path: impl Into<PathBuf>, fast: bool) -> Self {
+    pub fn plant_file(path: impl Into<PathBuf>, pace: Pace) -> Self {
         Self::Virtual {
             plant: VirtualPlant::File(path.into()),
-            fast,
+            pace,
         }
     }
 
     /// The virtual device running a preset.
     #[cfg(feature = "virtual")]
     #[must_use]
-    pub fn preset(name: impl Into<String>, fast: bool) -> Self {
+    pub fn preset(name: impl Into<String>, pace: Pace) -> Self {
         Self::Virtual {
             plant: VirtualPlant::Preset(name.into()),
-            fast,
+            pace,
         }
     }
 
@@ -83,10 +85,10 @@ impl ConnectSpec {
     pub fn describe(&self) -> String {
         match self {
             #[cfg(feature = "virtual")]
-            Self::Virtual { fast, .. } => format!(
+            Self::Virtual { pace, .. } => format!(
                 "virtual device ({}{})",
                 self.virtual_plant_name().unwrap_or_default(),
-                if *fast { ", fast" } else { "" }
+                if pace.is_fast() { ", fast" } else { "" }
             ),
             Self::Serial { path, baud } => format!("serial port {path} at {baud} baud"),
             #[cfg(feature = "qemu")]
@@ -95,7 +97,7 @@ impl ConnectSpec {
             Self::BoardEmulator(s) => format!(
                 "board emulator (nucleo-f446re-{}{})",
                 s.output.as_deref().unwrap_or("dac"),
-                if s.fast { ", fast" } else { "" }
+                if s.pace.is_fast() { ", fast" } else { "" }
             ),
         }
     }
@@ -118,12 +120,12 @@ impl ConnectSpec {
     /// preset or the plant file's bad key and its range.
     #[cfg(feature = "virtual")]
     pub fn virtual_spec(&self) -> Result<Option<crate::virtual_device::Spec>> {
-        let Self::Virtual { plant, fast } = self else {
+        let Self::Virtual { plant, pace } = self else {
             return Ok(None);
         };
         let name = match plant {
             VirtualPlant::File(path) => {
-                return crate::virtual_device::Spec::from_plant_file(path, *fast).map(Some)
+                return crate::virtual_device::Spec::from_plant_file(path, *pace).map(Some)
             }
             VirtualPlant::Preset(name) => name,
         };
@@ -144,7 +146,7 @@ impl ConnectSpec {
         Ok(Some(crate::virtual_device::Spec {
             plant: d.params,
             counts_per_rev,
-            fast: *fast,
+            pace: *pace,
             initial_position: 0.0,
             output_range: Some(d.force_limit),
             scene: None,
@@ -189,7 +191,7 @@ mod tests {
 
     #[test]
     fn connects_to_the_virtual_device_of_a_preset_and_names_it() {
-        let spec = ConnectSpec::preset("maxon-re35", true);
+        let spec = ConnectSpec::preset("maxon-re35", Pace::Fast);
         assert_eq!(spec.describe(), "virtual device (maxon-re35, fast)");
         let mut c = connect(&spec).unwrap();
         assert_eq!(c.info.board.as_str(), "virtual");
@@ -204,10 +206,14 @@ mod tests {
 
     #[test]
     fn bad_targets_are_typed_errors() {
-        let e = connect(&ConnectSpec::preset("nope", true)).unwrap_err();
+        let e = connect(&ConnectSpec::preset("nope", Pace::Fast)).unwrap_err();
         assert!(matches!(e, ClientError::Plant { path: None, .. }), "{e:?}");
         assert!(e.to_string().contains("unknown device \"nope\""), "{e}");
-        let e = connect(&ConnectSpec::plant_file("/nonexistent/plant.toml", true)).unwrap_err();
+        let e = connect(&ConnectSpec::plant_file(
+            "/nonexistent/plant.toml",
+            Pace::Fast,
+        ))
+        .unwrap_err();
         assert!(
             matches!(&e, ClientError::Plant { path: Some(_), .. }),
             "{e:?}"

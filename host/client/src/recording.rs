@@ -473,7 +473,7 @@ mod tests {
         let spec = crate::virtual_device::Spec {
             plant: stiffwall_core::devices::find("maxon-re35").unwrap().params,
             counts_per_rev: 8192,
-            fast: true,
+            pace: crate::pace::Pace::Fast,
             initial_position: 0.0,
             output_range: None,
             scene: None,

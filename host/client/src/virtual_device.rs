@@ -54,8 +54,8 @@ pub struct Spec {
     pub plant: PhysicalParams,
     /// Encoder counts per revolution for rotary devices (0 for linear).
     pub counts_per_rev: u32,
-    /// Run as fast as the host reads instead of in real time.
-    pub fast: bool,
+    /// In real time, or as fast as the host reads.
+    pub pace: crate::pace::Pace,
     /// Initial position of the plant, m (rad).
     pub initial_position: f64,
     /// The amplifier's output range, N (N·m), when known (a preset's published peak force);
@@ -87,7 +87,7 @@ fn damper_law(d: WallDamper) -> DamperLaw {
 impl Spec {
     /// The virtual device of a scene file: `[device]` and `[effects]` are the plant,
     /// `[controller]` the boot configuration. Errors name the key and its allowed range.
-    pub fn from_plant_file(path: &std::path::Path, fast: bool) -> Result<Self> {
+    pub fn from_plant_file(path: &std::path::Path, pace: crate::pace::Pace) -> Result<Self> {
         let plant_error = |message: String| ClientError::Plant {
             path: Some(path.to_path_buf()),
             message,
@@ -107,7 +107,7 @@ impl Spec {
                 rotational: model.counts_per_rev.is_some(),
             },
             counts_per_rev: model.counts_per_rev.unwrap_or(0),
-            fast,
+            pace,
             initial_position: 0.0,
             output_range: None,
             scene: Some(ScenePlant {
@@ -180,7 +180,7 @@ impl Spec {
     pub fn defaults(&self) -> ServoConfig {
         let b = self.board();
         let base = ServoConfig {
-            heartbeat_timeout_ms: if self.fast { 0 } else { 500 },
+            heartbeat_timeout_ms: if self.pace.is_fast() { 0 } else { 500 },
             stiffness: 0.0,
             servo_rate_hz: (1.0 / self.plant.period_s).round().clamp(100.0, 20_000.0) as u32,
             force_limit: b.force_per_code * b.max_code as f32,
@@ -326,7 +326,13 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
             ticks_since_epoch = 0;
         }
         // Servo ticks due now.
-        let due = ticks_due(spec.fast, &link, epoch, period_s, ticks_since_epoch);
+        let due = ticks_due(
+            spec.pace.is_fast(),
+            &link,
+            epoch,
+            period_s,
+            ticks_since_epoch,
+        );
         for _ in 0..due {
             tick = tick.wrapping_add(1);
             ticks_since_epoch += 1;
@@ -341,7 +347,11 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
         if !transmit(pty, &mut link) {
             break;
         }
-        if due == 0 && (link.rx.is_empty() || room == 0) && link.tx.is_empty() && !spec.fast {
+        if due == 0
+            && (link.rx.is_empty() || room == 0)
+            && link.tx.is_empty()
+            && !spec.pace.is_fast()
+        {
             std::thread::sleep(Duration::from_micros(200));
         }
     }

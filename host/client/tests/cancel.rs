@@ -7,7 +7,11 @@ use stiffwall_client::{connect, Cancel, ClientError, ConnectSpec};
 
 #[test]
 fn a_cancelled_release_stops_the_device_and_the_client_stays_usable() {
-    let mut c = connect(&ConnectSpec::preset("maxon-re35", true)).unwrap();
+    let mut c = connect(&ConnectSpec::preset(
+        "maxon-re35",
+        stiffwall_client::Pace::Fast,
+    ))
+    .unwrap();
     let cfg = stiffwall_proto::ServoConfig {
         stiffness: 0.5,
         ..c.get_config().unwrap()
@@ -45,9 +49,9 @@ fn a_cancelled_release_stops_the_device_and_the_client_stays_usable() {
 
 #[test]
 fn a_child_token_follows_the_ctrl_c_root() {
-    let op = stiffwall_client::cancel::ctrl_c().child();
+    let op = stiffwall_client::ctrl_c().child();
     assert!(!op.is_cancelled());
     op.cancel();
     assert!(op.is_cancelled());
-    assert!(!stiffwall_client::cancel::ctrl_c().is_cancelled());
+    assert!(!stiffwall_client::ctrl_c().is_cancelled());
 }

@@ -3,9 +3,7 @@
 //! this command line's flags: a refused field by its `--flag`
 //! ([`crate::config_flags::flag_name`]), a plant file as `--plant FILE`.
 
-use stiffwall_client::client::describe_error_named;
-use stiffwall_client::session::SessionError;
-use stiffwall_client::ClientError;
+use stiffwall_client::{describe_error_named, ClientError, SessionError};
 
 /// An error whose chain [`message`] renders: an `anyhow::Error` or a [`ClientError`].
 pub trait ErrorChain {

@@ -7,9 +7,9 @@
 //! range, before anything is sent; the device validates the rest and a refused config changes
 //! nothing.
 
-use crate::device::client::Client;
 use crate::device::connect::ConnectArgs;
 use anyhow::{bail, Context, Result};
+use stiffwall_client::Client;
 use stiffwall_proto::{DamperLaw, ParseDamperLawError, SafeMode, ServoConfig, WallMode};
 
 /// `on` / `off`.

@@ -17,10 +17,10 @@
 //! is reported at the tick where the device (with its monitor on) latched it. It runs even when
 //! the recording's config had the monitor off, and then says what *would* have latched.
 
-use crate::recording::{Recording, Row};
 use anyhow::{bail, Result};
 use serde::Serialize;
 use std::fmt::Write as _;
+use stiffwall_client::{Recording, Row};
 use stiffwall_core::monitor::{self, energy_e8, EnergyMonitor};
 use stiffwall_firmware::{BoardInfo, Fx64, Gains};
 use stiffwall_proto::{flags, ServoConfig, WallMode};

@@ -1,18 +1,15 @@
-//! The telemetry session of `stiffwall-client` ([`stiffwall_client::session`]: plan, pump,
-//! recorder), re-exported, plus what needs the command line: the Ctrl-C handler that cancels
-//! [`stiffwall_client::cancel::ctrl_c`] and a recording header described from the `--port/--device/…` options.
+//! What the telemetry session of `stiffwall-client` (plan, pump, recorder) needs from the
+//! command line: the Ctrl-C handler that cancels [`stiffwall_client::ctrl_c`] and a recording
+//! header described from the `--port/--device/…` options.
 
-pub use stiffwall_client::session::*;
-
-use crate::device::client::Client;
 use crate::device::connect::ConnectArgs;
-use crate::recording::Header;
+use stiffwall_client::{header_for_target, Client, Header};
 use stiffwall_proto::ServoConfig;
 
-/// Makes Ctrl-C cancel [`stiffwall_client::cancel::ctrl_c`] (once per process; later calls
+/// Makes Ctrl-C cancel [`stiffwall_client::ctrl_c`] (once per process; later calls
 /// keep the first handler).
 pub fn stop_on_ctrl_c() {
-    let _ = ctrlc::set_handler(|| stiffwall_client::cancel::ctrl_c().cancel());
+    let _ = ctrlc::set_handler(|| stiffwall_client::ctrl_c().cancel());
 }
 
 /// Header facts of a recording made through `client` now, its target described from `connect`.

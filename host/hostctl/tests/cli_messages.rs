@@ -8,7 +8,7 @@ use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-use stiffwall_host::device::client::{describe_error, readable};
+use stiffwall_client::{describe_error, readable};
 use stiffwall_proto::{ConfigField, ErrorCode, ErrorDetail};
 
 fn hostctl(args: &[&str]) -> Output {

@@ -6,10 +6,9 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
+use stiffwall_client::Client;
+use stiffwall_client::{spawn_virtual_device as spawn, Pace, VirtualSpec as Spec};
 use stiffwall_host::cmd::record::{header, record, End, Plan};
-use stiffwall_host::device::client::Client;
-use stiffwall_host::device::virtual_device::{spawn, Spec};
-use stiffwall_host::recording;
 
 fn hostctl(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_hostctl"))
@@ -54,7 +53,7 @@ fn maxon(fast: bool) -> Spec {
     Spec {
         plant: stiffwall_core::devices::find("maxon-re35").unwrap().params,
         counts_per_rev: 8192,
-        fast,
+        pace: Pace::fast_if(fast),
         initial_position: 0.0,
         output_range: None,
         scene: None,
@@ -218,7 +217,7 @@ fn ten_seconds_at_5khz_has_zero_gaps() {
         "record 10 s at 5 kHz (--fast): {:.2} s wall; {out}",
         wall.as_secs_f64()
     );
-    let rec = recording::read(&f).unwrap();
+    let rec = stiffwall_client::read_recording(&f).unwrap();
     assert_eq!(rec.rows.len(), 50_000);
     assert_eq!(rec.missing(), 0);
     assert_eq!(rec.segments().len(), 1);
@@ -289,7 +288,7 @@ fn disconnect_keeps_what_was_received() {
     );
     assert!(o.rows > 100, "kept what was received: {}", o.rows);
     assert!(o.rows < 5000, "stopped at the disconnect: {}", o.rows);
-    let rec = recording::read(&f).unwrap();
+    let rec = stiffwall_client::read_recording(&f).unwrap();
     assert_eq!(
         rec.rows.len() as u64,
         o.rows,
@@ -390,7 +389,7 @@ fn cli_recording_reports_link_loss_and_disconnect_and_keeps_data() {
         err.contains("the device disconnected during the recording"),
         "{err}"
     );
-    let rec = recording::read(&f).unwrap();
+    let rec = stiffwall_client::read_recording(&f).unwrap();
     assert!(rec.rows.len() > 500, "kept {} rows", rec.rows.len());
     assert!(
         err.contains(&format!("kept the {} samples received", rec.rows.len())),
@@ -496,7 +495,7 @@ fn replay_reproduces_force_codes_bit_for_bit() {
 
     // Negative control: one comparable force code changed → a reported mismatch, exit 1.
     let text = std::fs::read_to_string(&f).unwrap();
-    let rec = recording::parse(&text).unwrap();
+    let rec = stiffwall_client::parse_recording(&text).unwrap();
     let victim = rec
         .rows
         .iter()
@@ -586,7 +585,10 @@ fn corrupted_csv_is_a_clear_error() {
     ok(&["record", f.to_str().unwrap(), "--seconds", "0.2", "--fast"]);
     let text = std::fs::read_to_string(&f).unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    let header_at = lines.iter().position(|l| *l == recording::COLUMNS).unwrap();
+    let header_at = lines
+        .iter()
+        .position(|l| *l == stiffwall_client::RECORDING_COLUMNS)
+        .unwrap();
     let row_line = header_at + 5; // 0-based index of some data row
     let mut bad_lines: Vec<String> = lines.iter().map(|l| (*l).to_string()).collect();
     let fields: Vec<&str> = lines[row_line].split(',').collect();

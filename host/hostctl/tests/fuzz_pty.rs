@@ -17,10 +17,9 @@ use std::io::Write;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
-use stiffwall_host::device::client::Client;
-use stiffwall_host::device::virtual_device::{spawn, Spec};
-use stiffwall_host::recording;
-use stiffwall_host::session::{self, End, Plan};
+use stiffwall_client::Client;
+use stiffwall_client::{spawn_virtual_device as spawn, Pace, VirtualSpec as Spec};
+use stiffwall_client::{End, Plan};
 use stiffwall_proto::frame::decode_frame;
 use stiffwall_proto::{encode, HostMsg, ServoConfig, MAX_FRAME};
 
@@ -84,7 +83,7 @@ fn maxon() -> Spec {
     Spec {
         plant: stiffwall_core::devices::find("maxon-re35").unwrap().params,
         counts_per_rev: 8192,
-        fast: true,
+        pace: Pace::Fast,
         initial_position: 0.0,
         output_range: None,
         scene: None,
@@ -162,12 +161,13 @@ fn garbage_through_the_pty_while_recording_changes_nothing_and_loses_nothing() {
             "the flood did not finish in 200 recordings"
         );
         let plan = Plan::new(1, Some(30.0), rate_hz).unwrap();
-        let header = session::header(&c, before, 1, None);
+        let header = stiffwall_client::header_for_target(&c, before, 1, "device".into(), None);
         let mut text = Vec::new();
-        let outcome = session::record(&mut c, &plan, &header, &mut text, |_| {})
+        let outcome = stiffwall_client::record(&mut c, &plan, &header, &mut text, |_| {})
             .expect("recording under garbage");
         assert_eq!(outcome.end, End::Complete, "recording {recordings}");
-        let rec = recording::parse(&String::from_utf8(text).unwrap()).expect("parses");
+        let rec =
+            stiffwall_client::parse_recording(&String::from_utf8(text).unwrap()).expect("parses");
         assert_eq!(
             rec.rows.len() as u64,
             plan.samples.unwrap(),

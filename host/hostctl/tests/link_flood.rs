@@ -12,10 +12,10 @@ use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use stiffwall_host::device::client::Client;
-use stiffwall_host::device::transport::pty_pair;
-use stiffwall_host::device::virtual_device::{spawn, Spec};
-use stiffwall_host::session::{self, End, Plan};
+use stiffwall_client::pty_pair;
+use stiffwall_client::Client;
+use stiffwall_client::{spawn_virtual_device as spawn, Pace, VirtualSpec as Spec};
+use stiffwall_client::{End, Plan};
 
 #[path = "support/flood.rs"]
 mod flood;
@@ -99,7 +99,7 @@ fn non_telemetry_flood_does_not_defeat_the_silence_watchdog() {
     let mut c = Client::connect(host, None).expect("handshake");
     let plan = Plan::new(1, None, 1000).unwrap();
     let t0 = Instant::now();
-    let (end, stats) = session::pump(&mut c, &plan, |_, _, _, _, _| Ok(())).unwrap();
+    let (end, stats) = stiffwall_client::pump(&mut c, &plan, |_, _, _, _, _| Ok(())).unwrap();
     let took = t0.elapsed();
     stop.store(true, Ordering::Relaxed);
     drop(c);
@@ -117,7 +117,7 @@ fn maxon(fast: bool) -> Spec {
     Spec {
         plant: d.params,
         counts_per_rev: 8192,
-        fast,
+        pace: Pace::fast_if(fast),
         initial_position: 0.0,
         output_range: None,
         scene: None,
@@ -167,7 +167,7 @@ fn flood_acceptance_ten_seconds() {
 /// growing with every byte (90 MB went in before the bound).
 #[test]
 fn virtual_device_receive_buffer_is_bounded() {
-    use stiffwall_host::device::virtual_device::RX_LIMIT;
+    use stiffwall_client::RX_LIMIT;
     let (vd, _host_port_never_read) = spawn(maxon(false)).expect("spawn virtual device");
     let mut w = second_writer(&vd.pty, true);
     let mut out = [0u8; MAX_FRAME];

@@ -5,23 +5,24 @@
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use stiffwall_host::device::client::Client;
-use stiffwall_host::device::{qemu, transport};
+use stiffwall_client::Client;
+use stiffwall_client::{boot_qemu, find_qemu_image, Qemu};
 
 #[path = "support/flood.rs"]
 mod flood;
 
-fn boot() -> (qemu::Qemu, Client) {
-    let image = qemu::find_image(None).expect("QEMU image (run `cargo xtask qemu`)");
-    let q = qemu::boot(&image).expect("boot QEMU");
-    let port = transport::open_port(&q.pty, transport::DEFAULT_BAUD).expect("open QEMU pty");
+fn boot() -> (Qemu, Client) {
+    let image = find_qemu_image(None).expect("QEMU image (run `cargo xtask qemu`)");
+    let q = boot_qemu(&image).expect("boot QEMU");
+    let port =
+        stiffwall_client::open_port(&q.pty, stiffwall_client::DEFAULT_BAUD).expect("open QEMU pty");
     let client = Client::connect(port, None).expect("handshake with the QEMU image");
     (q, client)
 }
 
 /// Ends a scenario the way the issue asks: the host sends `Shutdown`, the image acknowledges and
 /// exits through semihosting with status 0.
-fn finish(mut q: qemu::Qemu, mut c: Client) {
+fn finish(mut q: Qemu, mut c: Client) {
     c.shutdown(0).expect("Shutdown acknowledged");
     let status = q
         .wait_exit(std::time::Duration::from_secs(5))
@@ -78,13 +79,13 @@ fn boot_and_handshake() {
 
 /// One release test on the QEMU image; returns a transcript line set.
 fn release_transcript(c: &mut Client, k: f32, deflection: i32, ticks: u32) -> String {
-    use stiffwall_host::tune::release::classify;
+    use stiffwall_tune::classify;
     let mut cfg = c.get_config().expect("GetConfig");
     cfg.stiffness = k;
     c.clear_faults().expect("ClearFaults");
     c.set_config(&cfg).expect("SetConfig");
     let rec = c.release(deflection, ticks).expect("release");
-    let counts = stiffwall_host::tune::release::released_counts(&rec.samples, 0);
+    let counts = stiffwall_tune::released_counts(&rec.samples, 0);
     let verdict = classify(&counts, rec.faults != 0);
     let mut t = String::new();
     writeln!(t, "stiffness {k} deflection {deflection} ticks {ticks}").unwrap();
@@ -189,7 +190,7 @@ fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
 #[test]
 #[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
 fn tune_dry_run_on_the_qemu_image() {
-    use stiffwall_host::tune::procedure::{tune, Settings};
+    use stiffwall_tune::{tune, Settings};
     let (q, mut c) = boot();
     let before = c.get_config().unwrap();
     let o = tune(

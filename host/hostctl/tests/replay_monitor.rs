@@ -8,7 +8,6 @@
 
 use std::path::PathBuf;
 use std::process::Command;
-use stiffwall_host::recording;
 use stiffwall_proto::flags;
 
 fn hostctl(args: &[&str]) -> (bool, String, String) {
@@ -56,7 +55,7 @@ fn replay_finds_the_growth_of_a_region_c_release_where_the_device_latched_it() {
     ];
     let (ok, out, err) = hostctl(&args);
     assert!(ok, "record failed:\n{out}\n{err}");
-    let rec = recording::read(&f).unwrap();
+    let rec = stiffwall_client::read_recording(&f).unwrap();
     // The device's latch: the first sample in safe mode, after the release.
     let released = rec
         .rows
@@ -125,7 +124,7 @@ fn replay_monitor_is_quiet_on_a_region_a_release_and_skips_decimated_recordings(
         "--fast",
     ]);
     assert!(ok, "{out}\n{err}");
-    let rec = recording::read(&f).unwrap();
+    let rec = stiffwall_client::read_recording(&f).unwrap();
     assert!(rec
         .rows
         .iter()

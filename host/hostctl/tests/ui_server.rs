@@ -8,7 +8,6 @@
 mod ui_support;
 
 use std::process::Command;
-use stiffwall_host::recording;
 use ui_support::Server;
 
 const WS_HEADERS: &str = "Connection: Upgrade\r\nUpgrade: websocket\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==";
@@ -243,7 +242,7 @@ fn release_test_and_lossless_recording_through_the_server() {
     assert_eq!(code, 200, "{v}");
     let rows = v["result"]["rows"].as_u64().unwrap();
     assert_eq!(v["result"]["stats"]["missing"], 0, "{v}");
-    let rec = recording::read(&dir.join("ui.csv")).expect("a valid recording");
+    let rec = stiffwall_client::read_recording(&dir.join("ui.csv")).expect("a valid recording");
     assert_eq!(rec.missing(), 0);
     assert_eq!(rec.rows.len() as u64, rows);
     assert!(rows > 2000, "{rows} rows");

@@ -62,21 +62,139 @@ pub enum TuneError {
     },
 }
 
+/// The error of one step of the procedure (identification, a wall test, the search, a
+/// prediction): what the public step functions return, and what [`TuneError`] is made of.
+/// [`StepError::Context`] says what was being done when an inner error happened; the message
+/// is the whole chain, `context: inner` (as the procedure prints it).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StepError {
+    /// The device failed, refused, or the client's cancel token was cancelled (the message is
+    /// the client's error with its causes, `error: cause: …`).
+    #[error("{}", chain(.0))]
+    Device(ClientError),
+    /// A setting out of range.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// Physical parameters outside the model's domain (a prediction).
+    #[error(transparent)]
+    Params(#[from] stiffwall_core::params::ParamError),
+    /// No stiffness passed a search or a verification set.
+    #[error(transparent)]
+    NoWallPassed(#[from] NoWallPassed),
+    /// The supervisor latched faults (`latched`, the fault bits) during an identification
+    /// chirp.
+    #[error("the supervisor latched faults {latched:#x} during the excitation")]
+    ExcitationTripped {
+        /// The latched fault bits.
+        latched: u32,
+    },
+    /// The step could not complete (the message says why: a singular fit, lost telemetry, a
+    /// device that does not come to rest, …).
+    #[error("{0}")]
+    Failed(String),
+    /// `inner` happened while doing `context`.
+    #[error("{context}: {inner}")]
+    Context {
+        /// What was being done, in words.
+        context: String,
+        /// What went wrong.
+        inner: Box<StepError>,
+    },
+}
+
+impl StepError {
+    /// The innermost error, under every [`StepError::Context`].
+    #[must_use]
+    pub fn root(&self) -> &StepError {
+        match self {
+            Self::Context { inner, .. } => inner.root(),
+            other => other,
+        }
+    }
+
+    /// Whether the supervisor latched faults somewhere in this error's chain; their bits.
+    #[must_use]
+    pub fn tripped(&self) -> Option<u32> {
+        match self {
+            Self::ExcitationTripped { latched } => Some(*latched),
+            Self::Context { context: _, inner } => inner.tripped(),
+            _ => None,
+        }
+    }
+
+    /// The innermost error, owned (the contexts dropped).
+    fn into_root(self) -> StepError {
+        match self {
+            Self::Context { inner, .. } => inner.into_root(),
+            other => other,
+        }
+    }
+}
+
+impl From<ClientError> for StepError {
+    fn from(e: ClientError) -> Self {
+        Self::Device(e)
+    }
+}
+
+/// `e` and its causes, `error: cause: …`.
+fn chain(e: &ClientError) -> String {
+    let mut s = e.to_string();
+    let mut cause = std::error::Error::source(e);
+    while let Some(c) = cause {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        cause = c.source();
+    }
+    s
+}
+
+impl From<std::num::TryFromIntError> for StepError {
+    fn from(e: std::num::TryFromIntError) -> Self {
+        Self::Failed(e.to_string())
+    }
+}
+
+/// A step's result.
+pub(crate) type Result<T, E = StepError> = std::result::Result<T, E>;
+
+/// Adds what was being done to a step's error.
+pub(crate) trait Context<T> {
+    /// `context: error` on error.
+    fn context(self, context: impl Into<String>) -> Result<T>;
+}
+
+impl<T, E: Into<StepError>> Context<T> for std::result::Result<T, E> {
+    fn context(self, context: impl Into<String>) -> Result<T> {
+        self.map_err(|e| StepError::Context {
+            context: context.into(),
+            inner: Box::new(e.into()),
+        })
+    }
+}
+
+/// Returns early with [`StepError::Failed`] and a formatted message.
+macro_rules! bail {
+    ($($arg:tt)*) => {
+        return Err($crate::error::StepError::Failed(format!($($arg)*)))
+    };
+}
+pub(crate) use bail;
+
 impl TuneError {
-    /// Classifies an error of the procedure's steps (which carry context as `anyhow`): a
-    /// cancel when `cancelled`, a device error when the root cause is one, else the message.
-    pub(crate) fn from_step(e: anyhow::Error, cancelled: bool) -> Self {
+    /// Classifies an error of the procedure's steps: a cancel when `cancelled`, a device
+    /// error when the root cause is one, else the message.
+    pub(crate) fn from_step(e: StepError, cancelled: bool) -> Self {
         if cancelled {
             return Self::Cancelled;
         }
-        let during = format!("{e:#}");
-        match e.downcast::<ClientError>() {
-            Ok(ClientError::Cancelled) => Self::Cancelled,
-            Ok(source) => Self::Device { during, source },
-            Err(e) => match e.downcast::<SettingsError>() {
-                Ok(s) => Self::Settings(s),
-                Err(_) => Self::Procedure(during),
-            },
+        let during = e.to_string();
+        match e.into_root() {
+            StepError::Device(ClientError::Cancelled) => Self::Cancelled,
+            StepError::Device(source) => Self::Device { during, source },
+            StepError::Settings(s) => Self::Settings(s),
+            _ => Self::Procedure(during),
         }
     }
 }
@@ -84,7 +202,6 @@ impl TuneError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use anyhow::Context as _;
 
     #[test]
     fn a_step_error_is_classified_by_its_root_cause() {
@@ -95,16 +212,16 @@ mod tests {
             TuneError::Device { during, .. } => assert_eq!(during, "restoring: framing: too long"),
             other => panic!("{other:?}"),
         }
-        let e = anyhow::anyhow!("no stiffness passed");
+        let e = StepError::Failed("no stiffness passed".into());
         assert!(
             matches!(TuneError::from_step(e, false), TuneError::Procedure(m) if m == "no stiffness passed")
         );
-        let e = anyhow::Error::new(ClientError::Cancelled);
+        let e = StepError::Device(ClientError::Cancelled);
         assert!(matches!(
             TuneError::from_step(e, false),
             TuneError::Cancelled
         ));
-        let e = anyhow::anyhow!("anything");
+        let e = StepError::Failed("anything".into());
         assert!(matches!(
             TuneError::from_step(e, true),
             TuneError::Cancelled

@@ -7,12 +7,12 @@
 //! every experiment starts from rest with the wall off, so its record depends on the device's
 //! counts only (the determinism of [`super::procedure`]).
 
+use super::error::{bail, Context, Result, StepError};
 use super::ident::{self, Identified};
 use super::model_check::{self, Evidence};
 use super::progress::{Progress, Reporter};
 use super::settings::{check_cancel, Settings, RAMP_SECONDS};
 use super::verify::rest_position;
-use anyhow::{bail, Context, Result};
 use stiffwall_client::Client;
 use stiffwall_proto::{flags, ExciteProfile, HostMsg, ServoConfig, TABLE_CHUNK};
 
@@ -79,7 +79,10 @@ fn excite_and_identify(
             // fine encoder moves many counts per tick); `identify` then tries gentler levels.
             let latched = c.faults().map_or(0, |f| f.latched);
             if latched != 0 {
-                return Err(anyhow::Error::new(ExcitationTripped { latched }).context(e));
+                return Err(StepError::Context {
+                    context: e.to_string(),
+                    inner: Box::new(StepError::ExcitationTripped { latched }),
+                });
             }
             return Err(e);
         }
@@ -116,7 +119,7 @@ pub(crate) fn identify(
     let fpc = f64::from(c.info.force_per_code);
     let max_code = c.info.max_code.max(1);
     let limit_code = ((f64::from(cfg.force_limit) / fpc) as i32).clamp(1, max_code);
-    let mut last_err: Option<anyhow::Error> = None;
+    let mut last_err: Option<StepError> = None;
     let mut levels = vec![0.05, 0.1, 0.2, 0.4];
     let mut i = 0;
     while i < levels.len() {
@@ -142,7 +145,7 @@ pub(crate) fn identify(
                 // The supervisor stopped the first level: the device may be driven too fast
                 // for its limits (a fine encoder), so gentler levels (halving, down to
                 // 0.05 / 64) come first, then the stronger ones as before.
-                if frac == 0.05 && e.chain().any(|c| c.is::<ExcitationTripped>()) {
+                if frac == 0.05 && e.tripped().is_some() {
                     levels = (1..=6).map(|j| 0.05 / f64::from(1u32 << j)).collect();
                     levels.extend([0.1, 0.2, 0.4]);
                     i = 0;
@@ -151,11 +154,8 @@ pub(crate) fn identify(
             }
         }
     }
-    let e = last_err.unwrap_or_else(|| anyhow::anyhow!("no excitation"));
-    let tripped = e
-        .chain()
-        .find_map(|c| c.downcast_ref::<ExcitationTripped>())
-        .map(|t| t.latched);
+    let e = last_err.unwrap_or_else(|| StepError::Failed("no excitation".into()));
+    let tripped = e.tripped();
     if let Some(latched) = tripped {
         let jump = latched & stiffwall_proto::fault::ENCODER_JUMP != 0;
         return Err(e).context(format!(
@@ -174,13 +174,6 @@ pub(crate) fn identify(
         ));
     }
     Err(e).context("identification failed at every excitation level")
-}
-
-/// The supervisor latched faults (`latched`, the fault bits) during an identification chirp.
-#[derive(Debug, thiserror::Error)]
-#[error("the supervisor latched faults {latched:#x} during the excitation")]
-struct ExcitationTripped {
-    latched: u32,
 }
 
 /// Breakaway evidence: a slow force ramp from rest (wall off, config `base` with K = 0) in each
@@ -215,7 +208,7 @@ pub(super) fn breakaway(
             .collect();
         for (j, chunk) in table.chunks(TABLE_CHUNK).enumerate() {
             let values = heapless::Vec::from_slice(chunk)
-                .map_err(|_| anyhow::anyhow!("table chunk too long"))?;
+                .map_err(|_| StepError::Failed("table chunk too long".into()))?;
             c.request(&HostMsg::TableChunk {
                 offset: u16::try_from(j * TABLE_CHUNK)?,
                 values,

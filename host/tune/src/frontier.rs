@@ -4,6 +4,7 @@
 //!
 //! Units: K N/m (N·m/rad), B N·s/m (N·m·s/rad), T s.
 
+use super::error::Result;
 use super::outcome::FrontierPoint;
 use super::progress::Progress;
 use super::release::Verdict;
@@ -11,7 +12,6 @@ use super::search::{largest_settling_k, Found, Search};
 use super::settings::*;
 use super::steps::{df_equivalent, Notes, Run};
 use super::verify::{Test, TestResult};
-use anyhow::Result;
 use stiffwall_client::Client;
 use stiffwall_core::criteria;
 use stiffwall_proto::{DamperLaw, ServoConfig};

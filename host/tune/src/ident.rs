@@ -24,7 +24,7 @@
 //!
 //! Units: SI (kg, N·s/m, N; or kg·m², N·m·s/rad, N·m for rotary devices with Δ in rad).
 
-use anyhow::{bail, Result};
+use super::error::{bail, Result, StepError};
 use nalgebra::{DMatrix, DVector};
 
 /// The extended fit's k must exceed this many of its standard errors to be kept.
@@ -225,8 +225,9 @@ fn window_rows(samples: &[Sample], x: &[f64], v: &[f64], s: &Settings) -> Vec<([
 /// The rigid fit (m, b, c), or the extended one (m, b, c, k, f₀) with its spring when k is
 /// resolved and the residual clearly smaller ([`SPRING_SIGNIFICANCE`], [`SPRING_RESIDUAL_GAIN`]).
 fn rigid_or_extended(rows: &[([f64; 5], f64)]) -> Result<(Fit, Option<Spring>)> {
-    let rigid = least_squares(rows, 3)
-        .ok_or_else(|| anyhow::anyhow!("excitation does not separate m, b and c (singular fit)"))?;
+    let rigid = least_squares(rows, 3).ok_or_else(|| {
+        StepError::Failed("excitation does not separate m, b and c (singular fit)".into())
+    })?;
     let extended = least_squares(rows, 5).filter(|e| {
         e.p[3] > SPRING_SIGNIFICANCE * e.se[3]
             && e.residual_rel < SPRING_RESIDUAL_GAIN * rigid.residual_rel

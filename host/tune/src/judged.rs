@@ -17,6 +17,8 @@ use super::verdict::MIN_TAIL;
 /// The length at which a record counts as settled: the first L at which the last
 /// max(`min_run`, ⌈L/3⌉) counts of `counts[..L]` are all equal (so the tail judged by the
 /// verdict, a quarter of L, is at rest). None while that has not happened.
+/// (The tests' shorthand.)
+#[cfg(test)]
 #[must_use]
 pub fn settled_at(counts: &[i64], min_run: usize) -> Option<usize> {
     settled_within(counts, min_run, false)
@@ -78,6 +80,8 @@ pub fn max_test_len(ticks: usize) -> usize {
 /// soft transmission, say) is thus watched up to [`DECAY_EXTENSION`] × longer instead of being
 /// judged a buzz while it still shrinks; a persistent buzz ends at the base length. Computed
 /// from the counts alone, so it does not depend on when the host sees them.
+/// (The tests' shorthand.)
+#[cfg(test)]
 #[must_use]
 pub fn judged_len(counts: &[i64], ticks: usize, min_run: usize) -> Option<usize> {
     judged_len_within(counts, ticks, min_run, false)

@@ -123,7 +123,7 @@ impl Delivered {
     }
 
     /// So far off the asked speed that a failure says nothing about the wall at it: slower
-    /// than asked, or faster than [`LAUNCH_EXCUSE_FACTOR`] × it + one count per tick.
+    /// than asked, or faster than `LAUNCH_EXCUSE_FACTOR` × it + one count per tick.
     #[must_use]
     pub fn excuses_failure(&self) -> bool {
         self.slow() || self.contact.max(self.fastest) > LAUNCH_EXCUSE_FACTOR * self.asked + 1.0

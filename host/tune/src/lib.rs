@@ -2,17 +2,23 @@
 //! experiment` run): identification, release and impact test verdicts, the stiffness search,
 //! the (K, B) frontier search, and [`tune`], which runs them on a connected device with typed
 //! settings ([`Settings`], checked by [`Settings::validate`]), progress events ([`Progress`]),
-//! a cancel token ([`stiffwall_client::Cancel`]) and errors ([`TuneError`]).
+//! a cancel token ([`stiffwall_client::Cancel`]) and errors ([`TuneError`]). The result is an
+//! [`Outcome`] (serializable both ways, as are the progress events).
+//!
+//! The modules are private; besides [`tune`], the steps a program may run on their own are
+//! re-exported here: one wall test ([`run_test`] of a [`Test`], judged as [`Judging`] says),
+//! the verdict of a release ([`classify`] of [`released_counts`]), the device at rest
+//! ([`rest_position`]), the predicted limits ([`predict`]). They fail with a [`StepError`].
 //!
 //! A user's program: tune the virtual device, printing progress, and give up after 2 s (the
 //! fast virtual device tunes in a few seconds; a board takes minutes):
 //!
 //! ```
 //! use std::time::{Duration, Instant};
-//! use stiffwall_client::{connect, Cancel, ConnectSpec};
+//! use stiffwall_client::{connect, Cancel, ConnectSpec, Pace};
 //! use stiffwall_tune::{tune, Progress, Settings, TuneError};
 //!
-//! let mut client = connect(&ConnectSpec::preset("maxon-re35", true))?;
+//! let mut client = connect(&ConnectSpec::preset("maxon-re35", Pace::Fast))?;
 //! let cancel = Cancel::default();
 //! let started = Instant::now();
 //! let settings = Settings { dry_run: true, ..Settings::default() };
@@ -32,25 +38,39 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod error;
-pub mod excite;
-pub mod frontier;
-pub mod ident;
-pub mod judged;
-pub mod launch;
-pub mod model_check;
-pub mod outcome;
-pub mod procedure;
-pub mod progress;
-pub mod release;
-pub mod search;
-pub mod settings;
-pub mod steps;
-pub mod verdict;
-pub mod verify;
+#![warn(missing_docs)]
 
-pub use error::{SettingsError, TuneError};
-pub use outcome::Outcome;
-pub use procedure::tune;
+mod error;
+mod excite;
+mod frontier;
+mod ident;
+mod judged;
+mod launch;
+mod model_check;
+mod outcome;
+mod procedure;
+mod progress;
+mod release;
+mod search;
+mod settings;
+mod steps;
+mod verdict;
+mod verify;
+
+pub use error::{NoWallPassed, SettingsError, StepError, TuneError};
+pub use launch::Delivered;
+pub use model_check::Evidence;
+pub use outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
+pub use procedure::{predict, tune};
 pub use progress::Progress;
-pub use settings::{Damping, Settings};
+pub use release::{classify, released_counts, Verdict};
+pub use search::{Found, Trial};
+pub use settings::{
+    Criterion, Damping, Settings, CONFIRM_BACKOFF, DEFAULT_XIDOT, FRICTION_MISMATCH_MARGIN,
+    MISMATCH_MARGIN,
+};
+pub use steps::{deflection_for, df_equivalent};
+pub use verify::{
+    clear_faults, impact, rest_position, run_test, ChatterReport, Judging, Test, TestResult,
+    TestRun, WallSides,
+};

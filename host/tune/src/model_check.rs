@@ -117,7 +117,7 @@ pub fn release_frequency_hz(counts: &[i64], period_s: f64, max_crossings: usize)
 }
 
 /// What the checks measured, for the report.
-#[derive(Debug, Clone, Default, serde::Serialize)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Evidence {
     /// Relative fit residual of the identification.
     pub residual_rel: f64,

@@ -11,7 +11,7 @@ use super::verify::TestResult;
 use stiffwall_core::params::PhysicalParams;
 
 /// Predicted stiffness limits, N/m (N·m/rad).
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct Predicted {
     /// Region A (passive) limit, (17)–(18).
     pub passive: f64,
@@ -24,7 +24,7 @@ pub struct Predicted {
 }
 
 /// Everything `tune` found.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Outcome {
     /// Identified parameters.
     pub identified: IdentifiedReport,
@@ -73,21 +73,21 @@ pub struct Outcome {
     /// What the model checks measured.
     pub model_evidence: Evidence,
     /// Margin applied to the set wall's largest resting K (the requested one, times
-    /// [`crate::settings::MISMATCH_MARGIN`] on a mismatch; at most [`crate::settings::DAMPED_MARGIN`] with a damper).
+    /// [`crate::settings::MISMATCH_MARGIN`] on a mismatch; at most `crate::settings::DAMPED_MARGIN` with a damper).
     pub margin_used: f64,
     /// Whether the config was saved.
     pub saved: bool,
 }
 
 /// One point of the verified frontier.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrontierPoint {
     /// Virtual damping B, N·s/m (N·m·s/rad).
     pub b: f64,
     /// Largest resting K found at B, N/m (N·m/rad).
     pub k_verified: Option<f64>,
     /// The damper's law at this B (`difference`, `dead-band-N`).
-    #[serde(serialize_with = "law_name")]
+    #[serde(serialize_with = "law_name", deserialize_with = "law_from_name")]
     pub damper: stiffwall_proto::DamperLaw,
 }
 
@@ -98,8 +98,15 @@ fn law_name<S: serde::Serializer>(
     s.collect_str(law)
 }
 
+fn law_from_name<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<stiffwall_proto::DamperLaw, D::Error> {
+    let name = <String as serde::Deserialize>::deserialize(d)?;
+    name.parse().map_err(serde::de::Error::custom)
+}
+
 /// Identified parameters as reported.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct IdentifiedReport {
     /// m and its standard error.
     pub mass: [f64; 2],

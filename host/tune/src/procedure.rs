@@ -33,6 +33,7 @@
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
 use super::error::TuneError;
+use super::error::{Context, Result, StepError};
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
 use super::launch::Delivered;
@@ -41,17 +42,15 @@ use super::progress::{Progress, Reporter};
 use super::search::{largest_settling_k, Search};
 use super::steps::{Notes, Run};
 use super::verify::rest_position;
-use anyhow::{Context, Result};
 use stiffwall_client::{Cancel, Client};
 use stiffwall_core::criteria;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
 
 use super::excite::identify;
-pub use super::outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
+pub use super::outcome::{IdentifiedReport, Outcome, Predicted};
 pub use super::settings::*;
-pub use super::steps::{deflection_for, df_equivalent};
-pub use super::verify::Test;
+pub use super::steps::df_equivalent;
 
 /// Step 2: predictions for the identified device.
 pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
@@ -184,7 +183,7 @@ fn tune_inner(
             ident = tried;
             (found, None)
         }
-        Some(Err(e)) if e.downcast_ref::<super::error::NoWallPassed>().is_some() => {
+        Some(Err(e)) if matches!(e.root(), StepError::NoWallPassed(_)) => {
             let why = no_rest_reason(&ident, ceiling, Some(&e));
             progress.report(Progress::Finding { text: why.clone() });
             let chatter = least_chatter_settings(s);
@@ -268,7 +267,7 @@ fn quiet_ceiling(ident: &Identification) -> f64 {
 }
 
 /// Why no wall rests on this device, in words (`failure`: the search's or verification's).
-fn no_rest_reason(ident: &Identification, ceiling: f64, failure: Option<&anyhow::Error>) -> String {
+fn no_rest_reason(ident: &Identification, ceiling: f64, failure: Option<&StepError>) -> String {
     let (f, k) = ident.units;
     let head = if ceiling <= 0.0 {
         format!(

@@ -9,7 +9,7 @@
 use std::fmt;
 
 /// One step of the tune procedure, as it starts.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]
 #[non_exhaustive]
 pub enum Progress {
@@ -56,7 +56,7 @@ pub enum Progress {
         /// The test, in words (`impact at … from …`).
         test: String,
         /// Why the step runs an impact (`force saturates`, `damped wall`).
-        reason: &'static str,
+        reason: String,
     },
     /// The whole verification set at K (and B).
     Verifying {

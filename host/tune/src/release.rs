@@ -18,4 +18,4 @@ pub fn released_counts(samples: &[stiffwall_proto::Sample], coarsen_shift: u8) -
         .collect()
 }
 
-pub use super::verdict::{classify, Verdict, MIN_TAIL};
+pub use super::verdict::{classify, Verdict};

@@ -7,8 +7,8 @@
 //! above `k_cap` (the firmware's force and energy limits) and gives up after `max_tests` tests.
 //! Nothing here talks to a device: the caller supplies the release test as a closure.
 
+use super::error::{bail, Result};
 use super::release::Verdict;
-use anyhow::{bail, Result};
 
 /// Search settings.
 #[derive(Debug, Clone, Copy)]
@@ -38,7 +38,7 @@ impl Default for Search {
 }
 
 /// One release test the search ran.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Trial {
     /// Stiffness tested.
     pub k: f64,
@@ -47,7 +47,7 @@ pub struct Trial {
 }
 
 /// Result of a search.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Found {
     /// Largest stiffness whose test settled.
     pub k_pass: f64,

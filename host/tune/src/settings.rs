@@ -18,7 +18,7 @@ pub const CONFIRM_BACKOFF: f64 = 0.95;
 pub const MISMATCH_MARGIN: f64 = 0.85;
 /// Factor applied to the margin instead of [`MISMATCH_MARGIN`] when the only mismatch is the
 /// friction (breakaway above sliding: static friction or a dead band) or the verified K below
-/// the prediction, the identified dynamics fitting ([`crate::model_check::dynamics_fit`]) and every
+/// the prediction, the identified dynamics fitting (`crate::model_check::dynamics_fit`) and every
 /// impact launched: static friction dissipates, and the release tests run at the energy asked
 /// for (re-aimed where the hold stuck off target), so the verified K is the device's own.
 pub const FRICTION_MISMATCH_MARGIN: f64 = 0.9;
@@ -54,9 +54,9 @@ pub struct Settings {
 }
 
 /// How `tune` chooses the virtual damping B.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Damping {
-    /// Search the (K, B) frontier ([`DAMPING_BETAS`]) for the stiffest verified pair.
+    /// Search the (K, B) frontier (`DAMPING_BETAS`) for the stiffest verified pair.
     Search,
     /// Fixed B, N·s/m (N·m·s/rad), ≥ 0; 0 is the spring-only tune.
     Fixed(f64),
@@ -188,7 +188,7 @@ impl Settings {
 
 /// Fails with [`stiffwall_client::ClientError::Cancelled`] once the client's cancel token
 /// (the caller's, for a tune) was cancelled.
-pub(crate) fn check_cancel(c: &stiffwall_client::Client) -> anyhow::Result<()> {
+pub(crate) fn check_cancel(c: &stiffwall_client::Client) -> super::error::Result<()> {
     if c.cancel_token().is_cancelled() {
         return Err(stiffwall_client::ClientError::Cancelled.into());
     }

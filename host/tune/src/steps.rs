@@ -4,12 +4,12 @@
 //!
 //! Units: SI (N/m, N·s/m, kg, m/s; rotary N·m/rad, N·m·s/rad, kg·m², rad/s), ticks.
 
+use super::error::Result;
 use super::launch::Delivered;
 use super::progress::Progress;
 use super::release::Verdict;
 use super::settings::*;
 use super::verify::{min_settle_run, run_test, test_set, Judging, Test, TestResult, TestRun};
-use anyhow::Result;
 use stiffwall_client::Client;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
@@ -170,8 +170,15 @@ impl Run<'_> {
             };
             for &dir in dirs {
                 let v_ticks = dir * self.v * self.period_s() / self.p.resolution;
-                let test =
-                    super::verify::impact(v_ticks, self.natural_ticks(k), self.one_sided_wall);
+                let test = super::verify::impact(
+                    v_ticks,
+                    self.natural_ticks(k),
+                    if self.one_sided_wall {
+                        super::verify::WallSides::OneSided
+                    } else {
+                        super::verify::WallSides::Both
+                    },
+                );
                 let why = if k > self.k_force {
                     "force saturates"
                 } else {
@@ -180,7 +187,7 @@ impl Run<'_> {
                 (self.progress)(Progress::ImpactStep {
                     k,
                     test: test.describe(),
-                    reason: why,
+                    reason: why.into(),
                 });
                 let impact = self.test(c, base, k, test, thorough)?.verdict;
                 if impact == Verdict::NotLaunched {

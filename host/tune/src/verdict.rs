@@ -37,7 +37,7 @@
 pub const MIN_TAIL: usize = 50;
 
 /// Wall geometry of a trajectory.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Wall {
     /// The spring acts on both sides of the origin.
@@ -47,7 +47,7 @@ pub enum Wall {
 }
 
 /// Outcome of one test.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Verdict {
     /// Comes to rest with monotonically shrinking swings.

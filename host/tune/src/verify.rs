@@ -39,18 +39,15 @@
 //! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
 //! decays, and a persistent buzz is still judged at the base length.
 
-pub use super::judged::{
-    decaying, judged_len, judged_len_within, max_test_len, settled_at, settled_within,
-    DECAY_EXTENSION,
-};
+use super::error::{bail, Result, StepError};
+use super::judged::{judged_len_within, max_test_len};
 use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
 use super::verdict::{classify, Criterion, Verdict, Wall, MIN_TAIL};
-use anyhow::{bail, Result};
 use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
 
 /// One test of the verification set.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Test {
     /// Hold at `deflection_ticks` effective ticks from the wall, release.
@@ -99,10 +96,21 @@ pub fn launch_distance(v_ticks: f64, natural_ticks: f64) -> i32 {
         .clamp(3.0, f64::from(1 << 20)) as i32
 }
 
+/// Where the wall of an impact test is: on both sides of the wall position (the bidirectional
+/// wall), or only on the side of counts ≥ 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WallSides {
+    /// The bidirectional wall.
+    Both,
+    /// A one-sided wall, occupying counts ≥ 0.
+    OneSided,
+}
+
 /// An impact test at `v_ticks` ticks per tick (sign: direction of motion), launched from the
-/// side it moves away from.
+/// side it moves away from, into a wall on `sides`.
 #[must_use]
-pub fn impact(v_ticks: f64, natural_ticks: f64, one_sided: bool) -> Test {
+pub fn impact(v_ticks: f64, natural_ticks: f64, sides: WallSides) -> Test {
+    let one_sided = sides == WallSides::OneSided;
     let milli = ((v_ticks * 1000.0).round() as i32).clamp(-1_000_000, 1_000_000);
     let milli = if milli == 0 { 1 } else { milli };
     let d = launch_distance(v_ticks, natural_ticks);
@@ -114,7 +122,7 @@ pub fn impact(v_ticks: f64, natural_ticks: f64, one_sided: bool) -> Test {
 }
 
 /// A test with its stiffness and verdict.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TestResult {
     /// The test.
     pub test: Test,
@@ -189,14 +197,14 @@ pub fn test_set(
         .collect();
     if impacts {
         let v = v_ticks.abs();
-        set.push(impact(v, natural_ticks, true));
-        set.push(impact(v / 2.0, natural_ticks, true));
+        set.push(impact(v, natural_ticks, WallSides::OneSided));
+        set.push(impact(v / 2.0, natural_ticks, WallSides::OneSided));
         if thorough {
-            set.push(impact(v / 4.0, natural_ticks, true));
+            set.push(impact(v / 4.0, natural_ticks, WallSides::OneSided));
         }
         if !one_sided_wall {
-            set.push(impact(v, natural_ticks, false));
-            set.push(impact(-v, natural_ticks, false));
+            set.push(impact(v, natural_ticks, WallSides::Both));
+            set.push(impact(-v, natural_ticks, WallSides::Both));
         }
     }
     set
@@ -212,8 +220,8 @@ pub fn rest_position(c: &mut Client) -> Result<i32> {
     let (mut last, mut same) = (i32::MIN, 0u32);
     let result = loop {
         if std::time::Instant::now() > deadline {
-            break Err(anyhow::anyhow!(
-                "the device did not come to rest within 20 s with the wall off"
+            break Err(StepError::Failed(
+                "the device did not come to rest within 20 s with the wall off".into(),
             ));
         }
         if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
@@ -307,10 +315,10 @@ pub struct TestRun {
 
 /// Runs one test at stiffness `k` (config `base` with that K) for a base length of `ticks`
 /// ticks after the release, longer while its oscillation still decays (at most
-/// [`max_test_len`]); the record ends at [`judged_len`] (settled: run `min_run`). A release
-/// whose hold stopped off target is re-aimed ([`reaim`], at most [`HOLD_REAIMS`] times); an
+/// `max_test_len`); the record ends at `judged_len` (settled: run `min_run`). A release
+/// whose hold stopped off target is re-aimed (`reaim`, at most `HOLD_REAIMS` times); an
 /// impact whose launch arrived too fast and failed is re-aimed at a launch speed that should
-/// deliver the asked one ([`Delivered::reaimed`], at most [`LAUNCH_REAIMS`] times). The last
+/// deliver the asked one ([`Delivered::reaimed`], at most `LAUNCH_REAIMS` times). The last
 /// attempt's outcome is the test's, but for a release that passed only from short of its
 /// deflection after an attempt failed from farther: that failure stands (see `run_release`).
 #[allow(clippy::too_many_arguments)]
@@ -577,12 +585,7 @@ struct Judged {
 impl Judged {
     /// The verdict of `test`'s record; an impact judged against the speed `asked` (counts per
     /// tick; None: its own).
-    fn judge(
-        &self,
-        test: Test,
-        rec: &stiffwall_client::client::Record,
-        asked: Option<f64>,
-    ) -> TestRun {
+    fn judge(&self, test: Test, rec: &stiffwall_client::Record, asked: Option<f64>) -> TestRun {
         let mut counts = super::release::released_counts(&rec.samples, self.shift);
         // Judge only up to where the record settled (what came after is the Stop's latency).
         let tripped = rec.faults != 0;

@@ -328,7 +328,22 @@ fn defines(text: &str, name: &str) -> bool {
     const KINDS: [&str; 8] = [
         "fn ", "struct ", "enum ", "trait ", "const ", "static ", "type ", "mod ",
     ];
-    text.lines().map(str::trim).any(|l| {
+    // A `use` over several lines (`pub use a::{\n B,\n C,\n};`) counts as one line.
+    let mut lines: Vec<String> = Vec::new();
+    let mut open_use = false;
+    for l in text.lines().map(str::trim) {
+        if open_use {
+            if let Some(last) = lines.last_mut() {
+                last.push(' ');
+                last.push_str(l);
+            }
+        } else {
+            lines.push(l.to_string());
+        }
+        open_use =
+            (open_use || l.starts_with("use ") || l.starts_with("pub use ")) && !l.ends_with(';');
+    }
+    lines.iter().map(String::as_str).any(|l| {
         let word_at = |i: usize| {
             l[i..].starts_with(name)
                 && !l[i + name.len()..].starts_with(|c: char| c.is_alphanumeric() || c == '_')
@@ -704,6 +719,10 @@ mod tests {
         assert!(defines("pub fn quiet_ceiling(c: f64)", "quiet_ceiling"));
         assert!(!defines("pub fn quiet_ceiling_x()", "quiet_ceiling"));
         assert!(defines("pub use crate::a::{B, quiet};", "quiet"));
+        assert!(defines(
+            "pub use a::{\n    B,\n    quiet as loud,\n};",
+            "loud"
+        ));
     }
 
     #[test]

@@ -81,6 +81,14 @@ fn sync_sim_benchmarks() -> Result<()> {
     update_section(&docs.join("BENCHMARKS.md"), "sim", body.trim_end())
 }
 
+/// The examples of the library crates `ci` builds and runs (each a few seconds on the fast
+/// virtual device).
+const LIBRARY_EXAMPLES: [(&str, &str); 3] = [
+    ("stiffwall-tune", "tune_virtual"),
+    ("stiffwall-tune", "release_test"),
+    ("stiffwall-client", "record"),
+];
+
 fn ci() -> Result<()> {
     let started = std::time::Instant::now();
     let step = |name: &str| {
@@ -132,6 +140,10 @@ fn ci() -> Result<()> {
     firmware::firmware(&[])?;
     step("host tests (unit, SIL, end to end against the virtual device)");
     run(cargo().args(["test", "--workspace"]))?;
+    step("the library examples (tune the virtual device, one release test, record 10 s)");
+    for (krate, example) in LIBRARY_EXAMPLES {
+        run(cargo().args(["run", "-p", krate, "--example", example]))?;
+    }
     step("the fuzz campaign of docs/RELIABILITY.md: 1e7 frames, 1e6 chunks, 1e5 power cuts, 1e6 pty frames (seed 1)");
     fuzz::fuzz(&["--frames".to_string(), "10000000".to_string()])?;
     step("the 10 s flood of bad frames, real time and fast (the issue's acceptance run; debug build of the step above)");

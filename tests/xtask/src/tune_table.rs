@@ -1,28 +1,25 @@
 //! `cargo xtask tune-table [--quick] [--only NAME]...`: the evidence table of docs/TUNE.md
 //! (issue 10, items 5 and 6), generated, never written by hand.
 //!
-//! Builds `hostctl` (release), then runs `tests/src/bin/tune_table.rs` (release), which for every
-//! plant of `sim/plants/` computes the true largest stable stiffness K* with the simulator alone,
-//! runs `hostctl tune --plant FILE --fast --dry-run --json`, drives the firmware supervisor at
-//! 1.5 K* and writes docs/TUNE.md. `--quick` skips the tune runs (K* and the supervisor only);
+//! Runs [`table`] in this process, which for every plant of `sim/plants/` computes the true
+//! largest stable stiffness K* with the simulator alone, tunes the fast virtual device running
+//! the plant with `stiffwall_tune::tune` (a dry run, as `hostctl tune --plant FILE --fast
+//! --dry-run`), drives the firmware supervisor at 1.5 K* and writes docs/TUNE.md. `--quick` skips the tune runs (K* and the supervisor only);
 //! `--only NAME` restricts to plants by file stem; `--plant FILE` (repeatable) checks your own
 //! plant files instead (printed; written only with `--out FILE`); `--no-write` prints without
 //! writing; `--check FILE` compares a fresh run's K* columns with FILE's (stale: an error) and
 //! writes nothing. Whatever the options, a row that fails what the docs claim is an error.
 use anyhow::{bail, Result};
 
-/// Builds hostctl and runs the table program.
+mod table;
+
+/// Checks the options and runs the table program.
 pub fn tune_table(args: &[String]) -> Result<()> {
     let mut pass: Vec<String> = Vec::new();
-    let mut quick = false;
     let mut i = 0;
     while i < args.len() {
         match args[i].as_str() {
-            "--quick" => {
-                quick = true;
-                pass.push(args[i].clone());
-            }
-            "--no-write" => pass.push(args[i].clone()),
+            "--quick" | "--no-write" => pass.push(args[i].clone()),
             "--only" => {
                 let Some(v) = args.get(i + 1) else {
                     bail!("--only needs a plant name (a file stem of sim/plants/)");
@@ -48,24 +45,7 @@ pub fn tune_table(args: &[String]) -> Result<()> {
         }
         i += 1;
     }
-    if !quick {
-        let hostctl = crate::process::build_hostctl()?;
-        pass.push("--hostctl".into());
-        pass.push(hostctl.to_string_lossy().into_owned());
-    }
-    crate::process::run(
-        crate::process::cargo()
-            .args([
-                "run",
-                "--release",
-                "-p",
-                "stiffwall-tests",
-                "--bin",
-                "tune_table",
-                "--",
-            ])
-            .args(&pass),
-    )
+    table::generate(&pass)
 }
 
 /// The tune tables' check in `cargo xtask ci`: docs/TUNE.md (the 21 plants of `sim/plants/`)

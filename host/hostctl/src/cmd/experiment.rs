@@ -1,7 +1,7 @@
 //! `hostctl experiment release`: the paper's Fig. 8 test on a device. The device is held at a
 //! deflection (effective encoder ticks from the wall) with zero velocity, released, and
 //! recorded; the outcome is classified (settles / locally stable / limit cycle below one tick /
-//! persistent / growing, see [`crate::tune::release`]) and plotted: x(t) with the ±1-tick lines,
+//! persistent / growing, see `stiffwall_tune::classify`) and plotted: x(t) with the ±1-tick lines,
 //! beside the (β, σ) operating point and its critical line for the equivalent velocity (all
 //! spring energy turned into kinetic energy, as in Sec. V).
 
@@ -9,7 +9,6 @@ use crate::analysis;
 use crate::device::connect::ConnectArgs;
 use crate::figure::{self, Figure};
 use crate::output::{emit, emit_json};
-use crate::tune::release::{classify, Verdict};
 use anyhow::{bail, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -17,6 +16,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::{flags, Sample, ServoConfig};
+use stiffwall_tune::{classify, Verdict};
 
 /// Arguments of `hostctl experiment`.
 #[derive(Debug, clap::Args)]
@@ -117,7 +117,7 @@ pub fn release_config(
              (N/m or N·m/rad, > 0 and ≤ {} for this device at coarsening shift 0); a board \
              keeps one set with `hostctl config set --stiffness K` and `hostctl config save`",
             cfg.stiffness,
-            crate::device::client::readable(f64::from(max_stiffness))
+            stiffwall_client::readable(f64::from(max_stiffness))
         );
     }
     Ok(cfg)
@@ -144,7 +144,7 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         .copied()
         .filter(|s| s.flags & flags::RELEASED != 0)
         .collect();
-    let counts = crate::tune::release::released_counts(&released, cfg.coarsen_shift);
+    let counts = stiffwall_tune::released_counts(&released, cfg.coarsen_shift);
     let verdict = classify(&counts, rec.faults != 0);
     let rate = f64::from(c.info.servo_rate_hz);
     let delta = f64::from(c.info.resolution) * f64::from(1u32 << cfg.coarsen_shift);
@@ -220,7 +220,7 @@ struct ReleaseDone<'a> {
     /// Counts after the release.
     counts: &'a [i64],
     verdict: Verdict,
-    rec: &'a stiffwall_client::client::Record,
+    rec: &'a stiffwall_client::Record,
     /// Equivalent maximum velocity of the release (with a model).
     v_eq: Option<f64>,
     /// The analysis at that velocity (with a model).

@@ -14,9 +14,10 @@
 use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;
 use crate::output::emit;
-pub use crate::session::{header, pump, record, End, Outcome, Plan, Stats};
+pub use crate::session::header;
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
+pub use stiffwall_client::{pump, record, End, Plan, SessionOutcome as Outcome, Stats};
 
 /// Arguments of `hostctl record`.
 #[derive(Debug, clap::Args)]

@@ -35,13 +35,13 @@
 use crate::figure::{self, Figure};
 use crate::output::emit_report;
 use crate::plant_args::{PlantArgs, PlantArgsError};
-use crate::recording::{self, Recording};
 use anyhow::{anyhow, bail, Context, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use stiffwall_client::{read_recording, Recording, Row};
 use stiffwall_firmware::{BoardInfo, Channels, HeldCode, SampledCount, Servo};
 use stiffwall_proto::{flags, ServoConfig};
 use stiffwall_sim::rich::{PlantModel, RichPlant};
@@ -252,7 +252,7 @@ impl Encoder {
 /// rest compared with the recorded force codes.
 fn replay_run(
     r: &mut ServoReplay,
-    rows: &[recording::Row],
+    rows: &[Row],
     board: BoardInfo,
     cfg: &ServoConfig,
     encoder: Encoder,
@@ -634,7 +634,7 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(path) = &args.plot {
         figure::format_of(path)?;
     }
-    let rec = recording::read(&args.file)?;
+    let rec = read_recording(&args.file)?;
     if rec.rows.is_empty() {
         bail!("{}: the recording holds no samples", args.file.display());
     }
@@ -668,7 +668,7 @@ pub fn run(args: &Args) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::{Header, Row};
+    use stiffwall_client::Header;
     use stiffwall_proto::{DeviceInfo, Limits, Sample};
 
     fn info(bits: u8) -> DeviceInfo {
@@ -716,7 +716,7 @@ mod tests {
             energy: 0,
         };
         let mut out = Vec::new();
-        let mut w = crate::recording::Writer::new(&mut out, &header).unwrap();
+        let mut w = stiffwall_client::Writer::new(&mut out, &header).unwrap();
         w.batch(0, &[sample(0), sample(1)], 0).unwrap();
         w.batch(5, &[sample(5)], 0).unwrap(); // 3 missing between rows
         w.batch(10, &[], 4).unwrap(); // 4 missing at the end, as session::pump writes them
@@ -727,7 +727,7 @@ mod tests {
             text.contains("# gap: 4 samples missing before seq 10"),
             "{text}"
         );
-        let rec = crate::recording::parse(&text).unwrap();
+        let rec = stiffwall_client::parse_recording(&text).unwrap();
         assert_eq!(rec.missing(), 3);
         assert_eq!(trailing_gap(&text), 4);
         assert_eq!(rec.missing() + trailing_gap(&text), 7);

@@ -8,10 +8,10 @@
 use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;
 use crate::output::emit;
-use crate::session::{pump, End, Plan};
 use anyhow::{bail, Result};
 use std::io::IsTerminal as _;
 use std::time::{Duration, Instant};
+use stiffwall_client::{pump, End, Plan};
 
 /// Arguments of `hostctl stream`.
 #[derive(Debug, clap::Args)]

@@ -5,12 +5,11 @@ use crate::analysis::{self, kb_plot};
 use crate::device::connect::ConnectArgs;
 use crate::output::{emit, emit_json};
 use crate::session;
-use crate::tune::procedure::{self, Outcome, Settings};
-use crate::tune::{SettingsError, TuneError};
 use anyhow::{anyhow, Result};
 use std::fmt::Write as _;
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
+use stiffwall_tune::{Criterion, Damping, Outcome, Settings, SettingsError, TuneError};
 
 /// Arguments of `hostctl tune`.
 #[derive(Debug, clap::Args)]
@@ -70,18 +69,16 @@ pub fn settings(a: &Args) -> Result<Settings> {
         .transpose()?;
     let s = Settings {
         damper,
-        damping: a
-            .damping
-            .map_or(procedure::Damping::Search, procedure::Damping::Fixed),
+        damping: a.damping.map_or(Damping::Search, Damping::Fixed),
         max_velocity: a.max_velocity,
         margin: a.margin,
         release_ticks: a.release_ticks,
         excite_seconds: a.excite_seconds,
         dry_run: a.dry_run,
         criterion: if a.accept_chatter {
-            procedure::Criterion::AcceptChatter
+            Criterion::AcceptChatter
         } else {
-            procedure::Criterion::Rest
+            Criterion::Rest
         },
         ..Settings::default()
     };
@@ -123,8 +120,8 @@ pub fn run(a: &Args) -> Result<()> {
     };
     say(&format!("connecting to the {}", a.connect.describe()));
     let mut client = a.connect.connect()?;
-    let cancel = stiffwall_client::Cancel::default();
-    let outcome = procedure::tune(&mut client, &s, &cancel, &mut |e| say(&e.to_string()));
+    let cancel = stiffwall_client::Cancel::on_ctrl_c();
+    let outcome = stiffwall_tune::tune(&mut client, &s, &cancel, &mut |e| say(&e.to_string()));
     bar.finish_and_clear();
     let o = match outcome {
         Ok(o) => o,
@@ -171,7 +168,7 @@ fn wants_kb_figure(o: &Outcome) -> bool {
 }
 
 /// The (K, B) frontier figure of a tune: the exact linear K_max(B) of the identified model with
-/// Coulomb as describing-function damping at the max velocity (as [`procedure::predict`]),
+/// Coulomb as describing-function damping at the max velocity (as [`stiffwall_tune::predict`]),
 /// over 0 ..= 1.3 × the largest B tried; the verified points, the spring-only and the set wall.
 fn kb_figure(o: &Outcome) -> kb_plot::Frontier {
     let u = kb_plot::Units::of(o.params.rotational);
@@ -181,7 +178,7 @@ fn kb_figure(o: &Outcome) -> kb_plot::Frontier {
     } else {
         analysis::damping::FRONTIER_B_MAX_M_PER_T * o.params.mass / o.params.period_s
     };
-    let eq = procedure::df_equivalent(&o.params, o.max_velocity);
+    let eq = stiffwall_tune::df_equivalent(&o.params, o.max_velocity);
     kb_plot::Frontier {
         title: "tune: (K, B) frontier of the identified model".to_string(),
         units: u,

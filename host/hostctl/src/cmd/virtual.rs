@@ -7,7 +7,6 @@
 //! Only the virtual device can be served: `--port` and `--qemu` are refused.
 
 use crate::device::connect::ConnectArgs;
-use crate::device::virtual_device;
 use crate::session;
 use anyhow::{ensure, Context, Result};
 use std::io::Write;
@@ -38,7 +37,7 @@ pub fn run(args: &Args) -> Result<()> {
         .virtual_spec()?
         .ok_or_else(|| anyhow::anyhow!("no virtual device to serve"))?;
     session::stop_on_ctrl_c();
-    let (vd, host) = virtual_device::spawn(spec)?;
+    let (vd, host) = stiffwall_client::spawn_virtual_device(spec)?;
     // Keep the pty's host side open with a plain file (no exclusive lock, unlike the serial
     // port handle from `spawn`, which is closed) so it never hangs up between clients.
     let _keep_open = std::fs::OpenOptions::new()
@@ -58,7 +57,7 @@ pub fn run(args: &Args) -> Result<()> {
         vd.pty,
         vd.pty
     );
-    while !session::interrupted() {
+    while !stiffwall_client::interrupted() {
         std::thread::sleep(Duration::from_millis(50));
     }
     eprintln!("stopped");

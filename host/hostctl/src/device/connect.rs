@@ -5,12 +5,11 @@
 //! file's plant (`--plant FILE.toml`). The options only convert into a [`ConnectSpec`]
 //! ([`ConnectArgs::spec`]); `stiffwall_client::connect` does the rest.
 
-use super::client::Client;
-use super::{transport, virtual_device};
 use anyhow::{anyhow, bail, Result};
 use std::path::PathBuf;
-pub use stiffwall_client::connect::DEFAULT_VIRTUAL_DEVICE;
-use stiffwall_client::{ConnectSpec, VirtualPlant};
+use stiffwall_client::Client;
+pub use stiffwall_client::DEFAULT_VIRTUAL_DEVICE;
+use stiffwall_client::{Cancel, ConnectSpec, Pace, VirtualPlant};
 
 /// How to reach the device.
 #[derive(Debug, Clone, clap::Args)]
@@ -20,7 +19,7 @@ pub struct ConnectArgs {
     #[arg(long, global = true, conflicts_with = "qemu")]
     pub port: Option<String>,
     /// Baud rate of --port.
-    #[arg(long, global = true, default_value_t = transport::DEFAULT_BAUD)]
+    #[arg(long, global = true, default_value_t = stiffwall_client::DEFAULT_BAUD)]
     pub baud: u32,
     /// Plant of the virtual device: a preset name (see `hostctl analyze --list-devices`).
     #[arg(
@@ -85,11 +84,11 @@ impl ConnectArgs {
                 image: self.qemu_image.clone(),
             }
         } else if self.board_emulator {
-            ConnectSpec::BoardEmulator(stiffwall_client::board_emu::Spec {
+            ConnectSpec::BoardEmulator(stiffwall_client::BoardEmulatorSpec {
                 output: self.features.clone(),
                 device: self.device.clone(),
                 plant_file: self.plant.clone(),
-                fast: self.fast,
+                pace: Pace::fast_if(self.fast),
             })
         } else {
             self.virtual_target()
@@ -105,7 +104,7 @@ impl ConnectArgs {
         };
         ConnectSpec::Virtual {
             plant,
-            fast: self.fast,
+            pace: Pace::fast_if(self.fast),
         }
     }
 
@@ -127,7 +126,7 @@ impl ConnectArgs {
             bail!("--device and --plant both pick the virtual device's plant; give one");
         }
         if let Some(f) = self.features.as_deref() {
-            if !stiffwall_client::board_emu::OUTPUTS.contains(&f) {
+            if !stiffwall_client::BOARD_EMULATOR_OUTPUTS.contains(&f) {
                 bail!("--features {f}: allowed dac or pwm (the board emulator's force output)");
             }
         }
@@ -144,13 +143,17 @@ impl ConnectArgs {
     }
 
     /// The virtual device's specification, when the target is the virtual device.
-    pub fn virtual_spec(&self) -> Result<Option<virtual_device::Spec>> {
+    pub fn virtual_spec(&self) -> Result<Option<stiffwall_client::VirtualSpec>> {
         Ok(self.spec()?.virtual_spec()?)
     }
 
-    /// Connects and performs the handshake.
+    /// Connects and performs the handshake. The client's experiments check a token Ctrl-C
+    /// cancels ([`Cancel::on_ctrl_c`]; the command installs the handler,
+    /// [`crate::session::stop_on_ctrl_c`]).
     pub fn connect(&self) -> Result<Client> {
-        Ok(stiffwall_client::connect(&self.spec()?)?)
+        let mut client = stiffwall_client::connect(&self.spec()?)?;
+        client.set_cancel(Cancel::on_ctrl_c());
+        Ok(client)
     }
 }
 

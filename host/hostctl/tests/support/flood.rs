@@ -11,10 +11,9 @@ use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use stiffwall_client::Client;
+use stiffwall_client::{End, Plan};
 use stiffwall_host::cmd::replay::trailing_gap;
-use stiffwall_host::device::client::Client;
-use stiffwall_host::recording;
-use stiffwall_host::session::{self, End, Plan};
 
 /// A second, non-blocking writer on the host side of a pty the client already holds (as
 /// another program on the same serial line would be). The client's port is opened exclusive
@@ -68,13 +67,13 @@ pub fn record_under_flood(c: &mut Client, path: &str, seconds: f64, rate_bytes_s
     // Let the flood start before the stream does.
     std::thread::sleep(Duration::from_millis(100));
     let plan = Plan::new(1, Some(seconds), rate_hz).unwrap();
-    let header = session::header(c, cfg, 1, None);
+    let header = stiffwall_client::header_for_target(c, cfg, 1, "device".into(), None);
     let mut out = Vec::new();
-    let outcome = session::record(c, &plan, &header, &mut out, |_| {}).unwrap();
+    let outcome = stiffwall_client::record(c, &plan, &header, &mut out, |_| {}).unwrap();
     stop.store(true, Ordering::Relaxed);
     let flood_bytes = flooder.join().unwrap();
     let text = String::from_utf8(out).unwrap();
-    let rec = recording::parse(&text).expect("the recording parses");
+    let rec = stiffwall_client::parse_recording(&text).expect("the recording parses");
     let rows = rec.rows.len() as u64;
     assert_eq!(rows, outcome.rows);
     FloodRun {

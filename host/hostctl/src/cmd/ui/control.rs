@@ -137,7 +137,7 @@ impl Control {
         };
         let op = Op {
             kind,
-            cancel: Cancel::default(),
+            cancel: Cancel::on_ctrl_c(),
             started: Instant::now(),
         };
         admitted.cancel = Some(op.cancel.clone());

@@ -3,7 +3,7 @@
 //! pages (in 25 ms binary frames, see [`super::wire`]), and runs the pages' commands between
 //! reads with the same functions as the command-line tools: `config set`'s
 //! [`Overrides::set_on`], `experiment release`'s checks and verdict, `tune`'s
-//! [`procedure::tune`], and `record`'s [`Writer`] and header.
+//! [`stiffwall_tune::tune`], and `record`'s [`Writer`] and header.
 //!
 //! Units: device integers in telemetry (ticks, raw counts, output codes, energy in K·Δ_eff²/8);
 //! SI for the model and K. Invariants: the recorder sees every batch the device sends, in
@@ -27,10 +27,7 @@ use super::plane::{self};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
 use super::wire::{self, Command, Reply};
 use crate::config_flags::Overrides;
-use crate::device::client::Client;
-use crate::recording::Writer;
-use crate::session::{self, Stats};
-use crate::tune::procedure;
+use crate::session;
 use anyhow::{bail, Context, Result};
 use axum::extract::ws::Message;
 use serde_json::{json, Value};
@@ -38,6 +35,9 @@ use std::io::BufWriter;
 use std::sync::atomic::Ordering;
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
+use stiffwall_client::Client;
+use stiffwall_client::Stats;
+use stiffwall_client::Writer;
 use stiffwall_proto::{flags, DeviceMsg, ExperimentKind, Sample, ServoConfig};
 
 /// Period of the binary telemetry frames sent to the pages.
@@ -67,7 +67,7 @@ pub fn run(
         setup,
         shared,
         cfg,
-        xidot: procedure::DEFAULT_XIDOT,
+        xidot: stiffwall_tune::DEFAULT_XIDOT,
         streaming: false,
         frame: Vec::new(),
         chunks: 0,
@@ -109,7 +109,7 @@ pub fn run(
 impl Dev {
     fn main_loop(&mut self, rx: &mpsc::Receiver<Request>) -> Result<()> {
         loop {
-            if self.shared.stop.load(Ordering::Relaxed) || session::interrupted() {
+            if self.shared.stop.load(Ordering::Relaxed) || stiffwall_client::interrupted() {
                 return Ok(());
             }
             while let Ok(req) = rx.try_recv() {

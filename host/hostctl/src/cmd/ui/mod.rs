@@ -158,7 +158,7 @@ pub fn run(a: &Args) -> Result<()> {
     let stop = Arc::clone(&shared);
     let served = rt.block_on(async move {
         conn::serve(listener, server::router(app), async move {
-            while !stop.stop.load(Ordering::Relaxed) && !crate::session::interrupted() {
+            while !stop.stop.load(Ordering::Relaxed) && !stiffwall_client::interrupted() {
                 tokio::time::sleep(Duration::from_millis(100)).await;
             }
         })

@@ -6,13 +6,13 @@
 //! (device-dropped vs link-lost) as `hostctl record` does; the file is flushed at least every
 //! [`super::device::FLUSH_PERIOD`]; files are written only inside the record directory.
 
-use crate::recording::Writer;
-use crate::session::Stats;
 use anyhow::{bail, Result};
 use serde_json::{json, Value};
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use stiffwall_client::Stats;
+use stiffwall_client::Writer;
 use stiffwall_proto::Sample;
 
 /// A recording made from the page.

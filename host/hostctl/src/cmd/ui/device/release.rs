@@ -12,12 +12,12 @@ use super::state::{Dev, Release};
 use crate::cmd::experiment::release_config;
 use crate::cmd::ui::wire::ReleaseTest;
 use crate::cmd::ui::{trace, wire};
-use crate::device::client::HEARTBEAT_PERIOD;
-use crate::tune::release::classify;
 use anyhow::{bail, Result};
 use serde_json::json;
 use std::time::{Duration, Instant};
+use stiffwall_client::HEARTBEAT_PERIOD;
 use stiffwall_proto::HostMsg;
+use stiffwall_tune::classify;
 
 /// Longest release test the page runs, s of device time (duration ≤ this × the servo rate):
 /// a release settles or fails within a few hundred natural periods (well under a minute on
@@ -62,7 +62,7 @@ impl Dev {
             bail!(
                 "the wall is off (K = 0): enter the test's stiffness in the release test's K \
                  field (> 0 and ≤ {} {} on this device), or set K in Config",
-                crate::device::client::readable(f64::from(max_k)),
+                stiffwall_client::readable(f64::from(max_k)),
                 if self.client.info.counts_per_rev > 0 {
                     "N·m/rad"
                 } else {

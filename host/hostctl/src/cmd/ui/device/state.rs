@@ -7,7 +7,6 @@ use crate::cmd::ui::control::Control;
 use crate::cmd::ui::plane::Model;
 use crate::cmd::ui::record::Recorder;
 use crate::cmd::ui::wire::{Command, Reply};
-use crate::device::client::Client;
 use crate::device::connect::ConnectArgs;
 use axum::extract::ws::Message;
 use serde_json::Value;
@@ -15,6 +14,7 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+use stiffwall_client::Client;
 use stiffwall_proto::{Sample, ServoConfig};
 use tokio::sync::broadcast;
 

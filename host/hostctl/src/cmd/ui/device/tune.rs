@@ -7,10 +7,10 @@
 use super::state::Dev;
 use crate::cmd::ui::plane::Model;
 use crate::cmd::ui::wire::{Reply, TuneTest};
-use crate::tune::{procedure, Settings, SettingsError, TuneError};
 use anyhow::{anyhow, bail, Result};
 use serde_json::{json, Value};
 use std::sync::Arc;
+use stiffwall_tune::{Settings, SettingsError, TuneError};
 
 /// The page's label of a tune setting.
 fn page_label(field: &str) -> &str {
@@ -102,7 +102,7 @@ impl Dev {
             json!({"type": "tune", "state": "running", "message": "starting"}),
         );
         let cancel = self.shared.control.op_cancel().unwrap_or_default();
-        let outcome = procedure::tune(&mut self.client, &s, &cancel, &mut |event| {
+        let outcome = stiffwall_tune::tune(&mut self.client, &s, &cancel, &mut |event| {
             shared.publish(
                 "tune",
                 json!({"type": "tune", "state": "running", "message": event.to_string(),
@@ -136,7 +136,7 @@ impl Dev {
 /// The answer to an aborted tune.
 const ABORTED: &str = "tune aborted; the previous config was restored";
 
-fn done_event(o: &crate::tune::Outcome) -> Value {
+fn done_event(o: &stiffwall_tune::Outcome) -> Value {
     json!({
         "type": "tune",
         "state": "done",

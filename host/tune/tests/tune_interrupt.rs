@@ -4,19 +4,16 @@
 //! (cancelling the tune's `Cancel` token: the Ctrl-C handler cancels its root) from the
 //! progress callback when the phase starts.
 
-use stiffwall_client::Cancel;
-use stiffwall_host::device::client::Client;
-use stiffwall_host::device::virtual_device::{spawn, Spec};
-use stiffwall_host::tune::procedure::{self, Settings};
-use stiffwall_host::tune::TuneError;
+use stiffwall_client::{spawn_virtual_device, Cancel, Client, Pace, VirtualSpec};
 use stiffwall_proto::ServoConfig;
+use stiffwall_tune::{tune, Settings, TuneError};
 
 fn connect() -> Client {
     let p = stiffwall_core::devices::find("maxon-re35").unwrap().params;
-    let (vd, port) = spawn(Spec {
+    let (vd, port) = spawn_virtual_device(VirtualSpec {
         plant: p,
         counts_per_rev: (std::f64::consts::TAU / p.resolution).round() as u32,
-        fast: true,
+        pace: Pace::Fast,
         initial_position: 0.0,
         output_range: None,
         scene: None,
@@ -46,7 +43,7 @@ fn tune_interrupted_in_each_phase_restores_the_previous_config() {
         c.set_config(&before).unwrap();
         let cancel = Cancel::default();
         let mut seen = false;
-        let r = procedure::tune(&mut c, &Settings::default(), &cancel, &mut |m| {
+        let r = tune(&mut c, &Settings::default(), &cancel, &mut |m| {
             if m.to_string().starts_with(phase) {
                 seen = true;
                 cancel.cancel();

@@ -1,15 +1,15 @@
-//! End-to-end tests against the built-in virtual device over a pseudo-terminal.
+//! End-to-end tests against the built-in virtual device over a pseudo-terminal (release
+//! verdicts: they need the tune's classifier, so they live with it).
 
-use stiffwall_host::device::client::Client;
-use stiffwall_host::device::virtual_device::{spawn, Spec};
-use stiffwall_host::tune::release::{classify, Verdict};
+use stiffwall_client::{spawn_virtual_device as spawn, Client, Pace, VirtualSpec as Spec};
+use stiffwall_tune::{classify, released_counts, Verdict};
 
 fn maxon(fast: bool) -> Spec {
     let d = stiffwall_core::devices::find("maxon-re35").expect("preset");
     Spec {
         plant: d.params,
         counts_per_rev: 8192,
-        fast,
+        pace: Pace::fast_if(fast),
         initial_position: 0.0,
         output_range: None,
         scene: None,
@@ -35,7 +35,7 @@ fn release_verdict(c: &mut Client, k: f32, deflection: i32) -> Verdict {
         rec.samples.first(),
         rec.samples.len()
     );
-    let counts = stiffwall_host::tune::release::released_counts(&rec.samples, 0);
+    let counts = released_counts(&rec.samples, 0);
     eprintln!(
         "K={k} faults={:#x} completed={} n={} head={:?} tail={:?}",
         rec.faults,
@@ -70,7 +70,7 @@ fn soft_wall_settles_and_stiff_wall_does_not() {
 fn a_device_speaking_another_protocol_version_is_refused_clearly() {
     use std::io::{Read, Write};
     use stiffwall_proto::{encode, DeviceMsg, FrameDecoder, HostMsg, MAX_FRAME};
-    let (mut master, host, _name) = stiffwall_host::device::transport::pty_pair().unwrap();
+    let (mut master, host, _name) = stiffwall_client::pty_pair().unwrap();
     let fake = std::thread::spawn(move || {
         let mut dec = FrameDecoder::new();
         let mut byte = [0u8; 1];
