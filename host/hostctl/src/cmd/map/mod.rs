@@ -26,13 +26,13 @@ pub mod args;
 pub mod atlas;
 pub mod atlas_model;
 pub mod atlas_plot;
-pub mod file;
+pub use stiffwall_analysis::map_file as file;
 pub mod kb;
 pub mod kb_args;
 pub mod kb_file;
 pub mod kb_plot;
 pub mod plot;
-pub mod values;
+pub use stiffwall_analysis::values;
 
 use crate::figure;
 use crate::output::emit_json;

@@ -1,0 +1,12 @@
+//! `stiffwall-analysis`: the library logic behind `hostctl` that is neither argument parsing,
+//! rendering nor the live view: the `hostctl map` file format and its validation and merging
+//! ([`map_file`], [`values`]).
+//!
+//! Units: as documented per module (dimensionless Table I quantities in map files, SI for a
+//! device's physical parameters). Errors: `thiserror` enums whose messages name the field and
+//! its allowed range; the command line adds its own context at the edge.
+
+#![warn(missing_docs)]
+
+pub mod map_file;
+pub mod values;
