@@ -1,6 +1,7 @@
 //! `stiffwall-analysis`: the library logic behind `hostctl` that is neither argument parsing,
 //! rendering nor the live view: the `hostctl map` file format and its validation and merging
-//! ([`map_file`], [`values`]).
+//! ([`map_file`], [`values`]); the paper's analysis of one device ([`device_report`],
+//! [`damping`]) and the data of its (K, B) frontier figure ([`frontier`]).
 //!
 //! Units: as documented per module (dimensionless Table I quantities in map files, SI for a
 //! device's physical parameters). Errors: `thiserror` enums whose messages name the field and
@@ -10,3 +11,6 @@
 
 pub mod map_file;
 pub mod values;
+pub mod damping;
+pub mod device_report;
+pub mod frontier;

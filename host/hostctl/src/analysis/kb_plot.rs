@@ -1,4 +1,5 @@
-//! The (B, K) plane of one device: virtual damping B on x, wall stiffness K on y, with core's
+//! The drawing of the (B, K) plane of one device (its data: [`stiffwall_analysis::frontier`],
+//! re-exported here): virtual damping B on x, wall stiffness K on y, with core's
 //! predicted exact linear boundary K_max(B) (`stiffwall_core::criteria::k_max_exact_linear`).
 //! Shared by `hostctl map --k-b` (under its map), `hostctl analyze --damping B --plot` and
 //! `hostctl tune --plot` (the frontier figure, [`Frontier`]).
@@ -15,69 +16,14 @@ use anyhow::Result;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use serde::Serialize;
-use std::path::{Path, PathBuf};
-use stiffwall_core::{criteria, PhysicalParams};
+use std::path::Path;
+pub use stiffwall_analysis::frontier::*;
 
 /// Size of the frontier figure in pixels.
 pub const SIZE_PX: (u32, u32) = (900, 660);
 
-/// Number of B values of [`boundary`].
-pub const BOUNDARY_POINTS: usize = 81;
-
 /// A chart over the (B, K) plane.
 pub type KbChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
-
-/// Units of the axes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct Units {
-    /// Unit of K.
-    pub k: &'static str,
-    /// Unit of B.
-    pub b: &'static str,
-}
-
-impl Units {
-    /// SI units of K and B.
-    #[must_use]
-    pub fn of(rotational: bool) -> Self {
-        if rotational {
-            Self {
-                k: "N·m/rad",
-                b: "N·m·s/rad",
-            }
-        } else {
-            Self {
-                k: "N/m",
-                b: "N·s/m",
-            }
-        }
-    }
-}
-
-/// `<stem>-kb.<ext>` beside `path` (`dir/t.svg` → `dir/t-kb.svg`).
-#[must_use]
-pub fn kb_path(path: &Path) -> PathBuf {
-    let stem = path
-        .file_stem()
-        .map_or_else(|| "plot".to_string(), |s| s.to_string_lossy().into_owned());
-    let name = match path.extension() {
-        Some(e) => format!("{stem}-kb.{}", e.to_string_lossy()),
-        None => format!("{stem}-kb"),
-    };
-    path.with_file_name(name)
-}
-
-/// K_max(B) of `p` on [`BOUNDARY_POINTS`] B values linear in 0 ..= `b_max` [N·s/m or
-/// N·m·s/rad], as (B, K_max) pairs; B values where core refuses the parameters are left out.
-#[must_use]
-pub fn boundary(p: &PhysicalParams, b_max: f64) -> Vec<(f64, f64)> {
-    let n = BOUNDARY_POINTS - 1;
-    (0..=n)
-        .map(|i| b_max * i as f64 / n as f64)
-        .filter_map(|b| criteria::k_max_exact_linear(p, b).ok().map(|k| (b, k)))
-        .collect()
-}
 
 /// Draws the axes (no mesh) with the labels `B [unit]` and `K [unit]`.
 ///
@@ -124,61 +70,6 @@ where
     Ok(())
 }
 
-/// A highlighted (B, K) point with its legend text.
-#[derive(Debug, Clone)]
-pub struct Mark {
-    /// B [N·s/m or N·m·s/rad].
-    pub b: f64,
-    /// K [N/m or N·m/rad].
-    pub k: f64,
-    /// Legend text.
-    pub label: String,
-}
-
-/// The frontier figure: the predicted boundary and what was verified or chosen on it.
-#[derive(Debug, Clone)]
-pub struct Frontier {
-    /// Caption.
-    pub title: String,
-    /// Units of the axes.
-    pub units: Units,
-    /// Predicted K_max(B), (B, K) pairs.
-    pub boundary: Vec<(f64, f64)>,
-    /// Legend text of the boundary.
-    pub boundary_label: String,
-    /// Verified points (B, largest resting K); None: none verified at that B (drawn as a
-    /// cross on the B axis).
-    pub verified: Vec<(f64, Option<f64>)>,
-    /// The spring-only wall's K (drawn at B = 0).
-    pub spring_only: Option<f64>,
-    /// The best B of the boundary.
-    pub best: Option<Mark>,
-    /// The chosen pair or operating point (highlighted).
-    pub chosen: Option<Mark>,
-    /// The quiet ceiling 2·max(c, F_s)/Δ (a horizontal line): above it no wall comes to rest
-    /// (the chatter band, up to the growth boundary K_max(B)). None: not drawn.
-    pub quiet_ceiling: Option<f64>,
-}
-
-impl Frontier {
-    /// The plotted (B, K) ranges: everything drawn, with room above for the legend.
-    fn ranges(&self) -> (f64, f64) {
-        let marks = self.best.iter().chain(self.chosen.iter());
-        let bs = self.boundary.iter().map(|p| p.0);
-        let bs = bs.chain(self.verified.iter().map(|v| 1.05 * v.0));
-        let b_max = bs
-            .chain(marks.clone().map(|m| 1.05 * m.b))
-            .fold(0.0, f64::max);
-        let ks = self.boundary.iter().map(|p| p.1).filter(|k| k.is_finite());
-        let ks = ks.chain(self.verified.iter().filter_map(|v| v.1));
-        let ks = ks.chain(self.spring_only).chain(marks.map(|m| m.k));
-        let ks = ks.chain(self.quiet_ceiling.filter(|k| k.is_finite()));
-        let k_max = 1.35 * ks.fold(0.0, f64::max);
-        let pos = |x: f64| if x > 0.0 && x.is_finite() { x } else { 1.0 };
-        (pos(b_max), pos(k_max))
-    }
-}
-
 impl Figure for Frontier {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
     where
@@ -195,8 +86,8 @@ impl Figure for Frontier {
         axes(&mut chart, self.units)?;
         let label = Some(self.boundary_label.clone());
         draw_boundary(&mut chart, &self.boundary, (0.0, y1), label)?;
-        self.draw_quiet_ceiling(&mut chart, x1)?;
-        self.draw_points(&mut chart)?;
+        draw_quiet_ceiling(self, &mut chart, x1)?;
+        draw_points(self, &mut chart)?;
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperRight)
@@ -208,107 +99,105 @@ impl Figure for Frontier {
     }
 }
 
-impl Frontier {
-    /// The quiet ceiling as a dashed horizontal line over the whole B axis: below it a wall can
-    /// come to rest; between it and K_max(B) it chatters; above K_max(B) it grows.
-    fn draw_quiet_ceiling<DB: DrawingBackend>(
-        &self,
-        chart: &mut KbChart<'_, DB>,
-        x1: f64,
-    ) -> Result<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        let Some(k) = self.quiet_ceiling.filter(|k| k.is_finite() && *k > 0.0) else {
-            return Ok(());
-        };
-        let purple = RGBColor(130, 60, 170);
+/// The quiet ceiling as a dashed horizontal line over the whole B axis: below it a wall can
+/// come to rest; between it and K_max(B) it chatters; above K_max(B) it grows.
+fn draw_quiet_ceiling<DB: DrawingBackend>(
+    f: &Frontier,
+    chart: &mut KbChart<'_, DB>,
+    x1: f64,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let Some(k) = f.quiet_ceiling.filter(|k| k.is_finite() && *k > 0.0) else {
+        return Ok(());
+    };
+    let purple = RGBColor(130, 60, 170);
+    chart
+        .draw_series(DashedLineSeries::new(
+            vec![(0.0, k), (x1, k)],
+            8,
+            5,
+            purple.stroke_width(2),
+        ))?
+        .label(format!(
+            "quiet ceiling 2c/Δ = {k:.4e}: above it every wall chatters (up to K_max(B); above that it grows)"
+        ))
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], purple.stroke_width(2)));
+    Ok(())
+}
+
+fn draw_points<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let blue = RGBColor(40, 90, 200);
+    let ok: Vec<(f64, f64)> = f
+        .verified
+        .iter()
+        .filter_map(|&(b, k)| k.map(|k| (b, k)))
+        .collect();
+    if !ok.is_empty() {
         chart
-            .draw_series(DashedLineSeries::new(
-                vec![(0.0, k), (x1, k)],
+            .draw_series(ok.iter().map(|&p| Circle::new(p, 5, blue.filled())))?
+            .label("verified: largest resting K at each B tried")
+            .legend(move |(x, y)| Circle::new((x + 9, y), 5, blue.filled()));
+    }
+    let none: Vec<f64> = f
+        .verified
+        .iter()
+        .filter(|v| v.1.is_none())
+        .map(|v| v.0)
+        .collect();
+    if !none.is_empty() {
+        chart
+            .draw_series(
+                none.iter()
+                    .map(|&b| Cross::new((b, 0.0), 7, blue.stroke_width(2))),
+            )?
+            .label("B tried, no K at or above the best so far (on the B axis)")
+            .legend(move |(x, y)| Cross::new((x + 9, y), 5, blue.stroke_width(2)));
+    }
+    if let Some(k) = f.spring_only {
+        let green = RGBColor(20, 140, 60);
+        chart
+            .draw_series(std::iter::once(TriangleMarker::new(
+                (0.0, k),
                 8,
-                5,
-                purple.stroke_width(2),
+                green.filled(),
+            )))?
+            .label(format!("spring-only wall K = {k:.4e}"))
+            .legend(move |(x, y)| TriangleMarker::new((x + 9, y), 6, green.filled()));
+    }
+    draw_marks(f, chart)
+}
+
+fn draw_marks<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    if let Some(m) = &f.best {
+        let orange = RGBColor(230, 130, 20);
+        chart
+            .draw_series(std::iter::once(Cross::new(
+                (m.b, m.k),
+                8,
+                orange.stroke_width(3),
+            )))?
+            .label(m.label.clone())
+            .legend(move |(x, y)| Cross::new((x + 9, y), 6, orange.stroke_width(3)));
+    }
+    if let Some(m) = &f.chosen {
+        chart
+            .draw_series(std::iter::once(
+                EmptyElement::at((m.b, m.k))
+                    + Circle::new((0, 0), 9, BLACK.stroke_width(3))
+                    + Circle::new((0, 0), 4, BLACK.filled()),
             ))?
-            .label(format!(
-                "quiet ceiling 2c/Δ = {k:.4e}: above it every wall chatters (up to K_max(B); above that it grows)"
-            ))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], purple.stroke_width(2)));
-        Ok(())
+            .label(m.label.clone())
+            .legend(|(x, y)| Circle::new((x + 9, y), 7, BLACK.stroke_width(3)));
     }
-
-    fn draw_points<DB: DrawingBackend>(&self, chart: &mut KbChart<'_, DB>) -> Result<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        let blue = RGBColor(40, 90, 200);
-        let ok: Vec<(f64, f64)> = self
-            .verified
-            .iter()
-            .filter_map(|&(b, k)| k.map(|k| (b, k)))
-            .collect();
-        if !ok.is_empty() {
-            chart
-                .draw_series(ok.iter().map(|&p| Circle::new(p, 5, blue.filled())))?
-                .label("verified: largest resting K at each B tried")
-                .legend(move |(x, y)| Circle::new((x + 9, y), 5, blue.filled()));
-        }
-        let none: Vec<f64> = self
-            .verified
-            .iter()
-            .filter(|v| v.1.is_none())
-            .map(|v| v.0)
-            .collect();
-        if !none.is_empty() {
-            chart
-                .draw_series(
-                    none.iter()
-                        .map(|&b| Cross::new((b, 0.0), 7, blue.stroke_width(2))),
-                )?
-                .label("B tried, no K at or above the best so far (on the B axis)")
-                .legend(move |(x, y)| Cross::new((x + 9, y), 5, blue.stroke_width(2)));
-        }
-        if let Some(k) = self.spring_only {
-            let green = RGBColor(20, 140, 60);
-            chart
-                .draw_series(std::iter::once(TriangleMarker::new(
-                    (0.0, k),
-                    8,
-                    green.filled(),
-                )))?
-                .label(format!("spring-only wall K = {k:.4e}"))
-                .legend(move |(x, y)| TriangleMarker::new((x + 9, y), 6, green.filled()));
-        }
-        self.draw_marks(chart)
-    }
-
-    fn draw_marks<DB: DrawingBackend>(&self, chart: &mut KbChart<'_, DB>) -> Result<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        if let Some(m) = &self.best {
-            let orange = RGBColor(230, 130, 20);
-            chart
-                .draw_series(std::iter::once(Cross::new(
-                    (m.b, m.k),
-                    8,
-                    orange.stroke_width(3),
-                )))?
-                .label(m.label.clone())
-                .legend(move |(x, y)| Cross::new((x + 9, y), 6, orange.stroke_width(3)));
-        }
-        if let Some(m) = &self.chosen {
-            chart
-                .draw_series(std::iter::once(
-                    EmptyElement::at((m.b, m.k))
-                        + Circle::new((0, 0), 9, BLACK.stroke_width(3))
-                        + Circle::new((0, 0), 4, BLACK.filled()),
-                ))?
-                .label(m.label.clone())
-                .legend(|(x, y)| Circle::new((x + 9, y), 7, BLACK.stroke_width(3)));
-        }
-        Ok(())
-    }
+    Ok(())
 }
 
 /// Writes the frontier figure to `path` (.svg or .png, any case).
@@ -322,13 +211,6 @@ pub fn write(path: &Path, f: &Frontier) -> Result<(), FigureError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn kb_path_puts_kb_before_the_extension() {
-        assert_eq!(kb_path(Path::new("d/t.svg")), PathBuf::from("d/t-kb.svg"));
-        assert_eq!(kb_path(Path::new("a.b.PNG")), PathBuf::from("a.b-kb.PNG"));
-        assert_eq!(kb_path(Path::new("t")), PathBuf::from("t-kb"));
-    }
 
     fn frontier(verified: Vec<(f64, Option<f64>)>, boundary: Vec<(f64, f64)>) -> Frontier {
         Frontier {
@@ -346,17 +228,6 @@ mod tests {
             }),
             quiet_ceiling: None,
         }
-    }
-
-    #[test]
-    fn ranges_cover_everything_and_stay_positive_when_all_is_zero_or_not_finite() {
-        let f = frontier(vec![(2.0, Some(900.0))], vec![(0.0, 50.0), (3.0, f64::NAN)]);
-        let (b, k) = f.ranges();
-        assert!(b >= 3.0 && k > 900.0, "{b} {k}");
-        let mut empty = frontier(Vec::new(), Vec::new());
-        empty.spring_only = None;
-        empty.chosen = None;
-        assert_eq!(empty.ranges(), (1.0, 1.0));
     }
 
     #[test]
