@@ -14,3 +14,4 @@ pub mod values;
 pub mod damping;
 pub mod device_report;
 pub mod frontier;
+pub mod atlas;

@@ -18,16 +18,15 @@
 //! A line's agreement is the fraction of the panel's grid points on which its prediction
 //! equals the simulation. Invariant: the atlas is computed only from a complete, validated map.
 //!
-//! Layout: the lines and the atlas document are plain data in `atlas_model` (re-exported
-//! here); `atlas_plot` draws them; this module computes, renders Markdown and runs the
+//! Layout: the lines, the atlas document and its computation are `stiffwall_analysis::atlas`
+//! (re-exported here); `atlas_plot` draws them; this module renders Markdown and runs the
 //! command, on top of both.
 
-pub use super::atlas_model::{Agreement, Atlas, AtlasPanel, Line, Slice};
 use super::atlas_plot;
-use super::file::{self, Cost, MapFile};
-use anyhow::{ensure, Context, Result};
+use super::file;
+use anyhow::{Context, Result};
 use std::path::PathBuf;
-use stiffwall_sim::classify::Class;
+pub use stiffwall_analysis::atlas::{compute, Agreement, Atlas, AtlasPanel, Line, Slice};
 
 /// Arguments of `hostctl map atlas`.
 #[derive(Debug, clap::Args)]
@@ -49,84 +48,6 @@ pub struct Args {
     /// Command line recorded in the --markdown header (how the table was generated).
     #[arg(long)]
     pub generated_by: Option<String>,
-}
-
-/// Compares every panel of a complete map with every [`Line`].
-///
-/// # Errors
-/// A sharded map, or parameters out of the analysis' range.
-pub fn compute(m: &MapFile) -> Result<Atlas> {
-    ensure!(
-        m.shard.is_none(),
-        "the atlas needs a complete map: merge the shards first (hostctl map merge)"
-    );
-    ensure!(
-        m.spec.damping == 0.0,
-        "the atlas compares with the spring-only boundaries of the paper: the map has \
-         damping beta_v = {} (recompute it with --damping 0)",
-        m.spec.damping
-    );
-    let mut panels = Vec::with_capacity(m.panels.len());
-    for (pi, p) in m.panels.iter().enumerate() {
-        let cost = Cost::of(
-            std::slice::from_ref(p),
-            vec![m.cost.ns_per_period.get(pi).cloned().unwrap_or_default()],
-        );
-        let slice = Slice {
-            mu: p.mu,
-            tau_d: p.tau_d,
-            xidot0: p.xidot0,
-        };
-        let growing = p
-            .points
-            .iter()
-            .filter(|q| q.class == Class::Growing)
-            .count();
-        let mut agreement = Vec::with_capacity(Line::ALL.len());
-        for line in Line::ALL {
-            let (mut correct, mut false_growth, mut missed, mut defined) = (0, 0, 0, true);
-            for q in &p.points {
-                let Some(pred) = slice
-                    .predicts_growth(line, q.beta, q.sigma)
-                    .with_context(|| format!("mu = {}, tau_d = {}", p.mu, p.tau_d))?
-                else {
-                    defined = false;
-                    break;
-                };
-                let sim = q.class == Class::Growing;
-                match (pred, sim) {
-                    (true, false) => false_growth += 1,
-                    (false, true) => missed += 1,
-                    _ => correct += 1,
-                }
-            }
-            let n = p.points.len();
-            agreement.push(Agreement {
-                line: line.name(),
-                correct: defined.then_some(correct),
-                fraction: (defined && n > 0).then(|| correct as f64 / n as f64),
-                false_growth: defined.then_some(false_growth),
-                missed_growth: defined.then_some(missed),
-            });
-        }
-        panels.push(AtlasPanel {
-            mu: p.mu,
-            tau_d: p.tau_d,
-            xidot0: p.xidot0,
-            points: p.points.len(),
-            growing,
-            periods_total: cost.periods_total,
-            ns_per_period_mean: cost.ns_per_period_mean,
-            agreement,
-        });
-    }
-    Ok(Atlas {
-        map_spec_crc64: m.spec_crc64.clone(),
-        periods: m.spec.periods,
-        cpu_seconds: m.cost.cpu_seconds,
-        cpu_ns_per_period: m.cost.cpu_ns_per_period,
-        panels,
-    })
 }
 
 fn pct(f: Option<f64>) -> String {
@@ -332,137 +253,4 @@ pub fn run(a: &Args) -> Result<()> {
         print!("{json}");
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::cmd::map::file::{Panel, Spec, Values};
-    use stiffwall_sim::exact::History;
-    use stiffwall_sim::map::{Axis, MapPoint};
-
-    /// A 4 × 4 map (μ = 100, τ_D = 0, ξ̇₀ = 1) whose "simulated" classes are set by hand.
-    fn hand_map(growing: &[(f64, f64)]) -> MapFile {
-        let spec = Spec {
-            mu: Values::One(100.0),
-            tau_d: Values::One(0.0),
-            xidot0: vec![1.0],
-            beta: Axis {
-                lo: 0.1,
-                hi: 1.0,
-                n: 4,
-            },
-            sigma: Axis {
-                lo: 0.0,
-                hi: 1.5,
-                n: 4,
-            },
-            periods: 10,
-            history: History::HoldInitial,
-            damping: 0.0,
-        };
-        let ps = spec.panels()[0];
-        let points: Vec<MapPoint> = (0..16)
-            .map(|i| {
-                let (beta, sigma) = ps.point(i);
-                let hit = growing
-                    .iter()
-                    .any(|&(b, s)| (b - beta).abs() < 1e-9 && (s - sigma).abs() < 1e-9);
-                MapPoint {
-                    index: i,
-                    beta,
-                    sigma,
-                    class: if hit {
-                        Class::Growing
-                    } else {
-                        Class::MonotoneDecay
-                    },
-                    periods_run: 10,
-                    h0: 0.0,
-                    h_end: 0.0,
-                    tail_amplitude: 0.0,
-                }
-            })
-            .collect();
-        let panels = vec![Panel {
-            mu: 100.0,
-            tau_d: 0.0,
-            xidot0: 1.0,
-            points,
-        }];
-        MapFile {
-            spec_crc64: spec.crc64(),
-            spec,
-            shard: None,
-            cost: Cost::of(&panels, vec![vec![0.0; 16]]),
-            panels,
-            seconds: 0.0,
-        }
-    }
-
-    /// Expected counts worked out by hand on the grid β ∈ {0.1, 0.4, 0.7, 1.0},
-    /// σ ∈ {0, 0.5, 1, 1.5}, μ = 100, τ_D = 0, ξ̇_max = 1:
-    /// - worst case: growth in C (β < ½, σ < ½) or D (β < ½, ½ ≤ σ < ½ + (½ − β)·1 = 1 − β):
-    ///   (0.1, 0), (0.1, 0.5), (0.4, 0), (0.4, 0.5);
-    /// - (72)/(74): ω ≈ 1/√μ = 0.1, M = 1/ω, σ_line ≈ (π/4)(½ − β): 0.31 at β = 0.1, 0.08 at
-    ///   0.4, negative beyond: growth at (0.1, 0), (0.4, 0) only;
-    /// - exact linear, τ_D = 0: stable iff β ≳ ½ (Colgate's 2b/T for bT/m = β/μ ≪ 1), growth at
-    ///   all 8 points with β ∈ {0.1, 0.4}.
-    ///
-    /// With simulated growth at (0.1, 0), (0.1, 0.5), (0.1, 1), (0.4, 0):
-    /// worst case misses (0.1, 1) and falsely predicts (0.4, 0.5): 14/16; DF misses (0.1, 0.5)
-    /// and (0.1, 1): 14/16; linear falsely predicts (0.4, 0.5), (0.4, 1), (0.4, 1.5),
-    /// (0.1, 1.5): 12/16.
-    #[test]
-    fn agreement_fractions_match_a_hand_count() {
-        let m = hand_map(&[(0.1, 0.0), (0.1, 0.5), (0.1, 1.0), (0.4, 0.0)]);
-        let a = compute(&m).unwrap();
-        let p = &a.panels[0];
-        assert_eq!((p.points, p.growing), (16, 4));
-        let get = |l: Line| *p.agreement.iter().find(|x| x.line == l.name()).unwrap();
-        let wc = get(Line::WorstCase);
-        assert_eq!(
-            (wc.correct, wc.false_growth, wc.missed_growth),
-            (Some(14), Some(1), Some(1))
-        );
-        assert_eq!(wc.fraction, Some(0.875));
-        for l in [Line::Df72, Line::Df74] {
-            let d = get(l);
-            assert_eq!(
-                (d.correct, d.false_growth, d.missed_growth),
-                (Some(14), Some(0), Some(2)),
-                "{l:?}"
-            );
-        }
-        let lin = get(Line::LinearExact);
-        assert_eq!(
-            (lin.correct, lin.false_growth, lin.missed_growth),
-            (Some(12), Some(4), Some(0))
-        );
-        assert_eq!(lin.fraction, Some(0.75));
-        // Simulated growth exactly where the worst case predicts it: 16/16.
-        let m = hand_map(&[(0.1, 0.0), (0.1, 0.5), (0.4, 0.0), (0.4, 0.5)]);
-        assert_eq!(
-            compute(&m).unwrap().panels[0].fraction(Line::WorstCase),
-            Some(1.0)
-        );
-        let md = markdown(
-            &compute(&m).unwrap(),
-            Some("hostctl map atlas x.json"),
-            None,
-        );
-        assert!(
-            md.contains("| 100.0000 | 0 | 1 | 16 | 4 | 100.0 % |"),
-            "{md}"
-        );
-        assert_eq!(compute(&m).unwrap().panels[0].periods_total, 160);
-    }
-
-    #[test]
-    fn a_shard_is_refused() {
-        let mut m = hand_map(&[]);
-        m.shard = Some((0, 2));
-        let e = compute(&m).unwrap_err().to_string();
-        assert!(e.contains("merge the shards first"), "{e}");
-    }
 }

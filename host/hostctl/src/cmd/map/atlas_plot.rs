@@ -4,7 +4,7 @@
 //! Units: dimensionless (β, σ, μ on the axes; fractions in [0, 1]). Invariant: drawn only from a
 //! complete, validated map and the atlas computed from it; lines are clipped to the plot.
 
-use super::atlas_model::{Atlas, Line, Slice};
+use stiffwall_analysis::atlas::{Atlas, Line, Slice};
 use super::file::{MapFile, Panel};
 use super::plot::draw_cells;
 use crate::figure::{self, Figure};

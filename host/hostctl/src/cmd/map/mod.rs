@@ -24,7 +24,6 @@
 
 pub mod args;
 pub mod atlas;
-pub mod atlas_model;
 pub mod atlas_plot;
 pub use stiffwall_analysis::map_file as file;
 pub mod kb;
