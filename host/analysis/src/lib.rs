@@ -15,3 +15,4 @@ pub mod damping;
 pub mod device_report;
 pub mod frontier;
 pub mod atlas;
+pub mod kb;

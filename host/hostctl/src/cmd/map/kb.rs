@@ -15,172 +15,23 @@
 //! core's exact sampled linear K_max(B) (`criteria::k_max_exact_linear`: ZOH, backward
 //! difference, b, T_D; no quantization or Coulomb).
 //!
-//! Layout: the JSON document is plain data in `kb_file` (re-exported here), drawn by `kb_plot`;
-//! this module computes, renders and runs on top of both.
+//! Layout: the flags are resolved once by `kb_args` into a device and a sweep; the JSON
+//! document and its computation are `stiffwall_analysis::kb` (re-exported here), drawn by
+//! `kb_plot`; this module renders the text and runs the command.
 //!
 //! Invariants: every flag is checked before anything is computed or written; β_v ≤ 1000 and
 //! τ_D ≤ 250 at every point; the result is deterministic and independent of thread count.
 
-use super::args::{history_of, Args};
+use super::args::Args;
 use super::file;
-use super::kb_args::{resolve_plant, Plant};
-pub use super::kb_file::{BoundaryPoint, KbFile, KbPoint, KbSpec, BOUNDARY_POINTS, MODEL_NOTE};
+pub use super::kb_args::spec_of;
 use super::kb_plot;
-pub use crate::analysis::kb_plot::Units;
-use anyhow::{ensure, Context, Result};
-use rayon::prelude::*;
+use anyhow::{Context, Result};
 use std::fmt::Write as _;
-use stiffwall_core::criteria;
+pub use stiffwall_analysis::kb::{
+    boundary, compute, BoundaryPoint, KbFile, KbPoint, KbSpec, Units, BOUNDARY_POINTS, MODEL_NOTE,
+};
 use stiffwall_sim::classify::Class;
-use stiffwall_sim::exact::MAX_BETA_V;
-use stiffwall_sim::map::{self as smap, Axis};
-
-fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Result<Axis> {
-    let s = s.with_context(|| format!("--k-b needs {flag} LO:HI:N [{unit}]"))?;
-    let a = Axis::parse(s).map_err(|e| anyhow::anyhow!("{flag} [{unit}]: {e}"))?;
-    let ok = if strict { a.lo > min } else { a.lo >= min };
-    ensure!(
-        ok,
-        "{flag} lo = {}: allowed range is {} {min} {unit}",
-        a.lo,
-        if strict { ">" } else { ">=" }
-    );
-    Ok(a)
-}
-
-/// Checks the flags of `--k-b` and returns the plant and sweep (nothing is computed).
-///
-/// # Errors
-/// A flag out of range, naming it and its allowed range.
-pub fn spec_of(a: &Args) -> Result<(Plant, KbSpec)> {
-    let plant = resolve_plant(&a.kb)?;
-    let tau_d = plant.delay_s / plant.period_s;
-    ensure!(
-        tau_d <= stiffwall_sim::params::MAX_TAU_D,
-        "{}: delay T_D = {} s is {tau_d} periods; allowed range is T_D <= {} T",
-        if a.kb.plant_file.is_some() {
-            "--plant controller.extra_delay_s"
-        } else {
-            "--delay"
-        },
-        plant.delay_s,
-        stiffwall_sim::params::MAX_TAU_D
-    );
-    let u = Units::of(plant.rotational);
-    let k = axis("--k-axis", a.kb.k_axis.as_deref(), 0.0, true, u.k)?;
-    let b = axis("--b-axis", a.kb.b_axis.as_deref(), 0.0, false, u.b)?;
-    ensure!(
-        k.n.checked_mul(b.n)
-            .is_some_and(|n| n <= smap::MAX_GRID_POINTS),
-        "--k-axis x --b-axis: {} x {} points, at most {}",
-        k.n,
-        b.n,
-        smap::MAX_GRID_POINTS
-    );
-    let bv_max = b.hi / (k.lo * plant.period_s);
-    ensure!(
-        bv_max.is_finite() && bv_max <= MAX_BETA_V,
-        "--b-axis hi = {} {}: beta_v = B/(K*T) = {bv_max:e} at K = {} (--k-axis lo); allowed \
-         range is B <= {MAX_BETA_V}*K*T = {:e} {}",
-        b.hi,
-        u.b,
-        k.lo,
-        MAX_BETA_V * k.lo * plant.period_s,
-        u.b
-    );
-    ensure!(
-        a.xidot0.len() == 1 && a.xidot0[0].is_finite() && a.xidot0[0].abs() <= 1e12,
-        "--xidot0 with --k-b: give one finite value, |v| <= 1e12 (counts per period)"
-    );
-    ensure!(
-        (1..=smap::MAX_PERIODS).contains(&a.periods),
-        "--periods {}: allowed range is [1, 1e8]",
-        a.periods
-    );
-    let spec = KbSpec {
-        k,
-        b,
-        xidot0: a.xidot0[0],
-        velocity: a.xidot0[0] * plant.resolution / plant.period_s,
-        periods: a.periods,
-        history: history_of(a.history),
-    };
-    for kk in [k.lo, k.hi] {
-        plant
-            .at(kk, b.hi)
-            .map_err(|e| anyhow::anyhow!("--k-axis K = {kk}: {e}"))?;
-    }
-    Ok((plant, spec))
-}
-
-fn point(plant: &Plant, spec: &KbSpec, index: usize) -> KbPoint {
-    let k = spec.k.at(index / spec.b.n);
-    let b = spec.b.at(index % spec.b.n);
-    // In range at both ends of the K axis (checked by `spec_of`), hence everywhere.
-    let (d, beta_v) = plant
-        .at(k, b)
-        .unwrap_or((stiffwall_sim::Params::BASE, f64::NAN));
-    let o = smap::simulate_point_damped(d, spec.xidot0, spec.periods, spec.history, beta_v);
-    let phys = plant.physical(k);
-    KbPoint {
-        index,
-        k,
-        b,
-        mu: d.mu,
-        beta: d.beta,
-        sigma: d.sigma,
-        beta_v,
-        class: o.class,
-        periods_run: o.periods_run,
-        h0: o.h0,
-        h_end: o.h_end,
-        tail_amplitude: o.tail_amplitude,
-        chatter: super::kb_file::is_chatter(o.class, o.tail_amplitude),
-        linear_stable: criteria::exact_linear_stable(&phys, b).unwrap_or(false),
-    }
-}
-
-/// K_max(B) on [`BOUNDARY_POINTS`] values spanning the B axis.
-#[must_use]
-pub fn boundary(plant: &Plant, b: &Axis) -> Vec<BoundaryPoint> {
-    let n = if b.hi > b.lo { BOUNDARY_POINTS } else { 1 };
-    let axis = Axis { n, ..*b };
-    let p = plant.physical(1.0);
-    (0..n)
-        .map(|i| {
-            let b = axis.at(i);
-            BoundaryPoint {
-                b,
-                k_max: criteria::k_max_exact_linear(&p, b).unwrap_or(f64::NAN),
-            }
-        })
-        .collect()
-}
-
-/// Simulates every point of `spec` in parallel (rayon), calling `progress` once per point.
-#[must_use]
-pub fn compute(plant: &Plant, spec: &KbSpec, progress: &(dyn Fn() + Sync)) -> KbFile {
-    let t0 = std::time::Instant::now();
-    let points: Vec<KbPoint> = (0..spec.k.n * spec.b.n)
-        .into_par_iter()
-        .with_max_len(1)
-        .map(|i| {
-            let p = point(plant, spec, i);
-            progress();
-            p
-        })
-        .collect();
-    KbFile {
-        kind: "k-b",
-        model: MODEL_NOTE,
-        units: Units::of(plant.rotational),
-        plant: plant.clone(),
-        spec: spec.clone(),
-        points,
-        boundary: boundary(plant, &spec.b),
-        seconds: t0.elapsed().as_secs_f64(),
-    }
-}
 
 fn class_char(c: Class, chatter: bool) -> char {
     match c {

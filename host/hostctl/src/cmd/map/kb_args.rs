@@ -1,4 +1,5 @@
-//! The flags of `hostctl map --k-b` and the device they describe.
+//! The flags of `hostctl map --k-b`, resolved once into the device ([`Plant`]) and the sweep
+//! ([`KbSpec`]) that `stiffwall_analysis::kb::compute` maps.
 //!
 //! Units: SI. A linear device: m [kg], b [N·s/m], c [N], Δ [m], K [N/m], B [N·s/m]; a
 //! rotational one: kg·m², N·m·s/rad, N·m, rad, N·m/rad, N·m·s/rad. T and T_D in s.
@@ -10,14 +11,15 @@
 //! `--viscous`, `--coulomb`, `--resolution`, `--period` (`--delay` 0 by default). Invariant:
 //! every value is checked by `stiffwall-core`'s ranges, errors name the flag.
 
+use super::args::{history_of, Args};
 use crate::plant_args::{PlantArgs, PlantArgsError};
 use anyhow::{anyhow, ensure, Context, Result};
-use serde::Serialize;
 use std::path::{Path, PathBuf};
+pub use stiffwall_analysis::kb::Plant;
+use stiffwall_analysis::kb::{KbSpec, Units};
 use stiffwall_core::params::check_positive;
-use stiffwall_core::PhysicalParams;
-use stiffwall_sim::params::{Params, MAX_TAU_D};
-use stiffwall_sim::rich::{PlantModel, WallDamper};
+use stiffwall_sim::exact::MAX_BETA_V;
+use stiffwall_sim::map::{self as smap, Axis};
 
 /// Flags of the (K, B) map (`hostctl map --k-b`).
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -60,109 +62,11 @@ pub struct KbArgs {
     pub rotational: bool,
 }
 
-/// The device of a (K, B) map (its K is the sweep's).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Plant {
-    /// Where it came from (`plant file …`, `preset …`, `flags`).
-    pub source: String,
-    /// m [kg or kg·m²].
-    pub mass: f64,
-    /// b [N·s/m or N·m·s/rad].
-    pub viscous: f64,
-    /// c [N or N·m].
-    pub coulomb: f64,
-    /// Δ [m or rad].
-    pub resolution: f64,
-    /// T [s].
-    pub period_s: f64,
-    /// T_D [s].
-    pub delay_s: f64,
-    /// Rotational units.
-    pub rotational: bool,
-    /// Effects of the plant file that the map does not simulate.
-    pub ignored: Vec<String>,
-}
-
-impl Plant {
-    /// Core's physical parameters at stiffness `k`.
-    #[must_use]
-    pub fn physical(&self, k: f64) -> PhysicalParams {
-        PhysicalParams {
-            mass: self.mass,
-            viscous: self.viscous,
-            coulomb: self.coulomb,
-            resolution: self.resolution,
-            period_s: self.period_s,
-            stiffness: k,
-            delay_s: self.delay_s,
-            rotational: self.rotational,
-        }
-    }
-
-    /// Table I at (K, B): (μ, β, σ, τ_D) and β_v = B/(KT).
-    ///
-    /// # Errors
-    /// A value out of the solver's range (μ underflow, τ_D > 250), naming the quantity.
-    pub fn at(&self, k: f64, b: f64) -> Result<(Params, f64)> {
-        let d = self.physical(k).to_dimensionless()?;
-        ensure!(
-            d.tau_d <= MAX_TAU_D,
-            "tau_d = T_D/T = {}: allowed range is [0, {MAX_TAU_D}]",
-            d.tau_d
-        );
-        Ok((d, b / (k * self.period_s)))
-    }
-}
-
-fn ignored_effects(m: &PlantModel, one_sided: bool, damper: Option<WallDamper>) -> Vec<String> {
-    let mut v = Vec::new();
-    let mut add = |on: bool, name: &str| {
-        if on {
-            v.push(name.to_owned());
-        }
-    };
-    add(m.stiction.is_some(), "stiction");
-    add(m.cogging.is_some(), "cogging");
-    add(m.transmission.is_some(), "transmission");
-    let amp = m.amplifier;
-    add(
-        amp.is_some_and(|a| a.cutoff_hz.is_some()),
-        "amplifier filter",
-    );
-    add(
-        amp.is_some_and(|a| a.force_limit_n.is_some()),
-        "amplifier saturation",
-    );
-    add(
-        amp.is_some_and(|a| a.deadband_n.is_some()),
-        "amplifier dead band",
-    );
-    add(m.hand.is_some(), "hand");
-    add(one_sided, "one-sided wall");
-    // The maps damp the plain difference of the paper's wall law.
-    add(
-        matches!(damper, Some(WallDamper::DeadBand(_))),
-        "damper dead band",
-    );
-    v
-}
-
 fn from_file(path: &Path) -> Result<Plant> {
     let text =
         std::fs::read_to_string(path).map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
-    let (m, ctl) = PlantModel::from_scene_toml(&text)
-        .map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
-    Ok(Plant {
-        source: format!("plant file {}", path.display()),
-        mass: m.mass_kg,
-        viscous: m.viscous_ns_per_m,
-        coulomb: m.coulomb_n,
-        resolution: m.resolution_m,
-        period_s: ctl.period_s,
-        delay_s: ctl.extra_delay_s,
-        rotational: m.counts_per_rev.is_some(),
-        ignored: ignored_effects(&m, ctl.one_sided, ctl.damper),
-    })
+    Plant::from_scene_toml(format!("plant file {}", path.display()), &text)
+        .map_err(|e| anyhow!("--plant {}: {e}", path.display()))
 }
 
 fn checked(
@@ -223,4 +127,82 @@ pub fn resolve_plant(a: &KbArgs) -> Result<Plant> {
         anyhow::bail!("--plant gives the whole device: --{flag} cannot be combined with it");
     }
     from_file(path)
+}
+
+fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Result<Axis> {
+    let s = s.with_context(|| format!("--k-b needs {flag} LO:HI:N [{unit}]"))?;
+    let a = Axis::parse(s).map_err(|e| anyhow::anyhow!("{flag} [{unit}]: {e}"))?;
+    let ok = if strict { a.lo > min } else { a.lo >= min };
+    ensure!(
+        ok,
+        "{flag} lo = {}: allowed range is {} {min} {unit}",
+        a.lo,
+        if strict { ">" } else { ">=" }
+    );
+    Ok(a)
+}
+
+/// Checks the flags of `--k-b` and returns the plant and sweep (nothing is computed).
+///
+/// # Errors
+/// A flag out of range, naming it and its allowed range.
+pub fn spec_of(a: &Args) -> Result<(Plant, KbSpec)> {
+    let plant = resolve_plant(&a.kb)?;
+    let tau_d = plant.delay_s / plant.period_s;
+    ensure!(
+        tau_d <= stiffwall_sim::params::MAX_TAU_D,
+        "{}: delay T_D = {} s is {tau_d} periods; allowed range is T_D <= {} T",
+        if a.kb.plant_file.is_some() {
+            "--plant controller.extra_delay_s"
+        } else {
+            "--delay"
+        },
+        plant.delay_s,
+        stiffwall_sim::params::MAX_TAU_D
+    );
+    let u = Units::of(plant.rotational);
+    let k = axis("--k-axis", a.kb.k_axis.as_deref(), 0.0, true, u.k)?;
+    let b = axis("--b-axis", a.kb.b_axis.as_deref(), 0.0, false, u.b)?;
+    ensure!(
+        k.n.checked_mul(b.n)
+            .is_some_and(|n| n <= smap::MAX_GRID_POINTS),
+        "--k-axis x --b-axis: {} x {} points, at most {}",
+        k.n,
+        b.n,
+        smap::MAX_GRID_POINTS
+    );
+    let bv_max = b.hi / (k.lo * plant.period_s);
+    ensure!(
+        bv_max.is_finite() && bv_max <= MAX_BETA_V,
+        "--b-axis hi = {} {}: beta_v = B/(K*T) = {bv_max:e} at K = {} (--k-axis lo); allowed \
+         range is B <= {MAX_BETA_V}*K*T = {:e} {}",
+        b.hi,
+        u.b,
+        k.lo,
+        MAX_BETA_V * k.lo * plant.period_s,
+        u.b
+    );
+    ensure!(
+        a.xidot0.len() == 1 && a.xidot0[0].is_finite() && a.xidot0[0].abs() <= 1e12,
+        "--xidot0 with --k-b: give one finite value, |v| <= 1e12 (counts per period)"
+    );
+    ensure!(
+        (1..=smap::MAX_PERIODS).contains(&a.periods),
+        "--periods {}: allowed range is [1, 1e8]",
+        a.periods
+    );
+    let spec = KbSpec {
+        k,
+        b,
+        xidot0: a.xidot0[0],
+        velocity: a.xidot0[0] * plant.resolution / plant.period_s,
+        periods: a.periods,
+        history: history_of(a.history),
+    };
+    for kk in [k.lo, k.hi] {
+        plant
+            .at(kk, b.hi)
+            .map_err(|e| anyhow::anyhow!("--k-axis K = {kk}: {e}"))?;
+    }
+    Ok((plant, spec))
 }

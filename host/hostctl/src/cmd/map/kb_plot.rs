@@ -5,7 +5,7 @@
 //!
 //! Invariant: cells are centred on the grid points; drawn only from a computed [`KbFile`].
 
-use super::kb_file::KbFile;
+use stiffwall_analysis::kb::KbFile;
 use super::plot::class_color;
 use crate::analysis::kb_plot;
 use crate::figure::{self, Figure, FigureError};

@@ -28,7 +28,6 @@ pub mod atlas_plot;
 pub use stiffwall_analysis::map_file as file;
 pub mod kb;
 pub mod kb_args;
-pub mod kb_file;
 pub mod kb_plot;
 pub mod plot;
 pub use stiffwall_analysis::values;
