@@ -16,3 +16,5 @@ pub mod device_report;
 pub mod frontier;
 pub mod atlas;
 pub mod kb;
+pub mod monitor_report;
+pub mod replay;
