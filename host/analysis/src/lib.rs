@@ -18,3 +18,4 @@ pub mod atlas;
 pub mod kb;
 pub mod monitor_report;
 pub mod replay;
+pub mod plant;

@@ -37,7 +37,7 @@
 
 use crate::figure::{self, Figure};
 use crate::output::emit_report;
-use crate::plant_args::{PlantArgs, PlantArgsError};
+use crate::plant_args::{PlantArgs, PlantSpecError};
 use crate::recording::{self, Recording};
 use anyhow::{anyhow, bail, Context, Result};
 pub use stiffwall_analysis::replay::{
@@ -94,7 +94,7 @@ fn plant_model(args: &Args, rec: &Recording) -> Result<(PlantModel, String)> {
             recorded
         };
         let f = args.plant.friction(preset).map_err(|e| match e {
-            PlantArgsError::Incomplete => anyhow!("plant replay needs m, b and c: give --device NAME, --plant FILE or all of --mass, --viscous and --coulomb"),
+            PlantSpecError::Incomplete => anyhow!("plant replay needs m, b and c: give --device NAME, --plant FILE or all of --mass, --viscous and --coulomb"),
             e => e.into(),
         })?;
         let model = PlantModel::rigid(f.mass, f.viscous, f.coulomb, delta)

@@ -12,7 +12,7 @@
 //! every value is checked by `stiffwall-core`'s ranges, errors name the flag.
 
 use super::args::{history_of, Args};
-use crate::plant_args::{PlantArgs, PlantArgsError};
+use crate::plant_args::{PlantArgs, PlantSpecError};
 use anyhow::{anyhow, ensure, Context, Result};
 use std::path::{Path, PathBuf};
 pub use stiffwall_analysis::kb::Plant;
@@ -80,7 +80,7 @@ fn checked(
 
 fn from_flags(a: &KbArgs) -> Result<Plant> {
     let friction = a.plant.friction(None).map_err(|e| match e {
-        PlantArgsError::Incomplete => anyhow!(
+        PlantSpecError::Incomplete => anyhow!(
             "--k-b needs a device: --plant FILE, --device NAME, or all of --mass, --viscous, \
              --coulomb, --resolution and --period"
         ),
