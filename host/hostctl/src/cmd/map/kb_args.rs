@@ -27,7 +27,7 @@ pub struct KbArgs {
     /// Map the (K, B) plane of one physical device instead of the (beta, sigma) plane.
     #[arg(
         long = "k-b",
-        conflicts_with_all = ["mu", "tau_d", "beta", "sigma", "shard", "overlay", "damping"]
+        conflicts_with_all = ["mu", "tau_d", "beta", "sigma", "shard", "overlay", "beta_v"]
     )]
     pub k_b: bool,
     /// With --k-b: K axis lo:hi:n, N/m (N·m/rad for rotational devices), lo > 0.

@@ -7,7 +7,7 @@
 //! `lo:hi:n:log`), a third axis: one panel per (μ, τ_D, ξ̇₀), μ outer. `--shard k/n` computes
 //! every n-th point (starting at k) of every panel so a batch scheduler can split a sweep;
 //! `hostctl map merge` joins the shard files; `hostctl map atlas` compares a map with the
-//! analytic boundaries ([`atlas`]). `--damping BETA_V` (dimensionless β_v = B/(K·T) in
+//! analytic boundaries ([`atlas`]). `--beta-v BETA_V` (dimensionless β_v = B/(K·T) in
 //! [0, 1000]) adds the wall's virtual damper at every point (`spec.damping`, written only when
 //! nonzero: with 0 every file, hash and figure is unchanged). `--k-b` maps the (K, B) plane of
 //! one physical device instead ([`kb`]; SI units).
@@ -100,9 +100,9 @@ fn spec_of(a: &Args) -> Result<Spec> {
     ensure!(beta.lo >= 0.0, "--beta: allowed range is >= 0");
     ensure!(sigma.lo >= 0.0, "--sigma: allowed range is >= 0");
     ensure!(
-        a.damping.is_finite() && (0.0..=MAX_BETA_V).contains(&a.damping),
-        "--damping {}: allowed range is [0, {MAX_BETA_V}] (dimensionless beta_v = B/(K*T))",
-        a.damping
+        a.beta_v.is_finite() && (0.0..=MAX_BETA_V).contains(&a.beta_v),
+        "--beta-v {}: allowed range is [0, {MAX_BETA_V}] (dimensionless beta_v = B/(K*T))",
+        a.beta_v
     );
     let spec = Spec {
         mu,
@@ -112,10 +112,10 @@ fn spec_of(a: &Args) -> Result<Spec> {
         sigma,
         periods: a.periods,
         history: history_of(a.history),
-        damping: a.damping,
+        damping: a.beta_v,
     };
     spec.validate()
-        .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --damping")?;
+        .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --beta-v")?;
     Ok(spec)
 }
 
@@ -258,7 +258,7 @@ fn run_merge(
 fn check_overlay(spec: &Spec, overlay: bool) -> Result<()> {
     ensure!(
         !overlay || spec.damping == 0.0,
-        "--overlay draws the spring-only boundaries of Fig. 3/5: not valid with --damping {} \
+        "--overlay draws the spring-only boundaries of Fig. 3/5: not valid with --beta-v {} \
          (allowed with --overlay: 0)",
         spec.damping
     );
@@ -303,6 +303,12 @@ fn report(m: &MapFile) {
 /// # Errors
 /// A flag out of range, an invalid or incomplete set of shard files, or a file error.
 pub fn run(args: &Args) -> Result<()> {
+    if args.damping_renamed.is_some() {
+        bail!(
+            "`hostctl map --damping` was renamed: use `--beta-v` (the dimensionless virtual \
+             damping B/(K*T))"
+        );
+    }
     if let Some(Sub::Merge {
         inputs,
         out,
