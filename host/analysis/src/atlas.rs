@@ -267,13 +267,14 @@ pub fn compute(m: &MapFile) -> Result<Atlas, AtlasError> {
         for line in Line::ALL {
             let (mut correct, mut false_growth, mut missed, mut defined) = (0, 0, 0, true);
             for q in &p.points {
-                let Some(pred) = slice
-                    .predicts_growth(line, q.beta, q.sigma)
-                    .map_err(|source| AtlasError::Param {
-                        mu: p.mu,
-                        tau_d: p.tau_d,
-                        source,
-                    })?
+                let Some(pred) =
+                    slice
+                        .predicts_growth(line, q.beta, q.sigma)
+                        .map_err(|source| AtlasError::Param {
+                            mu: p.mu,
+                            tau_d: p.tau_d,
+                            source,
+                        })?
                 else {
                     defined = false;
                     break;

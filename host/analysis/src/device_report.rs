@@ -14,9 +14,7 @@ use crate::damping;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use stiffwall_core::params::{check_non_negative, check_positive};
-use stiffwall_core::{
-    criteria, describing, limits, regions, ParamError, PhysicalParams, Region,
-};
+use stiffwall_core::{criteria, describing, limits, regions, ParamError, PhysicalParams, Region};
 
 /// One stiffness limit of a criterion.
 #[derive(Debug, Clone, Serialize)]
@@ -279,4 +277,3 @@ fn criteria_table(
     );
     Ok(crit)
 }
-

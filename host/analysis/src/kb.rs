@@ -312,4 +312,3 @@ pub fn compute(plant: &Plant, spec: &KbSpec, progress: &(dyn Fn() + Sync)) -> Kb
         seconds: t0.elapsed().as_secs_f64(),
     }
 }
-

@@ -9,13 +9,13 @@
 
 #![warn(missing_docs)]
 
-pub mod map_file;
-pub mod values;
+pub mod atlas;
 pub mod damping;
 pub mod device_report;
 pub mod frontier;
-pub mod atlas;
 pub mod kb;
+pub mod map_file;
 pub mod monitor_report;
-pub mod replay;
 pub mod plant;
+pub mod replay;
+pub mod values;

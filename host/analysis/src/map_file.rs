@@ -185,7 +185,9 @@ impl Spec {
             "xidot0: {} values, allowed 1 to {MAX_PANELS}",
             self.xidot0.len()
         );
-        self.mu.validate().map_err(|e| MapFileError::Spec(format!("mu: {e}")))?;
+        self.mu
+            .validate()
+            .map_err(|e| MapFileError::Spec(format!("mu: {e}")))?;
         self.tau_d
             .validate()
             .map_err(|e| MapFileError::Spec(format!("tau_d: {e}")))?;
@@ -395,12 +397,10 @@ impl MapFile {
 /// The first problem found, naming the file, the field and what was expected.
 pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
     let name = path.display();
-    f.spec
-        .validate()
-        .map_err(|e| MapFileError::InvalidSpec {
-            path: path.to_path_buf(),
-            source: Box::new(e),
-        })?;
+    f.spec.validate().map_err(|e| MapFileError::InvalidSpec {
+        path: path.to_path_buf(),
+        source: Box::new(e),
+    })?;
     let crc = f.spec.crc64();
     ensure!(
         Content,

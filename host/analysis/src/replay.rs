@@ -21,7 +21,8 @@
 //! (c) **Energy monitor** ([`crate::monitor_report`]).
 //!
 //! Invariants: nothing panics on bad input; every refusal is a [`ReplayError`] naming what the
-//! replay needs (decimation 1, a stiffness, a position in range, a valid plant).
+//! replay needs (decimation 1, a position in range, a valid plant); the monitor's are
+//! `MonitorError`s.
 
 use crate::monitor_report::{monitor_recording, MonitorReplay};
 use serde::Serialize;
@@ -48,15 +49,6 @@ pub enum ReplayError {
         /// The recording's decimation.
         decimation: u16,
     },
-    /// (c) on a decimated recording.
-    #[error("the energy monitor needs every servo tick (decimation 1); this recording has decimation {decimation}")]
-    MonitorDecimated {
-        /// The recording's decimation.
-        decimation: u16,
-    },
-    /// (c) with K·Δ_eff² zero.
-    #[error("the energy monitor needs a stiffness K > 0 (the storage function is K·Δ_eff²·H)")]
-    MonitorNoStiffness,
     /// (b) with a recorded position the servo's i32 cannot hold.
     #[error("servo replay: the recorded position {pos0} is outside the servo's i32 range")]
     PositionRange {
@@ -434,8 +426,7 @@ pub fn replay(rec: &Recording, plant: Result<(PlantModel, String), String>) -> R
         Ok(s) => (Some(s), None),
         Err(e) => (None, Some(e.to_string())),
     };
-    let (monitor, monitor_skipped) = match monitor_recording(rec, &board_of(&rec.header.device))
-    {
+    let (monitor, monitor_skipped) = match monitor_recording(rec, &board_of(&rec.header.device)) {
         Ok(m) => (Some(m), None),
         Err(e) => (None, Some(e.to_string())),
     };

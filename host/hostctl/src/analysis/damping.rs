@@ -73,4 +73,3 @@ pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
     }
     s
 }
-

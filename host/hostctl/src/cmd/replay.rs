@@ -40,14 +40,14 @@ use crate::output::emit_report;
 use crate::plant_args::{PlantArgs, PlantSpecError};
 use crate::recording::{self, Recording};
 use anyhow::{anyhow, bail, Context, Result};
-pub use stiffwall_analysis::replay::{
-    board_of, replay_model, replay_plant, replay_servo, trailing_gap, Mismatch, PlantReplay,
-    Report, ServoReplay, FIT_WINDOW, START_GRID,
-};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+pub use stiffwall_analysis::replay::{
+    board_of, replay_model, replay_plant, replay_servo, trailing_gap, Mismatch, PlantReplay,
+    Report, ServoReplay, FIT_WINDOW, START_GRID,
+};
 use stiffwall_sim::rich::PlantModel;
 
 /// Arguments of `hostctl replay`.

@@ -23,10 +23,10 @@
 //! command, on top of both.
 
 use super::atlas_plot;
-use super::file;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 pub use stiffwall_analysis::atlas::{compute, Agreement, Atlas, AtlasPanel, Line, Slice};
+use stiffwall_analysis::map_file as file;
 
 /// Arguments of `hostctl map atlas`.
 #[derive(Debug, clap::Args)]

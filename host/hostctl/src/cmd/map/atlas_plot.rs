@@ -4,14 +4,14 @@
 //! Units: dimensionless (β, σ, μ on the axes; fractions in [0, 1]). Invariant: drawn only from a
 //! complete, validated map and the atlas computed from it; lines are clipped to the plot.
 
-use stiffwall_analysis::atlas::{Atlas, Line, Slice};
-use super::file::{MapFile, Panel};
 use super::plot::draw_cells;
 use crate::figure::{self, Figure};
 use anyhow::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
+use stiffwall_analysis::atlas::{Atlas, Line, Slice};
+use stiffwall_analysis::map_file::{MapFile, Panel};
 use stiffwall_core::regions;
 
 fn line_color(l: Line) -> RGBColor {

@@ -1,5 +1,5 @@
-//! The flags of `hostctl map --k-b`, resolved once into the device ([`Plant`]) and the sweep
-//! ([`KbSpec`]) that `stiffwall_analysis::kb::compute` maps.
+//! The flags of `hostctl map --k-b` and the device they describe, resolved once into a
+//! [`Plant`] (`stiffwall_analysis::kb`).
 //!
 //! Units: SI. A linear device: m [kg], b [N·s/m], c [N], Δ [m], K [N/m], B [N·s/m]; a
 //! rotational one: kg·m², N·m·s/rad, N·m, rad, N·m/rad, N·m·s/rad. T and T_D in s.
@@ -11,15 +11,11 @@
 //! `--viscous`, `--coulomb`, `--resolution`, `--period` (`--delay` 0 by default). Invariant:
 //! every value is checked by `stiffwall-core`'s ranges, errors name the flag.
 
-use super::args::{history_of, Args};
 use crate::plant_args::{PlantArgs, PlantSpecError};
-use anyhow::{anyhow, ensure, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use std::path::{Path, PathBuf};
 pub use stiffwall_analysis::kb::Plant;
-use stiffwall_analysis::kb::{KbSpec, Units};
 use stiffwall_core::params::check_positive;
-use stiffwall_sim::exact::MAX_BETA_V;
-use stiffwall_sim::map::{self as smap, Axis};
 
 /// Flags of the (K, B) map (`hostctl map --k-b`).
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -127,82 +123,4 @@ pub fn resolve_plant(a: &KbArgs) -> Result<Plant> {
         anyhow::bail!("--plant gives the whole device: --{flag} cannot be combined with it");
     }
     from_file(path)
-}
-
-fn axis(flag: &str, s: Option<&str>, min: f64, strict: bool, unit: &str) -> Result<Axis> {
-    let s = s.with_context(|| format!("--k-b needs {flag} LO:HI:N [{unit}]"))?;
-    let a = Axis::parse(s).map_err(|e| anyhow::anyhow!("{flag} [{unit}]: {e}"))?;
-    let ok = if strict { a.lo > min } else { a.lo >= min };
-    ensure!(
-        ok,
-        "{flag} lo = {}: allowed range is {} {min} {unit}",
-        a.lo,
-        if strict { ">" } else { ">=" }
-    );
-    Ok(a)
-}
-
-/// Checks the flags of `--k-b` and returns the plant and sweep (nothing is computed).
-///
-/// # Errors
-/// A flag out of range, naming it and its allowed range.
-pub fn spec_of(a: &Args) -> Result<(Plant, KbSpec)> {
-    let plant = resolve_plant(&a.kb)?;
-    let tau_d = plant.delay_s / plant.period_s;
-    ensure!(
-        tau_d <= stiffwall_sim::params::MAX_TAU_D,
-        "{}: delay T_D = {} s is {tau_d} periods; allowed range is T_D <= {} T",
-        if a.kb.plant_file.is_some() {
-            "--plant controller.extra_delay_s"
-        } else {
-            "--delay"
-        },
-        plant.delay_s,
-        stiffwall_sim::params::MAX_TAU_D
-    );
-    let u = Units::of(plant.rotational);
-    let k = axis("--k-axis", a.kb.k_axis.as_deref(), 0.0, true, u.k)?;
-    let b = axis("--b-axis", a.kb.b_axis.as_deref(), 0.0, false, u.b)?;
-    ensure!(
-        k.n.checked_mul(b.n)
-            .is_some_and(|n| n <= smap::MAX_GRID_POINTS),
-        "--k-axis x --b-axis: {} x {} points, at most {}",
-        k.n,
-        b.n,
-        smap::MAX_GRID_POINTS
-    );
-    let bv_max = b.hi / (k.lo * plant.period_s);
-    ensure!(
-        bv_max.is_finite() && bv_max <= MAX_BETA_V,
-        "--b-axis hi = {} {}: beta_v = B/(K*T) = {bv_max:e} at K = {} (--k-axis lo); allowed \
-         range is B <= {MAX_BETA_V}*K*T = {:e} {}",
-        b.hi,
-        u.b,
-        k.lo,
-        MAX_BETA_V * k.lo * plant.period_s,
-        u.b
-    );
-    ensure!(
-        a.xidot0.len() == 1 && a.xidot0[0].is_finite() && a.xidot0[0].abs() <= 1e12,
-        "--xidot0 with --k-b: give one finite value, |v| <= 1e12 (counts per period)"
-    );
-    ensure!(
-        (1..=smap::MAX_PERIODS).contains(&a.periods),
-        "--periods {}: allowed range is [1, 1e8]",
-        a.periods
-    );
-    let spec = KbSpec {
-        k,
-        b,
-        xidot0: a.xidot0[0],
-        velocity: a.xidot0[0] * plant.resolution / plant.period_s,
-        periods: a.periods,
-        history: history_of(a.history),
-    };
-    for kk in [k.lo, k.hi] {
-        plant
-            .at(kk, b.hi)
-            .map_err(|e| anyhow::anyhow!("--k-axis K = {kk}: {e}"))?;
-    }
-    Ok((plant, spec))
 }

@@ -5,7 +5,6 @@
 //!
 //! Invariant: cells are centred on the grid points; drawn only from a computed [`KbFile`].
 
-use stiffwall_analysis::kb::KbFile;
 use super::plot::class_color;
 use crate::analysis::kb_plot;
 use crate::figure::{self, Figure, FigureError};
@@ -13,6 +12,7 @@ use anyhow::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
+use stiffwall_analysis::kb::KbFile;
 
 struct KbFigure<'a>(&'a KbFile);
 

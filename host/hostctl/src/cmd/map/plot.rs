@@ -4,12 +4,12 @@
 //! Units: dimensionless (β, σ on the axes). Invariant: the image is drawn only from a complete,
 //! validated [`MapFile`]; cells are centred on the grid points.
 
-use super::file::MapFile;
 use crate::figure::{self, Figure, FigureError};
 use anyhow::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
+use stiffwall_analysis::map_file::MapFile;
 use stiffwall_core::regions;
 use stiffwall_sim::classify::Class;
 

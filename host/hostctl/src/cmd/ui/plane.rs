@@ -2,7 +2,7 @@
 //! figures: the operating point and stiffness limits of [`crate::analysis::analyze`], the
 //! region polygons and the critical line of `stiffwall_core::regions` (as in
 //! [`crate::analysis::plot`]), and, for an opened `hostctl map` JSON, the file's validation
-//! ([`crate::cmd::map::file::validate`]) and the analytic boundaries of `hostctl map --overlay`.
+//! ([`stiffwall_analysis::map_file::validate`]) and the analytic boundaries of `hostctl map --overlay`.
 //! The (B, K) frontier beside it is [`super::frontier`].
 //!
 //! Units: β, σ, ξ̇ dimensionless (ξ̇ in encoder ticks per servo period); m, b, c, K SI (N/m or
@@ -10,8 +10,8 @@
 //! that is off (K = 0) gives a plane without an operating point and says why.
 
 use crate::analysis;
-use crate::cmd::map::file::{self, MapFile};
 use serde_json::{json, Value};
+use stiffwall_analysis::map_file::{self, MapFile};
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_core::regions::{self, Boundary, Region, Window};
 use stiffwall_proto::{DeviceInfo, ServoConfig};
@@ -199,7 +199,7 @@ fn wall_off(model: &Model, info: &DeviceInfo, cfg: &ServoConfig, xidot: f64) -> 
 pub fn map_view(text: &str) -> anyhow::Result<Value> {
     let m: MapFile = serde_json::from_str(text)
         .map_err(|e| anyhow::anyhow!("not a hostctl map JSON file: {e}"))?;
-    file::validate(std::path::Path::new("the opened map"), &m)?;
+    map_file::validate(std::path::Path::new("the opened map"), &m)?;
     if m.shard.is_some() {
         anyhow::bail!(
             "the opened map is shard {:?} of a sweep; merge the shards with `hostctl map --merge` first",
@@ -349,7 +349,7 @@ mod tests {
 
     #[test]
     fn a_damped_map_gets_no_spring_only_boundaries() {
-        use crate::cmd::map::file::{Spec, Values};
+        use stiffwall_analysis::map_file::{Spec, Values};
         use stiffwall_sim::map::Axis;
         let axis = |hi| Axis { lo: 0.0, hi, n: 3 };
         let mut spec = Spec {
