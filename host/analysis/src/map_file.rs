@@ -1,4 +1,5 @@
-//! The map JSON file: format, full validation, atomic writing and shard merging.
+//! The map JSON file: its computation ([`compute`]), format, full validation, atomic writing
+//! and shard merging.
 //!
 //! Units: dimensionless (Table I), `seconds` of wall time, `ns_per_period` nanoseconds of wall
 //! time per simulated period. Panels are ordered slice-major: for each μ (outer), each τ_D,
@@ -574,6 +575,50 @@ pub fn write<T: Serialize>(path: &Path, m: &T) -> Result<()> {
         path: path.to_path_buf(),
         source,
     })
+}
+
+/// Computes a map (or shard (k, n) of it) with the exact solver, calling `progress` once per
+/// point; the cost and CPU time are measured around the computation.
+#[must_use]
+pub fn compute(
+    spec: &Spec,
+    shard: Option<(usize, usize)>,
+    progress: &(dyn Fn() + Sync),
+    opts: map::RunOptions,
+) -> MapFile {
+    let (k, n) = shard.unwrap_or((0, 1));
+    let t0 = std::time::Instant::now();
+    let cpu0 = process_cpu_seconds();
+    let specs = spec.panels();
+    let mut cycle_points = 0;
+    let (panels, ns): (Vec<Panel>, Vec<Vec<f64>>) = specs
+        .iter()
+        .map(|ps| {
+            let idx = map::shard(ps, k, n);
+            let o = map::run_with(ps, &idx, progress, opts);
+            cycle_points += o.cycle_points() as u64;
+            let panel = Panel {
+                mu: ps.mu,
+                tau_d: ps.tau_d,
+                xidot0: ps.xidot0,
+                points: o.points,
+            };
+            (panel, o.ns_per_period)
+        })
+        .unzip();
+    MapFile {
+        spec: spec.clone(),
+        spec_crc64: spec.crc64(),
+        shard,
+        cost: Cost::of(&panels, ns)
+            .with_cpu_seconds(
+                cpu0.zip(process_cpu_seconds())
+                    .map(|(a, b)| (b - a).max(0.0)),
+            )
+            .with_cycle_points(cycle_points),
+        panels,
+        seconds: t0.elapsed().as_secs_f64(),
+    }
 }
 
 /// Merges validated shard files of one sweep (any order) into a complete map.

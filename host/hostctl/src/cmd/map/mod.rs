@@ -36,7 +36,7 @@ use crate::figure;
 use crate::output::emit_json;
 use anyhow::{bail, ensure, Context, Result};
 pub use args::{history_of, Args, HistoryArg, Sub};
-use file::{Cost, MapFile, Panel, Spec, Values};
+use file::{MapFile, Panel, Spec, Values};
 use indicatif::{ProgressBar, ProgressStyle};
 use plot::damping_label;
 use std::path::PathBuf;
@@ -154,11 +154,11 @@ pub fn compute_with(
     opts: map::RunOptions,
 ) -> Result<MapFile> {
     let (k, n) = shard.unwrap_or((0, 1));
-    let t0 = std::time::Instant::now();
-    let cpu0 = file::process_cpu_seconds();
-    let specs = spec.panels();
-    let per_panel: Vec<Vec<usize>> = specs.iter().map(|ps| map::shard(ps, k, n)).collect();
-    let total: usize = per_panel.iter().map(Vec::len).sum();
+    let total: usize = spec
+        .panels()
+        .iter()
+        .map(|ps| map::shard(ps, k, n).len())
+        .sum();
     let pb = if quiet {
         ProgressBar::hidden()
     } else {
@@ -171,37 +171,9 @@ pub fn compute_with(
         );
         pb
     };
-    let tick = || pb.inc(1);
-    let mut cycle_points = 0;
-    let (panels, ns): (Vec<Panel>, Vec<Vec<f64>>) = specs
-        .iter()
-        .zip(&per_panel)
-        .map(|(ps, idx)| {
-            let o = map::run_with(ps, idx, &tick, opts);
-            cycle_points += o.cycle_points() as u64;
-            let panel = Panel {
-                mu: ps.mu,
-                tau_d: ps.tau_d,
-                xidot0: ps.xidot0,
-                points: o.points,
-            };
-            (panel, o.ns_per_period)
-        })
-        .unzip();
+    let m = file::compute(spec, shard, &|| pb.inc(1), opts);
     pb.finish_and_clear();
-    Ok(MapFile {
-        spec: spec.clone(),
-        spec_crc64: spec.crc64(),
-        shard,
-        cost: Cost::of(&panels, ns)
-            .with_cpu_seconds(
-                cpu0.zip(file::process_cpu_seconds())
-                    .map(|(a, b)| (b - a).max(0.0)),
-            )
-            .with_cycle_points(cycle_points),
-        panels,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    Ok(m)
 }
 
 /// The complete result already in `out` for this sweep and shard, if any (resume).
