@@ -1,11 +1,19 @@
 //! `stiffwall-analysis`: the library logic behind `hostctl` that is neither argument parsing,
-//! rendering nor the live view: the `hostctl map` file format and its validation and merging
-//! ([`map_file`], [`values`]); the paper's analysis of one device ([`device_report`],
-//! [`damping`]) and the data of its (K, B) frontier figure ([`frontier`]).
+//! rendering nor the live view:
+//! - maps: the `hostctl map` file format, its computation, validation and shard merging
+//!   ([`map_file`], [`values`]), the atlas of the paper's analytic lines against a map
+//!   ([`atlas`]) and the (K, B) map of one physical device ([`kb`]);
+//! - one device: the paper's analysis ([`device_report`]), its spring + damper part
+//!   ([`damping`]) and the data of its (K, B) frontier figure ([`frontier`]); the plant as
+//!   given, a preset and m, b, c ([`plant`]);
+//! - recordings: the replay engines ([`replay`]) and the energy-monitor replay
+//!   ([`monitor_report`]); the checks of a release test ([`release`]).
 //!
 //! Units: as documented per module (dimensionless Table I quantities in map files, SI for a
-//! device's physical parameters). Errors: `thiserror` enums whose messages name the field and
-//! its allowed range; the command line adds its own context at the edge.
+//! device's physical parameters, raw counts and servo ticks for recordings). Errors: `thiserror`
+//! enums whose messages name the field (as the command line spells it) and its allowed range;
+//! the command line adds its own context at the edge. Layer 3 of docs/ARCHITECTURE.md: depends
+//! on core, proto, sim, the firmware and the client, never on tune or `hostctl`.
 
 #![warn(missing_docs)]
 
@@ -17,5 +25,6 @@ pub mod kb;
 pub mod map_file;
 pub mod monitor_report;
 pub mod plant;
+pub mod release;
 pub mod replay;
 pub mod values;

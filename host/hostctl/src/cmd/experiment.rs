@@ -15,6 +15,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
+use stiffwall_analysis::release;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::{flags, Sample, ServoConfig};
 
@@ -78,27 +79,17 @@ pub fn check_release(a: &ReleaseArgs) -> Result<()> {
     check_release_values(a.deflection, a.ticks, a.stiffness)
 }
 
-/// [`check_release`] on the values themselves (shared with `hostctl ui`'s release command).
+/// [`check_release`] on the values themselves (shared with `hostctl ui`'s release command;
+/// `stiffwall_analysis::release::check_values`).
 ///
 /// # Errors
 /// As [`check_release`].
 pub fn check_release_values(deflection: i32, ticks: u32, stiffness: Option<f64>) -> Result<()> {
-    if deflection == 0 || deflection.unsigned_abs() > 1 << 20 {
-        bail!("--deflection must be non-zero and within [-1048576, 1048576] (got {deflection})");
-    }
-    if !(100..=10_000_000).contains(&ticks) {
-        bail!("--ticks must be within [100, 10000000] (got {ticks})");
-    }
-    if let Some(k) = stiffness {
-        if !(k.is_finite() && k > 0.0) {
-            bail!("--stiffness must be finite and > 0 (got {k})");
-        }
-    }
-    Ok(())
+    Ok(release::check_values(deflection, ticks, stiffness)?)
 }
 
-/// The configuration a release test runs with: `original` with the test's stiffness, refused
-/// when the wall would be off; shared with `hostctl ui`.
+/// The configuration a release test runs with (`stiffwall_analysis::release::config`): shared
+/// with `hostctl ui`.
 ///
 /// # Errors
 /// K is 0 (or NaN) and no `--stiffness` was given.
@@ -107,20 +98,7 @@ pub fn release_config(
     stiffness: Option<f64>,
     max_stiffness: f32,
 ) -> Result<ServoConfig> {
-    let mut cfg = *original;
-    if let Some(k) = stiffness {
-        cfg.stiffness = k as f32;
-    }
-    if cfg.stiffness.is_nan() || cfg.stiffness <= 0.0 {
-        bail!(
-            "the device's wall is off (K = {}): give the test's stiffness with --stiffness K \
-             (N/m or N·m/rad, > 0 and ≤ {} for this device at coarsening shift 0); a board \
-             keeps one set with `hostctl config set --stiffness K` and `hostctl config save`",
-            cfg.stiffness,
-            crate::device::client::readable(f64::from(max_stiffness))
-        );
-    }
-    Ok(cfg)
+    Ok(release::config(original, stiffness, max_stiffness)?)
 }
 
 fn release(a: &ReleaseArgs) -> Result<()> {
