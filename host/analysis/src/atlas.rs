@@ -149,6 +149,39 @@ impl Slice {
         Ok(Some(criteria::gil_avello_rubio_stable(&p)?))
     }
 
+    /// β values where the linear loop's stability flips inside [b0, b1] (scan + bisection).
+    ///
+    /// # Errors
+    /// Parameters out of range.
+    pub fn linear_flips(&self, b0: f64, b1: f64) -> Result<Vec<f64>> {
+        const SCAN: usize = 400;
+        let stable = |b: f64| self.linear_stable(b.max(0.0));
+        let mut flips = Vec::new();
+        let mut prev_b = b0.max(0.0);
+        let Some(mut prev) = stable(prev_b)? else {
+            return Ok(flips);
+        };
+        for i in 1..=SCAN {
+            let b = b0.max(0.0) + (b1 - b0.max(0.0)) * i as f64 / SCAN as f64;
+            let s = stable(b)?.unwrap_or(prev);
+            if s != prev {
+                let (mut lo, mut hi) = (prev_b, b);
+                for _ in 0..50 {
+                    let mid = 0.5 * (lo + hi);
+                    if stable(mid)?.unwrap_or(prev) == prev {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                flips.push(0.5 * (lo + hi));
+            }
+            prev = s;
+            prev_b = b;
+        }
+        Ok(flips)
+    }
+
     /// Whether `line` predicts growth at (β, σ); `None` when the line is not defined here.
     ///
     /// # Errors

@@ -74,36 +74,6 @@ fn step(lo: f64, hi: f64, n: usize) -> f64 {
     }
 }
 
-/// β values where the linear loop's stability flips inside [b0, b1] (scan + bisection).
-fn linear_flips(slice: &Slice, b0: f64, b1: f64) -> Result<Vec<f64>> {
-    const SCAN: usize = 400;
-    let stable = |b: f64| slice.linear_stable(b.max(0.0));
-    let mut flips = Vec::new();
-    let mut prev_b = b0.max(0.0);
-    let Some(mut prev) = stable(prev_b)? else {
-        return Ok(flips);
-    };
-    for i in 1..=SCAN {
-        let b = b0.max(0.0) + (b1 - b0.max(0.0)) * i as f64 / SCAN as f64;
-        let s = stable(b)?.unwrap_or(prev);
-        if s != prev {
-            let (mut lo, mut hi) = (prev_b, b);
-            for _ in 0..50 {
-                let mid = 0.5 * (lo + hi);
-                if stable(mid)?.unwrap_or(prev) == prev {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            flips.push(0.5 * (lo + hi));
-        }
-        prev = s;
-        prev_b = b;
-    }
-    Ok(flips)
-}
-
 /// The title, the agreement of each line (in its colour) and the cell legend of a panel.
 fn draw_panel_header<DB: DrawingBackend>(
     top: &DrawingArea<DB, Shift>,
@@ -195,7 +165,7 @@ where
         }
         chart.draw_series(LineSeries::new(pts, line_color(l).stroke_width(2)))?;
     }
-    for b in linear_flips(&slice, window.beta_min, window.beta_max)? {
+    for b in slice.linear_flips(window.beta_min, window.beta_max)? {
         chart.draw_series(LineSeries::new(
             vec![(b, window.sigma_min), (b, window.sigma_max)],
             line_color(Line::LinearExact).stroke_width(2),
