@@ -151,9 +151,9 @@ pub struct Plant {
     pub coulomb: f64,
     /// Δ [m or rad].
     pub resolution: f64,
-    /// T [s].
+    /// T, s.
     pub period_s: f64,
-    /// T_D [s].
+    /// T_D, s.
     pub delay_s: f64,
     /// Rotational units.
     pub rotational: bool,

@@ -2,8 +2,8 @@
 //! command line ([`PlantSpec`]): a device preset and the friction model's m, b, c overriding
 //! its fields, resolved into a [`Friction`].
 //!
-//! Units: SI; for a linear device m [kg], b [N·s/m], c [N]; for a rotational one m [kg·m²],
-//! b [N·m·s/rad], c [N·m]. Invariants: the ranges are `stiffwall-core`'s
+//! Units: SI; for a linear device m in kg, b in N·s/m, c in N; for a rotational one m in kg·m²,
+//! b in N·m·s/rad, c in N·m. Invariants: the ranges are `stiffwall-core`'s
 //! ([`stiffwall_core::params::check_positive`], [`stiffwall_core::params::check_non_negative`]):
 //! m finite and > 0, b and c finite and >= 0; a refused value is an error naming the flag, its
 //! allowed range and the value. A preset name is matched case-insensitively against

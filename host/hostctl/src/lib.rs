@@ -5,11 +5,16 @@
 //! command (they convert into a `stiffwall_client::ConnectSpec`); [`cli_error`] prints errors
 //! in the command line's words (refused fields as `--flag`s).
 //!
+//! The library logic (map files, atlas, (K, B) maps, the device report, replay and monitor
+//! engines, the plant as given, release checks) is the `stiffwall-analysis` crate; this crate
+//! parses arguments, renders text and figures and serves the live view (`cmd::ui`).
+//!
 //! Commands never import each other: what several of them share lives beside them —
 //! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
-//! [`plant_args`] (the plant flags, checked by `stiffwall-core`), [`config_flags`] (servo
+//! [`plant_args`] (the plant flags, resolved by `stiffwall_analysis::plant`), [`config_flags`] (servo
 //! configuration changes), [`session`] (the telemetry stream and recorder), [`analysis`] (the
-//! paper's analysis of one device, its (β, σ) figure and the (K, B) frontier figure), [`recording`] and [`tune`].
+//! text of the paper's analysis of one device, its (β, σ) figure and the (K, B) frontier
+//! figure), [`recording`] and [`tune`].
 //!
 //! Units: as documented per module (SI on the command line, device integers on the wire).
 //! Errors: library modules return `thiserror` enums naming the field and its range; the

@@ -1,4 +1,4 @@
-//! Figure of a (K, B) map: B on x, K on y (SI, the units of [`super::kb_file::Units`]), classes as
+//! Figure of a (K, B) map: B on x, K on y (SI, the units of [`stiffwall_analysis::kb::Units`]), classes as
 //! the grey levels of the (β, σ) map, and core's predicted exact linear boundary K_max(B) in
 //! red (clamped to the plotted K range; K_max = 0 where no K is stable). Axes and boundary are
 //! drawn by [`crate::analysis::kb_plot`], shared with the frontier figures of analyze and tune.
