@@ -12,7 +12,9 @@
 //! Units: as documented per module (dimensionless Table I quantities in map files, SI for a
 //! device's physical parameters, raw counts and servo ticks for recordings). Errors: `thiserror`
 //! enums whose messages name the field (as the command line spells it) and its allowed range;
-//! the command line adds its own context at the edge. Layer 3 of docs/ARCHITECTURE.md: depends
+//! the command line adds its own context at the edge. Invariants: nothing here parses a command
+//! line, draws, prints or serves; a file or value is checked (here, or once by the caller where
+//! a function says so, e.g. the (K, B) sweep) before anything is computed from it. Layer 3 of docs/ARCHITECTURE.md: depends
 //! on core, proto, sim, the firmware and the client, never on tune or `hostctl`.
 
 #![warn(missing_docs)]

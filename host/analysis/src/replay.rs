@@ -20,6 +20,10 @@
 //!
 //! (c) **Energy monitor** ([`crate::monitor_report`]).
 //!
+//! Units: counts are raw encoder counts relative to the recorded wall, errors in encoder ticks,
+//! m, b, c in SI (kg, N·s/m, N; kg·m², N·m·s/rad, N·m for a rotary device), force codes as
+//! recorded (× `force_per_code` gives N or N·m), times in servo periods of the recording.
+//!
 //! Invariants: nothing panics on bad input; every refusal is a [`ReplayError`] naming what the
 //! replay needs (decimation 1, a position in range, a valid plant); the monitor's are
 //! `MonitorError`s.
