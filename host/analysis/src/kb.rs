@@ -247,7 +247,8 @@ fn ignored_effects(m: &PlantModel, one_sided: bool, damper: Option<WallDamper>) 
 fn point(plant: &Plant, spec: &KbSpec, index: usize) -> KbPoint {
     let k = spec.k.at(index / spec.b.n);
     let b = spec.b.at(index % spec.b.n);
-    // In range at both ends of the K axis (checked by `spec_of`), hence everywhere.
+    // In range at both ends of the K axis (checked by the caller, see `compute`), hence
+    // everywhere.
     let (d, beta_v) = plant
         .at(k, b)
         .unwrap_or((stiffwall_sim::Params::BASE, f64::NAN));
@@ -289,6 +290,11 @@ pub fn boundary(plant: &Plant, b: &Axis) -> Vec<BoundaryPoint> {
 }
 
 /// Simulates every point of `spec` in parallel (rayon), calling `progress` once per point.
+///
+/// `spec` is checked by the caller first (`hostctl map --k-b` does it once, naming its flags):
+/// K lo > 0, B lo >= 0, at most `MAX_GRID_POINTS` points, B/(K·T) <= 1000 at the smallest K,
+/// [`Plant::at`] in range at both ends of the K axis. Unchecked, a point out of range falls
+/// back to `Params::BASE` with β_v = NaN instead of panicking.
 #[must_use]
 pub fn compute(plant: &Plant, spec: &KbSpec, progress: &(dyn Fn() + Sync)) -> KbFile {
     let t0 = std::time::Instant::now();
