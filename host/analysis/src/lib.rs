@@ -7,7 +7,8 @@
 //!   ([`damping`]) and the data of its (K, B) frontier figure ([`frontier`]); the plant as
 //!   given, a preset and m, b, c ([`plant`]);
 //! - recordings: the replay engines ([`replay`]) and the energy-monitor replay
-//!   ([`monitor_report`]); the checks of a release test ([`release`]).
+//!   ([`monitor_report`]); the checks of a release test ([`release`]) and of a servo
+//!   configuration change ([`config_check`]).
 //!
 //! Units: as documented per module (dimensionless Table I quantities in map files, SI for a
 //! device's physical parameters, raw counts and servo ticks for recordings). Errors: `thiserror`
@@ -20,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod atlas;
+pub mod config_check;
 pub mod damping;
 pub mod device_report;
 pub mod frontier;
