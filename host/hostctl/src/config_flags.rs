@@ -4,8 +4,8 @@
 //! Units: SI (N/m or N·m/rad, N·s/m or N·m·s/rad, N or N·m, m/s or rad/s, J, Hz); ticks,
 //! counts and shifts are integers. Invariants: obviously bad numbers (NaN, infinite, negative,
 //! zero where a positive value is needed) are refused on the host, naming the flag and its
-//! range, before anything is sent; the device validates the rest and a refused config changes
-//! nothing.
+//! range, before anything is sent (by `stiffwall_analysis::config_check`); the device validates
+//! the rest and a refused config changes nothing.
 
 use crate::device::client::Client;
 use crate::device::connect::ConnectArgs;
