@@ -8,8 +8,8 @@
 //! here beyond formatting.
 
 pub mod damping;
-pub mod kb_plot;
-pub mod plot;
+pub use stiffwall_figures::frontier as kb_plot;
+pub use stiffwall_figures::plane as plot;
 
 use std::fmt::Write as _;
 pub use stiffwall_analysis::device_report::*;

@@ -25,7 +25,8 @@ pub mod cli_error;
 pub mod cmd;
 pub mod config_flags;
 pub mod device;
-pub mod figure;
+/// The figure writer (the `stiffwall-figures` crate's), re-exported under its old path.
+pub use stiffwall_figures::figure;
 pub mod monitor_report;
 pub mod output;
 pub mod plant_args;

@@ -276,7 +276,7 @@ struct Release<'a> {
 }
 
 impl Figure for Release<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> figure::DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -296,11 +296,13 @@ fn draw<DB: DrawingBackend>(
     rate: f64,
     verdict: Verdict,
     report: Option<&analysis::Report>,
-) -> Result<()>
+) -> figure::DrawResult
 where
     DB::ErrorType: 'static,
 {
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("plot: {e}");
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| -> figure::DrawError {
+        format!("plot: {e}").into()
+    };
     root.fill(&WHITE).map_err(err)?;
     let (left, right) = root.split_horizontally(600);
     if let Some(r) = report {

@@ -208,7 +208,7 @@ fn render(file: &Path, r: &Report) -> String {
 struct PlantFigure<'a>(&'a PlantReplay);
 
 impl Figure for PlantFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> figure::DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -216,7 +216,7 @@ impl Figure for PlantFigure<'_> {
     }
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &PlantReplay) -> Result<()>
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &PlantReplay) -> figure::DrawResult
 where
     DB::ErrorType: 'static,
 {

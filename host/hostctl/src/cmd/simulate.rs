@@ -115,7 +115,7 @@ pub fn run(args: &Args) -> Result<()> {
 struct Trajectory<'a>(&'a [Row]);
 
 impl Figure for Trajectory<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> figure::DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -123,7 +123,7 @@ impl Figure for Trajectory<'_> {
     }
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Result<()>
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> figure::DrawResult
 where
     DB::ErrorType: 'static,
 {

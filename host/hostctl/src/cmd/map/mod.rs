@@ -24,13 +24,13 @@
 
 pub mod args;
 pub mod atlas;
-pub mod atlas_plot;
 pub use stiffwall_analysis::map_file as file;
+pub use stiffwall_figures::atlas as atlas_plot;
 pub mod kb;
 pub mod kb_args;
-pub mod kb_plot;
-pub mod plot;
 pub use stiffwall_analysis::values;
+pub use stiffwall_figures::kb_map as kb_plot;
+pub use stiffwall_figures::map as plot;
 
 use crate::figure;
 use crate::output::emit_json;

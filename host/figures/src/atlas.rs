@@ -4,9 +4,8 @@
 //! Units: dimensionless (β, σ, μ on the axes; fractions in [0, 1]). Invariant: drawn only from a
 //! complete, validated map and the atlas computed from it; lines are clipped to the plot.
 
-use super::plot::draw_cells;
-use crate::figure::{self, Figure};
-use anyhow::Result;
+use crate::figure::{self, DrawResult, Figure, FigureError};
+use crate::map::draw_cells;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -33,7 +32,12 @@ pub fn panel_file(mu: f64, tau_d: f64, xidot0: f64, ext: &str) -> String {
 ///
 /// # Errors
 /// A drawing or file error.
-pub fn plot_all(m: &MapFile, a: &Atlas, dir: &Path, ext: &str) -> Result<Vec<PathBuf>> {
+pub fn plot_all(
+    m: &MapFile,
+    a: &Atlas,
+    dir: &Path,
+    ext: &str,
+) -> Result<Vec<PathBuf>, FigureError> {
     let mut out = Vec::new();
     for (p, ap) in m.panels.iter().zip(&a.panels) {
         let path = dir.join(panel_file(p.mu, p.tau_d, p.xidot0, ext));
@@ -58,7 +62,7 @@ struct PanelFigure<'a> {
 }
 
 impl Figure for PanelFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -78,7 +82,7 @@ fn step(lo: f64, hi: f64, n: usize) -> f64 {
 fn draw_panel_header<DB: DrawingBackend>(
     top: &DrawingArea<DB, Shift>,
     f: &PanelFigure,
-) -> Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -118,7 +122,7 @@ where
     Ok(())
 }
 
-fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &PanelFigure) -> Result<()>
+fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &PanelFigure) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -179,7 +183,7 @@ struct SummaryFigure<'a> {
 }
 
 impl Figure for SummaryFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -187,7 +191,7 @@ impl Figure for SummaryFigure<'_> {
     }
 }
 
-fn draw_summary<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, a: &Atlas) -> Result<()>
+fn draw_summary<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, a: &Atlas) -> DrawResult
 where
     DB::ErrorType: 'static,
 {

@@ -11,8 +11,7 @@
 //! restated; a K_max that is not finite is not drawn, one outside the plotted K range is
 //! clamped to it. The frontier figure's file is named [`kb_path`] of the (β, σ) figure's.
 
-use crate::figure::{self, Figure, FigureError};
-use anyhow::Result;
+use crate::figure::{self, DrawResult, Figure, FigureError};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -29,7 +28,7 @@ pub type KbChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Rang
 ///
 /// # Errors
 /// A drawing error.
-pub fn axes<DB: DrawingBackend>(chart: &mut KbChart<'_, DB>, u: Units) -> Result<()>
+pub fn axes<DB: DrawingBackend>(chart: &mut KbChart<'_, DB>, u: Units) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -52,7 +51,7 @@ pub fn draw_boundary<DB: DrawingBackend>(
     pts: &[(f64, f64)],
     (y0, y1): (f64, f64),
     label: Option<String>,
-) -> Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -71,7 +70,7 @@ where
 }
 
 impl Figure for Frontier {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -105,7 +104,7 @@ fn draw_quiet_ceiling<DB: DrawingBackend>(
     f: &Frontier,
     chart: &mut KbChart<'_, DB>,
     x1: f64,
-) -> Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -127,7 +126,7 @@ where
     Ok(())
 }
 
-fn draw_points<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> Result<()>
+fn draw_points<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -172,7 +171,7 @@ where
     draw_marks(f, chart)
 }
 
-fn draw_marks<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> Result<()>
+fn draw_marks<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
