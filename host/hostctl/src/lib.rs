@@ -7,7 +7,8 @@
 //!
 //! The library logic (map files, atlas, (K, B) maps, the device report, replay and monitor
 //! engines, the plant as given, release checks) is the `stiffwall-analysis` crate; this crate
-//! parses arguments, renders text and figures and serves the live view (`cmd::ui`).
+//! parses arguments, renders text (the figures are drawn by `stiffwall-figures`, re-exported
+//! under the old paths) and serves the live view (`cmd::ui`).
 //!
 //! Commands never import each other: what several of them share lives beside them —
 //! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
