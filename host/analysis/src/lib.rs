@@ -1,5 +1,5 @@
 //! `stiffwall-analysis`: the library logic behind `hostctl` that is neither argument parsing,
-//! rendering nor the live view:
+//! rendering nor the live view's server:
 //! - maps: the `hostctl map` file format, its computation, validation and shard merging
 //!   ([`map_file`], [`values`]), the atlas of the paper's analytic lines against a map
 //!   ([`atlas`]) and the (K, B) map of one physical device ([`kb`]);
@@ -8,7 +8,9 @@
 //!   given, a preset and m, b, c ([`plant`]);
 //! - recordings: the replay engines ([`replay`]) and the energy-monitor replay
 //!   ([`monitor_report`]); the checks of a release test ([`release`]) and of a servo
-//!   configuration change ([`config_check`]).
+//!   configuration change ([`config_check`]);
+//! - the live view's data ([`live`]): the (β, σ) plane and (B, K) frontier panels and a
+//!   release test's decimated trace, as the page receives them (its server is `hostctl`'s).
 //!
 //! Units: as documented per module (dimensionless Table I quantities in map files, SI for a
 //! device's physical parameters, raw counts and servo ticks for recordings). Errors: `thiserror`
@@ -26,6 +28,7 @@ pub mod damping;
 pub mod device_report;
 pub mod frontier;
 pub mod kb;
+pub mod live;
 pub mod map_file;
 pub mod monitor_report;
 pub mod plant;

@@ -169,7 +169,7 @@ async fn api_map(body: Bytes) -> Response {
         Ok(v) => axum::Json(v).into_response(),
         Err(e) => (
             StatusCode::UNPROCESSABLE_ENTITY,
-            axum::Json(json!({"type": "map", "error": format!("{e:#}")})),
+            axum::Json(json!({"type": "map", "error": format!("{:#}", anyhow::Error::from(e))})),
         )
             .into_response(),
     }
