@@ -8,7 +8,10 @@
 //!   rotational: N·m·s/rad, N·m/rad);
 //! - [`map`]: the panels of a (β, σ) map file (dimensionless axes);
 //! - [`atlas`]: an atlas's panel images and its summary (dimensionless axes, fractions);
-//! - [`kb_map`]: a (K, B) map file (B and K in SI units as in [`frontier`]).
+//! - [`kb_map`]: a (K, B) map file (B and K in SI units as in [`frontier`]);
+//! - [`trajectory`]: a simulated scene's ξ(τ) and H_T(τ) (τ in servo periods);
+//! - [`plant_replay`]: a recording replayed through the plant (t in s, counts in ticks);
+//! - [`release`]: a release test beside the device's (β, σ) plane (t in s, x in ticks).
 //!
 //! Errors: the public writers return [`FigureError`], naming the file; drawing functions
 //! return [`figure::DrawResult`] (plotters' error or a message). No command line here: the
@@ -22,5 +25,8 @@ pub mod frontier;
 pub mod kb_map;
 pub mod map;
 pub mod plane;
+pub mod plant_replay;
+pub mod release;
+pub mod trajectory;
 
 pub use figure::{DrawError, DrawResult, Figure, FigureError};

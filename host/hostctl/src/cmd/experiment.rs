@@ -7,16 +7,15 @@
 
 use crate::analysis;
 use crate::device::connect::ConnectArgs;
-use crate::figure::{self, Figure};
+use crate::figure;
 use crate::output::{emit, emit_json};
 use crate::tune::release::{classify, Verdict};
 use anyhow::{bail, Result};
-use plotters::coord::Shift;
-use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use stiffwall_analysis::release;
 use stiffwall_core::params::PhysicalParams;
+use stiffwall_figures::release as release_figure;
 use stiffwall_proto::{flags, Sample, ServoConfig};
 
 /// Arguments of `hostctl experiment`.
@@ -144,13 +143,13 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         _ => None,
     };
     if let Some(path) = &a.plot {
-        let fig = Release {
+        let fig = release_figure::Release {
             counts: &counts,
             rate,
-            verdict,
+            verdict: verdict.describe(),
             report: report.as_ref(),
         };
-        figure::write(path, (1500, 600), &fig)?;
+        figure::write(path, release_figure::SIZE_PX, &fig)?;
     }
     let done = ReleaseDone {
         stiffness: cfg.stiffness,
@@ -265,95 +264,4 @@ impl ReleaseDone<'_> {
         }
         s
     }
-}
-
-/// The release figure: the (β, σ) plane (when a model is known) beside x(t).
-struct Release<'a> {
-    counts: &'a [i64],
-    rate: f64,
-    verdict: Verdict,
-    report: Option<&'a analysis::Report>,
-}
-
-impl Figure for Release<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> figure::DrawResult
-    where
-        DB::ErrorType: 'static,
-    {
-        draw(
-            root.clone(),
-            self.counts,
-            self.rate,
-            self.verdict,
-            self.report,
-        )
-    }
-}
-
-fn draw<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    counts: &[i64],
-    rate: f64,
-    verdict: Verdict,
-    report: Option<&analysis::Report>,
-) -> figure::DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| -> figure::DrawError {
-        format!("plot: {e}").into()
-    };
-    root.fill(&WHITE).map_err(err)?;
-    let (left, right) = root.split_horizontally(600);
-    if let Some(r) = report {
-        analysis::plot::draw(left, r)?;
-    }
-    let t_end = counts.len() as f64 / rate;
-    let lo = counts.iter().copied().min().unwrap_or(-2).min(-2) as f64 - 0.5;
-    let hi = counts.iter().copied().max().unwrap_or(2).max(2) as f64 + 1.5;
-    let mut chart = ChartBuilder::on(&right)
-        .caption(
-            format!("release test: {}", verdict.describe()),
-            ("sans-serif", 22),
-        )
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t_end.max(1e-3), lo..hi)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("t [s]")
-        .y_desc("x [encoder ticks]")
-        .draw()
-        .map_err(err)?;
-    chart
-        .draw_series(LineSeries::new(
-            counts
-                .iter()
-                .enumerate()
-                .map(|(i, n)| (i as f64 / rate, *n as f64)),
-            BLUE.stroke_width(2),
-        ))
-        .map_err(err)?
-        .label("x(t) (encoder count)")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
-    for level in [-1.0, 1.0] {
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(0.0, level), (t_end, level)],
-                6,
-                4,
-                BLACK.into(),
-            ))
-            .map_err(err)?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
-    root.present().map_err(err)?;
-    Ok(())
 }

@@ -35,19 +35,18 @@
 //! Invariants: a corrupted file is an error naming the line and the column
 //! ([`crate::recording`]); nothing panics on bad input; a mismatch in (b) exits non-zero.
 
-use crate::figure::{self, Figure};
+use crate::figure;
 use crate::output::emit_report;
 use crate::plant_args::{PlantArgs, PlantSpecError};
 use crate::recording::{self, Recording};
 use anyhow::{anyhow, bail, Context, Result};
-use plotters::coord::Shift;
-use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 pub use stiffwall_analysis::replay::{
     board_of, replay_model, replay_plant, replay_servo, trailing_gap, Mismatch, PlantReplay,
     Report, ServoReplay, FIT_WINDOW, START_GRID,
 };
+use stiffwall_figures::plant_replay;
 use stiffwall_sim::rich::PlantModel;
 
 /// Arguments of `hostctl replay`.
@@ -204,76 +203,6 @@ fn render(file: &Path, r: &Report) -> String {
     s
 }
 
-/// Recorded vs model count above their difference.
-struct PlantFigure<'a>(&'a PlantReplay);
-
-impl Figure for PlantFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> figure::DrawResult
-    where
-        DB::ErrorType: 'static,
-    {
-        draw(root, self.0)
-    }
-}
-
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &PlantReplay) -> figure::DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
-    let (top, bottom) = root.split_vertically(430);
-    let t1 = p.trace.last().map_or(1.0, |r| r.0).max(1e-6);
-    let lo = p.trace.iter().map(|r| r.1.min(r.2)).min().unwrap_or(0) - 1;
-    let hi = p.trace.iter().map(|r| r.1.max(r.2)).max().unwrap_or(0) + 1;
-    let mut ch = ChartBuilder::on(&top)
-        .caption(
-            format!(
-                "replay through the plant: RMS {:.2} ticks, max {} ticks",
-                p.rms_ticks, p.max_ticks
-            ),
-            ("sans-serif", 18),
-        )
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t1, lo as f64..hi as f64)?;
-    ch.configure_mesh()
-        .x_desc("t [s]")
-        .y_desc("count [ticks]")
-        .draw()?;
-    ch.draw_series(LineSeries::new(
-        p.trace.iter().map(|r| (r.0, r.1 as f64)),
-        &BLUE,
-    ))?
-    .label("recorded")
-    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
-    ch.draw_series(LineSeries::new(
-        p.trace.iter().map(|r| (r.0, r.2 as f64)),
-        &RED,
-    ))?
-    .label("model")
-    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
-    ch.configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    let emax = (p.max_ticks as f64).max(1.0) + 0.5;
-    let mut ce = ChartBuilder::on(&bottom)
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t1, -emax..emax)?;
-    ce.configure_mesh()
-        .x_desc("t [s]")
-        .y_desc("model − recorded [ticks]")
-        .draw()?;
-    ce.draw_series(LineSeries::new(
-        p.trace.iter().map(|r| (r.0, (r.2 - r.1) as f64)),
-        &BLACK,
-    ))?;
-    Ok(())
-}
-
 /// Runs `hostctl replay`.
 pub fn run(args: &Args) -> Result<()> {
     if let Some(path) = &args.plot {
@@ -289,7 +218,7 @@ pub fn run(args: &Args) -> Result<()> {
         .with_context(|| format!("reading {}", args.file.display()))?;
     report.missing += trailing_gap(&text);
     if let (Some(path), Some(p)) = (&args.plot, &report.plant) {
-        figure::write(path, (1000, 650), &PlantFigure(p))?;
+        figure::write(path, plant_replay::SIZE_PX, &plant_replay::PlantFigure(p))?;
     } else if args.plot.is_some() {
         bail!(
             "--plot needs the plant replay, which did not run: {}",
