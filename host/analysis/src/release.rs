@@ -6,6 +6,9 @@
 //! ±2²⁰ counts, a duration within [100, 10⁷] ticks, a given K finite and > 0; a test never runs
 //! with the wall off (K = 0 or NaN). Errors name the flag and its allowed range.
 
+/// Default of `experiment release --ticks` (and of the page's release test), servo ticks.
+pub const DEFAULT_RELEASE_TICKS: u32 = 3000;
+
 use stiffwall_client::describe::readable;
 use stiffwall_proto::ServoConfig;
 

@@ -32,8 +32,7 @@ pub enum Kind {
     Release(ReleaseArgs),
 }
 
-/// Default of `experiment release --ticks` (and of the page's release test).
-pub const DEFAULT_RELEASE_TICKS: u32 = 3000;
+pub use stiffwall_analysis::release::DEFAULT_RELEASE_TICKS;
 
 /// Arguments of `hostctl experiment release`.
 #[derive(Debug, clap::Args)]
