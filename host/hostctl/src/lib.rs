@@ -26,9 +26,10 @@ pub mod cli_error;
 pub mod cmd;
 pub mod config_flags;
 pub mod device;
+/// The energy-monitor replay and its text (`stiffwall-analysis`), re-exported under its old path.
+pub use stiffwall_analysis::monitor_report;
 /// The figure writer (the `stiffwall-figures` crate's), re-exported under its old path.
 pub use stiffwall_figures::figure;
-pub mod monitor_report;
 pub mod output;
 pub mod plant_args;
 pub use stiffwall_client::recording;
