@@ -9,6 +9,7 @@ use crate::map::draw_cells;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
+pub use stiffwall_analysis::atlas::panel_file;
 use stiffwall_analysis::atlas::{Atlas, Line, Slice};
 use stiffwall_analysis::map_file::{MapFile, Panel};
 use stiffwall_core::regions;
@@ -20,12 +21,6 @@ fn line_color(l: Line) -> RGBColor {
         Line::Df74 => RGBColor(0, 170, 220),
         Line::LinearExact => RGBColor(20, 150, 40),
     }
-}
-
-/// File name of a panel's image.
-#[must_use]
-pub fn panel_file(mu: f64, tau_d: f64, xidot0: f64, ext: &str) -> String {
-    format!("atlas-mu{mu:.4}-tau{tau_d}-xidot{xidot0}.{ext}")
 }
 
 /// Writes every panel image and `atlas-summary.<ext>` into `dir`; returns the paths.
