@@ -15,6 +15,7 @@
 pub use crate::frontier::Units;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::fmt::Write as _;
 use stiffwall_core::{criteria, ParamError, PhysicalParams};
 use stiffwall_sim::classify::Class;
 use stiffwall_sim::exact::History;
@@ -317,4 +318,56 @@ pub fn compute(plant: &Plant, spec: &KbSpec, progress: &(dyn Fn() + Sync)) -> Kb
         boundary: boundary(plant, &spec.b),
         seconds: t0.elapsed().as_secs_f64(),
     }
+}
+
+fn class_char(c: Class, chatter: bool) -> char {
+    match c {
+        Class::Persistent if chatter => 'c',
+        Class::Growing => '#',
+        Class::Persistent => 'o',
+        Class::NonMonotoneDecay => '~',
+        Class::MonotoneDecay => '.',
+    }
+}
+
+/// The text report: class counts, the class grid (K rows from the top, B columns) and K_max(B).
+#[must_use]
+pub fn render(m: &KbFile) -> String {
+    let (s, u) = (&m.spec, m.units);
+    let mut out = String::new();
+    let _ = writeln!(out, "(K, B) map of {}: {}", m.plant.source, MODEL_NOTE);
+    if !m.plant.ignored.is_empty() {
+        let _ = writeln!(out, "not simulated: {}", m.plant.ignored.join(", "));
+    }
+    let count = |c: Class| m.points.iter().filter(|p| p.class == c).count();
+    let chatter = m.points.iter().filter(|p| p.chatter).count();
+    let _ = writeln!(
+        out,
+        "{} points: growing {} (#), persistent {} (o), chatter within one count {chatter} (c), non-monotone decay {} (~), monotone decay {} (.); linear-stable {}",
+        m.points.len(),
+        count(Class::Growing),
+        count(Class::Persistent) - chatter,
+        count(Class::NonMonotoneDecay),
+        count(Class::MonotoneDecay),
+        m.points.iter().filter(|p| p.linear_stable).count()
+    );
+    let _ = writeln!(
+        out,
+        "rows K [{}] from {:e} (top) down, columns B [{}] {:e}..{:e}:",
+        u.k, s.k.hi, u.b, s.b.lo, s.b.hi
+    );
+    for row in m.points.chunks(s.b.n).rev() {
+        let cells: String = row.iter().map(|p| class_char(p.class, p.chatter)).collect();
+        let _ = writeln!(out, "{:>12.4e} {cells}", row[0].k);
+    }
+    let _ = writeln!(out, "predicted exact linear K_max(B):");
+    let step = (m.boundary.len() / 10).max(1);
+    for bp in m.boundary.iter().step_by(step) {
+        let _ = writeln!(
+            out,
+            "  B = {:>11.4e} {}: K_max = {:.4e} {}",
+            bp.b, u.b, bp.k_max, u.k
+        );
+    }
+    out
 }

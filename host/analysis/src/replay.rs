@@ -30,6 +30,8 @@
 
 use crate::monitor_report::{monitor_recording, MonitorReplay};
 use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
 use stiffwall_client::recording::{Recording, Row};
 use stiffwall_firmware::{BoardInfo, Channels, HeldCode, SampledCount, Servo};
 use stiffwall_proto::{flags, ServoConfig};
@@ -444,6 +446,69 @@ pub fn replay(rec: &Recording, plant: Result<(PlantModel, String), String>) -> R
         monitor,
         monitor_skipped,
     }
+}
+
+/// The text of `hostctl replay`: the file's sample counts, then the plant (a), servo (b) and
+/// energy-monitor (c) replays, each as run or why it was skipped.
+#[must_use]
+pub fn render(file: &Path, r: &Report) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: {} samples, {} missing sample numbers",
+        file.display(),
+        r.samples,
+        r.missing
+    );
+    match (&r.plant, &r.plant_skipped) {
+        (Some(p), _) => {
+            let _ = writeln!(
+                s,
+                "(a) plant replay [m = {:.4e}, b = {:.4e}, c = {:.4e}; {}]: {} samples in {} run(s): model − recording RMS {:.3} ticks, max {} ticks",
+                p.mass, p.viscous, p.coulomb, p.source, p.compared, p.runs, p.rms_ticks, p.max_ticks
+            );
+        }
+        (None, Some(why)) => {
+            let _ = writeln!(s, "(a) plant replay skipped: {why}");
+        }
+        (None, None) => {}
+    }
+    match (&r.servo, &r.servo_skipped) {
+        (Some(v), _) => {
+            let _ = writeln!(
+                s,
+                "(b) servo replay: {}/{} force codes reproduced bit for bit{} (excluded: {} warm-up, {} safe mode, {} hold/excitation)",
+                v.matched,
+                v.compared,
+                if v.mismatch_count == 0 { "" } else { " — MISMATCHES" },
+                v.excluded_warmup,
+                v.excluded_safe_mode,
+                v.excluded_experiment
+            );
+            for m in &v.mismatches {
+                let _ = writeln!(
+                    s,
+                    "    seq {}: count {} recorded {} replayed {}",
+                    m.seq, m.count, m.recorded, m.replayed
+                );
+            }
+        }
+        (None, Some(why)) => {
+            let _ = writeln!(s, "(b) servo replay skipped: {why}");
+        }
+        (None, None) => {}
+    }
+    match (&r.monitor, &r.monitor_skipped) {
+        (Some(m), _) => {
+            let _ = writeln!(s, "{}", crate::monitor_report::render(m));
+        }
+        (None, Some(why)) => {
+            let _ = writeln!(s, "(c) energy monitor skipped: {why}");
+        }
+        (None, None) => {}
+    }
+    s.pop();
+    s
 }
 
 #[cfg(test)]

@@ -29,8 +29,9 @@
 //! count, the peak's energy, and whether the device latched there
 //! ([`crate::monitor_report`]). Needs decimation 1.
 //!
-//! The engines are `stiffwall_analysis::replay` (re-exported here); this module resolves the
-//! plant flags, renders the report and draws the plant replay's figure.
+//! The engines and the report's text are `stiffwall_analysis::replay` (re-exported here), the
+//! plant replay's figure `stiffwall_figures::plant_replay`; this module resolves the plant
+//! flags and runs the command.
 //!
 //! Invariants: a corrupted file is an error naming the line and the column
 //! ([`crate::recording`]); nothing panics on bad input; a mismatch in (b) exits non-zero.
@@ -40,11 +41,10 @@ use crate::output::emit_report;
 use crate::plant_args::{PlantArgs, PlantSpecError};
 use crate::recording::{self, Recording};
 use anyhow::{anyhow, bail, Context, Result};
-use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 pub use stiffwall_analysis::replay::{
-    board_of, replay_model, replay_plant, replay_servo, trailing_gap, Mismatch, PlantReplay,
-    Report, ServoReplay, FIT_WINDOW, START_GRID,
+    board_of, render, replay_model, replay_plant, replay_servo, trailing_gap, Mismatch,
+    PlantReplay, Report, ServoReplay, FIT_WINDOW, START_GRID,
 };
 use stiffwall_figures::plant_replay;
 use stiffwall_sim::rich::PlantModel;
@@ -141,66 +141,6 @@ pub fn replay(args: &Args, rec: &Recording) -> Result<Report> {
         Ok(p) => Ok(p),
     };
     Ok(stiffwall_analysis::replay::replay(rec, plant))
-}
-
-fn render(file: &Path, r: &Report) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{}: {} samples, {} missing sample numbers",
-        file.display(),
-        r.samples,
-        r.missing
-    );
-    match (&r.plant, &r.plant_skipped) {
-        (Some(p), _) => {
-            let _ = writeln!(
-                s,
-                "(a) plant replay [m = {:.4e}, b = {:.4e}, c = {:.4e}; {}]: {} samples in {} run(s): model − recording RMS {:.3} ticks, max {} ticks",
-                p.mass, p.viscous, p.coulomb, p.source, p.compared, p.runs, p.rms_ticks, p.max_ticks
-            );
-        }
-        (None, Some(why)) => {
-            let _ = writeln!(s, "(a) plant replay skipped: {why}");
-        }
-        (None, None) => {}
-    }
-    match (&r.servo, &r.servo_skipped) {
-        (Some(v), _) => {
-            let _ = writeln!(
-                s,
-                "(b) servo replay: {}/{} force codes reproduced bit for bit{} (excluded: {} warm-up, {} safe mode, {} hold/excitation)",
-                v.matched,
-                v.compared,
-                if v.mismatch_count == 0 { "" } else { " — MISMATCHES" },
-                v.excluded_warmup,
-                v.excluded_safe_mode,
-                v.excluded_experiment
-            );
-            for m in &v.mismatches {
-                let _ = writeln!(
-                    s,
-                    "    seq {}: count {} recorded {} replayed {}",
-                    m.seq, m.count, m.recorded, m.replayed
-                );
-            }
-        }
-        (None, Some(why)) => {
-            let _ = writeln!(s, "(b) servo replay skipped: {why}");
-        }
-        (None, None) => {}
-    }
-    match (&r.monitor, &r.monitor_skipped) {
-        (Some(m), _) => {
-            let _ = writeln!(s, "{}", crate::monitor_report::render(m));
-        }
-        (None, Some(why)) => {
-            let _ = writeln!(s, "(c) energy monitor skipped: {why}");
-        }
-        (None, None) => {}
-    }
-    s.pop();
-    s
 }
 
 /// Runs `hostctl replay`.

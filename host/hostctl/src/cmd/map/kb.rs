@@ -17,8 +17,8 @@
 //!
 //! Layout: the flags are resolved once ([`spec_of`], the device by `kb_args`) into a
 //! `Plant` and a [`KbSpec`]; the JSON document and its computation are
-//! `stiffwall_analysis::kb` (re-exported here), drawn by `kb_plot`; this module renders the
-//! text and runs the command.
+//! `stiffwall_analysis::kb` with its text [`render`] (re-exported here), drawn by `kb_plot`
+//! (`stiffwall_figures::kb_map`); this module runs the command.
 //!
 //! Invariants: every flag is checked before anything is computed or written; β_v ≤ 1000 and
 //! τ_D ≤ 250 at every point; the result is deterministic and independent of thread count.
@@ -27,12 +27,11 @@ use super::args::{history_of, Args};
 use super::kb_args::{resolve_plant, Plant};
 use super::kb_plot;
 use anyhow::{ensure, Context, Result};
-use std::fmt::Write as _;
+pub use stiffwall_analysis::kb::render;
 pub use stiffwall_analysis::kb::{
     boundary, compute, BoundaryPoint, KbFile, KbPoint, KbSpec, Units, BOUNDARY_POINTS, MODEL_NOTE,
 };
 use stiffwall_analysis::map_file as file;
-use stiffwall_sim::classify::Class;
 use stiffwall_sim::exact::MAX_BETA_V;
 use stiffwall_sim::map::{self as smap, Axis};
 
@@ -112,58 +111,6 @@ pub fn spec_of(a: &Args) -> Result<(Plant, KbSpec)> {
             .map_err(|e| anyhow::anyhow!("--k-axis K = {kk}: {e}"))?;
     }
     Ok((plant, spec))
-}
-
-fn class_char(c: Class, chatter: bool) -> char {
-    match c {
-        Class::Persistent if chatter => 'c',
-        Class::Growing => '#',
-        Class::Persistent => 'o',
-        Class::NonMonotoneDecay => '~',
-        Class::MonotoneDecay => '.',
-    }
-}
-
-/// The text report: class counts, the class grid (K rows from the top, B columns) and K_max(B).
-#[must_use]
-pub fn render(m: &KbFile) -> String {
-    let (s, u) = (&m.spec, m.units);
-    let mut out = String::new();
-    let _ = writeln!(out, "(K, B) map of {}: {}", m.plant.source, MODEL_NOTE);
-    if !m.plant.ignored.is_empty() {
-        let _ = writeln!(out, "not simulated: {}", m.plant.ignored.join(", "));
-    }
-    let count = |c: Class| m.points.iter().filter(|p| p.class == c).count();
-    let chatter = m.points.iter().filter(|p| p.chatter).count();
-    let _ = writeln!(
-        out,
-        "{} points: growing {} (#), persistent {} (o), chatter within one count {chatter} (c), non-monotone decay {} (~), monotone decay {} (.); linear-stable {}",
-        m.points.len(),
-        count(Class::Growing),
-        count(Class::Persistent) - chatter,
-        count(Class::NonMonotoneDecay),
-        count(Class::MonotoneDecay),
-        m.points.iter().filter(|p| p.linear_stable).count()
-    );
-    let _ = writeln!(
-        out,
-        "rows K [{}] from {:e} (top) down, columns B [{}] {:e}..{:e}:",
-        u.k, s.k.hi, u.b, s.b.lo, s.b.hi
-    );
-    for row in m.points.chunks(s.b.n).rev() {
-        let cells: String = row.iter().map(|p| class_char(p.class, p.chatter)).collect();
-        let _ = writeln!(out, "{:>12.4e} {cells}", row[0].k);
-    }
-    let _ = writeln!(out, "predicted exact linear K_max(B):");
-    let step = (m.boundary.len() / 10).max(1);
-    for bp in m.boundary.iter().step_by(step) {
-        let _ = writeln!(
-            out,
-            "  B = {:>11.4e} {}: K_max = {:.4e} {}",
-            bp.b, u.b, bp.k_max, u.k
-        );
-    }
-    out
 }
 
 /// Runs `hostctl map --k-b`: checks every flag, computes, then writes JSON, text and plot.
