@@ -11,11 +11,12 @@
 //! under the old paths) and serves the live view (`cmd::ui`).
 //!
 //! Commands never import each other: what several of them share lives beside them —
-//! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
+//! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension, from
+//! `stiffwall-figures`),
 //! [`plant_args`] (the plant flags, resolved by `stiffwall_analysis::plant`), [`config_flags`] (servo
 //! configuration changes), [`session`] (the telemetry stream and recorder), [`analysis`] (the
-//! text of the paper's analysis of one device, its (β, σ) figure and the (K, B) frontier
-//! figure), [`recording`] and [`tune`].
+//! paper's analysis of one device with its text, its (β, σ) figure and the (K, B) frontier
+//! figure, re-exported), [`monitor_report`], [`recording`] and [`tune`].
 //!
 //! Units: as documented per module (SI on the command line, device integers on the wire).
 //! Errors: library modules return `thiserror` enums naming the field and its range; the
