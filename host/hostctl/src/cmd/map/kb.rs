@@ -25,13 +25,13 @@
 
 use super::args::{history_of, Args};
 use super::kb_args::{resolve_plant, Plant};
-use super::kb_plot;
 use anyhow::{ensure, Context, Result};
 pub use stiffwall_analysis::kb::render;
 pub use stiffwall_analysis::kb::{
     boundary, compute, BoundaryPoint, KbFile, KbPoint, KbSpec, Units, BOUNDARY_POINTS, MODEL_NOTE,
 };
 use stiffwall_analysis::map_file as file;
+use stiffwall_figures::kb_map as kb_plot;
 use stiffwall_sim::exact::MAX_BETA_V;
 use stiffwall_sim::map::{self as smap, Axis};
 

@@ -10,13 +10,14 @@
 
 use super::state::{Dev, Release};
 use crate::cmd::experiment::release_config;
+use crate::cmd::ui::wire;
 use crate::cmd::ui::wire::ReleaseTest;
-use crate::cmd::ui::{trace, wire};
 use crate::device::client::HEARTBEAT_PERIOD;
 use crate::tune::release::classify;
 use anyhow::{bail, Result};
 use serde_json::json;
 use std::time::{Duration, Instant};
+use stiffwall_analysis::live::trace;
 use stiffwall_proto::HostMsg;
 
 /// Longest release test the page runs, s of device time (duration ≤ this × the servo rate):

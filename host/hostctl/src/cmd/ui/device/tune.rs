@@ -5,12 +5,12 @@
 //! and the telemetry stream paused meanwhile (the pages show "not live").
 
 use super::state::Dev;
-use crate::cmd::ui::plane::Model;
 use crate::cmd::ui::wire::{Reply, TuneTest};
 use crate::tune::{procedure, Settings, SettingsError, TuneError};
 use anyhow::{anyhow, bail, Result};
 use serde_json::{json, Value};
 use std::sync::Arc;
+use stiffwall_analysis::live::plane::Model;
 
 /// The page's label of a tune setting.
 fn page_label(field: &str) -> &str {
