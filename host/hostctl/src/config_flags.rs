@@ -4,11 +4,13 @@
 //! Units: SI (N/m or N·m/rad, N·s/m or N·m·s/rad, N or N·m, m/s or rad/s, J, Hz); ticks,
 //! counts and shifts are integers. Invariants: obviously bad numbers (NaN, infinite, negative,
 //! zero where a positive value is needed) are refused on the host, naming the flag and its
-//! range, before anything is sent; the device validates the rest and a refused config changes
-//! nothing.
+//! range, before anything is sent (by `stiffwall_analysis::config_check`); the device validates
+//! the rest and a refused config changes nothing.
 
 use crate::device::connect::ConnectArgs;
 use anyhow::{bail, Context, Result};
+pub use stiffwall_analysis::config_check::FlagError;
+use stiffwall_analysis::config_check::{int, real};
 use stiffwall_client::Client;
 use stiffwall_proto::{DamperLaw, ParseDamperLawError, SafeMode, ServoConfig, WallMode};
 
@@ -148,67 +150,6 @@ pub fn flag_name(field: stiffwall_proto::ConfigField) -> &'static str {
         F::Damper => "--damper",
         F::Argument => "argument",
     }
-}
-
-/// A configuration flag outside its allowed range (checked on the host, before sending).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum FlagError {
-    /// A real-valued field.
-    #[error("--{flag} must be a finite number {range} (got {value})")]
-    Real {
-        /// The flag, without dashes.
-        flag: &'static str,
-        /// The value given.
-        value: f32,
-        /// The allowed range, `> 0` or `>= 0`.
-        range: &'static str,
-    },
-    /// A damper law outside the firmware's (a dead band out of range).
-    #[error("--damper {value}: {reason}")]
-    Damper {
-        /// The law given.
-        value: DamperLaw,
-        /// What is wrong with it.
-        reason: ParseDamperLawError,
-    },
-    /// An integer field.
-    #[error("--{flag} must be within [{lo}, {hi}] (got {value})")]
-    Int {
-        /// The flag, without dashes.
-        flag: &'static str,
-        /// The value given.
-        value: i64,
-        /// Smallest allowed value.
-        lo: i64,
-        /// Largest allowed value.
-        hi: i64,
-    },
-}
-
-fn real(flag: &'static str, value: f32, positive: bool) -> Result<f32, FlagError> {
-    let ok = value.is_finite() && if positive { value > 0.0 } else { value >= 0.0 };
-    if ok {
-        Ok(value)
-    } else {
-        Err(FlagError::Real {
-            flag,
-            value,
-            range: if positive { "> 0" } else { ">= 0" },
-        })
-    }
-}
-
-fn int<T: TryFrom<i64>>(flag: &'static str, value: i64, lo: i64, hi: i64) -> Result<T, FlagError> {
-    let err = FlagError::Int {
-        flag,
-        value,
-        lo,
-        hi,
-    };
-    if value < lo || value > hi {
-        return Err(err);
-    }
-    T::try_from(value).map_err(|_| err)
 }
 
 impl Overrides {

@@ -4,13 +4,20 @@
 //! command to the protocol client of `stiffwall-client` (they convert into a `stiffwall_client::ConnectSpec`); [`cli_error`] prints errors
 //! in the command line's words (refused fields as `--flag`s).
 //!
+//! The library logic (map files, atlas, (K, B) maps, the device report, replay and monitor
+//! engines, the plant as given, release checks) is the `stiffwall-analysis` crate; this crate
+//! parses arguments, renders text (the figures are drawn by `stiffwall-figures`, re-exported
+//! under the old paths) and serves the live view (`cmd::ui`).
+//!
 //! Commands never import each other: what several of them share lives beside them —
-//! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension),
-//! [`plant_args`] (the plant flags, checked by `stiffwall-core`), [`config_flags`] (servo
+//! [`output`] (tables and JSON on stdout), [`figure`] (SVG/PNG files by extension, from
+//! `stiffwall-figures`),
+//! [`plant_args`] (the plant flags, resolved by `stiffwall_analysis::plant`), [`config_flags`] (servo
 //! configuration changes), [`session`] (the telemetry stream and recorder), [`analysis`] (the
-//! paper's analysis of one device, its (β, σ) figure and the (K, B) frontier figure). The device libraries are used directly, not re-exported:
-//! `stiffwall-client` (client, transports, virtual device, sessions, recordings) and
-//! `stiffwall-tune` (the tune procedure).
+//! paper's analysis of one device with its text, its (β, σ) figure and the (K, B) frontier
+//! figure). The libraries are used directly, not re-exported: `stiffwall-client` (client,
+//! transports, virtual device, sessions, recordings), `stiffwall-tune` (the tune procedure),
+//! `stiffwall-analysis` (computation and text) and `stiffwall-figures` (pictures).
 //!
 //! Units: as documented per module (SI on the command line, device integers on the wire).
 //! Errors: library modules return `thiserror` enums naming the field and its range; the
@@ -21,8 +28,10 @@ pub mod cli_error;
 pub mod cmd;
 pub mod config_flags;
 pub mod device;
-pub mod figure;
-pub mod monitor_report;
+/// The energy-monitor replay and its text (`stiffwall-analysis`), re-exported under its old path.
+pub use stiffwall_analysis::monitor_report;
+/// The figure writer (the `stiffwall-figures` crate's), re-exported under its old path.
+pub use stiffwall_figures::figure;
 pub mod output;
 pub mod plant_args;
 pub mod session;

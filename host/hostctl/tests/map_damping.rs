@@ -1,7 +1,8 @@
-//! `hostctl map --damping BETA_V` (issue 19, item 2): `--damping 0` is bit-for-bit the map
+//! `hostctl map --beta-v BETA_V` (issue 19, item 2): `--beta-v 0` is bit-for-bit the map
 //! without the flag (JSON result and figure), a nonzero damping changes classes where the
 //! exact linear analysis and the quantized spring's rest points say it must, and a bad value is
-//! refused naming the flag and its range with nothing written.
+//! refused naming the flag and its range with nothing written. The old spelling `--damping`
+//! is refused with a one-line hint to `--beta-v` (issue 36).
 
 use serde_json::Value;
 use std::path::PathBuf;
@@ -59,7 +60,7 @@ fn damping_zero_is_the_map_without_the_flag() {
     let o = run(&["--out", a.to_str().unwrap(), "--plot", pa.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let o = run(&[
-        "--damping",
+        "--beta-v",
         "0",
         "--out",
         b.to_str().unwrap(),
@@ -89,7 +90,7 @@ fn classes(damping: &str) -> Vec<String> {
             "--periods",
             "20000",
             "--quiet",
-            "--damping",
+            "--beta-v",
             damping,
             "--out",
             out.to_str().unwrap(),
@@ -131,7 +132,7 @@ fn bad_damping_is_refused_naming_the_flag_and_range_and_nothing_is_written() {
         let out = d.join("m.json");
         let img = d.join("m.png");
         let o = run(&[
-            "--damping",
+            "--beta-v",
             bad,
             "--out",
             out.to_str().unwrap(),
@@ -141,7 +142,7 @@ fn bad_damping_is_refused_naming_the_flag_and_range_and_nothing_is_written() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{bad}: {err}");
         assert!(
-            err.contains("--damping") && err.contains("[0, 1000]"),
+            err.contains("--beta-v") && err.contains("[0, 1000]"),
             "{bad}: {err}"
         );
         assert!(!out.exists() && !img.exists(), "{bad}: wrote a file");
@@ -149,7 +150,7 @@ fn bad_damping_is_refused_naming_the_flag_and_range_and_nothing_is_written() {
     // The spring-only overlay is refused on a damped map.
     let img = d.join("overlay.png");
     let o = run(&[
-        "--damping",
+        "--beta-v",
         "1",
         "--overlay",
         "--plot",
@@ -159,4 +160,28 @@ fn bad_damping_is_refused_naming_the_flag_and_range_and_nothing_is_written() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("--overlay"), "{err}");
     assert!(!img.exists());
+}
+
+#[test]
+fn the_old_spelling_damping_is_refused_with_a_one_line_hint() {
+    let d = dir("renamed");
+    let out = d.join("m.json");
+    for value in ["2", "0"] {
+        let o = run(&["--damping", value, "--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(
+            err.trim_end(),
+            "error: `hostctl map --damping` was renamed: use `--beta-v` (the dimensionless \
+             virtual damping B/(K*T))"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!out.exists(), "wrote a file");
+    }
+    // The physical damper B of `analyze` keeps its name.
+    let o = hostctl()
+        .args(["analyze", "--device", "phantom-1.0", "--damping", "0.001"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }

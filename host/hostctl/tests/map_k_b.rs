@@ -137,7 +137,7 @@ fn physical_numbers_give_the_plant_files_points_and_the_beta_sigma_maps_classes(
             .args([
                 "--sigma",
                 &one("sigma"),
-                "--damping",
+                "--beta-v",
                 &p["beta_v"].to_string(),
             ])
             .arg("--out")
@@ -171,7 +171,7 @@ fn bad_k_b_input_is_refused_naming_the_flag_and_nothing_is_written() {
         (vec!["--k-axis", "1:2:0"], "--k-axis"),
         (vec!["--mass", "1"], "--mass cannot be combined"),
         (vec!["--mu", "100"], "--mu"),
-        (vec!["--damping", "1"], "--damping"),
+        (vec!["--beta-v", "1"], "--beta-v"),
         (vec!["--xidot0", "1,5"], "--xidot0"),
     ];
     for (extra, want) in cases {

@@ -7,14 +7,14 @@
 
 use crate::analysis;
 use crate::device::connect::ConnectArgs;
-use crate::figure::{self, Figure};
+use crate::figure;
 use crate::output::{emit, emit_json};
 use anyhow::{bail, Result};
-use plotters::coord::Shift;
-use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
+use stiffwall_analysis::release;
 use stiffwall_core::params::PhysicalParams;
+use stiffwall_figures::release as release_figure;
 use stiffwall_proto::{flags, Sample, ServoConfig};
 use stiffwall_tune::{classify, Verdict};
 
@@ -32,8 +32,7 @@ pub enum Kind {
     Release(ReleaseArgs),
 }
 
-/// Default of `experiment release --ticks` (and of the page's release test).
-pub const DEFAULT_RELEASE_TICKS: u32 = 3000;
+pub use stiffwall_analysis::release::DEFAULT_RELEASE_TICKS;
 
 /// Arguments of `hostctl experiment release`.
 #[derive(Debug, clap::Args)]
@@ -78,27 +77,17 @@ pub fn check_release(a: &ReleaseArgs) -> Result<()> {
     check_release_values(a.deflection, a.ticks, a.stiffness)
 }
 
-/// [`check_release`] on the values themselves (shared with `hostctl ui`'s release command).
+/// [`check_release`] on the values themselves (shared with `hostctl ui`'s release command;
+/// `stiffwall_analysis::release::check_values`).
 ///
 /// # Errors
 /// As [`check_release`].
 pub fn check_release_values(deflection: i32, ticks: u32, stiffness: Option<f64>) -> Result<()> {
-    if deflection == 0 || deflection.unsigned_abs() > 1 << 20 {
-        bail!("--deflection must be non-zero and within [-1048576, 1048576] (got {deflection})");
-    }
-    if !(100..=10_000_000).contains(&ticks) {
-        bail!("--ticks must be within [100, 10000000] (got {ticks})");
-    }
-    if let Some(k) = stiffness {
-        if !(k.is_finite() && k > 0.0) {
-            bail!("--stiffness must be finite and > 0 (got {k})");
-        }
-    }
-    Ok(())
+    Ok(release::check_values(deflection, ticks, stiffness)?)
 }
 
-/// The configuration a release test runs with: `original` with the test's stiffness, refused
-/// when the wall would be off; shared with `hostctl ui`.
+/// The configuration a release test runs with (`stiffwall_analysis::release::config`): shared
+/// with `hostctl ui`.
 ///
 /// # Errors
 /// K is 0 (or NaN) and no `--stiffness` was given.
@@ -107,20 +96,7 @@ pub fn release_config(
     stiffness: Option<f64>,
     max_stiffness: f32,
 ) -> Result<ServoConfig> {
-    let mut cfg = *original;
-    if let Some(k) = stiffness {
-        cfg.stiffness = k as f32;
-    }
-    if cfg.stiffness.is_nan() || cfg.stiffness <= 0.0 {
-        bail!(
-            "the device's wall is off (K = {}): give the test's stiffness with --stiffness K \
-             (N/m or N·m/rad, > 0 and ≤ {} for this device at coarsening shift 0); a board \
-             keeps one set with `hostctl config set --stiffness K` and `hostctl config save`",
-            cfg.stiffness,
-            stiffwall_client::readable(f64::from(max_stiffness))
-        );
-    }
-    Ok(cfg)
+    Ok(release::config(original, stiffness, max_stiffness)?)
 }
 
 fn release(a: &ReleaseArgs) -> Result<()> {
@@ -166,13 +142,13 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         _ => None,
     };
     if let Some(path) = &a.plot {
-        let fig = Release {
+        let fig = release_figure::Release {
             counts: &counts,
             rate,
-            verdict,
+            verdict: verdict.describe(),
             report: report.as_ref(),
         };
-        figure::write(path, (1500, 600), &fig)?;
+        figure::write(path, release_figure::SIZE_PX, &fig)?;
     }
     let done = ReleaseDone {
         stiffness: cfg.stiffness,
@@ -287,93 +263,4 @@ impl ReleaseDone<'_> {
         }
         s
     }
-}
-
-/// The release figure: the (β, σ) plane (when a model is known) beside x(t).
-struct Release<'a> {
-    counts: &'a [i64],
-    rate: f64,
-    verdict: Verdict,
-    report: Option<&'a analysis::Report>,
-}
-
-impl Figure for Release<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        draw(
-            root.clone(),
-            self.counts,
-            self.rate,
-            self.verdict,
-            self.report,
-        )
-    }
-}
-
-fn draw<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    counts: &[i64],
-    rate: f64,
-    verdict: Verdict,
-    report: Option<&analysis::Report>,
-) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("plot: {e}");
-    root.fill(&WHITE).map_err(err)?;
-    let (left, right) = root.split_horizontally(600);
-    if let Some(r) = report {
-        analysis::plot::draw(left, r)?;
-    }
-    let t_end = counts.len() as f64 / rate;
-    let lo = counts.iter().copied().min().unwrap_or(-2).min(-2) as f64 - 0.5;
-    let hi = counts.iter().copied().max().unwrap_or(2).max(2) as f64 + 1.5;
-    let mut chart = ChartBuilder::on(&right)
-        .caption(
-            format!("release test: {}", verdict.describe()),
-            ("sans-serif", 22),
-        )
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t_end.max(1e-3), lo..hi)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("t [s]")
-        .y_desc("x [encoder ticks]")
-        .draw()
-        .map_err(err)?;
-    chart
-        .draw_series(LineSeries::new(
-            counts
-                .iter()
-                .enumerate()
-                .map(|(i, n)| (i as f64 / rate, *n as f64)),
-            BLUE.stroke_width(2),
-        ))
-        .map_err(err)?
-        .label("x(t) (encoder count)")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
-    for level in [-1.0, 1.0] {
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(0.0, level), (t_end, level)],
-                6,
-                4,
-                BLACK.into(),
-            ))
-            .map_err(err)?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
-    root.present().map_err(err)?;
-    Ok(())
 }

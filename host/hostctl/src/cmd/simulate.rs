@@ -5,12 +5,11 @@
 //! the energy audit of the period ending at that instant: `e_d` (28), `e_g` (29), `residual` of
 //! the balance (26). Physical scenes are converted to these units when loaded.
 
-use crate::figure::{self, Figure};
+use crate::figure;
 use anyhow::{Context, Result};
-use plotters::coord::Shift;
-use plotters::prelude::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use stiffwall_figures::trajectory;
 use stiffwall_sim::scene::{Row, Scene};
 
 /// Arguments of `hostctl simulate`.
@@ -95,7 +94,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     w.flush()?;
     if let Some(p) = &args.plot {
-        figure::write(p, (900, 600), &Trajectory(&rows))?;
+        figure::write(p, trajectory::SIZE_PX, &trajectory::Trajectory(&rows))?;
     }
     if let Some((r, _)) = last {
         anyhow::ensure!(
@@ -108,65 +107,5 @@ pub fn run(args: &Args) -> Result<()> {
             r.xidot
         );
     }
-    Ok(())
-}
-
-/// ξ(τ) above H_T(τ).
-struct Trajectory<'a>(&'a [Row]);
-
-impl Figure for Trajectory<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        draw(root, self.0)
-    }
-}
-
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
-    let (a, b) = root.split_vertically(300);
-    let t1 = rows.last().map_or(1.0, |r| r.period as f64).max(1.0);
-    let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for r in rows {
-        lo = lo.min(finite(r.xi));
-        hi = hi.max(finite(r.xi));
-    }
-    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
-        lo -= 1.0;
-        hi += 1.0;
-    }
-    let mut c = ChartBuilder::on(&a)
-        .margin(8)
-        .x_label_area_size(30)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t1, lo..hi)?;
-    c.configure_mesh()
-        .x_desc("tau")
-        .y_desc("xi [ticks]")
-        .draw()?;
-    c.draw_series(LineSeries::new(
-        rows.iter().map(|r| (r.period as f64, finite(r.xi))),
-        &BLUE,
-    ))?;
-    let hmax = rows
-        .iter()
-        .map(|r| finite(r.h_t))
-        .fold(0.0, f64::max)
-        .max(1e-12);
-    let mut c = ChartBuilder::on(&b)
-        .margin(8)
-        .x_label_area_size(30)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t1, 0.0..hmax * 1.05)?;
-    c.configure_mesh().x_desc("tau").y_desc("H_T").draw()?;
-    c.draw_series(LineSeries::new(
-        rows.iter().map(|r| (r.period as f64, finite(r.h_t))),
-        &RED,
-    ))?;
     Ok(())
 }

@@ -69,8 +69,12 @@ pub struct Args {
     pub history: HistoryArg,
     /// Virtual damping beta_v = B/(K*T) of the wall at every point, dimensionless, in [0, 1000]
     /// (0: the paper's spring-only wall; the JSON records it only when nonzero).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub damping: f64,
+    #[arg(long = "beta-v", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub beta_v: f64,
+    /// The old spelling of `--beta-v`, refused with a hint (`--damping` is the physical
+    /// damper B on `tune`, `analyze` and `config`).
+    #[arg(long = "damping", hide = true, allow_hyphen_values = true)]
+    pub damping_renamed: Option<String>,
     /// The (K, B) map of one device (`--k-b`, [`kb`]).
     #[command(flatten)]
     pub kb: kb_args::KbArgs,

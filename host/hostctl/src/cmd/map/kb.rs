@@ -15,23 +15,23 @@
 //! core's exact sampled linear K_max(B) (`criteria::k_max_exact_linear`: ZOH, backward
 //! difference, b, T_D; no quantization or Coulomb).
 //!
-//! Layout: the JSON document is plain data in `kb_file` (re-exported here), drawn by `kb_plot`;
-//! this module computes, renders and runs on top of both.
+//! Layout: the flags are resolved once ([`spec_of`], the device by `kb_args`) into a
+//! `Plant` and a [`KbSpec`]; the JSON document and its computation are
+//! `stiffwall_analysis::kb` with its text [`render`] (re-exported here), drawn by `kb_plot`
+//! (`stiffwall_figures::kb_map`); this module runs the command.
 //!
 //! Invariants: every flag is checked before anything is computed or written; β_v ≤ 1000 and
 //! τ_D ≤ 250 at every point; the result is deterministic and independent of thread count.
 
 use super::args::{history_of, Args};
-use super::file;
 use super::kb_args::{resolve_plant, Plant};
-pub use super::kb_file::{BoundaryPoint, KbFile, KbPoint, KbSpec, BOUNDARY_POINTS, MODEL_NOTE};
-use super::kb_plot;
-pub use crate::analysis::kb_plot::Units;
 use anyhow::{ensure, Context, Result};
-use rayon::prelude::*;
-use std::fmt::Write as _;
-use stiffwall_core::criteria;
-use stiffwall_sim::classify::Class;
+pub use stiffwall_analysis::kb::render;
+pub use stiffwall_analysis::kb::{
+    boundary, compute, BoundaryPoint, KbFile, KbPoint, KbSpec, Units, BOUNDARY_POINTS, MODEL_NOTE,
+};
+use stiffwall_analysis::map_file as file;
+use stiffwall_figures::kb_map as kb_plot;
 use stiffwall_sim::exact::MAX_BETA_V;
 use stiffwall_sim::map::{self as smap, Axis};
 
@@ -111,127 +111,6 @@ pub fn spec_of(a: &Args) -> Result<(Plant, KbSpec)> {
             .map_err(|e| anyhow::anyhow!("--k-axis K = {kk}: {e}"))?;
     }
     Ok((plant, spec))
-}
-
-fn point(plant: &Plant, spec: &KbSpec, index: usize) -> KbPoint {
-    let k = spec.k.at(index / spec.b.n);
-    let b = spec.b.at(index % spec.b.n);
-    // In range at both ends of the K axis (checked by `spec_of`), hence everywhere.
-    let (d, beta_v) = plant
-        .at(k, b)
-        .unwrap_or((stiffwall_sim::Params::BASE, f64::NAN));
-    let o = smap::simulate_point_damped(d, spec.xidot0, spec.periods, spec.history, beta_v);
-    let phys = plant.physical(k);
-    KbPoint {
-        index,
-        k,
-        b,
-        mu: d.mu,
-        beta: d.beta,
-        sigma: d.sigma,
-        beta_v,
-        class: o.class,
-        periods_run: o.periods_run,
-        h0: o.h0,
-        h_end: o.h_end,
-        tail_amplitude: o.tail_amplitude,
-        chatter: super::kb_file::is_chatter(o.class, o.tail_amplitude),
-        linear_stable: criteria::exact_linear_stable(&phys, b).unwrap_or(false),
-    }
-}
-
-/// K_max(B) on [`BOUNDARY_POINTS`] values spanning the B axis.
-#[must_use]
-pub fn boundary(plant: &Plant, b: &Axis) -> Vec<BoundaryPoint> {
-    let n = if b.hi > b.lo { BOUNDARY_POINTS } else { 1 };
-    let axis = Axis { n, ..*b };
-    let p = plant.physical(1.0);
-    (0..n)
-        .map(|i| {
-            let b = axis.at(i);
-            BoundaryPoint {
-                b,
-                k_max: criteria::k_max_exact_linear(&p, b).unwrap_or(f64::NAN),
-            }
-        })
-        .collect()
-}
-
-/// Simulates every point of `spec` in parallel (rayon), calling `progress` once per point.
-#[must_use]
-pub fn compute(plant: &Plant, spec: &KbSpec, progress: &(dyn Fn() + Sync)) -> KbFile {
-    let t0 = std::time::Instant::now();
-    let points: Vec<KbPoint> = (0..spec.k.n * spec.b.n)
-        .into_par_iter()
-        .with_max_len(1)
-        .map(|i| {
-            let p = point(plant, spec, i);
-            progress();
-            p
-        })
-        .collect();
-    KbFile {
-        kind: "k-b",
-        model: MODEL_NOTE,
-        units: Units::of(plant.rotational),
-        plant: plant.clone(),
-        spec: spec.clone(),
-        points,
-        boundary: boundary(plant, &spec.b),
-        seconds: t0.elapsed().as_secs_f64(),
-    }
-}
-
-fn class_char(c: Class, chatter: bool) -> char {
-    match c {
-        Class::Persistent if chatter => 'c',
-        Class::Growing => '#',
-        Class::Persistent => 'o',
-        Class::NonMonotoneDecay => '~',
-        Class::MonotoneDecay => '.',
-    }
-}
-
-/// The text report: class counts, the class grid (K rows from the top, B columns) and K_max(B).
-#[must_use]
-pub fn render(m: &KbFile) -> String {
-    let (s, u) = (&m.spec, m.units);
-    let mut out = String::new();
-    let _ = writeln!(out, "(K, B) map of {}: {}", m.plant.source, MODEL_NOTE);
-    if !m.plant.ignored.is_empty() {
-        let _ = writeln!(out, "not simulated: {}", m.plant.ignored.join(", "));
-    }
-    let count = |c: Class| m.points.iter().filter(|p| p.class == c).count();
-    let chatter = m.points.iter().filter(|p| p.chatter).count();
-    let _ = writeln!(
-        out,
-        "{} points: growing {} (#), persistent {} (o), chatter within one count {chatter} (c), non-monotone decay {} (~), monotone decay {} (.); linear-stable {}",
-        m.points.len(),
-        count(Class::Growing),
-        count(Class::Persistent) - chatter,
-        count(Class::NonMonotoneDecay),
-        count(Class::MonotoneDecay),
-        m.points.iter().filter(|p| p.linear_stable).count()
-    );
-    let _ = writeln!(
-        out,
-        "rows K [{}] from {:e} (top) down, columns B [{}] {:e}..{:e}:",
-        u.k, s.k.hi, u.b, s.b.lo, s.b.hi
-    );
-    for row in m.points.chunks(s.b.n).rev() {
-        let cells: String = row.iter().map(|p| class_char(p.class, p.chatter)).collect();
-        let _ = writeln!(out, "{:>12.4e} {cells}", row[0].k);
-    }
-    let _ = writeln!(out, "predicted exact linear K_max(B):");
-    let step = (m.boundary.len() / 10).max(1);
-    for bp in m.boundary.iter().step_by(step) {
-        let _ = writeln!(
-            out,
-            "  B = {:>11.4e} {}: K_max = {:.4e} {}",
-            bp.b, u.b, bp.k_max, u.k
-        );
-    }
-    out
 }
 
 /// Runs `hostctl map --k-b`: checks every flag, computes, then writes JSON, text and plot.

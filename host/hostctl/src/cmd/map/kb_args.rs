@@ -1,4 +1,5 @@
-//! The flags of `hostctl map --k-b` and the device they describe.
+//! The flags of `hostctl map --k-b` and the device they describe, resolved once into a
+//! [`Plant`] (`stiffwall_analysis::kb`).
 //!
 //! Units: SI. A linear device: m [kg], b [N·s/m], c [N], Δ [m], K [N/m], B [N·s/m]; a
 //! rotational one: kg·m², N·m·s/rad, N·m, rad, N·m/rad, N·m·s/rad. T and T_D in s.
@@ -10,14 +11,11 @@
 //! `--viscous`, `--coulomb`, `--resolution`, `--period` (`--delay` 0 by default). Invariant:
 //! every value is checked by `stiffwall-core`'s ranges, errors name the flag.
 
-use crate::plant_args::{PlantArgs, PlantArgsError};
-use anyhow::{anyhow, ensure, Context, Result};
-use serde::Serialize;
+use crate::plant_args::{PlantArgs, PlantSpecError};
+use anyhow::{anyhow, Context, Result};
 use std::path::{Path, PathBuf};
+pub use stiffwall_analysis::kb::Plant;
 use stiffwall_core::params::check_positive;
-use stiffwall_core::PhysicalParams;
-use stiffwall_sim::params::{Params, MAX_TAU_D};
-use stiffwall_sim::rich::{PlantModel, WallDamper};
 
 /// Flags of the (K, B) map (`hostctl map --k-b`).
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -25,7 +23,7 @@ pub struct KbArgs {
     /// Map the (K, B) plane of one physical device instead of the (beta, sigma) plane.
     #[arg(
         long = "k-b",
-        conflicts_with_all = ["mu", "tau_d", "beta", "sigma", "shard", "overlay", "damping"]
+        conflicts_with_all = ["mu", "tau_d", "beta", "sigma", "shard", "overlay", "beta_v"]
     )]
     pub k_b: bool,
     /// With --k-b: K axis lo:hi:n, N/m (N·m/rad for rotational devices), lo > 0.
@@ -60,109 +58,11 @@ pub struct KbArgs {
     pub rotational: bool,
 }
 
-/// The device of a (K, B) map (its K is the sweep's).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Plant {
-    /// Where it came from (`plant file …`, `preset …`, `flags`).
-    pub source: String,
-    /// m [kg or kg·m²].
-    pub mass: f64,
-    /// b [N·s/m or N·m·s/rad].
-    pub viscous: f64,
-    /// c [N or N·m].
-    pub coulomb: f64,
-    /// Δ [m or rad].
-    pub resolution: f64,
-    /// T [s].
-    pub period_s: f64,
-    /// T_D [s].
-    pub delay_s: f64,
-    /// Rotational units.
-    pub rotational: bool,
-    /// Effects of the plant file that the map does not simulate.
-    pub ignored: Vec<String>,
-}
-
-impl Plant {
-    /// Core's physical parameters at stiffness `k`.
-    #[must_use]
-    pub fn physical(&self, k: f64) -> PhysicalParams {
-        PhysicalParams {
-            mass: self.mass,
-            viscous: self.viscous,
-            coulomb: self.coulomb,
-            resolution: self.resolution,
-            period_s: self.period_s,
-            stiffness: k,
-            delay_s: self.delay_s,
-            rotational: self.rotational,
-        }
-    }
-
-    /// Table I at (K, B): (μ, β, σ, τ_D) and β_v = B/(KT).
-    ///
-    /// # Errors
-    /// A value out of the solver's range (μ underflow, τ_D > 250), naming the quantity.
-    pub fn at(&self, k: f64, b: f64) -> Result<(Params, f64)> {
-        let d = self.physical(k).to_dimensionless()?;
-        ensure!(
-            d.tau_d <= MAX_TAU_D,
-            "tau_d = T_D/T = {}: allowed range is [0, {MAX_TAU_D}]",
-            d.tau_d
-        );
-        Ok((d, b / (k * self.period_s)))
-    }
-}
-
-fn ignored_effects(m: &PlantModel, one_sided: bool, damper: Option<WallDamper>) -> Vec<String> {
-    let mut v = Vec::new();
-    let mut add = |on: bool, name: &str| {
-        if on {
-            v.push(name.to_owned());
-        }
-    };
-    add(m.stiction.is_some(), "stiction");
-    add(m.cogging.is_some(), "cogging");
-    add(m.transmission.is_some(), "transmission");
-    let amp = m.amplifier;
-    add(
-        amp.is_some_and(|a| a.cutoff_hz.is_some()),
-        "amplifier filter",
-    );
-    add(
-        amp.is_some_and(|a| a.force_limit_n.is_some()),
-        "amplifier saturation",
-    );
-    add(
-        amp.is_some_and(|a| a.deadband_n.is_some()),
-        "amplifier dead band",
-    );
-    add(m.hand.is_some(), "hand");
-    add(one_sided, "one-sided wall");
-    // The maps damp the plain difference of the paper's wall law.
-    add(
-        matches!(damper, Some(WallDamper::DeadBand(_))),
-        "damper dead band",
-    );
-    v
-}
-
 fn from_file(path: &Path) -> Result<Plant> {
     let text =
         std::fs::read_to_string(path).map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
-    let (m, ctl) = PlantModel::from_scene_toml(&text)
-        .map_err(|e| anyhow!("--plant {}: {e}", path.display()))?;
-    Ok(Plant {
-        source: format!("plant file {}", path.display()),
-        mass: m.mass_kg,
-        viscous: m.viscous_ns_per_m,
-        coulomb: m.coulomb_n,
-        resolution: m.resolution_m,
-        period_s: ctl.period_s,
-        delay_s: ctl.extra_delay_s,
-        rotational: m.counts_per_rev.is_some(),
-        ignored: ignored_effects(&m, ctl.one_sided, ctl.damper),
-    })
+    Plant::from_scene_toml(format!("plant file {}", path.display()), &text)
+        .map_err(|e| anyhow!("--plant {}: {e}", path.display()))
 }
 
 fn checked(
@@ -176,7 +76,7 @@ fn checked(
 
 fn from_flags(a: &KbArgs) -> Result<Plant> {
     let friction = a.plant.friction(None).map_err(|e| match e {
-        PlantArgsError::Incomplete => anyhow!(
+        PlantSpecError::Incomplete => anyhow!(
             "--k-b needs a device: --plant FILE, --device NAME, or all of --mass, --viscous, \
              --coulomb, --resolution and --period"
         ),

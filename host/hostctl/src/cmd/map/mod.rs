@@ -7,7 +7,7 @@
 //! `lo:hi:n:log`), a third axis: one panel per (μ, τ_D, ξ̇₀), μ outer. `--shard k/n` computes
 //! every n-th point (starting at k) of every panel so a batch scheduler can split a sweep;
 //! `hostctl map merge` joins the shard files; `hostctl map atlas` compares a map with the
-//! analytic boundaries ([`atlas`]). `--damping BETA_V` (dimensionless β_v = B/(K·T) in
+//! analytic boundaries ([`atlas`]). `--beta-v BETA_V` (dimensionless β_v = B/(K·T) in
 //! [0, 1000]) adds the wall's virtual damper at every point (`spec.damping`, written only when
 //! nonzero: with 0 every file, hash and figure is unchanged). `--k-b` maps the (K, B) plane of
 //! one physical device instead ([`kb`]; SI units).
@@ -24,21 +24,19 @@
 
 pub mod args;
 pub mod atlas;
-pub mod atlas_model;
-pub mod atlas_plot;
-pub mod file;
+pub use stiffwall_analysis::map_file as file;
+pub use stiffwall_figures::atlas as atlas_plot;
 pub mod kb;
 pub mod kb_args;
-pub mod kb_file;
-pub mod kb_plot;
-pub mod plot;
-pub mod values;
+pub use stiffwall_analysis::values;
+pub use stiffwall_figures::kb_map as kb_plot;
+pub use stiffwall_figures::map as plot;
 
 use crate::figure;
 use crate::output::emit_json;
 use anyhow::{bail, ensure, Context, Result};
 pub use args::{history_of, Args, HistoryArg, Sub};
-use file::{Cost, MapFile, Panel, Spec, Values};
+use file::{MapFile, Panel, Spec, Values};
 use indicatif::{ProgressBar, ProgressStyle};
 use plot::damping_label;
 use std::path::PathBuf;
@@ -102,9 +100,9 @@ fn spec_of(a: &Args) -> Result<Spec> {
     ensure!(beta.lo >= 0.0, "--beta: allowed range is >= 0");
     ensure!(sigma.lo >= 0.0, "--sigma: allowed range is >= 0");
     ensure!(
-        a.damping.is_finite() && (0.0..=MAX_BETA_V).contains(&a.damping),
-        "--damping {}: allowed range is [0, {MAX_BETA_V}] (dimensionless beta_v = B/(K*T))",
-        a.damping
+        a.beta_v.is_finite() && (0.0..=MAX_BETA_V).contains(&a.beta_v),
+        "--beta-v {}: allowed range is [0, {MAX_BETA_V}] (dimensionless beta_v = B/(K*T))",
+        a.beta_v
     );
     let spec = Spec {
         mu,
@@ -114,10 +112,10 @@ fn spec_of(a: &Args) -> Result<Spec> {
         sigma,
         periods: a.periods,
         history: history_of(a.history),
-        damping: a.damping,
+        damping: a.beta_v,
     };
     spec.validate()
-        .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --damping")?;
+        .context("--mu x --tau-d x --xidot0 x --beta x --sigma x --beta-v")?;
     Ok(spec)
 }
 
@@ -156,11 +154,11 @@ pub fn compute_with(
     opts: map::RunOptions,
 ) -> Result<MapFile> {
     let (k, n) = shard.unwrap_or((0, 1));
-    let t0 = std::time::Instant::now();
-    let cpu0 = file::process_cpu_seconds();
-    let specs = spec.panels();
-    let per_panel: Vec<Vec<usize>> = specs.iter().map(|ps| map::shard(ps, k, n)).collect();
-    let total: usize = per_panel.iter().map(Vec::len).sum();
+    let total: usize = spec
+        .panels()
+        .iter()
+        .map(|ps| map::shard(ps, k, n).len())
+        .sum();
     let pb = if quiet {
         ProgressBar::hidden()
     } else {
@@ -173,37 +171,9 @@ pub fn compute_with(
         );
         pb
     };
-    let tick = || pb.inc(1);
-    let mut cycle_points = 0;
-    let (panels, ns): (Vec<Panel>, Vec<Vec<f64>>) = specs
-        .iter()
-        .zip(&per_panel)
-        .map(|(ps, idx)| {
-            let o = map::run_with(ps, idx, &tick, opts);
-            cycle_points += o.cycle_points() as u64;
-            let panel = Panel {
-                mu: ps.mu,
-                tau_d: ps.tau_d,
-                xidot0: ps.xidot0,
-                points: o.points,
-            };
-            (panel, o.ns_per_period)
-        })
-        .unzip();
+    let m = file::compute(spec, shard, &|| pb.inc(1), opts);
     pb.finish_and_clear();
-    Ok(MapFile {
-        spec: spec.clone(),
-        spec_crc64: spec.crc64(),
-        shard,
-        cost: Cost::of(&panels, ns)
-            .with_cpu_seconds(
-                cpu0.zip(file::process_cpu_seconds())
-                    .map(|(a, b)| (b - a).max(0.0)),
-            )
-            .with_cycle_points(cycle_points),
-        panels,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    Ok(m)
 }
 
 /// The complete result already in `out` for this sweep and shard, if any (resume).
@@ -260,7 +230,7 @@ fn run_merge(
 fn check_overlay(spec: &Spec, overlay: bool) -> Result<()> {
     ensure!(
         !overlay || spec.damping == 0.0,
-        "--overlay draws the spring-only boundaries of Fig. 3/5: not valid with --damping {} \
+        "--overlay draws the spring-only boundaries of Fig. 3/5: not valid with --beta-v {} \
          (allowed with --overlay: 0)",
         spec.damping
     );
@@ -305,6 +275,12 @@ fn report(m: &MapFile) {
 /// # Errors
 /// A flag out of range, an invalid or incomplete set of shard files, or a file error.
 pub fn run(args: &Args) -> Result<()> {
+    if args.damping_renamed.is_some() {
+        bail!(
+            "`hostctl map --damping` was renamed: use `--beta-v` (the dimensionless virtual \
+             damping B/(K*T))"
+        );
+    }
     if let Some(Sub::Merge {
         inputs,
         out,

@@ -23,7 +23,6 @@ use state::Dev;
 pub use state::{Request, Setup, Shared, Snapshot};
 pub use tune::{page_error, page_settings};
 
-use super::plane::{self};
 use super::record::{finish_recording, record_batch, record_path, Recorder};
 use super::wire::{self, Command, Reply};
 use crate::config_flags::Overrides;
@@ -35,6 +34,7 @@ use std::io::BufWriter;
 use std::sync::atomic::Ordering;
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
+use stiffwall_analysis::live::plane;
 use stiffwall_client::Client;
 use stiffwall_client::Stats;
 use stiffwall_client::Writer;

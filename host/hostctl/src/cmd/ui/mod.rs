@@ -25,14 +25,13 @@ pub mod app;
 pub mod conn;
 pub mod control;
 pub mod device;
-pub mod frontier;
-pub mod plane;
 pub mod record;
 pub mod security;
 pub mod server;
-pub mod trace;
 pub mod wire;
 pub mod ws;
+/// The live view's data (`stiffwall_analysis::live`), re-exported under its old paths.
+pub use stiffwall_analysis::live::{frontier, plane, trace};
 
 use crate::config_flags::Overrides;
 use crate::device::connect::ConnectArgs;

@@ -13,7 +13,6 @@
 
 use super::app::{reply_json, submit, App};
 use super::conn::Busy;
-use super::plane;
 use super::security::{check_form, token_from_query, Guard, Refusal, TOKEN_HEADER};
 use super::wire::parse_command;
 use super::ws::ws;
@@ -26,6 +25,7 @@ use axum::routing::{get, post};
 use axum::Extension;
 use axum::Router;
 use serde_json::json;
+use stiffwall_analysis::live::plane;
 use tower_http::limit::RequestBodyLimitLayer;
 
 /// The page, its script and its style, embedded at build time.
@@ -169,7 +169,7 @@ async fn api_map(body: Bytes) -> Response {
         Ok(v) => axum::Json(v).into_response(),
         Err(e) => (
             StatusCode::UNPROCESSABLE_ENTITY,
-            axum::Json(json!({"type": "map", "error": format!("{e:#}")})),
+            axum::Json(json!({"type": "map", "error": format!("{:#}", anyhow::Error::from(e))})),
         )
             .into_response(),
     }

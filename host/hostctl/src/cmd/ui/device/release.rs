@@ -10,11 +10,12 @@
 
 use super::state::{Dev, Release};
 use crate::cmd::experiment::release_config;
+use crate::cmd::ui::wire;
 use crate::cmd::ui::wire::ReleaseTest;
-use crate::cmd::ui::{trace, wire};
 use anyhow::{bail, Result};
 use serde_json::json;
 use std::time::{Duration, Instant};
+use stiffwall_analysis::live::trace;
 use stiffwall_client::HEARTBEAT_PERIOD;
 use stiffwall_proto::HostMsg;
 use stiffwall_tune::classify;

@@ -4,7 +4,6 @@
 //! faults, recording), `release.rs` and `tune.rs`, which import this file and not each other.
 
 use crate::cmd::ui::control::Control;
-use crate::cmd::ui::plane::Model;
 use crate::cmd::ui::record::Recorder;
 use crate::cmd::ui::wire::{Command, Reply};
 use crate::device::connect::ConnectArgs;
@@ -14,6 +13,7 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+use stiffwall_analysis::live::plane::Model;
 use stiffwall_client::Client;
 use stiffwall_proto::{Sample, ServoConfig};
 use tokio::sync::broadcast;

@@ -5,11 +5,11 @@
 //! and the telemetry stream paused meanwhile (the pages show "not live").
 
 use super::state::Dev;
-use crate::cmd::ui::plane::Model;
 use crate::cmd::ui::wire::{Reply, TuneTest};
 use anyhow::{anyhow, bail, Result};
 use serde_json::{json, Value};
 use std::sync::Arc;
+use stiffwall_analysis::live::plane::Model;
 use stiffwall_tune::{Settings, SettingsError, TuneError};
 
 /// The page's label of a tune setting.

@@ -4,18 +4,17 @@
 //! Units: dimensionless (β, σ on the axes). Invariant: the image is drawn only from a complete,
 //! validated [`MapFile`]; cells are centred on the grid points.
 
-use super::file::MapFile;
-use crate::figure::{self, Figure, FigureError};
-use anyhow::Result;
+use crate::figure::{self, DrawResult, Figure, FigureError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
+use stiffwall_analysis::map_file::MapFile;
 use stiffwall_core::regions;
 use stiffwall_sim::classify::Class;
 
 /// The (β, σ) axes of a map panel and its grid points as cells of `db` × `ds`, coloured by
 /// class (shared by `map --plot` and the atlas figures).
-pub(super) fn draw_cells<DB: DrawingBackend>(
+pub fn draw_cells<DB: DrawingBackend>(
     chart: &mut ChartContext<
         '_,
         DB,
@@ -24,7 +23,7 @@ pub(super) fn draw_cells<DB: DrawingBackend>(
     points: &[stiffwall_sim::map::MapPoint],
     db: f64,
     ds: f64,
-) -> Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -46,7 +45,8 @@ where
     Ok(())
 }
 
-pub(super) fn class_color(c: Class) -> RGBColor {
+/// The grey level (or colour) of a class, shared by the map, atlas and (K, B) map figures.
+pub fn class_color(c: Class) -> RGBColor {
     match c {
         Class::Growing => RGBColor(40, 40, 40),
         Class::Persistent => RGBColor(120, 120, 120),
@@ -64,7 +64,7 @@ struct MapFigure<'a> {
 }
 
 impl Figure for MapFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -100,7 +100,7 @@ fn draw<DB: DrawingBackend>(
     cols: usize,
     rows: usize,
     overlay: bool,
-) -> Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -166,7 +166,7 @@ where
 }
 
 /// `, beta_v = X` for a damped map, nothing for the spring-only wall.
-pub(crate) fn damping_label(beta_v: f64) -> String {
+pub fn damping_label(beta_v: f64) -> String {
     if beta_v == 0.0 {
         String::new()
     } else {

@@ -1,4 +1,5 @@
-//! The map JSON file: format, full validation, atomic writing and shard merging.
+//! The map JSON file: its computation ([`compute`]), format, full validation, atomic writing
+//! and shard merging.
 //!
 //! Units: dimensionless (Table I), `seconds` of wall time, `ns_per_period` nanoseconds of wall
 //! time per simulated period. Panels are ordered slice-major: for each μ (outer), each τ_D,
@@ -13,14 +14,84 @@
 //! mismatched sweeps and duplicate or missing shards; its result does not depend on the order
 //! of its inputs.
 
-use anyhow::{bail, ensure, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use stiffwall_sim::exact::History;
 use stiffwall_sim::map::{self, Axis, MapPoint, MapSpec};
 
-pub use super::values::Values;
+pub use crate::values::Values;
+
+/// Why a map spec or file is refused; every message names the file (where there is one), the
+/// field and what was allowed or expected.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MapFileError {
+    /// A spec field outside its allowed range (the message names the field and the range).
+    #[error("{0}")]
+    Spec(String),
+    /// A file whose spec is invalid (the source names the field).
+    #[error("{path}: invalid spec")]
+    InvalidSpec {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with the spec.
+        #[source]
+        source: Box<MapFileError>,
+    },
+    /// A file whose content contradicts its spec (the message names the file and field).
+    #[error("{0}")]
+    Content(String),
+    /// Files that do not merge into one map (mismatched sweeps, shards twice or missing).
+    #[error("{0}")]
+    Merge(String),
+    /// A file that could not be read.
+    #[error("reading {path}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file whose JSON ends early.
+    #[error("{path}: truncated (the JSON ends early: {error}); re-run its shard")]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// The parser's error.
+        error: serde_json::Error,
+    },
+    /// A file that is not a map file.
+    #[error("{path}: not a map file: {error}")]
+    NotAMapFile {
+        /// The file.
+        path: PathBuf,
+        /// The parser's error.
+        error: serde_json::Error,
+    },
+    /// A file that could not be written.
+    #[error("writing {path}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// `Result` of this module.
+pub type Result<T, E = MapFileError> = std::result::Result<T, E>;
+
+/// Returns `Err(MapFileError::$kind(format!(...)))` unless `$cond` holds.
+macro_rules! ensure {
+    ($kind:ident, $cond:expr, $($fmt:tt)*) => {
+        if !$cond {
+            return Err(MapFileError::$kind(format!($($fmt)*)));
+        }
+    };
+}
 
 /// Largest number of ξ̇₀ values of one map.
 pub const MAX_PANELS: usize = 64;
@@ -110,16 +181,20 @@ impl Spec {
     /// A message naming the field and its allowed range.
     pub fn validate(&self) -> Result<()> {
         ensure!(
+            Spec,
             (1..=MAX_PANELS).contains(&self.xidot0.len()),
             "xidot0: {} values, allowed 1 to {MAX_PANELS}",
             self.xidot0.len()
         );
-        self.mu.validate().map_err(|e| anyhow::anyhow!("mu: {e}"))?;
+        self.mu
+            .validate()
+            .map_err(|e| MapFileError::Spec(format!("mu: {e}")))?;
         self.tau_d
             .validate()
-            .map_err(|e| anyhow::anyhow!("tau_d: {e}"))?;
+            .map_err(|e| MapFileError::Spec(format!("tau_d: {e}")))?;
         let panels = self.mu.len() * self.tau_d.len() * self.xidot0.len();
         ensure!(
+            Spec,
             panels <= MAX_ALL_PANELS,
             "{} mu x {} tau_d x {} xidot0 = {panels} panels: at most {MAX_ALL_PANELS}",
             self.mu.len(),
@@ -128,14 +203,15 @@ impl Spec {
         );
         self.panel_at(self.mu.at(0), self.tau_d.at(0), self.xidot0[0])
             .validate()
-            .map_err(anyhow::Error::msg)?;
+            .map_err(MapFileError::Spec)?;
         ensure!(
+            Spec,
             panels.saturating_mul(self.len()) <= MAX_ALL_POINTS,
             "{panels} panels x {} points: at most {MAX_ALL_POINTS} points",
             self.len()
         );
         for p in self.panels() {
-            p.validate().map_err(anyhow::Error::msg)?;
+            p.validate().map_err(MapFileError::Spec)?;
         }
         Ok(())
     }
@@ -322,11 +398,13 @@ impl MapFile {
 /// The first problem found, naming the file, the field and what was expected.
 pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
     let name = path.display();
-    f.spec
-        .validate()
-        .with_context(|| format!("{name}: invalid spec"))?;
+    f.spec.validate().map_err(|e| MapFileError::InvalidSpec {
+        path: path.to_path_buf(),
+        source: Box::new(e),
+    })?;
     let crc = f.spec.crc64();
     ensure!(
+        Content,
         f.spec_crc64 == crc,
         "{name}: spec_crc64 is {:?} but the spec hashes to {crc:?}: the file was edited, is \
          corrupt or was written by an older hostctl; re-run its shard",
@@ -334,11 +412,13 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
     );
     let (k, n) = f.shard_or_whole();
     ensure!(
+        Content,
         (1..=MAX_SHARDS).contains(&n) && k < n,
         "{name}: shard [{k}, {n}]: need 0 <= k < n and 1 <= n <= {MAX_SHARDS}"
     );
     let specs = f.spec.panels();
     ensure!(
+        Content,
         f.panels.len() == specs.len(),
         "{name}: {} panels, but the spec has {} ({} mu x {} tau_d x {} xidot0 values)",
         f.panels.len(),
@@ -348,11 +428,13 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
         f.spec.xidot0.len()
     );
     ensure!(
+        Content,
         f.seconds.is_finite() && f.seconds >= 0.0,
         "{name}: seconds = {}: need a finite value >= 0",
         f.seconds
     );
     ensure!(
+        Content,
         f.cost.ns_per_period.len() == specs.len(),
         "{name}: cost.ns_per_period has {} panels, need {}",
         f.cost.ns_per_period.len(),
@@ -363,6 +445,7 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
     }
     let recount = Cost::of(&f.panels, f.cost.ns_per_period.clone());
     ensure!(
+        Content,
         f.cost.periods_total == recount.periods_total,
         "{name}: cost.periods_total = {}, but the points ran {} periods",
         f.cost.periods_total,
@@ -370,6 +453,7 @@ pub fn validate(path: &Path, f: &MapFile) -> Result<()> {
     );
     if let Some(c) = f.cost.cpu_seconds {
         ensure!(
+            Content,
             c.is_finite() && c >= 0.0,
             "{name}: cost.cpu_seconds = {c}: need a finite value >= 0"
         );
@@ -395,17 +479,20 @@ fn validate_panel(
         ("xidot0", panel.xidot0, ps.xidot0),
     ] {
         ensure!(
+            Content,
             got.to_bits() == want.to_bits(),
             "{name}: panel {pi} has {field} = {got}, the spec says {want}"
         );
     }
     ensure!(
+        Content,
         panel.points.len() == want,
         "{name}: panel {pi} has {} points; shard {k}/{n} of a {len}-point grid has {want}",
         panel.points.len()
     );
     let ns = &f.cost.ns_per_period[pi];
     ensure!(
+        Content,
         ns.len() == panel.points.len() && ns.iter().all(|c| c.is_finite() && *c >= 0.0),
         "{name}: cost.ns_per_period[{pi}]: need one finite value >= 0 per point ({})",
         panel.points.len()
@@ -413,12 +500,14 @@ fn validate_panel(
     for (j, pt) in panel.points.iter().enumerate() {
         let index = k + j * n;
         ensure!(
+            Content,
             pt.index == index,
             "{name}: panel {pi}, point {j}: index {}, expected {index} (shard {k}/{n})",
             pt.index
         );
         let (beta, sigma) = ps.point(index);
         ensure!(
+            Content,
             pt.beta.to_bits() == beta.to_bits() && pt.sigma.to_bits() == sigma.to_bits(),
             "{name}: panel {pi}, point {index}: beta = {}, sigma = {} contradict its index \
              (expected beta = {beta}, sigma = {sigma})",
@@ -426,6 +515,7 @@ fn validate_panel(
             pt.sigma
         );
         ensure!(
+            Content,
             pt.periods_run <= f.spec.periods,
             "{name}: panel {pi}, point {index}: periods_run = {} exceeds the horizon {}",
             pt.periods_run,
@@ -440,15 +530,16 @@ fn validate_panel(
 /// # Errors
 /// An unreadable, truncated, malformed or invalid file.
 pub fn read(path: &Path) -> Result<MapFile> {
-    let s = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let f: MapFile = serde_json::from_str(&s).map_err(|e| {
-        if e.is_eof() {
-            anyhow::anyhow!(
-                "{}: truncated (the JSON ends early: {e}); re-run its shard",
-                path.display()
-            )
+    let s = std::fs::read_to_string(path).map_err(|source| MapFileError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let f: MapFile = serde_json::from_str(&s).map_err(|error| {
+        let path = path.to_path_buf();
+        if error.is_eof() {
+            MapFileError::Truncated { path, error }
         } else {
-            anyhow::anyhow!("{}: not a map file: {e}", path.display())
+            MapFileError::NotAMapFile { path, error }
         }
     })?;
     validate(path, &f)?;
@@ -480,7 +571,54 @@ pub fn write<T: Serialize>(path: &Path, m: &T) -> Result<()> {
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
-    result.with_context(|| format!("writing {}", path.display()))
+    result.map_err(|source| MapFileError::Write {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Computes a map (or shard (k, n) of it) with the exact solver, calling `progress` once per
+/// point; the cost and CPU time are measured around the computation.
+#[must_use]
+pub fn compute(
+    spec: &Spec,
+    shard: Option<(usize, usize)>,
+    progress: &(dyn Fn() + Sync),
+    opts: map::RunOptions,
+) -> MapFile {
+    let (k, n) = shard.unwrap_or((0, 1));
+    let t0 = std::time::Instant::now();
+    let cpu0 = process_cpu_seconds();
+    let specs = spec.panels();
+    let mut cycle_points = 0;
+    let (panels, ns): (Vec<Panel>, Vec<Vec<f64>>) = specs
+        .iter()
+        .map(|ps| {
+            let idx = map::shard(ps, k, n);
+            let o = map::run_with(ps, &idx, progress, opts);
+            cycle_points += o.cycle_points() as u64;
+            let panel = Panel {
+                mu: ps.mu,
+                tau_d: ps.tau_d,
+                xidot0: ps.xidot0,
+                points: o.points,
+            };
+            (panel, o.ns_per_period)
+        })
+        .unzip();
+    MapFile {
+        spec: spec.clone(),
+        spec_crc64: spec.crc64(),
+        shard,
+        cost: Cost::of(&panels, ns)
+            .with_cpu_seconds(
+                cpu0.zip(process_cpu_seconds())
+                    .map(|(a, b)| (b - a).max(0.0)),
+            )
+            .with_cycle_points(cycle_points),
+        panels,
+        seconds: t0.elapsed().as_secs_f64(),
+    }
 }
 
 /// Merges validated shard files of one sweep (any order) into a complete map.
@@ -488,11 +626,14 @@ pub fn write<T: Serialize>(path: &Path, m: &T) -> Result<()> {
 /// # Errors
 /// Mismatched sweeps or shard counts, a shard given twice, or missing shards.
 pub fn merge(files: &[(PathBuf, MapFile)]) -> Result<MapFile> {
-    let (first_path, first) = files.first().context("no input files")?;
+    let (first_path, first) = files
+        .first()
+        .ok_or_else(|| MapFileError::Merge("no input files".into()))?;
     let (_, n) = first.shard_or_whole();
     let mut by_k: Vec<Option<usize>> = vec![None; n];
     for (i, (path, f)) in files.iter().enumerate() {
         ensure!(
+            Merge,
             f.spec == first.spec,
             "{} and {} belong to different sweeps ({} differs; spec_crc64 {} vs {})",
             first_path.display(),
@@ -503,17 +644,18 @@ pub fn merge(files: &[(PathBuf, MapFile)]) -> Result<MapFile> {
         );
         let (k, nf) = f.shard_or_whole();
         ensure!(
+            Merge,
             nf == n,
             "{} is shard {k}/{nf} but {} is a shard of {n}: merge shards of one split",
             path.display(),
             first_path.display()
         );
         if let Some(j) = by_k[k] {
-            bail!(
+            return Err(MapFileError::Merge(format!(
                 "shard {k}/{n} given twice: {} and {}",
                 files[j].0.display(),
                 path.display()
-            );
+            )));
         }
         by_k[k] = Some(i);
     }
@@ -524,6 +666,7 @@ pub fn merge(files: &[(PathBuf, MapFile)]) -> Result<MapFile> {
         .map(|(k, _)| format!("{k}/{n}"))
         .collect();
     ensure!(
+        Merge,
         missing.is_empty(),
         "missing shards: {} ({} of {n} given)",
         missing.join(", "),

@@ -1,16 +1,16 @@
 //! What the page draws in the (β, σ) plane, computed here with the same code as the PNG
-//! figures: the operating point and stiffness limits of [`crate::analysis::analyze`], the
+//! figures: the operating point and stiffness limits of [`crate::device_report::analyze`], the
 //! region polygons and the critical line of `stiffwall_core::regions` (as in
-//! [`crate::analysis::plot`]), and, for an opened `hostctl map` JSON, the file's validation
-//! ([`crate::cmd::map::file::validate`]) and the analytic boundaries of `hostctl map --overlay`.
+//! `stiffwall_figures::plane`), and, for an opened `hostctl map` JSON, the file's validation
+//! ([`crate::map_file::validate`]) and the analytic boundaries of `hostctl map --overlay`.
 //! The (B, K) frontier beside it is [`super::frontier`].
 //!
 //! Units: β, σ, ξ̇ dimensionless (ξ̇ in encoder ticks per servo period); m, b, c, K SI (N/m or
 //! N·m/rad etc.). Invariants: nothing here restates a threshold; a missing model or a wall
 //! that is off (K = 0) gives a plane without an operating point and says why.
 
-use crate::analysis;
-use crate::cmd::map::file::{self, MapFile};
+use crate::device_report as analysis;
+use crate::map_file::{self, MapFile, MapFileError};
 use serde_json::{json, Value};
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_core::regions::{self, Boundary, Region, Window};
@@ -195,16 +195,12 @@ fn wall_off(model: &Model, info: &DeviceInfo, cfg: &ServoConfig, xidot: f64) -> 
 /// map with a virtual damper, `spec.damping` > 0: those boundaries are the spring-only wall's).
 ///
 /// # Errors
-/// The JSON does not parse as a map file, or the file is invalid (the message names the field).
-pub fn map_view(text: &str) -> anyhow::Result<Value> {
-    let m: MapFile = serde_json::from_str(text)
-        .map_err(|e| anyhow::anyhow!("not a hostctl map JSON file: {e}"))?;
-    file::validate(std::path::Path::new("the opened map"), &m)?;
+/// [`MapViewError`]: the JSON does not parse as a map file, or the file is invalid (the message names the field).
+pub fn map_view(text: &str) -> Result<Value, MapViewError> {
+    let m: MapFile = serde_json::from_str(text).map_err(MapViewError::Parse)?;
+    map_file::validate(std::path::Path::new("the opened map"), &m)?;
     if m.shard.is_some() {
-        anyhow::bail!(
-            "the opened map is shard {:?} of a sweep; merge the shards with `hostctl map --merge` first",
-            m.shard
-        );
+        return Err(MapViewError::Shard(m.shard));
     }
     let s = &m.spec;
     let half = |a: &stiffwall_sim::map::Axis| {
@@ -256,6 +252,28 @@ pub fn map_view(text: &str) -> anyhow::Result<Value> {
     }))
 }
 
+/// Why an opened map file cannot be shown.
+#[derive(Debug, thiserror::Error)]
+pub enum MapViewError {
+    /// The text is not a map file's JSON.
+    #[error("not a hostctl map JSON file: {0}")]
+    Parse(serde_json::Error),
+    /// The map file is invalid (the message names the field).
+    #[error(transparent)]
+    Invalid(#[from] MapFileError),
+    /// The file is one shard of a sweep.
+    #[error(
+        "the opened map is shard {0:?} of a sweep; merge the shards with `hostctl map --merge` first"
+    )]
+    Shard(Option<(usize, usize)>),
+    /// A panel's parameters are refused by core's region boundaries.
+    #[error(transparent)]
+    Regions(#[from] stiffwall_core::ParamError),
+    /// The view could not be serialised.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -264,9 +282,9 @@ mod tests {
         let d = stiffwall_core::devices::find("maxon-re35").unwrap();
         DeviceInfo {
             protocol_version: stiffwall_proto::PROTOCOL_VERSION,
-            firmware_name: heapless::String::new(),
-            firmware_version: heapless::String::new(),
-            board: heapless::String::new(),
+            firmware_name: Default::default(),
+            firmware_version: Default::default(),
+            board: Default::default(),
             servo_rate_hz: 1000,
             counts_per_rev: 8192,
             resolution: d.params.resolution as f32,
@@ -349,7 +367,7 @@ mod tests {
 
     #[test]
     fn a_damped_map_gets_no_spring_only_boundaries() {
-        use crate::cmd::map::file::{Spec, Values};
+        use crate::map_file::{Spec, Values};
         use stiffwall_sim::map::Axis;
         let axis = |hi| Axis { lo: 0.0, hi, n: 3 };
         let mut spec = Spec {
@@ -363,7 +381,12 @@ mod tests {
             damping: 0.0,
         };
         let lines = |spec: &Spec| {
-            let m = crate::cmd::map::compute(spec, None, true).unwrap();
+            let m = map_file::compute(
+                spec,
+                None,
+                &|| {},
+                stiffwall_sim::map::RunOptions::default(),
+            );
             let v = map_view(&serde_json::to_string(&m).unwrap()).unwrap();
             v["panels"][0]["lines"].as_array().unwrap().len()
         };

@@ -4,12 +4,12 @@
 //! Units: B in N·s/m (N·m·s/rad with `--rotational`), K in N/m (N·m/rad). The frontier is
 //! [`criteria::FRONTIER_POINTS`] values of B on the linear grid 0 ..= 4·m/T.
 //!
-//! `--plot` adds the frontier figure ([`figure`]): K_max(B) over the same grid, the best B
-//! and the operating point (B given, the device's K).
+//! [`figure`] is the frontier figure's data: K_max(B) over the same grid, the best B and the
+//! operating point (B given, the device's K).
 //!
 //! Invariants: B is validated (finite, ≥ 0, named `damping`) before anything is computed.
 
-use super::kb_plot::{Frontier, Mark, Units};
+use crate::frontier::{Frontier, Mark, Units};
 use serde::Serialize;
 use std::fmt::Write as _;
 use stiffwall_core::{criteria, ParamError, PhysicalParams};
@@ -97,6 +97,43 @@ pub fn damping_report(p: &PhysicalParams, b_set: f64) -> Result<DampingReport, P
     })
 }
 
+/// The (B, K) frontier figure of `analyze --damping B --plot`: the K_max(B) table as a curve,
+/// the best B and the operating point (B given, the device's K).
+#[must_use]
+pub fn figure(d: &DampingReport, p: &PhysicalParams, device: Option<&str>) -> Frontier {
+    let u = Units::of(p.rotational);
+    Frontier {
+        title: format!(
+            "{}: (K, B) frontier, exact sampled linear K_max(B)",
+            device.unwrap_or("device")
+        ),
+        units: u,
+        boundary: d.frontier.iter().map(|f| (f.b, f.k_max)).collect(),
+        boundary_label: format!(
+            "exact linear K_max(B) (Jury), B = 0 … {FRONTIER_B_MAX_M_PER_T}·m/T"
+        ),
+        verified: Vec::new(),
+        spring_only: None,
+        best: Some(Mark {
+            b: d.b_opt,
+            k: d.k_max_opt,
+            label: format!(
+                "best B = {:.4e} {}: K_max = {:.4e} {}",
+                d.b_opt, u.b, d.k_max_opt, u.k
+            ),
+        }),
+        chosen: Some(Mark {
+            b: d.b_set,
+            k: p.stiffness,
+            label: format!(
+                "operating point B = {:.4e}, K = {:.4e} ({})",
+                d.b_set, p.stiffness, d.region
+            ),
+        }),
+        quiet_ceiling: Some(d.quiet_ceiling),
+    }
+}
+
 /// The text section printed after the main table.
 #[must_use]
 pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
@@ -162,41 +199,4 @@ pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
         let _ = writeln!(s, "  {:>12.4e} {:>12.4e}", pt.b, pt.k_max);
     }
     s
-}
-
-/// The (B, K) frontier figure of `analyze --damping B --plot`: the K_max(B) table as a curve,
-/// the best B and the operating point (B given, the device's K).
-#[must_use]
-pub fn figure(d: &DampingReport, p: &PhysicalParams, device: Option<&str>) -> Frontier {
-    let u = Units::of(p.rotational);
-    Frontier {
-        title: format!(
-            "{}: (K, B) frontier, exact sampled linear K_max(B)",
-            device.unwrap_or("device")
-        ),
-        units: u,
-        boundary: d.frontier.iter().map(|f| (f.b, f.k_max)).collect(),
-        boundary_label: format!(
-            "exact linear K_max(B) (Jury), B = 0 … {FRONTIER_B_MAX_M_PER_T}·m/T"
-        ),
-        verified: Vec::new(),
-        spring_only: None,
-        best: Some(Mark {
-            b: d.b_opt,
-            k: d.k_max_opt,
-            label: format!(
-                "best B = {:.4e} {}: K_max = {:.4e} {}",
-                d.b_opt, u.b, d.k_max_opt, u.k
-            ),
-        }),
-        chosen: Some(Mark {
-            b: d.b_set,
-            k: p.stiffness,
-            label: format!(
-                "operating point B = {:.4e}, K = {:.4e} ({})",
-                d.b_set, p.stiffness, d.region
-            ),
-        }),
-        quiet_ceiling: Some(d.quiet_ceiling),
-    }
 }

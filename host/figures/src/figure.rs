@@ -1,4 +1,4 @@
-//! Figure files of every `hostctl` command: the format by extension, one writer for both.
+//! Figure files of every stiffwall figure: the format by extension, one writer for both.
 //!
 //! Units: sizes in pixels. Invariants: the format is chosen by the file's extension, `.svg` or
 //! `.png` in any case (`.SVG`, `.Png`); any other name is refused before anything is drawn,
@@ -49,13 +49,19 @@ pub enum FigureError {
     },
 }
 
+/// What a drawing function returns on failure: plotters' backend error or a message.
+pub type DrawError = Box<dyn std::error::Error + Send + Sync>;
+
+/// The result of a drawing function.
+pub type DrawResult<T = ()> = Result<T, DrawError>;
+
 /// Something that can draw itself on any plotters backend.
 pub trait Figure {
     /// Draws the whole figure into `root` (which it fills); the writer presents it.
     ///
     /// # Errors
     /// A drawing error.
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static;
 }
@@ -118,7 +124,7 @@ pub fn write<F: Figure + ?Sized>(
     size_px: (u32, u32),
     figure: &F,
 ) -> Result<(), FigureError> {
-    let draw_err = |source: Box<dyn std::error::Error + Send + Sync>| FigureError::Draw {
+    let draw_err = |source: DrawError| FigureError::Draw {
         path: path.to_path_buf(),
         source,
     };
@@ -135,7 +141,7 @@ pub fn write<F: Figure + ?Sized>(
 fn render<DB: DrawingBackend, F: Figure + ?Sized>(
     root: DrawingArea<DB, Shift>,
     figure: &F,
-) -> Result<(), Box<dyn std::error::Error + Send + Sync>>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -150,7 +156,7 @@ mod tests {
 
     struct Square;
     impl Figure for Square {
-        fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+        fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
         where
             DB::ErrorType: 'static,
         {
@@ -162,11 +168,11 @@ mod tests {
 
     struct Broken;
     impl Figure for Broken {
-        fn draw<DB: DrawingBackend>(&self, _: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+        fn draw<DB: DrawingBackend>(&self, _: &DrawingArea<DB, Shift>) -> DrawResult
         where
             DB::ErrorType: 'static,
         {
-            anyhow::bail!("no data to draw")
+            Err("no data to draw".into())
         }
     }
 

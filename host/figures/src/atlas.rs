@@ -4,14 +4,14 @@
 //! Units: dimensionless (β, σ, μ on the axes; fractions in [0, 1]). Invariant: drawn only from a
 //! complete, validated map and the atlas computed from it; lines are clipped to the plot.
 
-use super::atlas_model::{Atlas, Line, Slice};
-use super::file::{MapFile, Panel};
-use super::plot::draw_cells;
-use crate::figure::{self, Figure};
-use anyhow::Result;
+use crate::figure::{self, DrawResult, Figure, FigureError};
+use crate::map::draw_cells;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
+pub use stiffwall_analysis::atlas::panel_file;
+use stiffwall_analysis::atlas::{Atlas, Line, Slice};
+use stiffwall_analysis::map_file::{MapFile, Panel};
 use stiffwall_core::regions;
 
 fn line_color(l: Line) -> RGBColor {
@@ -23,17 +23,16 @@ fn line_color(l: Line) -> RGBColor {
     }
 }
 
-/// File name of a panel's image.
-#[must_use]
-pub fn panel_file(mu: f64, tau_d: f64, xidot0: f64, ext: &str) -> String {
-    format!("atlas-mu{mu:.4}-tau{tau_d}-xidot{xidot0}.{ext}")
-}
-
 /// Writes every panel image and `atlas-summary.<ext>` into `dir`; returns the paths.
 ///
 /// # Errors
 /// A drawing or file error.
-pub fn plot_all(m: &MapFile, a: &Atlas, dir: &Path, ext: &str) -> Result<Vec<PathBuf>> {
+pub fn plot_all(
+    m: &MapFile,
+    a: &Atlas,
+    dir: &Path,
+    ext: &str,
+) -> Result<Vec<PathBuf>, FigureError> {
     let mut out = Vec::new();
     for (p, ap) in m.panels.iter().zip(&a.panels) {
         let path = dir.join(panel_file(p.mu, p.tau_d, p.xidot0, ext));
@@ -58,7 +57,7 @@ struct PanelFigure<'a> {
 }
 
 impl Figure for PanelFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -74,41 +73,11 @@ fn step(lo: f64, hi: f64, n: usize) -> f64 {
     }
 }
 
-/// β values where the linear loop's stability flips inside [b0, b1] (scan + bisection).
-fn linear_flips(slice: &Slice, b0: f64, b1: f64) -> Result<Vec<f64>> {
-    const SCAN: usize = 400;
-    let stable = |b: f64| slice.linear_stable(b.max(0.0));
-    let mut flips = Vec::new();
-    let mut prev_b = b0.max(0.0);
-    let Some(mut prev) = stable(prev_b)? else {
-        return Ok(flips);
-    };
-    for i in 1..=SCAN {
-        let b = b0.max(0.0) + (b1 - b0.max(0.0)) * i as f64 / SCAN as f64;
-        let s = stable(b)?.unwrap_or(prev);
-        if s != prev {
-            let (mut lo, mut hi) = (prev_b, b);
-            for _ in 0..50 {
-                let mid = 0.5 * (lo + hi);
-                if stable(mid)?.unwrap_or(prev) == prev {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            flips.push(0.5 * (lo + hi));
-        }
-        prev = s;
-        prev_b = b;
-    }
-    Ok(flips)
-}
-
 /// The title, the agreement of each line (in its colour) and the cell legend of a panel.
 fn draw_panel_header<DB: DrawingBackend>(
     top: &DrawingArea<DB, Shift>,
     f: &PanelFigure,
-) -> Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -148,7 +117,7 @@ where
     Ok(())
 }
 
-fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &PanelFigure) -> Result<()>
+fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &PanelFigure) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -195,7 +164,7 @@ where
         }
         chart.draw_series(LineSeries::new(pts, line_color(l).stroke_width(2)))?;
     }
-    for b in linear_flips(&slice, window.beta_min, window.beta_max)? {
+    for b in slice.linear_flips(window.beta_min, window.beta_max)? {
         chart.draw_series(LineSeries::new(
             vec![(b, window.sigma_min), (b, window.sigma_max)],
             line_color(Line::LinearExact).stroke_width(2),
@@ -209,7 +178,7 @@ struct SummaryFigure<'a> {
 }
 
 impl Figure for SummaryFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -217,7 +186,7 @@ impl Figure for SummaryFigure<'_> {
     }
 }
 
-fn draw_summary<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, a: &Atlas) -> Result<()>
+fn draw_summary<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, a: &Atlas) -> DrawResult
 where
     DB::ErrorType: 'static,
 {

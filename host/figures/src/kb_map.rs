@@ -1,18 +1,17 @@
-//! Figure of a (K, B) map: B on x, K on y (SI, the units of [`super::kb_file::Units`]), classes as
+//! Figure of a (K, B) map: B on x, K on y (SI, the units of [`stiffwall_analysis::kb::Units`]), classes as
 //! the grey levels of the (β, σ) map, and core's predicted exact linear boundary K_max(B) in
 //! red (clamped to the plotted K range; K_max = 0 where no K is stable). Axes and boundary are
-//! drawn by [`crate::analysis::kb_plot`], shared with the frontier figures of analyze and tune.
+//! drawn by [`crate::frontier`], shared with the frontier figures of analyze and tune.
 //!
 //! Invariant: cells are centred on the grid points; drawn only from a computed [`KbFile`].
 
-use super::kb_file::KbFile;
-use super::plot::class_color;
-use crate::analysis::kb_plot;
-use crate::figure::{self, Figure, FigureError};
-use anyhow::Result;
+use crate::figure::{self, DrawResult, Figure, FigureError};
+use crate::frontier as kb_plot;
+use crate::map::class_color;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
+use stiffwall_analysis::kb::KbFile;
 
 struct KbFigure<'a>(&'a KbFile);
 
@@ -27,7 +26,7 @@ fn step(lo: f64, hi: f64, n: usize) -> f64 {
 }
 
 impl Figure for KbFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {

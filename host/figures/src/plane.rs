@@ -7,13 +7,12 @@
 //! `classify_delayed` (β* = ½ + τ_D, σ = ½, σ* = ½ + ξ̈(τ_D² + τ_D), critical line
 //! σ = σ* + ξ̇(β* − β)); nothing here restates them.
 
-use super::Report;
-use crate::figure::{self, Figure, FigureError};
-use anyhow::anyhow;
+use crate::figure::{self, DrawError, DrawResult, Figure, FigureError};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
+use stiffwall_analysis::device_report::Report;
 use stiffwall_core::regions::{self, Boundary, Region, Window};
 
 const W: u32 = 1000;
@@ -27,7 +26,7 @@ pub const SIZE_PX: (u32, u32) = (W, H);
 pub struct Plane<'a>(pub &'a Report);
 
 impl Figure for Plane<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -43,8 +42,8 @@ pub fn write(path: &Path, r: &Report) -> Result<(), FigureError> {
     figure::write(path, SIZE_PX, &Plane(r))
 }
 
-fn e<E: std::fmt::Display>(err: E) -> anyhow::Error {
-    anyhow!("plot: {err}")
+fn e<E: std::fmt::Display>(err: E) -> DrawError {
+    format!("plot: {err}").into()
 }
 
 /// The plane's chart: β on x, σ on y, over `f64` ranges.
@@ -54,7 +53,7 @@ type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoor
 ///
 /// # Errors
 /// A drawing error.
-pub fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &Report) -> anyhow::Result<()>
+pub fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, r: &Report) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -132,7 +131,7 @@ fn draw_regions<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     r: &Report,
     window: &Window,
-) -> anyhow::Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -189,7 +188,7 @@ fn draw_path<DB: DrawingBackend>(
     r: &Report,
     bmax: f64,
     smax: f64,
-) -> anyhow::Result<()>
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -249,10 +248,7 @@ where
 }
 
 /// The operating point, labelled with K, β and σ.
-fn draw_operating_point<DB: DrawingBackend>(
-    chart: &mut Chart<'_, DB>,
-    r: &Report,
-) -> anyhow::Result<()>
+fn draw_operating_point<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, r: &Report) -> DrawResult
 where
     DB::ErrorType: 'static,
 {

@@ -49,7 +49,7 @@ fn compute(p: &PhysicalParams, b_set: f64) -> Result<Value, stiffwall_core::Para
         let k_max = criteria::k_max_exact_linear(p, b_set)?;
         json!({"b": b_set, "k": k, "k_max": k_max,
                "stable": criteria::exact_linear_stable(p, b_set)?,
-               "region": crate::analysis::damping::kb_region(k, k_max, quiet_ceiling)})
+               "region": crate::damping::kb_region(k, k_max, quiet_ceiling)})
     } else {
         Value::Null
     };

@@ -17,13 +17,27 @@
 //! is reported at the tick where the device (with its monitor on) latched it. It runs even when
 //! the recording's config had the monitor off, and then says what *would* have latched.
 
-use anyhow::{bail, Result};
 use serde::Serialize;
 use std::fmt::Write as _;
 use stiffwall_client::{Recording, Row};
 use stiffwall_core::monitor::{self, energy_e8, EnergyMonitor};
 use stiffwall_firmware::{BoardInfo, Fx64, Gains};
 use stiffwall_proto::{flags, ServoConfig, WallMode};
+
+/// Why the monitor replay cannot run.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MonitorError {
+    /// A decimated recording.
+    #[error("the energy monitor needs every servo tick (decimation 1); this recording has decimation {decimation}")]
+    Decimated {
+        /// The recording's decimation.
+        decimation: u16,
+    },
+    /// K·Δ_eff² zero.
+    #[error("the energy monitor needs a stiffness K > 0 (the storage function is K·Δ_eff²·H)")]
+    NoStiffness,
+}
 
 /// One energy-monitor event: the first tick of a growth trip or of an excursion over the limit.
 #[derive(Debug, Clone, Serialize)]
@@ -74,12 +88,14 @@ const PHASE: u16 = flags::HOLD | flags::RELEASED | flags::EXCITE;
 ///
 /// # Errors
 /// When the recording is decimated (turning points need every tick) or K·Δ_eff² is zero.
-pub fn monitor_recording(rec: &Recording, board: &BoardInfo) -> Result<MonitorReplay> {
+pub fn monitor_recording(
+    rec: &Recording,
+    board: &BoardInfo,
+) -> Result<MonitorReplay, MonitorError> {
     if rec.header.decimation != 1 {
-        bail!(
-            "the energy monitor needs every servo tick (decimation 1); this recording has decimation {}",
-            rec.header.decimation
-        );
+        return Err(MonitorError::Decimated {
+            decimation: rec.header.decimation,
+        });
     }
     let cfg = rec.header.config;
     let g: Gains<Fx64> = Gains::from_config(
@@ -90,7 +106,7 @@ pub fn monitor_recording(rec: &Recording, board: &BoardInfo) -> Result<MonitorRe
         board,
     );
     if !g.energy_monitor {
-        bail!("the energy monitor needs a stiffness K > 0 (the storage function is K·Δ_eff²·H)");
+        return Err(MonitorError::NoStiffness);
     }
     let de = f64::from(board.delta_eff(cfg.coarsen_shift));
     let mut r = MonitorReplay {
