@@ -15,9 +15,13 @@
 //! [`plant_args`] (the plant flags, resolved by `stiffwall_analysis::plant`), [`config_flags`] (servo
 //! configuration changes), [`session`] (the telemetry stream and recorder), [`analysis`] (the
 //! paper's analysis of one device with its text, its (β, σ) figure and the (K, B) frontier
-//! figure). The libraries are used directly, not re-exported: `stiffwall-client` (client,
-//! transports, virtual device, sessions, recordings), `stiffwall-tune` (the tune procedure),
-//! `stiffwall-analysis` (computation and text) and `stiffwall-figures` (pictures).
+//! figure). The live view (`cmd::ui`) is a command too: it shares the release test's
+//! configuration with `experiment release` through `stiffwall_analysis::release` and the
+//! configuration table with `config get` through [`output`]. The libraries are used directly:
+//! `stiffwall-client` (client, transports, virtual device, sessions, recordings) and
+//! `stiffwall-tune` (the tune procedure) are not re-exported; of `stiffwall-analysis`
+//! (computation and text) and `stiffwall-figures` (pictures), [`monitor_report`] and [`figure`]
+//! are re-exported under the paths they had when they lived here.
 //!
 //! Units: as documented per module (SI on the command line, device integers on the wire).
 //! Errors: library modules return `thiserror` enums naming the field and its range; the

@@ -5,6 +5,8 @@
 //! error, any other write failure is.
 
 use serde::Serialize;
+use std::fmt::Write as _;
+use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
 
 /// Why a report could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -60,6 +62,72 @@ pub fn emit_report<T: Serialize + ?Sized>(
     } else {
         emit(&table(value))
     }
+}
+
+/// Text rendering of a servo configuration, one `name value unit` row per field (the table of
+/// `hostctl config get` and of the live view's config panel).
+#[must_use]
+pub fn config_table(c: &ServoConfig) -> String {
+    let mut s = String::new();
+    let rows: [(&str, String); 17] = [
+        ("stiffness", format!("{} N/m (N·m/rad)", c.stiffness)),
+        ("damping", format!("{} N·s/m (N·m·s/rad)", c.damping)),
+        ("damper", c.damper.to_string()),
+        ("rate", format!("{} Hz", c.servo_rate_hz)),
+        ("delay-ticks", c.extra_delay_ticks.to_string()),
+        ("coarsen-shift", c.coarsen_shift.to_string()),
+        (
+            "wall",
+            match c.wall {
+                WallMode::Bidirectional => "bidirectional".into(),
+                WallMode::OneSided => "one-sided".into(),
+            },
+        ),
+        ("wall-position", format!("{} counts", c.wall_position)),
+        ("force-limit", format!("{} N (N·m)", c.force_limit)),
+        (
+            "max-velocity",
+            if c.max_velocity > 0.0 {
+                format!("{} m/s (rad/s)", c.max_velocity)
+            } else {
+                "off".into()
+            },
+        ),
+        (
+            "energy-monitor",
+            if c.energy_monitor { "on" } else { "off" }.into(),
+        ),
+        ("energy-limit", format!("{} J", c.energy_limit)),
+        ("energy-growth-cycles", c.energy_growth_cycles.to_string()),
+        (
+            "encoder-jump",
+            format!("{} counts/tick", c.encoder_jump_counts),
+        ),
+        (
+            "heartbeat-timeout-ms",
+            if c.heartbeat_timeout_ms > 0 {
+                c.heartbeat_timeout_ms.to_string()
+            } else {
+                "off".into()
+            },
+        ),
+        (
+            "safe-mode",
+            match c.safe_mode {
+                SafeMode::ZeroForce => "zero-force".into(),
+                SafeMode::Damping => "damping".into(),
+            },
+        ),
+        (
+            "safe-damping",
+            format!("{} N·s/m (N·m·s/rad)", c.safe_damping),
+        ),
+    ];
+    for (k, v) in rows {
+        let _ = writeln!(s, "{k:<21} {v}");
+    }
+    s.pop();
+    s
 }
 
 #[cfg(test)]

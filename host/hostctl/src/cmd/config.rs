@@ -9,10 +9,9 @@
 
 pub use crate::config_flags::{OnOff, Overrides, SafeModeArg, WallArg};
 use crate::device::connect::ConnectArgs;
-use crate::output::{emit, emit_json};
+use crate::output::{config_table, emit, emit_json};
 use anyhow::{bail, Context, Result};
-use std::fmt::Write as _;
-use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
+use stiffwall_proto::ServoConfig;
 
 /// Arguments of `hostctl config`.
 #[derive(Debug, clap::Args)]
@@ -42,71 +41,6 @@ pub enum Action {
     Save,
     /// Apply the firmware defaults (not persisted) and print them.
     Defaults,
-}
-
-/// Text rendering of a configuration.
-#[must_use]
-pub fn render(c: &ServoConfig) -> String {
-    let mut s = String::new();
-    let rows: [(&str, String); 17] = [
-        ("stiffness", format!("{} N/m (N·m/rad)", c.stiffness)),
-        ("damping", format!("{} N·s/m (N·m·s/rad)", c.damping)),
-        ("damper", c.damper.to_string()),
-        ("rate", format!("{} Hz", c.servo_rate_hz)),
-        ("delay-ticks", c.extra_delay_ticks.to_string()),
-        ("coarsen-shift", c.coarsen_shift.to_string()),
-        (
-            "wall",
-            match c.wall {
-                WallMode::Bidirectional => "bidirectional".into(),
-                WallMode::OneSided => "one-sided".into(),
-            },
-        ),
-        ("wall-position", format!("{} counts", c.wall_position)),
-        ("force-limit", format!("{} N (N·m)", c.force_limit)),
-        (
-            "max-velocity",
-            if c.max_velocity > 0.0 {
-                format!("{} m/s (rad/s)", c.max_velocity)
-            } else {
-                "off".into()
-            },
-        ),
-        (
-            "energy-monitor",
-            if c.energy_monitor { "on" } else { "off" }.into(),
-        ),
-        ("energy-limit", format!("{} J", c.energy_limit)),
-        ("energy-growth-cycles", c.energy_growth_cycles.to_string()),
-        (
-            "encoder-jump",
-            format!("{} counts/tick", c.encoder_jump_counts),
-        ),
-        (
-            "heartbeat-timeout-ms",
-            if c.heartbeat_timeout_ms > 0 {
-                c.heartbeat_timeout_ms.to_string()
-            } else {
-                "off".into()
-            },
-        ),
-        (
-            "safe-mode",
-            match c.safe_mode {
-                SafeMode::ZeroForce => "zero-force".into(),
-                SafeMode::Damping => "damping".into(),
-            },
-        ),
-        (
-            "safe-damping",
-            format!("{} N·s/m (N·m·s/rad)", c.safe_damping),
-        ),
-    ];
-    for (k, v) in rows {
-        let _ = writeln!(s, "{k:<21} {v}");
-    }
-    s.pop();
-    s
 }
 
 /// Runs `hostctl config`.
@@ -142,7 +76,7 @@ pub fn run(args: &Args) -> Result<()> {
         if let Some(w) = what {
             emit(&format!("# {w} on {}", args.connect.describe()))?;
         }
-        emit(&render(&cfg))?;
+        emit(&config_table(&cfg))?;
     }
     Ok(())
 }

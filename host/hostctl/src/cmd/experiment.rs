@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use stiffwall_analysis::release;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_figures::release as release_figure;
-use stiffwall_proto::{flags, Sample, ServoConfig};
+use stiffwall_proto::{flags, Sample};
 use stiffwall_tune::{classify, Verdict};
 
 /// Arguments of `hostctl experiment`.
@@ -86,19 +86,6 @@ pub fn check_release_values(deflection: i32, ticks: u32, stiffness: Option<f64>)
     Ok(release::check_values(deflection, ticks, stiffness)?)
 }
 
-/// The configuration a release test runs with (`stiffwall_analysis::release::config`): shared
-/// with `hostctl ui`.
-///
-/// # Errors
-/// K is 0 (or NaN) and no `--stiffness` was given.
-pub fn release_config(
-    original: &ServoConfig,
-    stiffness: Option<f64>,
-    max_stiffness: f32,
-) -> Result<ServoConfig> {
-    Ok(release::config(original, stiffness, max_stiffness)?)
-}
-
 fn release(a: &ReleaseArgs) -> Result<()> {
     check_release(a)?;
     if let Some(p) = &a.plot {
@@ -107,7 +94,7 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     let model = release_model(a)?;
     let mut c = a.connect.connect()?;
     let original = c.get_config()?;
-    let cfg = release_config(&original, a.stiffness, c.info.limits.max_stiffness)?;
+    let cfg = release::config(&original, a.stiffness, c.info.limits.max_stiffness)?;
     c.clear_faults().ok();
     c.set_config(&cfg)?;
     let rec = c.release(a.deflection, a.ticks);

@@ -160,7 +160,7 @@ impl Dev {
         self.shared.publish(
             "config",
             json!({"type": "config", "config": self.cfg,
-                   "text": crate::cmd::config::render(&self.cfg)}),
+                   "text": crate::output::config_table(&self.cfg)}),
         );
         self.shared.publish(
             "plane",

@@ -9,13 +9,13 @@
 //! [`MAX_RELEASE_SECONDS`] × the servo rate); only their decimated trace is kept.
 
 use super::state::{Dev, Release};
-use crate::cmd::experiment::release_config;
 use crate::cmd::ui::wire;
 use crate::cmd::ui::wire::ReleaseTest;
 use anyhow::{bail, Result};
 use serde_json::json;
 use std::time::{Duration, Instant};
 use stiffwall_analysis::live::trace;
+use stiffwall_analysis::release;
 use stiffwall_client::HEARTBEAT_PERIOD;
 use stiffwall_proto::HostMsg;
 use stiffwall_tune::classify;
@@ -59,7 +59,7 @@ impl Dev {
         let original = self.client.get_config()?;
         check_release_fields(a, original.servo_rate_hz)?;
         let max_k = self.client.info.limits.max_stiffness;
-        let Ok(test) = release_config(&original, a.stiffness, max_k) else {
+        let Ok(test) = release::config(&original, a.stiffness, max_k) else {
             bail!(
                 "the wall is off (K = 0): enter the test's stiffness in the release test's K \
                  field (> 0 and ≤ {} {} on this device), or set K in Config",
