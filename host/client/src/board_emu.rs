@@ -48,6 +48,29 @@ impl Drop for BoardEmulator {
     }
 }
 
+impl BoardEmulator {
+    /// Ends the run the way a host that goes away does: closes the emulator's stdin, then
+    /// waits up to `timeout` for it to exit by itself and returns its status (failure when the
+    /// run stopped on an unmodelled register or another emulator error).
+    pub fn close(mut self, timeout: Duration) -> Result<std::process::ExitStatus> {
+        drop(self._stdin.take());
+        let deadline = Instant::now() + timeout;
+        loop {
+            match self.child.try_wait() {
+                Ok(Some(status)) => return Ok(status),
+                Ok(None) if Instant::now() > deadline => {
+                    return Err(err(format!(
+                        "the board emulator did not exit within {} s of its stdin closing",
+                        timeout.as_secs()
+                    )))
+                }
+                Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+                Err(e) => return Err(err(format!("waiting for the board emulator: {e}"))),
+            }
+        }
+    }
+}
+
 fn repo_paths(rel: &str) -> Vec<PathBuf> {
     vec![
         PathBuf::from(rel),

@@ -122,6 +122,13 @@ impl Client {
                         });
                     }
                     c.info = info;
+                    // Framing errors seen so far answer bytes from before the link was in
+                    // sync (a Hello that reached a board still booting, whose UART overran,
+                    // or a banner): they are about no request of the caller's, so they are not
+                    // handed on as if they had come later.
+                    c.pending.retain(
+                        |m| !matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code)),
+                    );
                     return Ok(c);
                 }
                 Ok(DeviceMsg::Error { code, detail }) => {
@@ -621,6 +628,50 @@ mod tests {
     fn reply(port: &mut serialport::TTYPort, msg: &DeviceMsg) {
         let mut buf = [0u8; MAX_FRAME];
         port.write_all(encode(msg, &mut buf).unwrap()).unwrap();
+    }
+
+    #[test]
+    fn framing_errors_from_before_the_handshake_are_not_handed_on() {
+        // A board whose UART overran on the host's first bytes answers them with a COBS error
+        // ahead of the HelloReply; the caller's first `recv` must not see it as a new error,
+        // while a framing error that comes after the handshake still comes through.
+        let (mut master, host, _name) = pty_pair().unwrap();
+        std::thread::spawn(move || {
+            let mut dec = FrameDecoder::new();
+            let mut byte = [0u8; 1];
+            while master.read_exact(&mut byte).is_ok() {
+                if let Some(Ok(HostMsg::Hello { .. })) = dec.feed::<HostMsg>(byte[0]) {
+                    let junk = DeviceMsg::Error {
+                        code: ErrorCode::Cobs,
+                        detail: ErrorDetail::None,
+                    };
+                    reply(&mut master, &junk);
+                    let mut info = placeholder_info();
+                    info.protocol_version = PROTOCOL_VERSION;
+                    reply(&mut master, &DeviceMsg::HelloReply(info));
+                    let later = DeviceMsg::Error {
+                        code: ErrorCode::Crc,
+                        detail: ErrorDetail::None,
+                    };
+                    std::thread::sleep(Duration::from_millis(100));
+                    reply(&mut master, &later);
+                    std::thread::sleep(Duration::from_millis(500));
+                    return;
+                }
+            }
+        });
+        let mut c = Client::connect(host, None).unwrap();
+        let first = c.recv(Duration::from_secs(2)).unwrap();
+        assert!(
+            matches!(
+                first,
+                Some(DeviceMsg::Error {
+                    code: ErrorCode::Crc,
+                    ..
+                })
+            ),
+            "{first:?}"
+        );
     }
 
     #[test]

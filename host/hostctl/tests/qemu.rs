@@ -1,46 +1,151 @@
-//! QEMU scenarios: the real Cortex-M firmware image under `qemu-system-arm -serial pty`,
-//! driven through hostctl's own serial client. Opt-in (`#[ignore]`): `cargo xtask qemu` builds
-//! the image, sets `STIFFWALL_QEMU_IMAGE` and runs them; `STIFFWALL_BLESS=1` (`--bless`)
-//! rewrites the expected transcripts in `firmware/boards/qemu-an386/scenarios/`.
+//! The QEMU scenarios: a real Cortex-M firmware image driven through hostctl's own serial
+//! client, each scenario's transcript compared with an expected file. Opt-in (`#[ignore]`).
+//!
+//! Two targets run the same six scenarios:
+//! - the QEMU image (`qemu-an386`, its own simulated Impulse Engine) under
+//!   `qemu-system-arm -serial pty`: `cargo xtask qemu` builds it, sets `STIFFWALL_QEMU_IMAGE` and
+//!   runs these; expected transcripts in `firmware/boards/qemu-an386/scenarios/`;
+//! - with `STIFFWALL_SCENARIO_BOARD=nucleo-f446re-dac` (or `-pwm`), the Nucleo-F446RE image on the
+//!   board emulator, coupled to the emulator's default plant `maxon-re35`: `cargo xtask board-emu`
+//!   builds both and runs these per output; expected transcripts in
+//!   `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`.
+//!
+//! `STIFFWALL_BLESS=1` (`--bless`) rewrites the expected transcripts. Units: each target's own
+//! (N/m on the linear Impulse Engine, N·m/rad on the rotary maxon-re35). The release stiffnesses
+//! are chosen per target from the paper's regions (eqs. 17-18 for A, σ < ½ and β < ½ for C),
+//! and each transcript names the region the preset's parameters put them in.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
+use std::time::Duration;
 use stiffwall_client::Client;
-use stiffwall_client::{boot_qemu, find_qemu_image, Qemu};
+use stiffwall_client::{boot_qemu, find_qemu_image, BoardEmulator, BoardEmulatorSpec, Pace, Qemu};
 
 #[path = "support/flood.rs"]
 mod flood;
 
-fn boot() -> (Qemu, Client) {
-    let image = find_qemu_image(None).expect("QEMU image (run `cargo xtask qemu`)");
-    let q = boot_qemu(&image).expect("boot QEMU");
-    let port =
-        stiffwall_client::open_port(&q.pty, stiffwall_client::DEFAULT_BAUD).expect("open QEMU pty");
-    let client = Client::connect(port, None).expect("handshake with the QEMU image");
-    (q, client)
+/// What a scenario runs on.
+struct Target {
+    /// The directory of the expected transcripts, under `firmware/boards/`.
+    scenarios: &'static str,
+    /// The plant the image drives (the QEMU image's built-in one, or the emulator's).
+    device: &'static str,
+    /// `None`: the QEMU image; `Some(output)`: the Nucleo image for `dac` or `pwm`.
+    nucleo_output: Option<&'static str>,
+    /// Region A release: stiffness (device units) and deflection (counts).
+    region_a: (f32, i32),
+    /// Region C release: stiffness (device units) and deflection (counts).
+    region_c: (f32, i32),
 }
 
-/// Ends a scenario the way the issue asks: the host sends `Shutdown`, the image acknowledges and
-/// exits through semihosting with status 0.
-fn finish(mut q: Qemu, mut c: Client) {
+/// The target `STIFFWALL_SCENARIO_BOARD` names (unset: QEMU).
+fn target() -> Target {
+    match std::env::var("STIFFWALL_SCENARIO_BOARD").as_deref() {
+        Err(_) | Ok("qemu-an386") => Target {
+            scenarios: "qemu-an386/scenarios",
+            device: "impulse-engine",
+            nucleo_output: None,
+            // K = 20 N/m: β = 1.0, σ = 38 (region A). K = 3000 N/m: β = 0.0067, σ = 0.25 (C).
+            region_a: (20.0, 20),
+            region_c: (3000.0, 10),
+        },
+        Ok(name) => {
+            let output = match name {
+                "nucleo-f446re-dac" => "dac",
+                "nucleo-f446re-pwm" => "pwm",
+                other => panic!(
+                    "STIFFWALL_SCENARIO_BOARD={other}: allowed qemu-an386, nucleo-f446re-dac, \
+                     nucleo-f446re-pwm"
+                ),
+            };
+            Target {
+                scenarios: if output == "dac" {
+                    "nucleo-f446re/scenarios/dac"
+                } else {
+                    "nucleo-f446re/scenarios/pwm"
+                },
+                device: "maxon-re35",
+                nucleo_output: Some(output),
+                // K = 0.015 N·m/rad: β = 0.60, σ = 174 (region A; 2b/T = 0.018 bounds it). From
+                // 200 counts the spring's 2.3e-3 N·m beats c = 2e-3 N·m, so the rotor moves.
+                // K = 10 N·m/rad: β = 9e-4, σ = 0.26 (region C); its 0.077 N·m at 10 counts
+                // saturates at the image's force limit (¼ of the 0.1 N·m full scale, rig.rs).
+                region_a: (0.015, 200),
+                region_c: (10.0, 10),
+            }
+        }
+    }
+}
+
+/// A running image.
+enum Running {
+    Qemu(Qemu),
+    Board(BoardEmulator),
+}
+
+fn boot() -> (Running, Client) {
+    let t = target();
+    let (running, pty) = match t.nucleo_output {
+        None => {
+            let image = find_qemu_image(None).expect("QEMU image (run `cargo xtask qemu`)");
+            let q = boot_qemu(&image).expect("boot QEMU");
+            let pty = q.pty.clone();
+            (Running::Qemu(q), pty)
+        }
+        Some(output) => {
+            let e = stiffwall_client::start_board_emulator(&BoardEmulatorSpec {
+                output: Some(output.into()),
+                device: Some(t.device.into()),
+                plant_file: None,
+                pace: Pace::Fast,
+            })
+            .expect("board emulator (run `cargo xtask board-emu --build`)");
+            let pty = e.pty.clone();
+            (Running::Board(e), pty)
+        }
+    };
+    let port = stiffwall_client::open_port(&pty, stiffwall_client::DEFAULT_BAUD).expect("open pty");
+    let client = Client::connect(port, None).expect("handshake with the image");
+    (running, client)
+}
+
+/// The pty the image's UART is on.
+fn pty(r: &Running) -> String {
+    match r {
+        Running::Qemu(q) => q.pty.clone(),
+        Running::Board(e) => e.pty.clone(),
+    }
+}
+
+/// Ends a scenario: the host sends `Shutdown` and the image acknowledges it. The QEMU image
+/// then exits through semihosting with status 0; the Nucleo image has no exit (a board), so
+/// the host goes away and the emulator must end cleanly (no unmodelled register, no fault).
+fn finish(r: Running, mut c: Client) {
     c.shutdown(0).expect("Shutdown acknowledged");
-    let status = q
-        .wait_exit(std::time::Duration::from_secs(5))
-        .expect("QEMU exits");
-    assert!(status.success(), "semihosting exit status {status}");
+    let status = match r {
+        Running::Qemu(mut q) => q.wait_exit(Duration::from_secs(5)).expect("QEMU exits"),
+        Running::Board(e) => {
+            drop(c);
+            e.close(Duration::from_secs(10))
+                .expect("the emulator exits")
+        }
+    };
+    assert!(status.success(), "exit status {status}");
 }
 
 /// Compares a transcript with its expected file (or writes it when blessing).
 fn check(name: &str, transcript: &str) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../firmware/boards/qemu-an386/scenarios")
+        .join("../../firmware/boards")
+        .join(target().scenarios)
         .join(format!("{name}.expected"));
     if std::env::var_os("STIFFWALL_BLESS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).expect("scenario directory");
         std::fs::write(&path, transcript).expect("write expected transcript");
         return;
     }
     let expected = std::fs::read_to_string(&path)
-        .unwrap_or_else(|_| panic!("missing {}; run `cargo xtask qemu --bless`", path.display()));
+        .unwrap_or_else(|_| panic!("missing {}; run with --bless", path.display()));
     assert_eq!(
         transcript,
         expected,
@@ -49,8 +154,17 @@ fn check(name: &str, transcript: &str) {
     );
 }
 
+/// The paper's region (Fig. 3, τ_D = 0) of the target's preset at stiffness `k`.
+fn region(k: f32) -> stiffwall_core::Region {
+    let dev = stiffwall_core::devices::find(target().device).expect("preset");
+    let mut p = dev.params;
+    p.stiffness = f64::from(k);
+    let d = p.to_dimensionless().expect("valid preset");
+    stiffwall_core::regions::classify(d.beta, d.sigma, None).expect("region")
+}
+
 #[test]
-#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+#[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
 fn boot_and_handshake() {
     let (q, mut c) = boot();
     let i = c.info.clone();
@@ -88,6 +202,7 @@ fn release_transcript(c: &mut Client, k: f32, deflection: i32, ticks: u32) -> St
     let counts = stiffwall_tune::released_counts(&rec.samples, 0);
     let verdict = classify(&counts, rec.faults != 0);
     let mut t = String::new();
+    writeln!(t, "region {:?}", region(k)).unwrap();
     writeln!(t, "stiffness {k} deflection {deflection} ticks {ticks}").unwrap();
     writeln!(t, "completed {} faults {:#x}", rec.completed, rec.faults).unwrap();
     writeln!(t, "verdict {verdict:?}").unwrap();
@@ -96,21 +211,22 @@ fn release_transcript(c: &mut Client, k: f32, deflection: i32, ticks: u32) -> St
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+#[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
 fn release_in_region_a_settles() {
     let (q, mut c) = boot();
-    // Impulse Engine at 1 kHz, K = 20 N/m: β = 1.0, σ = 38 (region A).
-    let t = release_transcript(&mut c, 20.0, 20, 2000);
+    let (k, deflection) = target().region_a;
+    let t = release_transcript(&mut c, k, deflection, 2000);
     finish(q, c);
     check("release_in_region_a_settles", &t);
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+#[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
 fn release_in_region_c_trips_the_supervisor() {
     let (q, mut c) = boot();
-    // K = 3000 N/m: β = 0.0067, σ = 0.25 (region C): the energy monitor must trip.
-    let t = release_transcript(&mut c, 3000.0, 10, 2000);
+    // Region C: the energy monitor must trip.
+    let (k, deflection) = target().region_c;
+    let t = release_transcript(&mut c, k, deflection, 2000);
     let faults = c.faults().expect("GetFaults");
     let mut t = t;
     // After the trip the device coasts in safe mode and may also latch ENERGY_LIMIT, depending
@@ -127,7 +243,7 @@ fn release_in_region_c_trips_the_supervisor() {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
+#[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
 fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
     use stiffwall_proto::{encode, DeviceMsg, ErrorCode, HostMsg, MAX_FRAME};
     let (q, mut c) = boot();
@@ -188,8 +304,8 @@ fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
-fn tune_dry_run_on_the_qemu_image() {
+#[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
+fn tune_dry_run_identifies_the_plant() {
     use stiffwall_tune::{tune, Settings};
     let (q, mut c) = boot();
     let before = c.get_config().unwrap();
@@ -204,7 +320,11 @@ fn tune_dry_run_on_the_qemu_image() {
         &mut |m| eprintln!("tune: {m}"),
     )
     .expect("tune");
-    let (m, b, cc) = (0.032, 0.02, 0.024); // the board's simulated Impulse Engine (Table II)
+    // The plant the image drives (Table II's Impulse Engine, or maxon-re35 on the emulator).
+    let p = stiffwall_core::devices::find(target().device)
+        .unwrap()
+        .params;
+    let (m, b, cc) = (p.mass, p.viscous, p.coulomb);
     let mut t = String::new();
     writeln!(
         t,
@@ -244,18 +364,22 @@ fn tune_dry_run_on_the_qemu_image() {
     check("tune_dry_run", &t);
 }
 
-/// Issue 11, acceptance on the QEMU image: `record --seconds 10` while a second writer floods
-/// the image's serial pty with `01 00` at 40 KB/s keeps ≥ 99 % of the samples, and every lost
+/// Issue 11, acceptance on the image: `record --seconds 10` while a second writer floods the
+/// image's serial pty with `01 00` at 40 KB/s keeps ≥ 99 % of the samples, and every lost
 /// sample is written as a gap (the firmware's reply budget and error coalescing, on the real
 /// Cortex-M build). Not a transcript: the counts depend on host timing.
 #[test]
-#[ignore = "needs qemu-system-arm and the board image: run `cargo xtask qemu`"]
-fn flood_of_bad_frames_keeps_telemetry_on_the_qemu_image() {
+#[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
+fn flood_of_bad_frames_keeps_telemetry() {
     let (q, mut c) = boot();
-    let path = q.pty.clone();
+    let path = pty(&q);
     let run = flood::record_under_flood(&mut c, &path, 10.0, 40_000.0);
-    flood::check(&run, 0.99, "QEMU image, 10 s, 40 KB/s");
-    // The emulated UART back-pressures the pty (about 14 KB/s got in here): the flood must
+    flood::check(
+        &run,
+        0.99,
+        &format!("{}, 10 s, 40 KB/s", target().scenarios),
+    );
+    // The emulated UART back-pressures the pty (about 14 KB/s got into QEMU's): the flood must
     // still have been a flood, not a trickle.
     assert!(
         run.flood_bytes as f64 / run.wall_s > 5_000.0,

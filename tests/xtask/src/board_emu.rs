@@ -11,7 +11,9 @@
 //! hostctl and runs the emulated-board tests (`host/board-emu/tests/board.rs`, `#[ignore]`d,
 //! all must run): boot and clock tree, info over the pty, tune against the virtual device,
 //! release counts, config across a power cycle, the watchdog, refusals, and the mutation checks
-//! (each mutant must fail its test). `--bench` prints the cycles per servo tick and the CPU load
+//! (each mutant must fail its test); then the six QEMU scenarios of `host/hostctl/tests/qemu.rs`
+//! on each image (`STIFFWALL_SCENARIO_BOARD`), against the transcripts in
+//! `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`. `--bench` prints the cycles per servo tick and the CPU load
 //! at 1, 5 and 10 kHz for docs/BENCHMARKS.md.
 
 use crate::firmware::{self, root, Image, IMAGES};
@@ -119,7 +121,39 @@ pub fn board_emu(args: &[String]) -> Result<()> {
         "--test-threads=1",
     ]);
     test.env("STIFFWALL_HOSTCTL", target.join("debug/hostctl"));
-    run_counting(&mut test, TESTS)
+    run_counting(&mut test, TESTS)?;
+    scenarios()
+}
+
+/// The six QEMU scenarios (`host/hostctl/tests/qemu.rs`) on each Nucleo image, against
+/// `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`.
+fn scenarios() -> Result<()> {
+    for output in ["dac", "pwm"] {
+        eprintln!("xtask: the QEMU scenarios on the emulated board, {output} image");
+        let mut cmd = crate::process::cargo();
+        cmd.args([
+            "test",
+            "-p",
+            "stiffwall-host",
+            "--test",
+            "qemu",
+            "--",
+            "--ignored",
+            "--test-threads=1",
+        ])
+        .env(
+            "STIFFWALL_SCENARIO_BOARD",
+            format!("nucleo-f446re-{output}"),
+        )
+        .env(
+            "STIFFWALL_BOARD_EMU",
+            root().join("host/board-emu/target/release/stiffwall-board-emu"),
+        )
+        .env_remove("STIFFWALL_NUCLEO_ELF")
+        .current_dir(root());
+        run_counting(&mut cmd, crate::qemu::QEMU_SCENARIOS)?;
+    }
+    Ok(())
 }
 
 /// Measures cycles per servo tick and CPU load at 1, 5 and 10 kHz: the emulator serves its

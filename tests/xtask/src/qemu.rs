@@ -61,5 +61,5 @@ pub fn qemu(args: &[String]) -> Result<()> {
     crate::process::run_counting(&mut rec, 1)
 }
 
-/// The scenarios of `host/hostctl/tests/qemu.rs` (all must run).
-const QEMU_SCENARIOS: usize = 6;
+/// The scenarios of `host/hostctl/tests/qemu.rs` (all must run, here and on the emulated board).
+pub const QEMU_SCENARIOS: usize = 6;
