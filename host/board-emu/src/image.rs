@@ -32,6 +32,97 @@ pub enum Output {
     Pwm,
 }
 
+/// The image's rig (`RigRecord` of firmware/boards/nucleo-f446re/src/rig.rs, found in flash by
+/// its tag): what the firmware tells the host about the device, and so what the emulator
+/// couples its plant through.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rig {
+    /// Encoder counts per revolution after ×4 decoding; 0 for a linear device.
+    pub counts_per_rev: u32,
+    /// Encoder resolution Δ: rad per count (m for a linear device).
+    pub resolution: f64,
+    /// Torque (N·m) or force (N) at full-scale output.
+    pub full_scale: f64,
+}
+
+impl Rig {
+    /// The rig of the image's default build (the paper's Sec. V motor): rotary, 8192 counts/rev,
+    /// ±0.1 N·m.
+    pub const SEC_V: Rig = Rig {
+        counts_per_rev: 8192,
+        resolution: std::f64::consts::TAU / 8192.0,
+        full_scale: 0.1,
+    };
+
+    /// Whether the device is rotary.
+    pub fn rotary(&self) -> bool {
+        self.counts_per_rev > 0
+    }
+
+    /// In words, for messages.
+    pub fn describe(&self) -> String {
+        if self.rotary() {
+            format!(
+                "rotary with {} counts/rev, {} N·m full scale",
+                self.counts_per_rev, self.full_scale
+            )
+        } else {
+            format!(
+                "linear with {:.4e} m per count, {} N full scale",
+                self.resolution, self.full_scale
+            )
+        }
+    }
+}
+
+/// Tag and layout version of the rig record (rig.rs `RIG_MAGIC`).
+pub const RIG_MAGIC: &[u8; 8] = b"SWRIG\x00\x00\x01";
+
+/// Finds and checks the rig record in `flash`.
+fn rig_record(flash: &[u8]) -> Result<Rig> {
+    let Some(at) = flash.windows(RIG_MAGIC.len()).position(|w| w == RIG_MAGIC) else {
+        bail!(
+            "the image has no rig record (the SWRIG tag of src/rig.rs): built from a source \
+             older than the emulator, or for another board"
+        );
+    };
+    let field = |i: usize| -> [u8; 4] {
+        let o = at + RIG_MAGIC.len() + 4 * i;
+        flash
+            .get(o..o + 4)
+            .and_then(|b| b.try_into().ok())
+            .unwrap_or([0xFF; 4])
+    };
+    let counts_per_rev = u32::from_le_bytes(field(0));
+    let resolution = f64::from(f32::from_le_bytes(field(1)));
+    let full_scale = f64::from(f32::from_le_bytes(field(2)));
+    if !(resolution.is_finite() && resolution > 0.0 && full_scale.is_finite() && full_scale > 0.0)
+        || counts_per_rev > 1 << 24
+    {
+        bail!(
+            "the image's rig record is invalid: counts/rev {counts_per_rev} (allowed 0..=2^24), \
+             resolution {resolution} and full scale {full_scale} (allowed finite and > 0)"
+        );
+    }
+    let resolution = if counts_per_rev > 0 {
+        let exact = std::f64::consts::TAU / f64::from(counts_per_rev);
+        if (resolution / exact - 1.0).abs() > 1e-6 {
+            bail!(
+                "the image's rig record is inconsistent: {counts_per_rev} counts/rev but \
+                 resolution {resolution} rad (allowed 2π/{counts_per_rev} = {exact})"
+            );
+        }
+        exact
+    } else {
+        resolution
+    };
+    Ok(Rig {
+        counts_per_rev,
+        resolution,
+        full_scale,
+    })
+}
+
 /// A loaded, checked image.
 #[derive(Debug, Clone)]
 pub struct Image {
@@ -43,6 +134,8 @@ pub struct Image {
     pub reset: u32,
     /// The output variant named in the image.
     pub output: Output,
+    /// The rig the image describes.
+    pub rig: Rig,
     /// SHA-256 of the ELF file, lower-case hex.
     pub sha256: String,
     /// Addresses of every `WFI` (0xBF30) and `WFE` (0xBF20) halfword in executable sections.
@@ -123,6 +216,7 @@ pub fn parse(bytes: &[u8]) -> Result<Image> {
              \"nucleo-f446re-pwm\" is in its flash): built for another board"
         );
     };
+    let rig = rig_record(&flash)?;
     let mut sleep_insns = Vec::new();
     for section in file.sections() {
         use object::ObjectSection;
@@ -143,6 +237,7 @@ pub fn parse(bytes: &[u8]) -> Result<Image> {
         initial_sp,
         reset,
         output,
+        rig,
         sha256,
         sleep_insns,
     })
@@ -174,6 +269,34 @@ fn physical_address(bytes: &[u8], offset: u64) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn record(counts: u32, resolution: f32, full_scale: f32) -> Vec<u8> {
+        let mut flash = vec![0xFF_u8; 64];
+        flash.extend_from_slice(RIG_MAGIC);
+        flash.extend_from_slice(&counts.to_le_bytes());
+        flash.extend_from_slice(&resolution.to_le_bytes());
+        flash.extend_from_slice(&full_scale.to_le_bytes());
+        flash
+    }
+
+    #[test]
+    fn the_rig_record_is_read_and_checked() {
+        let r = rig_record(&record(8192, std::f32::consts::TAU / 8192.0, 0.1)).unwrap();
+        assert_eq!(r.counts_per_rev, 8192);
+        assert_eq!(r.resolution, std::f64::consts::TAU / 8192.0);
+        assert!((r.full_scale - 0.1).abs() < 1e-8);
+        let r = rig_record(&record(0, 29.1e-6, 8.5)).unwrap();
+        assert!(!r.rotary() && (r.resolution / 29.1e-6 - 1.0).abs() < 1e-7);
+        for (bad, why) in [
+            (record(8192, 1e-3, 0.1), "inconsistent"),
+            (record(0, 0.0, 8.5), "invalid"),
+            (record(0, 1e-5, f32::NAN), "invalid"),
+            (vec![0xFF; 64], "no rig record"),
+        ] {
+            let e = rig_record(&bad).unwrap_err().to_string();
+            assert!(e.contains(why), "{e}");
+        }
+    }
 
     #[test]
     fn garbage_and_truncation_are_refused() {

@@ -3,7 +3,7 @@
 //! flash config store and watchdog are coupled to the simulated plant of `stiffwall-sim`.
 //!
 //! Units: emulated time in seconds at the CLI, 1/720 MHz units inside (`periph::UNITS_PER_S`);
-//! the plant in SI (rad, N·m for the rotary rig). Invariants: the image is checked before
+//! the plant in SI (rad and N·m for a rotary rig, m and N for a linear one). Invariants: the image is checked before
 //! anything runs (`image`); runs are deterministic for a given image, plant and host byte
 //! stream timing; a register the emulator does not model stops the run with its name.
 //!
@@ -65,7 +65,7 @@ struct Args {
     store: Option<PathBuf>,
 }
 
-fn build_plant(args: &Args) -> Result<stiffwall_sim::rich::RichPlant> {
+fn build_plant(args: &Args, rig: &image::Rig) -> Result<stiffwall_sim::rich::RichPlant> {
     use stiffwall_sim::rich::{PlantModel, RichPlant};
     // (the model, whether the device is rotary)
     let (model, rotary) = if let Some(path) = &args.plant {
@@ -89,27 +89,30 @@ fn build_plant(args: &Args) -> Result<stiffwall_sim::rich::RichPlant> {
             .map_err(|e| anyhow::anyhow!("device {name}: {e}"))?;
         (m, p.rotational)
     };
-    // The image reports the rig of its src/rig.rs (rotary, 8192 counts/rev) to the host; a
-    // plant with another encoder would be read through the wrong resolution.
-    let rig_delta = std::f64::consts::TAU / plant::RIG_COUNTS_PER_REV;
+    // The image reports the rig of its src/rig.rs to the host; a plant with another encoder
+    // would be read through the wrong resolution.
     let what = args.plant.as_ref().map_or_else(
         || format!("device {}", args.device.as_deref().unwrap_or("maxon-re35")),
         |p| format!("plant file {}", p.display()),
     );
-    let counts = (std::f64::consts::TAU / model.resolution_m).round();
-    match rotary {
-        true if (model.resolution_m / rig_delta - 1.0).abs() < 1e-9 => {}
-        true => bail!(
-            "{what}: {counts} counts/rev, but the nucleo-f446re image's rig (src/rig.rs) has 8192: \
-             allowed only rotary plants with 8192 counts/rev (a device of its own needs its \
-             rig.rs constants and a rebuilt image)"
-        ),
-        false => bail!(
-            "{what} is linear (resolution {} m), but the nucleo-f446re image's rig (src/rig.rs) \
-             is rotary with 8192 counts/rev: allowed only rotary plants with 8192 counts/rev \
-             (a device of its own needs its rig.rs constants and a rebuilt image)",
-            model.resolution_m
-        ),
+    let same_encoder =
+        rotary == rig.rotary() && (model.resolution_m / rig.resolution - 1.0).abs() < 1e-6;
+    if !same_encoder {
+        let plant = if rotary {
+            format!(
+                "rotary with {} counts/rev",
+                (std::f64::consts::TAU / model.resolution_m).round()
+            )
+        } else {
+            format!("linear with {:.4e} m per count", model.resolution_m)
+        };
+        bail!(
+            "{what} is {plant}, but the image's rig (src/rig.rs) is {}: allowed only plants \
+             with the rig's encoder (a device of its own needs its rig.rs constants and a \
+             rebuilt image; the board crate's feature rig-phantom is the worked example for \
+             phantom-1.0, built by `cargo xtask board-emu --build`)",
+            rig.describe()
+        );
     }
     RichPlant::new(&model).map_err(|e| anyhow::anyhow!("plant: {e}"))
 }
@@ -146,13 +149,14 @@ fn run() -> Result<()> {
         }
     }
     eprintln!(
-        "stiffwall-board-emu: {} ({:?} output), sha256 {}",
+        "stiffwall-board-emu: {} ({:?} output, rig {}), sha256 {}",
         args.elf.display(),
         img.output,
+        img.rig.describe(),
         img.sha256
     );
-    let plant = build_plant(&args)?;
-    let mut p = Periph::new(plant::Coupling::new(Some(plant)));
+    let plant = build_plant(&args, &img.rig)?;
+    let mut p = Periph::new(plant::Coupling::new(Some(plant)).with_rig(img.rig));
     if let Some(path) = &args.store {
         if let Ok(bytes) = std::fs::read(path) {
             if bytes.len() != p.store.len() {
@@ -279,8 +283,13 @@ pub fn report(m: &mut emu::Machine<'_>) {
         "USART2: {} bytes sent, {} overruns; IWDG: {} feeds; flash: {} erases, {} words programmed",
         p.usart.sent, p.usart.overruns, p.iwdg_feeds, p.erases, p.programs
     );
+    let (length, force) = if p.plant.rig().rotary() {
+        ("rad", "N·m")
+    } else {
+        ("m", "N")
+    };
     eprintln!(
-        "plant: position {:.6} rad, force {:.6} N·m, {} output changes",
+        "plant: position {:.6} {length}, force {:.6} {force}, {} output changes",
         p.plant.position(),
         p.plant.force(),
         p.plant.changes

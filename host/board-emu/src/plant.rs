@@ -6,15 +6,16 @@
 //! linear device); force in N·m (N). Invariants: the plant is advanced lazily, exactly to the
 //! instant the firmware reads the encoder or changes the output, under the force held since the
 //! last change (zero-order hold in continuous time, as on hardware); the encoder count is
-//! floor(position / Δ_rig) with the rig's Δ = 2π/8192 (firmware/boards/nucleo-f446re/src/rig.rs),
-//! because the image reports that resolution to the host.
+//! floor(position / Δ_rig) with the Δ of the image's rig record (firmware/boards/nucleo-f446re/
+//! src/rig.rs; 2π/8192 rad by default), because the image reports that resolution to the host.
 //!
 //! Output stage (firmware/boards/nucleo-f446re/README.md): `dac`: V_PA4 = DOR·3.3 V/4096, the
 //! op-amp gives 6.81·(V_PA4 − 1.65 V), the amplifier's gain is chosen so that ±1800 codes
-//! (±9.876 V) is the rig's full scale `DEVICE_FULL_SCALE` = 0.1 N·m exactly; `pwm`: force =
+//! (±9.876 V) is the rig's full scale `DEVICE_FULL_SCALE` (0.1 N·m by default) exactly; `pwm`: force =
 //! ±full scale × duty / 0.98, negative when DIR (PA9) is high. Both are zero while the enable
 //! pin (PB10) is low.
 
+use crate::image::Rig;
 use stiffwall_sim::rich::RichPlant;
 
 /// Time units per second: 1/720 MHz, which divides evenly into every clock of the 180 MHz tree.
@@ -33,10 +34,6 @@ pub struct ForceState {
     pub dir_high: bool,
 }
 
-/// Rig encoder counts per revolution (rig.rs `DEVICE_COUNTS_PER_REV`).
-pub const RIG_COUNTS_PER_REV: f64 = 8192.0;
-/// Rig full-scale torque, N·m (rig.rs `DEVICE_FULL_SCALE`).
-pub const RIG_FULL_SCALE: f64 = 0.1;
 /// DAC reference (VDDA), V.
 pub const VDDA: f64 = 3.3;
 /// Op-amp stage gain Rf/R1 (README).
@@ -60,10 +57,13 @@ pub struct Coupling {
     pub state: Option<ForceState>,
     /// Output changes seen.
     pub changes: u64,
+    /// The rig the image describes: its Δ reads the encoder, its full scale sizes the output.
+    rig: Rig,
 }
 
 impl Coupling {
-    /// Couples `plant` (None: a plant that never moves, for bring-up runs).
+    /// Couples `plant` (None: a plant that never moves, for bring-up runs) through the default
+    /// rig ([`Rig::SEC_V`]).
     pub fn new(plant: Option<RichPlant>) -> Self {
         Self {
             plant,
@@ -71,11 +71,22 @@ impl Coupling {
             force: 0.0,
             state: None,
             changes: 0,
+            rig: Rig::SEC_V,
         }
     }
 
-    /// The force the output stage makes of `s`, N·m.
-    pub fn force_of(s: ForceState) -> f64 {
+    /// The rig the plant is coupled through.
+    pub fn rig(&self) -> Rig {
+        self.rig
+    }
+
+    /// The same, through `rig`.
+    pub fn with_rig(self, rig: Rig) -> Self {
+        Self { rig, ..self }
+    }
+
+    /// The force the output stage makes of `s`, N·m (N).
+    pub fn force_of(&self, s: ForceState) -> f64 {
         if !s.enabled {
             return 0.0;
         }
@@ -83,10 +94,10 @@ impl Coupling {
             let v = f64::from(code) * VDDA / 4096.0;
             let v_amp = OPAMP_GAIN * (v - V_MID);
             let full_scale_v = OPAMP_GAIN * DAC_FULL_SCALE_CODES * VDDA / 4096.0;
-            return RIG_FULL_SCALE * v_amp / full_scale_v;
+            return self.rig.full_scale * v_amp / full_scale_v;
         }
         if let Some(d) = s.duty {
-            let f = RIG_FULL_SCALE * d / PWM_FULL_SCALE_DUTY;
+            let f = self.rig.full_scale * d / PWM_FULL_SCALE_DUTY;
             return if s.dir_high { -f } else { f };
         }
         0.0
@@ -105,7 +116,7 @@ impl Coupling {
     /// A new output state from `now` on.
     pub fn set_force(&mut self, now: u64, s: ForceState) {
         self.advance_to(now);
-        self.force = Self::force_of(s);
+        self.force = self.force_of(s);
         self.state = Some(s);
         self.changes += 1;
     }
@@ -124,10 +135,7 @@ impl Coupling {
     /// The encoder count at the plant's current time.
     pub fn count(&self) -> i64 {
         match &self.plant {
-            Some(p) => {
-                let delta = std::f64::consts::TAU / RIG_COUNTS_PER_REV;
-                (p.position_m() / delta).floor() as i64
-            }
+            Some(p) => (p.position_m() / self.rig.resolution).floor() as i64,
             None => 0,
         }
     }
@@ -150,9 +158,17 @@ mod tests {
             duty: None,
             dir_high: false,
         };
-        assert!((Coupling::force_of(s(2048 + 1800)) - RIG_FULL_SCALE).abs() < 1e-12);
-        assert!((Coupling::force_of(s(2048 - 1800)) + RIG_FULL_SCALE).abs() < 1e-12);
-        assert_eq!(Coupling::force_of(s(2048)), 0.0);
+        let c = Coupling::new(None);
+        let full = Rig::SEC_V.full_scale;
+        assert!((c.force_of(s(2048 + 1800)) - full).abs() < 1e-12);
+        assert!((c.force_of(s(2048 - 1800)) + full).abs() < 1e-12);
+        assert_eq!(c.force_of(s(2048)), 0.0);
+        let phantom = c.with_rig(Rig {
+            counts_per_rev: 0,
+            resolution: 29.1e-6,
+            full_scale: 8.5,
+        });
+        assert!((phantom.force_of(s(2048 + 900)) - 4.25).abs() < 1e-9);
         // 0.20 V .. 3.10 V at the pin.
         assert!(((2048.0 - 1800.0) * VDDA / 4096.0 - 0.2).abs() < 0.01);
         assert!(((2048.0 + 1800.0) * VDDA / 4096.0 - 3.1).abs() < 0.01);

@@ -4,7 +4,7 @@
 //!
 //! Opt-in (`#[ignore]`): `cargo xtask board-emu` builds the images (and the mutants) into
 //! `target/board-emu/`, builds hostctl, and runs these with `--ignored`. Units: stiffness in
-//! N·m/rad (the rig is rotary), time in emulated seconds. Invariants: every test starts its own
+//! N·m/rad (the default rig is rotary; N/m on the phantom-1.0 rig), time in emulated seconds. Invariants: every test starts its own
 //! emulator process(es) and ends them; nothing depends on test order.
 
 use std::io::{BufRead, BufReader};
@@ -20,7 +20,7 @@ fn emulator() -> &'static str {
 }
 
 /// An image built by `cargo xtask board-emu` (`nucleo-f446re-dac`, `nucleo-f446re-pwm`,
-/// `qemu-an386`, `mutant-…`).
+/// `nucleo-f446re-dac-phantom-1.0`, `qemu-an386`, `mutant-…`).
 fn image(name: &str) -> PathBuf {
     let p = root().join("target/board-emu").join(format!("{name}.elf"));
     assert!(
@@ -183,13 +183,22 @@ fn refuses_other_boards_and_corrupt_files_before_running() {
         .arg(image("nucleo-f446re-dac"))
         .args(["--output", "pwm", "--seconds", "0.01"]));
     assert!(!ok && e.contains("it is the dac build"), "{e}");
-    // A plant the image's rig (rotary, 8192 counts/rev) does not describe.
+    // A plant the image's rig (rotary, 8192 counts/rev) does not describe, and the other way.
     let (ok, _, e) = run(Command::new(emulator())
         .arg("--elf")
         .arg(image("nucleo-f446re-dac"))
         .args(["--device", "phantom-1.0", "--seconds", "0.01"]));
     assert!(
         !ok && e.contains("is linear") && e.contains("8192 counts/rev"),
+        "{e}"
+    );
+    let (ok, _, e) = run(Command::new(emulator())
+        .arg("--elf")
+        .arg(image("nucleo-f446re-dac-phantom-1.0"))
+        .args(["--device", "maxon-re35", "--seconds", "0.01"]));
+    assert!(
+        !ok && e.contains("is rotary with 8192 counts/rev")
+            && e.contains("rig (src/rig.rs) is linear"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);
@@ -261,6 +270,14 @@ fn tune_sets_the_virtual_devices_wall_maxon_re35_dac() {
 #[ignore = "needs the images: run `cargo xtask board-emu`"]
 fn tune_sets_the_virtual_devices_wall_maxon_re35_pwm() {
     tune_matches(&["--device", "maxon-re35"], "pwm");
+}
+
+/// phantom-1.0 (linear, Table II) on the `dac` image built with that rig (src/rig.rs, feature
+/// `rig-phantom`), which `--board-emulator --device phantom-1.0` picks by itself.
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn tune_sets_the_virtual_devices_wall_phantom_1_0() {
+    tune_matches(&["--device", "phantom-1.0"], "dac");
 }
 
 #[test]

@@ -6,7 +6,8 @@
 //! its binary. Where things are found: the emulator binary from `$STIFFWALL_BOARD_EMU`, else
 //! `host/board-emu/target/release/stiffwall-board-emu` under the current directory or the
 //! repository this binary was built from; the image from `$STIFFWALL_NUCLEO_ELF`, else the copy
-//! `cargo xtask board-emu` keeps per output (`target/board-emu/nucleo-f446re-{dac,pwm}.elf`).
+//! `cargo xtask board-emu` keeps per output (`target/board-emu/nucleo-f446re-{dac,pwm}.elf`), or
+//! per output and device where a device has its own rig (`…-dac-phantom-1.0.elf`).
 //! Invariants: the process is killed when the handle drops, and it exits by itself when its
 //! stdin (held by this handle) closes, so no emulator outlives the host.
 
@@ -109,8 +110,11 @@ pub fn find_emulator() -> Result<PathBuf> {
         })
 }
 
-/// Finds the Nucleo image for `output` (`dac` or `pwm`).
-pub fn find_image(output: &str) -> Result<PathBuf> {
+/// Finds the Nucleo image for `output` (`dac` or `pwm`) and, when a preset is named, the image
+/// built with that device's rig if there is one (`nucleo-f446re-{output}-{device}.elf`, e.g.
+/// the `rig-phantom` build for `phantom-1.0`); otherwise the default image (whose rig the
+/// emulator checks against the plant).
+pub fn find_image(output: &str, device: Option<&str>) -> Result<PathBuf> {
     if !OUTPUTS.contains(&output) {
         return Err(err(format!(
             "--features {output}: allowed dac or pwm (the Nucleo image's force output)"
@@ -127,8 +131,12 @@ pub fn find_image(output: &str) -> Result<PathBuf> {
             )))
         };
     }
-    repo_paths(&format!("target/board-emu/nucleo-f446re-{output}.elf"))
-        .into_iter()
+    let own = device.map(|d| format!("target/board-emu/nucleo-f446re-{output}-{d}.elf"));
+    own.iter()
+        .flat_map(|rel| repo_paths(rel))
+        .chain(repo_paths(&format!(
+            "target/board-emu/nucleo-f446re-{output}.elf"
+        )))
         .find(|p| p.is_file())
         .ok_or_else(|| {
             err(format!(
@@ -142,7 +150,7 @@ pub fn find_image(output: &str) -> Result<PathBuf> {
 pub fn start(spec: &Spec) -> Result<BoardEmulator> {
     let exe = find_emulator()?;
     let output = spec.output.as_deref().unwrap_or("dac");
-    let image = find_image(output)?;
+    let image = find_image(output, spec.device.as_deref())?;
     let mut cmd = Command::new(&exe);
     cmd.arg("--elf")
         .arg(&image)

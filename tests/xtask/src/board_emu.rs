@@ -3,7 +3,8 @@
 //!
 //! Steps: installs `cmake` and `libclang-dev` when missing (root on Debian, as QEMU is
 //! installed); builds the `dac` and `pwm` images exactly as `cargo xtask firmware` and `cargo
-//! xtask flash` do, plus the QEMU image (for the other-board refusal) and the four mutants
+//! xtask flash` do, the `dac` image with the linear rig of feature `rig-phantom`
+//! (`nucleo-f446re-dac-phantom-1.0`), plus the QEMU image (for the other-board refusal) and the four mutants
 //! (features `mutant-*` of the board crate: encoder polarity, DAC alignment, TIM7 prescaler,
 //! USART2 BRR), and copies each ELF to `target/board-emu/NAME.elf` (`nucleo-f446re-dac`,
 //! `nucleo-f446re-pwm`, `qemu-an386`, `mutant-…`); builds the emulator
@@ -32,7 +33,7 @@ pub const MUTANTS: &[&str] = &[
 ];
 
 /// Tests in host/board-emu/tests/board.rs (all must run).
-const TESTS: usize = 14;
+const TESTS: usize = 15;
 
 fn image(name: &str) -> &'static Image {
     IMAGES
@@ -71,6 +72,10 @@ fn build(mutants: bool) -> Result<PathBuf> {
             copy(&elf, &out, m)?;
         }
     }
+    // The worked example of a linear rig (src/rig.rs, feature rig-phantom): the image
+    // `hostctl --board-emulator --device phantom-1.0` picks.
+    let phantom = firmware::build(cross, image("nucleo-f446re-dac"), &["rig-phantom"])?;
+    copy(&phantom, &out, "nucleo-f446re-dac-phantom-1.0")?;
     let pwm = firmware::build(cross, image("nucleo-f446re-pwm"), &[])?;
     copy(&pwm, &out, "nucleo-f446re-pwm")?;
     // The dac image last: the board crate's own output path keeps the default build.
