@@ -75,6 +75,8 @@ pub struct Machine<'a> {
     pub resets: Vec<(u64, ResetCause)>,
     /// Servo tick statistics.
     pub ticks: TickStats,
+    /// Nested exception entries: (the exception taken, the one it preempted) → how often.
+    pub preemptions: std::collections::BTreeMap<(usize, usize), u64>,
     /// From this time on, thread mode makes no progress (a hung main loop; the watchdog
     /// test): interrupts are still taken.
     pub hang_main_at: Option<u64>,
@@ -288,6 +290,7 @@ impl<'a> Machine<'a> {
             stats_since: 0,
             resets: Vec::new(),
             ticks: TickStats::default(),
+            preemptions: std::collections::BTreeMap::new(),
             hang_main_at: None,
         };
         m.cpu_reset()?;
@@ -452,6 +455,9 @@ impl<'a> Machine<'a> {
         self.set(RegisterARM::LR, exc_return)?;
         self.set(RegisterARM::XPSR, 0x0100_0000)?;
         self.set(RegisterARM::PC, handler & !1)?;
+        if let Some(&(below, _, _)) = self.active.last() {
+            *self.preemptions.entry((exc, below)).or_default() += 1;
+        }
         let insns = self.insns();
         let s = self.uc.get_data_mut();
         s.p.nvic_pend[irq] = false;

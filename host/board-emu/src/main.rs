@@ -231,6 +231,17 @@ fn check_servo_rate(m: &mut emu::Machine<'_>, want: Option<f64>) -> Result<()> {
     Ok(())
 }
 
+/// The name of exception number `exc` (16 + IRQ for interrupts) among those the image enables.
+fn exception_name(exc: usize) -> String {
+    match exc.checked_sub(16) {
+        Some(periph::IRQ_TIM2) => "TIM2".into(),
+        Some(periph::IRQ_USART2) => "USART2".into(),
+        Some(periph::IRQ_TIM7) => "TIM7".into(),
+        Some(irq) => format!("IRQ {irq}"),
+        None => format!("exception {exc}"),
+    }
+}
+
 /// Prints what the run measured: clocks, servo rate, cycles per tick, CPU load, resets.
 pub fn report(m: &mut emu::Machine<'_>) {
     let now = m.now();
@@ -239,6 +250,7 @@ pub fn report(m: &mut emu::Machine<'_>) {
     let insns = m.insns();
     let ticks = m.ticks.clone();
     let resets = m.resets.clone();
+    let preemptions = m.preemptions.clone();
     let pc = m.pc();
     let p = m.periph();
     let c = p.clocks();
@@ -283,6 +295,13 @@ pub fn report(m: &mut emu::Machine<'_>) {
         "USART2: {} bytes sent, {} overruns; IWDG: {} feeds; flash: {} erases, {} words programmed",
         p.usart.sent, p.usart.overruns, p.iwdg_feeds, p.erases, p.programs
     );
+    for ((taken, below), n) in &preemptions {
+        eprintln!(
+            "preemption: {} preempted {} {n} times",
+            exception_name(*taken),
+            exception_name(*below)
+        );
+    }
     let (length, force) = if p.plant.rig().rotary() {
         ("rad", "N·m")
     } else {

@@ -488,3 +488,77 @@ fn a_malformed_burst_leaves_the_link_and_the_servo_rate_intact() {
     assert!(e.contains(", 1000.000 Hz (PSC 1, ARR 44999)"), "{e}");
     assert!(e.contains(" 0 overruns"), "{e}");
 }
+
+/// Serves `elf` on a pty, writes a steady stream of bytes (48 KiB at 921 600 baud, about
+/// 0.5 s) into USART2, and returns how often USART2 preempted the servo tick (TIM7), how often
+/// TIM7 preempted USART2, and the emulator's report.
+fn preemptions(elf: &Path) -> (u64, u64, String) {
+    let mut child = Command::new(emulator())
+        .arg("--elf")
+        .arg(elf)
+        .args(["--pty"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starting the emulator");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().expect("stdout"))
+        .read_line(&mut line)
+        .expect("reading the pty line");
+    let pty = line
+        .trim()
+        .strip_prefix("pty: ")
+        .expect("pty line")
+        .to_string();
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    {
+        use std::io::Write;
+        let mut port = std::fs::OpenOptions::new().write(true).open(&pty).unwrap();
+        // Frame delimiters every 64 bytes: the firmware answers bad frames, never a hang.
+        let junk: Vec<u8> = (0..48 * 1024)
+            .map(|i: u32| if i % 64 == 63 { 0 } else { 0x55 })
+            .collect();
+        port.write_all(&junk).unwrap();
+    }
+    std::thread::sleep(std::time::Duration::from_millis(800));
+    drop(child.stdin.take());
+    let out = child.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{e}");
+    let times = |prefix: &str| -> u64 {
+        e.lines()
+            .find_map(|l| l.strip_prefix(prefix))
+            .and_then(|rest| rest.trim().strip_suffix("times"))
+            .map_or(0, |n| n.trim().parse().unwrap())
+    };
+    (
+        times("preemption: USART2 preempted TIM7 "),
+        times("preemption: TIM7 preempted USART2 "),
+        e,
+    )
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn usart2_preempts_the_servo_tick_and_never_the_other_way() {
+    // The NVIC priorities of main.rs: USART2 0x00 above TIM7 0x10. Some RXNE interrupts land
+    // inside servo ticks: each must preempt the tick (else a byte could wait a whole tick, and
+    // at 10 kHz be overrun), and no tick may ever preempt the USART2 handler.
+    let (over_tick, under_tick, e) = preemptions(&image("nucleo-f446re-dac"));
+    eprintln!("USART2 preempted TIM7 {over_tick} times, TIM7 preempted USART2 {under_tick} times");
+    assert!(over_tick > 0, "USART2 never preempted a servo tick\n{e}");
+    assert_eq!(under_tick, 0, "a servo tick preempted USART2\n{e}");
+    assert!(e.contains(" 0 overruns"), "{e}");
+}
+
+#[test]
+#[ignore = "needs the images: run `cargo xtask board-emu`"]
+fn mutant_nvic_priority_fails_the_preemption_check() {
+    // USART2 at 0x20, below the servo tick: the bytes now wait for the tick to end.
+    let (over_tick, under_tick, e) = preemptions(&mutant("nvic-priority"));
+    assert!(
+        over_tick == 0 && under_tick > 0,
+        "USART2 over TIM7 {over_tick}, TIM7 over USART2 {under_tick}\n{e}"
+    );
+}

@@ -4,9 +4,9 @@
 //! Steps: installs `cmake` and `libclang-dev` when missing (root on Debian, as QEMU is
 //! installed); builds the `dac` and `pwm` images exactly as `cargo xtask firmware` and `cargo
 //! xtask flash` do, the `dac` image with the linear rig of feature `rig-phantom`
-//! (`nucleo-f446re-dac-phantom-1.0`), plus the QEMU image (for the other-board refusal) and the four mutants
+//! (`nucleo-f446re-dac-phantom-1.0`), plus the QEMU image (for the other-board refusal) and the five mutants
 //! (features `mutant-*` of the board crate: encoder polarity, DAC alignment, TIM7 prescaler,
-//! USART2 BRR), and copies each ELF to `target/board-emu/NAME.elf` (`nucleo-f446re-dac`,
+//! USART2 BRR, NVIC priorities), and copies each ELF to `target/board-emu/NAME.elf` (`nucleo-f446re-dac`,
 //! `nucleo-f446re-pwm`, `qemu-an386`, `mutant-…`); builds the emulator
 //! (release). `--build` stops there (what `hostctl --board-emulator` needs). Otherwise it builds
 //! hostctl and runs the emulated-board tests (`host/board-emu/tests/board.rs`, `#[ignore]`d,
@@ -30,10 +30,11 @@ pub const MUTANTS: &[&str] = &[
     "mutant-dac-alignment",
     "mutant-tim7-prescaler",
     "mutant-usart-brr",
+    "mutant-nvic-priority",
 ];
 
 /// Tests in host/board-emu/tests/board.rs (all must run).
-const TESTS: usize = 15;
+const TESTS: usize = 17;
 
 fn image(name: &str) -> &'static Image {
     IMAGES

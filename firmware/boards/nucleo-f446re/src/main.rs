@@ -40,7 +40,11 @@ const HSE_HZ: u32 = 8_000_000;
 const SYSCLK_HZ: u32 = 180_000_000;
 
 /// NVIC priorities (upper nibble significant on the STM32F4: 16 levels, lower = more urgent).
+#[cfg(not(feature = "mutant-nvic-priority"))]
 const PRIO_USART2: u8 = 0x00;
+// Mutation check (board emulator): USART2 below the servo tick.
+#[cfg(feature = "mutant-nvic-priority")]
+const PRIO_USART2: u8 = 0x20;
 const PRIO_SERVO: u8 = 0x10;
 
 /// What the servo interrupt owns.
