@@ -75,15 +75,17 @@ impl Drop for Served {
     }
 }
 
-fn serve(elf: &Path, store: &Path) -> Served {
+/// Starts the emulator on `elf` serving a pty, with `args` after `--pty`; returns the child
+/// (stdin and stderr as given by the caller's `stderr`) and the pty's path.
+fn spawn_pty(elf: &Path, args: &[&std::ffi::OsStr], stderr: Stdio) -> (Child, String) {
     let mut child = Command::new(emulator())
         .arg("--elf")
         .arg(elf)
-        .args(["--pty", "--fast", "--store"])
-        .arg(store)
+        .arg("--pty")
+        .args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
+        .stderr(stderr)
         .spawn()
         .expect("starting the emulator");
     let mut line = String::new();
@@ -95,6 +97,15 @@ fn serve(elf: &Path, store: &Path) -> Served {
         .strip_prefix("pty: ")
         .expect("pty line")
         .to_string();
+    (child, pty)
+}
+
+fn serve(elf: &Path, store: &Path) -> Served {
+    let (child, pty) = spawn_pty(
+        elf,
+        &["--fast".as_ref(), "--store".as_ref(), store.as_os_str()],
+        Stdio::inherit(),
+    );
     Served { child, pty }
 }
 
@@ -446,24 +457,7 @@ fn a_malformed_burst_leaves_the_link_and_the_servo_rate_intact() {
     // The QEMU scenario `malformed_burst` on the emulated board: 4 KiB of junk (frame delimiters
     // included) into USART2, then the handshake and a config read still work, no byte was
     // overrun, and TIM7 kept its 1 kHz.
-    let mut child = Command::new(emulator())
-        .arg("--elf")
-        .arg(image("nucleo-f446re-dac"))
-        .args(["--pty"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("starting the emulator");
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().expect("stdout"))
-        .read_line(&mut line)
-        .expect("reading the pty line");
-    let pty = line
-        .trim()
-        .strip_prefix("pty: ")
-        .expect("pty line")
-        .to_string();
+    let (mut child, pty) = spawn_pty(&image("nucleo-f446re-dac"), &[], Stdio::piped());
     // After the boot (bytes that arrive before main unmasks USART2 overrun, as on the chip).
     std::thread::sleep(std::time::Duration::from_millis(200));
     let mut junk = Vec::with_capacity(4096);
@@ -493,24 +487,7 @@ fn a_malformed_burst_leaves_the_link_and_the_servo_rate_intact() {
 /// 0.5 s) into USART2, and returns how often USART2 preempted the servo tick (TIM7), how often
 /// TIM7 preempted USART2, and the emulator's report.
 fn preemptions(elf: &Path) -> (u64, u64, String) {
-    let mut child = Command::new(emulator())
-        .arg("--elf")
-        .arg(elf)
-        .args(["--pty"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("starting the emulator");
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().expect("stdout"))
-        .read_line(&mut line)
-        .expect("reading the pty line");
-    let pty = line
-        .trim()
-        .strip_prefix("pty: ")
-        .expect("pty line")
-        .to_string();
+    let (mut child, pty) = spawn_pty(elf, &[], Stdio::piped());
     std::thread::sleep(std::time::Duration::from_millis(200));
     {
         use std::io::Write;

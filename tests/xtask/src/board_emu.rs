@@ -136,18 +136,8 @@ pub fn board_emu(args: &[String]) -> Result<()> {
 fn scenarios() -> Result<()> {
     for output in ["dac", "pwm"] {
         eprintln!("xtask: the QEMU scenarios on the emulated board, {output} image");
-        let mut cmd = crate::process::cargo();
-        cmd.args([
-            "test",
-            "-p",
-            "stiffwall-host",
-            "--test",
-            "qemu",
-            "--",
-            "--ignored",
-            "--test-threads=1",
-        ])
-        .env(
+        let mut cmd = crate::qemu::scenarios_command();
+        cmd.env(
             "STIFFWALL_SCENARIO_BOARD",
             format!("nucleo-f446re-{output}"),
         )
@@ -155,8 +145,7 @@ fn scenarios() -> Result<()> {
             "STIFFWALL_BOARD_EMU",
             root().join("host/board-emu/target/release/stiffwall-board-emu"),
         )
-        .env_remove("STIFFWALL_NUCLEO_ELF")
-        .current_dir(root());
+        .env_remove("STIFFWALL_NUCLEO_ELF");
         run_counting(&mut cmd, crate::qemu::QEMU_SCENARIOS)?;
     }
     Ok(())

@@ -25,19 +25,8 @@ pub fn qemu(args: &[String]) -> Result<()> {
         .find(|i| i.name == "qemu-an386")
         .expect("the QEMU image is in the image table");
     let elf = firmware::build(cross, image, &[])?;
-    let mut cmd = crate::process::cargo();
-    cmd.args([
-        "test",
-        "-p",
-        "stiffwall-host",
-        "--test",
-        "qemu",
-        "--",
-        "--ignored",
-        "--test-threads=1",
-    ])
-    .env("STIFFWALL_QEMU_IMAGE", &elf)
-    .current_dir(root());
+    let mut cmd = scenarios_command();
+    cmd.env("STIFFWALL_QEMU_IMAGE", &elf);
     if bless {
         cmd.env("STIFFWALL_BLESS", "1");
     }
@@ -59,6 +48,24 @@ pub fn qemu(args: &[String]) -> Result<()> {
     .env("STIFFWALL_QEMU_IMAGE", &elf)
     .current_dir(root());
     crate::process::run_counting(&mut rec, 1)
+}
+
+/// The cargo command that runs the scenarios of `host/hostctl/tests/qemu.rs`, one at a time
+/// (the target comes from the caller's environment variables).
+pub fn scenarios_command() -> std::process::Command {
+    let mut cmd = crate::process::cargo();
+    cmd.args([
+        "test",
+        "-p",
+        "stiffwall-host",
+        "--test",
+        "qemu",
+        "--",
+        "--ignored",
+        "--test-threads=1",
+    ])
+    .current_dir(root());
+    cmd
 }
 
 /// The scenarios of `host/hostctl/tests/qemu.rs` (all must run, here and on the emulated board).
