@@ -66,6 +66,14 @@ pub struct LinearPlant {
     pub pos_scale: f64,
     /// Force scale for balancing (max(F_s, 1 mN)), N.
     pub force_scale: f64,
+    /// Lower end stop, m (−∞ without travel).
+    pub stop_lo: f64,
+    /// Upper end stop, m (+∞ without travel).
+    pub stop_hi: f64,
+    /// End-stop stiffness (0 without travel), N/m.
+    pub stop_k: f64,
+    /// End-stop damping, N·s/m.
+    pub stop_d: f64,
 }
 
 impl LinearPlant {
@@ -81,7 +89,7 @@ impl LinearPlant {
         } else {
             u
         };
-        f += extra;
+        f += extra + self.stop_force(y[0], y[1]);
         if self.trans {
             f += self.kt * (y[2] - y[0]) + self.dt * (y[3] - y[1]);
         } else {
@@ -89,6 +97,56 @@ impl LinearPlant {
         }
         f
     }
+
+    /// The end stops' contact force at motor position x and velocity v (0 inside the travel;
+    /// only pushing back: [`crate::rich::Travel::contact_force_n`]).
+    #[inline]
+    #[must_use]
+    pub fn stop_force(&self, x: f64, v: f64) -> f64 {
+        if x > self.stop_hi {
+            -(self.stop_k * (x - self.stop_hi) + self.stop_d * v).max(0.0)
+        } else if x < self.stop_lo {
+            (self.stop_k * (self.stop_lo - x) - self.stop_d * v).max(0.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// The contact functions of the two stops at (x, v): g > 0 exactly while that stop pushes
+    /// (past it and its spring and damper pushing back), continuous in (x, v).
+    #[inline]
+    fn contact_g(&self, x: f64, v: f64) -> (f64, f64) {
+        let hi = (x - self.stop_hi).min(self.stop_k * (x - self.stop_hi) + self.stop_d * v);
+        let lo = (self.stop_lo - x).min(self.stop_k * (self.stop_lo - x) - self.stop_d * v);
+        (lo, hi)
+    }
+
+    /// The contact mode at (x, v): +1 the upper stop pushes, −1 the lower one, 0 none.
+    #[inline]
+    #[must_use]
+    pub fn contact_of(&self, x: f64, v: f64) -> f64 {
+        if self.stop_k <= 0.0 {
+            return 0.0;
+        }
+        let (lo, hi) = self.contact_g(x, v);
+        if hi > 0.0 {
+            1.0
+        } else if lo > 0.0 {
+            -1.0
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A mode of the piecewise-affine field: the motor sliding forward, backward or stuck
+/// (`slide` ±1, 0), the filter output inside its range or clamped (`clamp` 0, ±1), the motor
+/// free or against the upper or lower end stop (`contact` 0, ±1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Mode {
+    slide: f64,
+    clamp: f64,
+    contact: f64,
 }
 
 /// One cached transition matrix.
@@ -96,6 +154,7 @@ impl LinearPlant {
 struct Cached {
     slide: f64,
     clamp: f64,
+    contact: f64,
     h: f64,
     e: Mat,
 }
@@ -106,7 +165,7 @@ pub struct Linear {
     p: LinearPlant,
     /// Fastest rate ρ, 1/s.
     rho: f64,
-    cache: [Option<Cached>; 4],
+    cache: [Option<Cached>; 6],
     next: usize,
 }
 
@@ -229,6 +288,8 @@ impl Linear {
             (p.b + p.dt + if p.trans { 0.0 } else { p.bh }) * p.inv_m1,
             (p.dt + p.bh) * p.inv_m2,
             2.0 * p.amp_z * p.amp_w,
+            libm::sqrt(p.stop_k * p.inv_m1),
+            p.stop_d * p.inv_m1,
         ];
         let rho = rates
             .iter()
@@ -238,7 +299,7 @@ impl Linear {
         Self {
             p,
             rho,
-            cache: [None; 4],
+            cache: [None; 6],
             next: 0,
         }
     }
@@ -250,8 +311,9 @@ impl Linear {
         [x, x * r, x, x * r, f, f * r, 1.0, f]
     }
 
-    /// The augmented matrix M of a mode (column 6: constant terms; column 7: the command's).
-    fn matrix(&self, slide: f64, clamp: f64) -> Mat {
+    /// The augmented matrix M of a mode (column 6: constant terms; column 7: the command's);
+    /// `contact` ±1: the upper (lower) end stop's spring and damper act on the motor.
+    fn matrix(&self, slide: f64, clamp: f64, contact: f64) -> Mat {
         let p = &self.p;
         let mut m = [[0.0; N]; N];
         let filter = p.amp_w > 0.0;
@@ -278,6 +340,12 @@ impl Linear {
             }
             m[1][1] -= p.b * k;
             m[1][6] -= slide * p.c * k;
+            if contact != 0.0 {
+                let bound = if contact > 0.0 { p.stop_hi } else { p.stop_lo };
+                m[1][0] -= p.stop_k * k;
+                m[1][1] -= p.stop_d * k;
+                m[1][6] += p.stop_k * bound * k;
+            }
         }
         if p.trans {
             let k = p.inv_m2;
@@ -300,13 +368,13 @@ impl Linear {
     }
 
     /// e^{Mh} of a mode, balanced (D⁻¹ M D with the state scales) for accuracy, cached.
-    fn transition(&mut self, slide: f64, clamp: f64, h: f64) -> Mat {
+    fn transition(&mut self, slide: f64, clamp: f64, contact: f64, h: f64) -> Mat {
         for c in self.cache.iter().flatten() {
-            if c.slide == slide && c.clamp == clamp && c.h == h {
+            if c.slide == slide && c.clamp == clamp && c.contact == contact && c.h == h {
                 return c.e;
             }
         }
-        let m = self.matrix(slide, clamp);
+        let m = self.matrix(slide, clamp, contact);
         let d = self.scales();
         let mut a = [[0.0; N]; N];
         for i in 0..N {
@@ -321,7 +389,13 @@ impl Linear {
                 e[i][j] = eb[i][j] * d[i] / d[j];
             }
         }
-        self.cache[self.next] = Some(Cached { slide, clamp, h, e });
+        self.cache[self.next] = Some(Cached {
+            slide,
+            clamp,
+            contact,
+            h,
+            e,
+        });
         self.next = (self.next + 1) % self.cache.len();
         e
     }
@@ -337,10 +411,32 @@ impl Linear {
         }
     }
 
-    /// The event function of a mode at z: fired when > 0 (≥ 0 for the slide's zero crossing).
-    fn event(&self, slide: f64, clamp: f64, u: f64, z: &[f64; N]) -> (f64, bool) {
+    /// The event function of a mode at z: fired when > 0 (≥ 0 for the slide's zero crossing
+    /// and a stop's release).
+    fn event(&self, m: Mode, u: f64, z: &[f64; N]) -> (f64, bool) {
+        let Mode {
+            slide,
+            clamp,
+            contact,
+        } = m;
         let mut worst = f64::NEG_INFINITY;
         let mut fired = false;
+        if self.p.stop_k > 0.0 && slide != 0.0 {
+            let (lo, hi) = self.p.contact_g(z[0], z[1]);
+            let phi = if contact > 0.0 {
+                -hi
+            } else if contact < 0.0 {
+                -lo
+            } else {
+                lo.max(hi)
+            };
+            worst = worst.max(phi);
+            fired |= if contact == 0.0 {
+                phi > 0.0
+            } else {
+                phi >= 0.0
+            };
+        }
         if slide != 0.0 {
             let phi = -slide * z[1];
             worst = worst.max(phi);
@@ -378,7 +474,11 @@ impl Linear {
         let subs = self.substeps(dt_s);
         let h = dt_s / subs;
         let mut z = self.augmented(y, u);
-        let mut clamp = self.clamp_of(z[4]);
+        let mut mode = Mode {
+            slide: *slide,
+            clamp: self.clamp_of(z[4]),
+            contact: self.p.contact_of(z[0], z[1]),
+        };
         let mut t = 0.0;
         let mut events = 0;
         // The sub-step grid is fixed from the start of the interval; after an event the step
@@ -397,13 +497,13 @@ impl Linear {
                 continue;
             }
             let z1 = if aligned {
-                let e = self.transition(*slide, clamp, step);
+                let e = self.transition(mode.slide, mode.clamp, mode.contact, step);
                 mat_vec(&e, &z)
             } else {
-                let w = taylor_terms(&self.matrix(*slide, clamp), &z, step);
+                let w = taylor_terms(&self.matrix(mode.slide, mode.clamp, mode.contact), &z, step);
                 taylor_at(&w, 1.0)
             };
-            let (_, fired) = self.event(*slide, clamp, u, &z1);
+            let (_, fired) = self.event(mode, u, &z1);
             if !fired {
                 z = z1;
                 t = t_next;
@@ -413,17 +513,19 @@ impl Linear {
             }
             aligned = false;
             // Locate the event on the closed form: lo not fired, hi fired.
-            let (tau, zh) = self.locate(*slide, clamp, u, &z, step, &z1);
+            let (tau, zh) = self.locate(mode, u, &z, step, &z1);
             z = zh;
             t += tau;
             events += 1;
-            self.switch_slide(&mut z, slide, u);
-            clamp = self.clamp_of(z[4]);
+            self.switch_slide(&mut z, &mut mode.slide, u);
+            mode.clamp = self.clamp_of(z[4]);
+            mode.contact = self.p.contact_of(z[0], z[1]);
             if t >= t_next {
                 k += 1.0;
                 aligned = true;
             }
         }
+        *slide = mode.slide;
         self.store(z, y);
     }
 
@@ -482,8 +584,7 @@ impl Linear {
     /// secant is of no use.
     fn locate(
         &mut self,
-        slide: f64,
-        clamp: f64,
+        mode: Mode,
         u: f64,
         z0: &[f64; N],
         step: f64,
@@ -491,10 +592,10 @@ impl Linear {
     ) -> (f64, [f64; N]) {
         // The closed form inside the sub-step as its Taylor series (no matrix exponential per
         // iteration).
-        let w = taylor_terms(&self.matrix(slide, clamp), z0, step);
+        let w = taylor_terms(&self.matrix(mode.slide, mode.clamp, mode.contact), z0, step);
         let at = |tau: f64| taylor_at(&w, tau / step);
-        let (f_lo, _) = self.event(slide, clamp, u, z0);
-        let (f_hi, _) = self.event(slide, clamp, u, z_hi);
+        let (f_lo, _) = self.event(mode, u, z0);
+        let (f_hi, _) = self.event(mode, u, z_hi);
         let this = &*self;
         crate::math::illinois(
             0.0,
@@ -505,7 +606,7 @@ impl Linear {
             4.0 * f64::EPSILON * step,
             |tau| {
                 let z = at(tau);
-                let (f, fired) = this.event(slide, clamp, u, &z);
+                let (f, fired) = this.event(mode, u, &z);
                 (f, fired, z)
             },
         )

@@ -1,6 +1,7 @@
 //! The plant beyond the paper's model (issue 10): static friction with Stribeck decay,
 //! cogging, a compliant transmission, amplifier saturation and dead band, on top of the
-//! existing hand, amplifier filter, extra delay and one-sided wall.
+//! existing hand, amplifier filter, extra delay and one-sided wall; and the device's travel
+//! (issue 46): end stops, a one-sided spring and damper at each end.
 //!
 //! Units: SI (m, m/s, kg, N, N·s/m, N/m, s); rotary devices (`device.counts_per_rev`) read the
 //! same keys in rad, rad/s, kg·m², N·m, N·m·s/rad, N·m/rad.
@@ -40,7 +41,7 @@ pub mod plant;
 
 pub use crate::dopri::{OdeMethod, OdeStats};
 pub use model::{
-    Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission,
-    WallDamper, MAX_DAMPER_DEAD_BAND,
+    Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission, Travel,
+    WallDamper, HARD_STOP_DAMPING_RATIO, HARD_STOP_HZ, MAX_DAMPER_DEAD_BAND,
 };
 pub use plant::{RichPlant, State, NS};

@@ -73,6 +73,74 @@ pub struct HandSi {
     pub stiffness_n_per_m: f64,
 }
 
+/// Contact frequency of a default (hard) end stop with the motor-side mass, Hz: the stop's
+/// stiffness defaults to m·(2π·[`HARD_STOP_HZ`])², far above any wall a servo at 1–20 kHz
+/// renders on the same mass.
+pub const HARD_STOP_HZ: f64 = 1000.0;
+/// Damping ratio of a default end stop with the motor-side mass (a rubber bumper: the
+/// contact rebounds little); its damping defaults to 2·ζ·√(k·m).
+pub const HARD_STOP_DAMPING_RATIO: f64 = 0.7;
+
+/// The device's travel: mechanical end stops at `min_m` and `max_m` on the motor (encoder)
+/// side, each a one-sided spring and damper that acts only while the motor is past it and
+/// only pushes (the contact force is −max(0, k·δ + d·v) at the upper stop, δ = x₁ − max_m,
+/// and mirrored at the lower one), so a motor leaving a stop separates without being held.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Travel {
+    /// Lower end stop, m (rad).
+    pub min_m: f64,
+    /// Upper end stop, m (rad), > `min_m`.
+    pub max_m: f64,
+    /// Stop stiffness, N/m (N·m/rad), > 0.
+    pub stop_stiffness_n_per_m: f64,
+    /// Stop damping, N·s/m (N·m·s/rad), ≥ 0.
+    pub stop_damping_ns_per_m: f64,
+}
+
+impl Travel {
+    /// End stops at `min_m` and `max_m` with the given stiffness and damping, or the defaults
+    /// of a hard stop for the motor-side mass `mass_kg` ([`HARD_STOP_HZ`],
+    /// [`HARD_STOP_DAMPING_RATIO`]) where `None`.
+    #[must_use]
+    pub fn with_defaults(
+        min_m: f64,
+        max_m: f64,
+        stiffness: Option<f64>,
+        damping: Option<f64>,
+        mass_kg: f64,
+    ) -> Self {
+        let w = 2.0 * core::f64::consts::PI * HARD_STOP_HZ;
+        let k = stiffness.unwrap_or(mass_kg * w * w);
+        let d = damping.unwrap_or(2.0 * HARD_STOP_DAMPING_RATIO * libm::sqrt(k * mass_kg));
+        Self {
+            min_m,
+            max_m,
+            stop_stiffness_n_per_m: k,
+            stop_damping_ns_per_m: d,
+        }
+    }
+
+    /// Whether `x_m` lies inside the travel (stops included).
+    #[must_use]
+    pub fn contains(&self, x_m: f64) -> bool {
+        x_m >= self.min_m && x_m <= self.max_m
+    }
+
+    /// The contact force of the stops at motor position `x_m` and velocity `v_m_per_s`, N
+    /// (N·m): 0 inside the travel, and only pushing back inside.
+    #[must_use]
+    pub fn contact_force_n(&self, x_m: f64, v_m_per_s: f64) -> f64 {
+        let (k, d) = (self.stop_stiffness_n_per_m, self.stop_damping_ns_per_m);
+        if x_m > self.max_m {
+            -(k * (x_m - self.max_m) + d * v_m_per_s).max(0.0)
+        } else if x_m < self.min_m {
+            (k * (self.min_m - x_m) - d * v_m_per_s).max(0.0)
+        } else {
+            0.0
+        }
+    }
+}
+
 /// Largest dead band of [`WallDamper::DeadBand`], counts per tick (the firmware's
 /// `stiffwall_proto::MAX_DEADBAND_COUNTS`).
 pub const MAX_DAMPER_DEAD_BAND: u8 = 8;
@@ -165,6 +233,8 @@ pub struct PlantModel {
     pub amplifier: Option<Amplifier>,
     /// Hand (on the link side when there is a transmission).
     pub hand: Option<HandSi>,
+    /// End stops (`None`: unbounded travel, the paper's plant).
+    pub travel: Option<Travel>,
 }
 
 /// An invalid model value (names the field and the allowed range): the rich physics' own
@@ -233,6 +303,30 @@ fn validate_amplifier(a: &Amplifier) -> Result<(), ModelError> {
     Ok(())
 }
 
+/// The end stops (part of [`PlantModel::validate`]).
+fn validate_travel(t: &Travel) -> Result<(), ModelError> {
+    chk(
+        t.min_m.is_finite() && t.min_m.abs() <= 1e3,
+        "effects.travel.min_m",
+        "[-1e3, 1e3] m (rad), below effects.travel.max_m",
+    )?;
+    chk(
+        t.max_m.is_finite() && t.max_m.abs() <= 1e3 && t.max_m > t.min_m,
+        "effects.travel.max_m",
+        "(effects.travel.min_m, 1e3] m (rad)",
+    )?;
+    chk(
+        pos(t.stop_stiffness_n_per_m) && t.stop_stiffness_n_per_m <= 1e12,
+        "effects.travel.stop_stiffness_n_per_m",
+        "(0, 1e12] N/m (N m/rad)",
+    )?;
+    chk(
+        nonneg(t.stop_damping_ns_per_m) && t.stop_damping_ns_per_m <= 1e9,
+        "effects.travel.stop_damping_ns_per_m",
+        "[0, 1e9] N s/m (N m s/rad)",
+    )
+}
+
 impl PlantModel {
     /// The paper's plant: rigid mass, viscous and dynamic Coulomb friction, no optional effect.
     pub fn rigid(
@@ -252,6 +346,7 @@ impl PlantModel {
             transmission: None,
             amplifier: None,
             hand: None,
+            travel: None,
         };
         m.validate()?;
         Ok(m)
@@ -311,6 +406,9 @@ impl PlantModel {
         if let Some(a) = self.amplifier {
             validate_amplifier(&a)?;
         }
+        if let Some(t) = self.travel {
+            validate_travel(&t)?;
+        }
         if let Some(h) = self.hand {
             chk(nonneg(h.mass_kg), "effects.hand.mass_kg", "[0, 1e6] kg")?;
             chk(
@@ -352,16 +450,18 @@ impl PlantModel {
     /// amplifier filter): the closed form of [`crate::rich::friction::advance_switch`].
     #[must_use]
     pub fn is_rigid(&self) -> bool {
-        self.transmission.is_none()
+        self.travel.is_none()
+            && self.transmission.is_none()
             && self.hand.is_none()
             && self.amplifier.and_then(|a| a.cutoff_hz).is_none()
     }
 
     /// Whether any effect beyond the paper's plant (and the existing hand and filter) is on:
-    /// stiction, cogging, transmission, force limit or dead band.
+    /// stiction, cogging, transmission, force limit, dead band or end stops.
     #[must_use]
     pub fn has_new_effects(&self) -> bool {
-        self.stiction.is_some()
+        self.travel.is_some()
+            || self.stiction.is_some()
             || self.cogging.is_some()
             || self.transmission.is_some()
             || self

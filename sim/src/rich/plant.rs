@@ -6,8 +6,9 @@
 //! without a transmission), amplifier filter output p (N) and its rate.
 //!
 //! Equations (each term only when its effect is on):
-//! - motor: m₁ v̇₁ = F_A + F_cog(x₁) + k_t(x₂ − x₁) + d_t(v₂ − v₁) − b v₁ − F_fric, with
-//!   F_cog = A·sin(2π x₁/P), F_A = clip(p) (filter) or the shaped command (no filter);
+//! - motor: m₁ v̇₁ = F_A + F_cog(x₁) + F_stop + k_t(x₂ − x₁) + d_t(v₂ − v₁) − b v₁ − F_fric,
+//!   with F_cog = A·sin(2π x₁/P), F_A = clip(p) (filter) or the shaped command (no filter),
+//!   F_stop the end stops' one-sided contact ([`crate::rich::Travel::contact_force_n`]);
 //! - link: m₂ v̇₂ = −k_t(x₂ − x₁) − d_t(v₂ − v₁) + F_H, F_H = −k_h x₂ − b_h v₂ (hand anchored at
 //!   x = 0; its mass adds to m₂; without a transmission the hand acts on the motor);
 //! - amplifier: p̈ + 2ζω ṗ + ω² p = ω² u', u' = the command after dead band and saturation
@@ -15,9 +16,10 @@
 //! - friction: the stick rule of [`crate::rich::friction`] (sliding −F(|v₁|)·sgn v₁, stuck
 //!   while |f_ext| ≤ F_s, events located).
 //!
-//! Engines: [`PlantModel::is_exact`] models step in closed form: rigid ones by
-//! [`crate::rich::friction::advance_switch`], those with a transmission, hand or filter by the
-//! matrix exponential of [`crate::rich::linear`]; the others (cogging, Stribeck decay) with
+//! Engines: [`PlantModel::is_exact`] models step in closed form: rigid ones without travel by
+//! [`crate::rich::friction::advance_switch`], those with a transmission, hand, filter or end
+//! stops by the matrix exponential of [`crate::rich::linear`] (a stop's contact and release are
+//! located as events there); the others (cogging, Stribeck decay) with
 //! Dormand–Prince 5(4) of [`crate::dopri`] (rtol 1e-9,
 //! atol 1e-6 in units of Δ, Δ/ms, max(F_s, 1 mN), per ms) or the method given to
 //! [`RichPlant::with_method`].
@@ -103,6 +105,10 @@ impl Derived {
             limit: m.force_limit_n().unwrap_or(f64::INFINITY),
             pos_scale: m.resolution_m,
             force_scale: m.static_friction_n().max(1e-3),
+            stop_lo: m.travel.map_or(f64::NEG_INFINITY, |t| t.min_m),
+            stop_hi: m.travel.map_or(f64::INFINITY, |t| t.max_m),
+            stop_k: m.travel.map_or(0.0, |t| t.stop_stiffness_n_per_m),
+            stop_d: m.travel.map_or(0.0, |t| t.stop_damping_ns_per_m),
         };
         Self {
             inv_m1: lin.inv_m1,
@@ -427,6 +433,13 @@ impl RichPlant {
         } else {
             self.y[1]
         }
+    }
+
+    /// The end stops' contact force on the motor now, N (N·m): 0 inside the travel or without
+    /// one ([`crate::rich::Travel::contact_force_n`]).
+    #[must_use]
+    pub fn stop_force_n(&self) -> f64 {
+        self.d.lin.stop_force(self.y[0], self.y[1])
     }
 
     /// Force the amplifier applies now, N (N·m).

@@ -55,6 +55,7 @@ impl Scene {
             stiction: e.stiction,
             cogging: e.cogging,
             transmission: e.transmission,
+            travel: e.travel,
             force_limit_n,
             deadband_n,
             damper: None,

@@ -3,7 +3,9 @@
 //! Units: physical scenes only (the new effects need SI values): `[device] counts_per_rev`,
 //! `[effects] stiction = { static_n, stribeck_m_per_s }`, `cogging = { amplitude_n, period_m }`,
 //! `transmission = { link_mass_kg, stiffness_n_per_m, damping_ns_per_m }`, and
-//! `amplifier.force_limit_n`, `amplifier.deadband_n` on every amplifier kind. Rotary devices
+//! `amplifier.force_limit_n`, `amplifier.deadband_n` on every amplifier kind, and `travel = {
+//! min_m, max_m, stop_stiffness_n_per_m, stop_damping_ns_per_m }` (the end stops; the last two
+//! optional: a hard stop of [`crate::rich::HARD_STOP_HZ`] with the motor-side mass by default). Rotary devices
 //! (`counts_per_rev` set) read every key in rad, N·m, kg·m², N·m·s/rad, N·m/rad.
 //!
 //! [`attach`] turns a resolved physical scene and the new keys into a [`RichScene`] (a
@@ -13,12 +15,12 @@
 //! [`RichScene`] holds a validated model.
 
 use super::error::SceneError;
-use super::raw::{RawCogging, RawStiction, RawTransmission};
+use super::raw::{RawCogging, RawStiction, RawTransmission, RawTravel};
 use super::spec::{RichScene, Scene, Solver};
 use crate::dopri::OdeMethod;
 use crate::reference::Method;
 use crate::rich::{
-    Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission,
+    Amplifier, Cogging, Controller, HandSi, ModelError, PlantModel, Stiction, Transmission, Travel,
     WallDamper,
 };
 
@@ -33,6 +35,8 @@ pub(super) struct RichKeys {
     pub(super) cogging: Option<RawCogging>,
     /// `effects.transmission`.
     pub(super) transmission: Option<RawTransmission>,
+    /// `effects.travel`.
+    pub(super) travel: Option<RawTravel>,
     /// `effects.amplifier.force_limit_n`.
     pub(super) force_limit_n: Option<f64>,
     /// `effects.amplifier.deadband_n`.
@@ -49,6 +53,8 @@ impl RichKeys {
             Some("effects.cogging")
         } else if self.transmission.is_some() {
             Some("effects.transmission")
+        } else if self.travel.is_some() {
+            Some("effects.travel")
         } else if self.force_limit_n.is_some() {
             Some("effects.amplifier.force_limit_n")
         } else if self.deadband_n.is_some() {
@@ -97,13 +103,23 @@ pub(super) fn attach(
     if !scene.zoh && keys.any_effect().is_some() {
         return Err(SceneError::Effect(
             "effects.zoh = false: allowed range is true when a new effect (stiction, cogging, \
-             transmission, force_limit_n, deadband_n) is on"
+             transmission, travel, force_limit_n, deadband_n) is on"
                 .into(),
         ));
     }
     let model = plant_model(scene, (k, t, delta), &keys);
     if let Err(me) = model.validate() {
         return Err(model_error(&me, &keys));
+    }
+    if let Some(tr) = model.travel {
+        let x0 = scene.init.x * delta;
+        if !tr.contains(x0) {
+            return Err(SceneError::Effect(format!(
+                "initial.position_m = {x0}: allowed range is [{}, {}] m (rad), inside \
+                 effects.travel",
+                tr.min_m, tr.max_m
+            )));
+        }
     }
     let method = method(scene.solver, &model, t)?;
     Ok(Some(RichScene {
@@ -159,6 +175,15 @@ fn plant_model(scene: &Scene, (k, t, delta): (f64, f64, f64), keys: &RichKeys) -
             damping_ns_per_m: t.damping_ns_per_m,
         }),
         amplifier,
+        travel: keys.travel.map(|tr| {
+            Travel::with_defaults(
+                tr.min_m,
+                tr.max_m,
+                tr.stop_stiffness_n_per_m,
+                tr.stop_damping_ns_per_m,
+                p.mu * k * t * t,
+            )
+        }),
         hand: scene.hand.map(|h| HandSi {
             mass_kg: h.mu * k * t * t,
             damping_ns_per_m: h.beta * k * t,
@@ -180,6 +205,12 @@ fn model_error(me: &ModelError, keys: &RichKeys) -> SceneError {
         "effects.transmission.damping_ns_per_m" => keys.transmission.map(|t| t.damping_ns_per_m),
         "effects.amplifier.force_limit_n" => keys.force_limit_n,
         "effects.amplifier.deadband_n" => keys.deadband_n,
+        "effects.travel.min_m" => keys.travel.map(|t| t.min_m),
+        "effects.travel.max_m" => keys.travel.map(|t| t.max_m),
+        "effects.travel.stop_stiffness_n_per_m" => {
+            keys.travel.and_then(|t| t.stop_stiffness_n_per_m)
+        }
+        "effects.travel.stop_damping_ns_per_m" => keys.travel.and_then(|t| t.stop_damping_ns_per_m),
         _ => None,
     };
     SceneError::Effect(match value {

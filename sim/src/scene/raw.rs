@@ -61,6 +61,7 @@ pub(super) struct RawEffects {
     pub stiction: Option<RawStiction>,
     pub cogging: Option<RawCogging>,
     pub transmission: Option<RawTransmission>,
+    pub travel: Option<RawTravel>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -185,4 +186,19 @@ pub(super) struct RawTransmission {
     pub stiffness_n_per_m: f64,
     /// Damper, N·s/m.
     pub damping_ns_per_m: f64,
+}
+
+/// `effects.travel` as written: the end stops (m, N/m, N·s/m; rad, N·m/rad, N·m·s/rad on a
+/// rotary device), the stop's stiffness and damping optional (a hard stop by default).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawTravel {
+    /// Lower end stop, m.
+    pub min_m: f64,
+    /// Upper end stop, m.
+    pub max_m: f64,
+    /// Stop stiffness, N/m.
+    pub stop_stiffness_n_per_m: Option<f64>,
+    /// Stop damping, N·s/m.
+    pub stop_damping_ns_per_m: Option<f64>,
 }
