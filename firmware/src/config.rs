@@ -157,6 +157,13 @@ impl core::fmt::Display for ConfigError {
                 self.min, self.max
             );
         }
+        if self.field == ConfigField::TravelMax {
+            return write!(
+                f,
+                "travel_max must be above travel_min, within [{}, {}] raw counts",
+                self.min, self.max
+            );
+        }
         write!(
             f,
             "{} must be within [{}, {}]",
@@ -259,6 +266,15 @@ pub fn validate(cfg: &ServoConfig, board: &BoardInfo) -> Result<(), ConfigError>
     check_f(F::SafeDamping, cfg.safe_damping, 0.0, dsafe)?;
     if let DamperLaw::DeadBand { counts } = cfg.damper {
         check_u(F::Damper, counts.into(), 1, MAX_DEADBAND_COUNTS.into())?;
+    }
+    if let (Some(lo), Some(hi)) = (cfg.travel_min, cfg.travel_max) {
+        if hi <= lo {
+            return Err(ConfigError {
+                field: F::TravelMax,
+                min: f64::from(lo) + 1.0,
+                max: f64::from(i32::MAX),
+            });
+        }
     }
     Ok(())
 }
@@ -389,6 +405,47 @@ impl AbsBound {
     }
 }
 
+/// The test "x outside [lo, hi]" for every `i32` x as one unsigned compare,
+/// `(x as u32).wrapping_sub(lo as u32) > span` with span = hi − lo (as `u32`): x − lo, taken
+/// modulo 2^32, lies in 0..=span exactly when lo ≤ x ≤ hi, and wraps above span when x < lo.
+/// The full `i32` range (lo = `i32::MIN`, span = `u32::MAX`) is never left: a window that is
+/// off costs the same one compare.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RangeBound {
+    lo: i32,
+    span: u32,
+}
+
+impl RangeBound {
+    /// The window [`lo`, `hi`] (lo ≤ hi; a reversed pair gives the empty-but-for-`lo` window
+    /// [lo, lo], never a wrapped one).
+    #[must_use]
+    pub const fn new(lo: i32, hi: i32) -> Self {
+        let hi = if hi < lo { lo } else { hi };
+        Self {
+            lo,
+            span: (hi as u32).wrapping_sub(lo as u32),
+        }
+    }
+
+    /// The travel window of a config: `travel_min` (`i32::MIN` when `None`) to `travel_max`
+    /// (`i32::MAX` when `None`).
+    #[must_use]
+    pub fn travel(cfg: &ServoConfig) -> Self {
+        Self::new(
+            cfg.travel_min.unwrap_or(i32::MIN),
+            cfg.travel_max.unwrap_or(i32::MAX),
+        )
+    }
+
+    /// `x` < lo or `x` > hi.
+    #[inline(always)]
+    #[must_use]
+    pub fn outside(self, x: i32) -> bool {
+        (x as u32).wrapping_sub(self.lo as u32) > self.span
+    }
+}
+
 /// Integer / fixed-point servo parameters derived from a valid config.
 ///
 /// `repr(C)`, the wall tick's fields first (as [`crate::Servo`], whose first field this is):
@@ -439,6 +496,9 @@ pub struct Gains<N: Numeric> {
     /// The over-velocity test, `vel_window_counts` as an [`AbsBound`] (never exceeded when
     /// the test is off), so the tick needs no separate on/off test.
     pub vel_bound: AbsBound,
+    /// The travel window on the raw count ([`RangeBound::travel`]; the whole `i32` range, never
+    /// left, when the config sets none).
+    pub travel: RangeBound,
     /// The energy limit as the largest allowed |2n+1|: ⌊√(e8_limit − 1)⌋
     /// ([`stiffwall_core::monitor::limit_m`], `u64::isqrt`), so that |2n+1| > this ⟺
     /// e8(n) = (2n+1)² + 1 > e8_limit (no multiply in the servo).
@@ -451,6 +511,9 @@ pub struct Gains<N: Numeric> {
     pub coarsen: Shift,
     /// `damp` is not zero.
     pub damping_on: bool,
+    /// An excitation adds the wall's centring spring and damper (`k_half` or `damp` is not
+    /// zero: K > 0 or B > 0); without, its codes are the profile's alone, flagged `WALL_OFF`.
+    pub excite_centring: bool,
     /// One-sided wall.
     pub one_sided: bool,
     /// Energy monitor on (and K > 0).
@@ -584,6 +647,7 @@ impl<N: Numeric> Gains<N> {
             damper_band: damper_band(damp != N::ZERO, cfg.damper),
             damper_v: AbsBound::new(DAMPER_V_MAX.unsigned_abs()),
             damping_on: damp != N::ZERO,
+            excite_centring: k_half != N::ZERO || damp != N::ZERO,
             hold_damp: Self::hold_damp(damp, kf),
             launch_damp: N::gain(2.0 * f64::from(HOLD_BETA) * kf),
             safe_damp: N::gain(
@@ -598,6 +662,7 @@ impl<N: Numeric> Gains<N> {
             limit,
             vel_window_counts,
             vel_bound: velocity_bound(vel_window_counts),
+            travel: RangeBound::travel(cfg),
             jump: cfg.encoder_jump_counts.max(1),
             jump_bound: AbsBound::new(cfg.encoder_jump_counts.max(1)),
             energy_monitor: cfg.energy_monitor && kd2 > 0.0,
@@ -726,7 +791,7 @@ mod tests {
         let b = BoardInfo::default();
         let c = ServoConfig::default();
         assert_eq!(validate(&c, &b), Ok(()));
-        let bad: [(ServoConfig, ConfigField); 14] = [
+        let bad: [(ServoConfig, ConfigField); 16] = [
             (
                 ServoConfig {
                     stiffness: -1.0,
@@ -827,6 +892,22 @@ mod tests {
                 },
                 ConfigField::Damper,
             ),
+            (
+                ServoConfig {
+                    travel_min: Some(10),
+                    travel_max: Some(10),
+                    ..c
+                },
+                ConfigField::TravelMax,
+            ),
+            (
+                ServoConfig {
+                    travel_min: Some(i32::MAX),
+                    travel_max: Some(i32::MIN),
+                    ..c
+                },
+                ConfigField::TravelMax,
+            ),
         ];
         for (cfg, field) in bad {
             assert_eq!(validate(&cfg, &b).map_err(|e| e.field), Err(field));
@@ -888,6 +969,89 @@ mod tests {
             e.to_string(),
             "damper: the dead band must be within [1, 8] counts (use `difference` for no dead band)"
         );
+    }
+
+    /// The travel window: off by default (and so in every older record), either end alone, or
+    /// both with min < max; min ≥ max is refused naming `travel_max` and its range.
+    #[test]
+    fn travel_window_is_checked_and_derived() {
+        use std::string::ToString;
+        let b = BoardInfo::default();
+        let c = ServoConfig::default();
+        assert_eq!((c.travel_min, c.travel_max), (None, None));
+        let window = |lo: Option<i32>, hi: Option<i32>| ServoConfig {
+            travel_min: lo,
+            travel_max: hi,
+            ..c
+        };
+        for (lo, hi) in [
+            (None, None),
+            (Some(-5), None),
+            (None, Some(-5)),
+            (Some(-5), Some(-4)),
+            (Some(i32::MIN), Some(i32::MAX)),
+        ] {
+            assert_eq!(validate(&window(lo, hi), &b), Ok(()), "{lo:?}..{hi:?}");
+        }
+        let e = validate(&window(Some(100), Some(-100)), &b).unwrap_err();
+        assert_eq!(
+            (e.field, e.min, e.max),
+            (ConfigField::TravelMax, 101.0, f64::from(i32::MAX))
+        );
+        assert_eq!(
+            e.to_string(),
+            "travel_max must be above travel_min, within [101, 2147483647] raw counts"
+        );
+        let g = |lo, hi| Gains::<Fx64>::from_config(&window(lo, hi), &b).travel;
+        assert_eq!(g(None, None), RangeBound::new(i32::MIN, i32::MAX));
+        let w = g(Some(-3), Some(7));
+        assert!(w.outside(-4) && !w.outside(-3) && !w.outside(7) && w.outside(8));
+        assert!(w.outside(i32::MIN) && w.outside(i32::MAX));
+        let lower = g(Some(-3), None);
+        assert!(lower.outside(-4) && !lower.outside(i32::MAX));
+        let upper = g(None, Some(7));
+        assert!(!upper.outside(i32::MIN) && upper.outside(8));
+    }
+
+    fn check_range_bound(x: i32, lo: i32, hi: i32) -> Result<(), TestCaseError> {
+        let (lo, hi) = (lo.min(hi), lo.max(hi));
+        prop_assert_eq!(
+            RangeBound::new(lo, hi).outside(x),
+            x < lo || x > hi,
+            "x = {}, [{}, {}]",
+            x,
+            lo,
+            hi
+        );
+        Ok(())
+    }
+
+    #[test]
+    fn range_bound_at_the_edges() {
+        let edges = [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX - 1, i32::MAX];
+        for &lo in &edges {
+            for &hi in &edges {
+                for &x in &edges {
+                    check_range_bound(x, lo, hi).unwrap();
+                }
+            }
+        }
+        // The full range is never left.
+        assert!(edges
+            .iter()
+            .all(|&x| !RangeBound::new(i32::MIN, i32::MAX).outside(x)));
+        // A reversed pair is [lo, lo], never a wrapped window.
+        assert!(!RangeBound::new(5, 4).outside(5) && RangeBound::new(5, 4).outside(4));
+    }
+
+    proptest! {
+        #[test]
+        fn range_bound_is_the_interval_test(x in any::<i32>(), lo in any::<i32>(), hi in any::<i32>(), near in -1000i32..1000, small in -1000i32..1000) {
+            for x in [x, near, lo, hi, lo.wrapping_sub(1), hi.wrapping_add(1)] {
+                check_range_bound(x, lo, hi)?;
+                check_range_bound(x, small, small.saturating_add(near.abs()))?;
+            }
+        }
     }
 
     /// The damper's one test: never without a damper; any motion for the plain difference;

@@ -44,7 +44,11 @@ mod wall;
 #[cfg(test)]
 mod damper_monitor_tests;
 #[cfg(test)]
+mod excite_tests;
+#[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod travel_tests;
 
 // The monitor's bits are the protocol's fault bits, so the servo latches them unchanged.
 const _: () =
@@ -53,16 +57,7 @@ const _: () = assert!(monitor::BUZZ == fault::BUZZ);
 
 /// The bit of [`Servo`]'s `halt` word that marks "no reading yet" (above every fault bit).
 const UNPRIMED: u32 = 1 << 31;
-const _: () = assert!(
-    UNPRIMED
-        & (fault::ENERGY_GROWTH
-            | fault::ENERGY_LIMIT
-            | fault::OVER_VELOCITY
-            | fault::HEARTBEAT
-            | fault::ENCODER_JUMP
-            | fault::BUZZ)
-        == 0
-);
+const _: () = assert!(UNPRIMED & fault::ALL == 0);
 
 const RING: usize = 32;
 const RING_MASK: u32 = RING as u32 - 1;
@@ -295,6 +290,12 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let mut new_faults = 0u32;
         if self.g.jump_bound.exceeded(d) {
             new_faults |= fault::ENCODER_JUMP;
+        }
+        // The raw count outside the travel window (one compare; a window that is off is the
+        // whole `i32` range, never left). It stands on the first reading too: a device that
+        // boots outside its window is outside it.
+        if self.g.travel.outside(self.pos) {
+            new_faults |= fault::TRAVEL;
         }
         let vi = (now & VEL_MASK) as usize;
         let old = core::mem::replace(&mut self.vel_hist[vi], self.pos);

@@ -1,13 +1,15 @@
 //! Two-slot, CRC-protected configuration store.
 //!
 //! Record layout (bytes, little-endian), at offset 0 of a slot:
-//! `magic "SWC2" (4) | generation u32 (4) | len u16 (2) | postcard(ServoConfig) (len) | CRC-32 (4)`
+//! `magic "SWC3" (4) | generation u32 (4) | len u16 (2) | postcard(ServoConfig) (len) | CRC-32 (4)`
 //! with the CRC-32/ISO-HDLC over everything before it.
 //!
-//! Versions: records are written with magic `SWC2` (protocol 2's [`ServoConfig`], ending with
-//! its `damper`). A record with magic `SWC1` (same layout, protocol 1's config: every field
-//! but `damper`) is still read, and migrated with `damper = DamperLaw::Difference`, the law
-//! it was saved under; the next save writes it as `SWC2`. Generations count across both.
+//! Versions: records are written with magic `SWC3` (protocol 3's [`ServoConfig`], ending with
+//! its travel window `travel_min`, `travel_max`). Older records (same layout) are still read
+//! and migrated: `SWC2` (protocol 2's config: every field but the travel window) with no
+//! travel window, the supervision it ran with; `SWC1` (protocol 1's: every field before
+//! `damper`) also with `damper = DamperLaw::Difference`, the law it was saved under. The next
+//! save writes `SWC3`. Generations count across all three.
 //!
 //! Invariant: [`ConfigStore::save`] always writes the slot that does *not* hold the newest
 //! valid record, with generation = newest + 1. A write interrupted at any byte therefore leaves
@@ -21,8 +23,10 @@ use stiffwall_proto::{DamperLaw, SafeMode, ServoConfig, WallMode};
 
 /// Largest record, bytes.
 pub const RECORD_MAX: usize = 128;
-/// The magic of the records written (protocol 2's config).
-const MAGIC: [u8; 4] = *b"SWC2";
+/// The magic of the records written (protocol 3's config).
+const MAGIC: [u8; 4] = *b"SWC3";
+/// The magic of a record of protocol 2's config ([`ServoConfigV2`]), read and migrated.
+const MAGIC_V2: [u8; 4] = *b"SWC2";
 /// The magic of a record of protocol 1's config ([`ServoConfigV1`]), read and migrated.
 const MAGIC_V1: [u8; 4] = *b"SWC1";
 const HEADER: usize = 10;
@@ -57,8 +61,28 @@ struct ServoConfigV1 {
     safe_damping: f32,
 }
 
+/// Protocol 2's [`ServoConfig`], the payload of an `SWC2` record: protocol 1's fields, then
+/// `damper` (postcard writes a nested struct's fields in place, without framing, so this is
+/// byte for byte the flat protocol-2 struct). Only read, to migrate.
+#[derive(Debug, Deserialize)]
+struct ServoConfigV2 {
+    v1: ServoConfigV1,
+    damper: DamperLaw,
+}
+
+impl From<ServoConfigV2> for ServoConfig {
+    /// The same config without a travel window (protocol 2 had none).
+    fn from(c: ServoConfigV2) -> Self {
+        Self {
+            damper: c.damper,
+            ..c.v1.into()
+        }
+    }
+}
+
 impl From<ServoConfigV1> for ServoConfig {
-    /// The same config with the damper it ran with: the plain backward difference.
+    /// The same config with the damper it ran with (the plain backward difference) and no
+    /// travel window.
     fn from(c: ServoConfigV1) -> Self {
         Self {
             stiffness: c.stiffness,
@@ -78,17 +102,30 @@ impl From<ServoConfigV1> for ServoConfig {
             safe_mode: c.safe_mode,
             safe_damping: c.safe_damping,
             damper: DamperLaw::Difference,
+            travel_min: None,
+            travel_max: None,
         }
     }
 }
 
-/// Parses one record (`SWC2`, or `SWC1` migrated); `None` if it is not a valid record.
+/// The protocol of a record's config, by its magic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Layout {
+    V1,
+    V2,
+    V3,
+}
+
+/// Parses one record (`SWC3`, or `SWC2` / `SWC1` migrated); `None` if it is not a valid
+/// record.
 fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
     let magic = buf.get(..4)?;
-    let v1 = if magic == MAGIC {
-        false
+    let layout = if magic == MAGIC {
+        Layout::V3
+    } else if magic == MAGIC_V2 {
+        Layout::V2
     } else if magic == MAGIC_V1 {
-        true
+        Layout::V1
     } else {
         return None;
     };
@@ -100,10 +137,10 @@ fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
         return None;
     }
     let body = buf.get(HEADER..end)?;
-    let cfg = if v1 {
-        postcard::from_bytes::<ServoConfigV1>(body).ok()?.into()
-    } else {
-        postcard::from_bytes(body).ok()?
+    let cfg = match layout {
+        Layout::V1 => postcard::from_bytes::<ServoConfigV1>(body).ok()?.into(),
+        Layout::V2 => postcard::from_bytes::<ServoConfigV2>(body).ok()?.into(),
+        Layout::V3 => postcard::from_bytes(body).ok()?,
     };
     Some((gen, cfg))
 }
@@ -273,7 +310,7 @@ mod tests {
     fn record_literal_header() {
         let mut buf = [0u8; RECORD_MAX];
         let n = build(&cfg(0.0), 7, &mut buf).unwrap();
-        assert_eq!(&buf[..8], &[b'S', b'W', b'C', b'2', 7, 0, 0, 0]);
+        assert_eq!(&buf[..8], &[b'S', b'W', b'C', b'3', 7, 0, 0, 0]);
         assert_eq!(
             usize::from(u16::from_le_bytes([buf[8], buf[9]])) + HEADER + 4,
             n
@@ -282,7 +319,8 @@ mod tests {
     }
 
     /// The protocol-1 default config's 37 postcard bytes (see `stiffwall_proto`'s literal
-    /// bytes test) with stiffness 2.0 (`00 00 00 40`) and damping 0.5 (`00 00 00 3f`).
+    /// bytes test) with stiffness 2.0 (`00 00 00 40`) and damping 0.5 (`00 00 00 3f`): also
+    /// the start of a protocol-2 and a protocol-3 config.
     #[rustfmt::skip]
     const V1_PAYLOAD: [u8; 37] = [
         0x00, 0x00, 0x00, 0x40, // stiffness 2.0
@@ -326,17 +364,105 @@ mod tests {
     fn record_literal_bytes_of_the_default_config() {
         let mut buf = [0u8; RECORD_MAX];
         let n = build(&ServoConfig::default(), 7, &mut buf).unwrap();
-        let mut want = std::vec![b'S', b'W', b'C', b'2', 7, 0, 0, 0, 39, 0];
+        let mut want = std::vec![b'S', b'W', b'C', b'3', 7, 0, 0, 0, 41, 0];
         want.extend_from_slice(&[0x00; 4]); // stiffness 0.0
         want.extend_from_slice(&[0x00; 4]); // damping 0.0
         want.extend_from_slice(&V1_PAYLOAD[8..]); // the rest of protocol 1's defaults
         want.extend_from_slice(&[0x01, 0x01]); // damper: DeadBand (variant 1), counts 1
-        want.extend_from_slice(&[0x1d, 0x7e, 0x37, 0xc4]); // zlib.crc32 of the bytes before
+        want.extend_from_slice(&[0x00, 0x00]); // travel_min, travel_max: None
+        want.extend_from_slice(&[0x73, 0x87, 0xac, 0x28]); // zlib.crc32 of the bytes before
         assert_eq!(&buf[..n], &want[..]);
     }
 
+    /// An `SWC2` record of generation 9: [`V1_PAYLOAD`] then the damper `DeadBand`
+    /// (variant 1) of 2 counts, `01 02` (protocol 2's config), CRC-32 written out (Python's
+    /// `zlib.crc32` of the 49 bytes before it).
+    fn v2_record() -> std::vec::Vec<u8> {
+        let mut r = std::vec![b'S', b'W', b'C', b'2', 9, 0, 0, 0, 39, 0];
+        r.extend_from_slice(&V1_PAYLOAD);
+        r.extend_from_slice(&[0x01, 0x02]);
+        assert_eq!(CRC32.checksum(&r).to_le_bytes(), [0x22, 0x93, 0xc3, 0x71]);
+        r.extend_from_slice(&[0x22, 0x93, 0xc3, 0x71]);
+        r
+    }
+
+    /// What the `SWC2` record holds, migrated: its damper, no travel window.
+    fn v2_config() -> ServoConfig {
+        ServoConfig {
+            stiffness: 2.0,
+            damping: 0.5,
+            damper: DamperLaw::DeadBand { counts: 2 },
+            travel_min: None,
+            travel_max: None,
+            ..ServoConfig::default()
+        }
+    }
+
+    /// A protocol-2 record (before the travel window) still loads, without a travel window,
+    /// and the next save writes `SWC3`; a save interrupted at any byte leaves it loadable.
     #[test]
-    fn a_v1_record_loads_with_the_plain_difference_and_the_next_save_is_v2() {
+    fn a_v2_record_loads_without_a_travel_window_and_the_next_save_is_v3() {
+        let rec = v2_record();
+        assert_eq!(parse(&rec), Some((9, v2_config())));
+        let mut bad = rec.clone();
+        bad[30] ^= 4;
+        assert_eq!(parse(&bad), None);
+        // The same bytes under the new magic are no record (a protocol-3 config is longer).
+        let mut as_v3 = rec.clone();
+        as_v3[3] = b'3';
+        let end = as_v3.len() - 4;
+        let crc = CRC32.checksum(&as_v3[..end]).to_le_bytes();
+        as_v3[end..].copy_from_slice(&crc);
+        assert_eq!(parse(&as_v3), None);
+        let travel = ServoConfig {
+            travel_min: Some(-4000),
+            travel_max: Some(4000),
+            ..v2_config()
+        };
+        for slot in 0..2 {
+            let mut m = MemStorage::default();
+            m.slots[slot][..rec.len()].copy_from_slice(&rec);
+            let mut s = ConfigStore::new(m.clone());
+            assert_eq!(s.newest(), Some((slot, 9, v2_config())));
+            s.save(&travel).unwrap();
+            assert_eq!(s.newest(), Some((1 - slot, 10, travel)));
+            assert_eq!(&s.storage.slots[1 - slot][..4], b"SWC3");
+            assert_eq!(&s.storage.slots[slot][..rec.len()], &rec[..]);
+            // Interrupted at every byte: the SWC2 config stays loadable.
+            let mut full = [0u8; RECORD_MAX];
+            let n = build(&travel, 10, &mut full).unwrap();
+            for k in 0..=n {
+                let mut s = ConfigStore::new(m.clone());
+                s.storage.interrupt_after = Some(k);
+                assert!(s.save(&travel).is_err());
+                let want = if k == n { travel } else { v2_config() };
+                assert_eq!(s.load(), Some(want), "interrupted at byte {k}");
+            }
+        }
+    }
+
+    /// The largest protocol-3 config (every varint at its longest, both travel ends set) fits
+    /// a record.
+    #[test]
+    fn the_longest_config_fits_a_record() {
+        let c = ServoConfig {
+            servo_rate_hz: u32::MAX,
+            wall_position: i32::MIN,
+            encoder_jump_counts: u32::MAX,
+            heartbeat_timeout_ms: u32::MAX,
+            damper: DamperLaw::DeadBand { counts: u8::MAX },
+            travel_min: Some(i32::MIN),
+            travel_max: Some(i32::MAX),
+            ..ServoConfig::default()
+        };
+        let mut buf = [0u8; RECORD_MAX];
+        let n = build(&c, u32::MAX, &mut buf).unwrap();
+        assert!(n <= 90, "{n}");
+        assert_eq!(parse(&buf[..n]), Some((u32::MAX, c)));
+    }
+
+    #[test]
+    fn a_v1_record_loads_with_the_plain_difference_and_the_next_save_is_v3() {
         let rec = v1_record();
         assert_eq!(parse(&rec), Some((5, v1_config())));
         // A corrupted one is no record, as a v2 one.
@@ -348,15 +474,15 @@ mod tests {
             m.slots[slot][..rec.len()].copy_from_slice(&rec);
             let mut s = ConfigStore::new(m);
             assert_eq!(s.newest(), Some((slot, 5, v1_config())));
-            // Saved unchanged, it is written as SWC2 (its damper now in the record).
+            // Saved unchanged, it is written as SWC3 (its damper now in the record).
             s.save(&v1_config()).unwrap();
             let (new_slot, gen, got) = s.newest().unwrap();
             assert_eq!((new_slot, gen, got), (1 - slot, 6, v1_config()));
-            assert_eq!(&s.storage.slots[new_slot][..4], b"SWC2");
+            assert_eq!(&s.storage.slots[new_slot][..4], b"SWC3");
             // The v1 record is untouched until the slot is needed again.
             assert_eq!(&s.storage.slots[slot][..rec.len()], &rec[..]);
             s.save(&cfg(3.0)).unwrap();
-            assert_eq!(&s.storage.slots[slot][..4], b"SWC2");
+            assert_eq!(&s.storage.slots[slot][..4], b"SWC3");
             assert_eq!(s.load(), Some(cfg(3.0)));
         }
     }
@@ -364,7 +490,7 @@ mod tests {
     /// A save over a store holding only an SWC1 record, interrupted at every byte, leaves the
     /// migrated SWC1 config loadable.
     #[test]
-    fn interrupted_first_v2_write_keeps_the_v1_config() {
+    fn interrupted_first_v3_write_keeps_the_v1_config() {
         let rec = v1_record();
         for erase_first in [true, false] {
             let mut m = MemStorage {

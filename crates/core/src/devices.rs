@@ -22,6 +22,10 @@ pub struct Device {
     /// device's full scale. Not in the paper: the manufacturers' published peak forces
     /// (see `docs/model-notes-core.md`).
     pub force_limit: f64,
+    /// The device's travel along the rendered axis, [min, max] m (rad) around the position it
+    /// starts at, where the manufacturer publishes a workspace (`None`: unbounded, as the
+    /// paper's model). Not in the paper: see `docs/model-notes-core.md` for each source.
+    pub travel: Option<[f64; 2]>,
 }
 
 /// Dimensionless values as printed in Table II, with the number of decimals printed.
@@ -80,6 +84,12 @@ pub const MAXON_COUNTS_PER_REV: f64 = 8192.0;
 /// and `maxon-re35` (Sec. V: rotational, 8192 counts/rev, c = 2e-3 N·m, b = 9e-6 N·m·s/rad,
 /// m = 6.28e-6 kg·m²; T = 1 ms, the fastest servo rate of Sec. V; K = 2 N·m/rad, our choice,
 /// which puts it in region E with σ ≈ 1.30, β ≈ 0.0045, μ ≈ 3.1, like the Table II devices).
+///
+/// Travel (issue 46), centred on the start: phantom-1.0 ±65 mm (the smallest side of the
+/// Phantom 1.0's published 13 × 18 × 25 cm workspace), omega ±55 mm (the 110 mm height of the
+/// omega.3's published Ø160 × 110 mm workspace), impulse-engine ±76.2 mm (the Impulse Engine
+/// 2000's published 6 × 6 in workspace); delta, freedom6 and mit-toolhandle unbounded (no
+/// single-axis figure at hand), maxon-re35 unbounded (the paper's bare motor turns freely).
 pub const DEVICES: [Device; 7] = [
     Device {
         name: "delta",
@@ -87,6 +97,7 @@ pub const DEVICES: [Device; 7] = [
         params: linear(0.250, 0.01, 0.883, 30.0, 0.33, 14500.0),
         printed: printed(155.2, 1, 0.002, 3, 2.03, 2),
         force_limit: 20.0,
+        travel: None,
     },
     Device {
         name: "freedom6",
@@ -94,6 +105,7 @@ pub const DEVICES: [Device; 7] = [
         params: linear(0.250, 0.01, 0.06, 20.0, 1.0, 2400.0),
         printed: printed(104.2, 1, 0.025, 3, 1.25, 2),
         force_limit: 2.5,
+        travel: None,
     },
     Device {
         name: "impulse-engine",
@@ -101,6 +113,7 @@ pub const DEVICES: [Device; 7] = [
         params: linear(0.032, 0.02, 0.024, 31.4, 0.2, 800.0),
         printed: printed(1007.8, 1, 0.13, 2, 0.97, 2),
         force_limit: 8.9,
+        travel: Some([-0.0762, 0.0762]),
     },
     Device {
         name: "mit-toolhandle",
@@ -108,6 +121,7 @@ pub const DEVICES: [Device; 7] = [
         params: linear(0.119, 0.001, 0.034, 20.1, 1.0, 3125.0),
         printed: printed(38.19, 2, 0.0003, 4, 0.54, 2),
         force_limit: 8.5,
+        travel: None,
     },
     Device {
         name: "omega",
@@ -115,6 +129,7 @@ pub const DEVICES: [Device; 7] = [
         params: linear(0.220, 0.01, 0.147, 10.0, 0.33, 14500.0),
         printed: printed(136.6, 1, 0.002, 3, 1.01, 2),
         force_limit: 12.0,
+        travel: Some([-0.055, 0.055]),
     },
     Device {
         name: "phantom-1.0",
@@ -122,6 +137,7 @@ pub const DEVICES: [Device; 7] = [
         params: linear(0.072, 0.005, 0.038, 29.1, 1.0, 1015.0),
         printed: printed(70.55, 2, 0.004, 3, 1.29, 2),
         force_limit: 8.5,
+        travel: Some([-0.065, 0.065]),
     },
     Device {
         name: "maxon-re35",
@@ -138,6 +154,7 @@ pub const DEVICES: [Device; 7] = [
         },
         printed: None,
         force_limit: 0.1,
+        travel: None,
     },
 ];
 

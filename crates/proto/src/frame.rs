@@ -342,13 +342,13 @@ mod tests {
     /// Issue 11, item 6: an over-long varint tag (`84 00` for 4) is not LoadDefaults.
     #[test]
     fn overlong_varint_tag_is_refused() {
-        // Version 2, the tag `84 00`, the CRC; COBS: `03` (two bytes, then the 0x00), `05`
+        // Version 3, the tag `84 00`, the CRC; COBS: `03` (two bytes, then the 0x00), `05`
         // (the four CRC bytes).
-        let frame = [0x03, 0x02, 0x84, 0x05, 0x33, 0x50, 0x2a, 0xa3, 0x00];
-        // The CRC is right (zlib.crc32(b'\x02\x84\x00')): only the encoding is wrong.
+        let frame = [0x03, 0x03, 0x84, 0x05, 0x04, 0x3a, 0xe8, 0xa2, 0x00];
+        // The CRC is right (zlib.crc32(b'\x03\x84\x00')): only the encoding is wrong.
         assert_eq!(
-            CRC32.checksum(&[0x02, 0x84, 0x00]).to_le_bytes(),
-            [0x33, 0x50, 0x2a, 0xa3]
+            CRC32.checksum(&[0x03, 0x84, 0x00]).to_le_bytes(),
+            [0x04, 0x3a, 0xe8, 0xa2]
         );
         assert_eq!(decode_bytes(&frame), Err(FrameError::Deserialize));
         // The canonical form of the same message decodes.
@@ -361,9 +361,9 @@ mod tests {
     /// not `UnknownTag(4294967295)`.
     #[test]
     fn varint_overflow_in_fifth_byte_is_a_decode_error() {
-        // Version 2, the five varint bytes, zlib.crc32(b'\x02\xff\xff\xff\xff\x7f') LE.
+        // Version 3, the five varint bytes, zlib.crc32(b'\x03\xff\xff\xff\xff\x7f') LE.
         let frame = [
-            0x0b, 0x02, 0xff, 0xff, 0xff, 0xff, 0x7f, 0xe7, 0x64, 0x6d, 0x05, 0x00,
+            0x0b, 0x03, 0xff, 0xff, 0xff, 0xff, 0x7f, 0x42, 0xb7, 0x31, 0xce, 0x00,
         ];
         assert_eq!(decode_bytes(&frame), Err(FrameError::Deserialize));
         // The largest u32 (fifth byte 0x0f) is a valid varint, hence an unknown tag.
@@ -376,14 +376,14 @@ mod tests {
     #[test]
     fn overlong_varint_in_a_field_is_refused() {
         // StreamStart (tag 5) with decimation 1 written as `81 00`.
-        let payload_body = [0x02u8, 0x05, 0x81, 0x00];
+        let payload_body = [0x03u8, 0x05, 0x81, 0x00];
         let mut payload = payload_body.to_vec();
         payload.extend(CRC32.checksum(&payload_body).to_le_bytes());
         assert_eq!(
             decode_payload::<HostMsg>(&payload),
             Err(FrameError::Deserialize)
         );
-        let canonical_body = [0x02u8, 0x05, 0x01];
+        let canonical_body = [0x03u8, 0x05, 0x01];
         let mut payload = canonical_body.to_vec();
         payload.extend(CRC32.checksum(&canonical_body).to_le_bytes());
         assert_eq!(
@@ -422,12 +422,12 @@ mod tests {
 
     #[test]
     fn heartbeat_literal_bytes() {
-        // payload = [version 2, tag 10 (Heartbeat)] ++ CRC-32 LE.
+        // payload = [version 3, tag 10 (Heartbeat)] ++ CRC-32 LE.
         let mut out = [0u8; 32];
         let f = encode(&HostMsg::Heartbeat, &mut out).unwrap();
-        let crc = CRC32.checksum(&[2, 10]).to_le_bytes();
-        assert_eq!(crc, [0x63, 0x99, 0x3a, 0x93]); // zlib.crc32(b'\x02\x0a')
-        assert_eq!(f, &[0x07, 0x02, 0x0a, 0x63, 0x99, 0x3a, 0x93, 0x00]);
+        let crc = CRC32.checksum(&[3, 10]).to_le_bytes();
+        assert_eq!(crc, [0x22, 0xa8, 0x21, 0x8a]); // zlib.crc32(b'\x03\x0a')
+        assert_eq!(f, &[0x07, 0x03, 0x0a, 0x22, 0xa8, 0x21, 0x8a, 0x00]);
         let mut d = FrameDecoder::new();
         let mut r = None;
         for &b in f {
@@ -438,13 +438,13 @@ mod tests {
 
     #[test]
     fn stream_start_literal_bytes() {
-        // StreamStart is tag 5, decimation 300 = varint [0xac, 0x02]; version 2;
-        // zlib.crc32(b'\x02\x05\xac\x02') LE.
+        // StreamStart is tag 5, decimation 300 = varint [0xac, 0x02]; version 3;
+        // zlib.crc32(b'\x03\x05\xac\x02') LE.
         let mut out = [0u8; 32];
         let f = encode(&HostMsg::StreamStart { decimation: 300 }, &mut out).unwrap();
         assert_eq!(
             f,
-            &[0x09, 0x02, 0x05, 0xac, 0x02, 0xb5, 0x47, 0x3a, 0x61, 0x00]
+            &[0x09, 0x03, 0x05, 0xac, 0x02, 0xd0, 0x20, 0x86, 0xd9, 0x00]
         );
     }
 
@@ -476,27 +476,29 @@ mod tests {
     fn errors_are_distinct() {
         let mut d = FrameDecoder::new();
         // Bad CRC.
-        let bad_crc = [0x07, 0x02, 0x0a, 0x63, 0x99, 0x3a, 0x92, 0x00];
+        let bad_crc = [0x07, 0x03, 0x0a, 0x22, 0xa8, 0x21, 0x8b, 0x00];
         let r: std::vec::Vec<_> = bad_crc
             .iter()
             .filter_map(|&b| d.feed::<HostMsg>(b))
             .collect();
         assert_eq!(r, [Err(FrameError::Crc)]);
-        // Version 1 (a host or device of protocol 1).
-        let crc = CRC32.checksum(&[1, 10]).to_le_bytes();
-        let mut p = std::vec![1u8, 10];
-        p.extend_from_slice(&crc);
+        // Versions 1 and 2 (a host or device of protocol 1 or 2).
         let mut enc = [0u8; 16];
-        let n = cobs::encode(&p, &mut enc);
-        let r: std::vec::Vec<_> = enc[..n]
-            .iter()
-            .chain(&[0])
-            .filter_map(|&b| d.feed::<HostMsg>(b))
-            .collect();
-        assert_eq!(r, [Err(FrameError::VersionMismatch { got: 1 })]);
+        for old in [1u8, 2] {
+            let crc = CRC32.checksum(&[old, 10]).to_le_bytes();
+            let mut p = std::vec![old, 10];
+            p.extend_from_slice(&crc);
+            let n = cobs::encode(&p, &mut enc);
+            let r: std::vec::Vec<_> = enc[..n]
+                .iter()
+                .chain(&[0])
+                .filter_map(|&b| d.feed::<HostMsg>(b))
+                .collect();
+            assert_eq!(r, [Err(FrameError::VersionMismatch { got: old })]);
+        }
         // Unknown tag 99.
-        let crc = CRC32.checksum(&[2, 99]).to_le_bytes();
-        let mut p = std::vec![2u8, 99];
+        let crc = CRC32.checksum(&[3, 99]).to_le_bytes();
+        let mut p = std::vec![3u8, 99];
         p.extend_from_slice(&crc);
         let n = cobs::encode(&p, &mut enc);
         let r: std::vec::Vec<_> = enc[..n]
@@ -506,8 +508,8 @@ mod tests {
             .collect();
         assert_eq!(r, [Err(FrameError::UnknownTag(99))]);
         // Truncated body: StreamStart without decimation.
-        let crc = CRC32.checksum(&[2, 5]).to_le_bytes();
-        let mut p = std::vec![2u8, 5];
+        let crc = CRC32.checksum(&[3, 5]).to_le_bytes();
+        let mut p = std::vec![3u8, 5];
         p.extend_from_slice(&crc);
         let n = cobs::encode(&p, &mut enc);
         let r: std::vec::Vec<_> = enc[..n]
@@ -528,7 +530,7 @@ mod tests {
             r.extend(d.feed::<HostMsg>(0x55));
         }
         r.extend(d.feed::<HostMsg>(0));
-        for &b in &[0x07, 0x02, 0x0a, 0x63, 0x99, 0x3a, 0x93, 0x00] {
+        for &b in &[0x07, 0x03, 0x0a, 0x22, 0xa8, 0x21, 0x8a, 0x00] {
             r.extend(d.feed::<HostMsg>(b));
         }
         assert_eq!(r, [Err(FrameError::Oversize), Ok(HostMsg::Heartbeat)]);
@@ -553,10 +555,12 @@ mod tests {
             safe_mode: SafeMode::Damping,
             safe_damping: 1.0,
             damper: DamperLaw::DeadBand { counts: 3 },
+            travel_min: Some(-70_000),
+            travel_max: Some(i32::MAX),
         };
         std::vec![
             HostMsg::Hello {
-                protocol_version: 2
+                protocol_version: PROTOCOL_VERSION
             },
             HostMsg::GetConfig,
             HostMsg::SetConfig(cfg),
@@ -621,7 +625,7 @@ mod tests {
 
     pub(crate) fn all_device_msgs() -> std::vec::Vec<DeviceMsg> {
         let info = DeviceInfo {
-            protocol_version: 2,
+            protocol_version: PROTOCOL_VERSION,
             firmware_name: "stiffwall".try_into().unwrap(),
             firmware_version: "0.1.0".try_into().unwrap(),
             board: "qemu-an386".try_into().unwrap(),
@@ -755,7 +759,7 @@ mod proptests {
             let mut tail = std::vec![0u8];
             tail.extend_from_slice(&f);
             let r = feed_all(&mut d, &tail);
-            prop_assert_eq!(r.last().cloned(), Some(Ok(HostMsg::Hello { protocol_version: 2 })));
+            prop_assert_eq!(r.last().cloned(), Some(Ok(HostMsg::Hello { protocol_version: PROTOCOL_VERSION })));
         }
 
         #[test]

@@ -21,7 +21,12 @@ use crate::damper::DamperLaw;
 ///
 /// Version 2: [`ServoConfig`] ends with [`ServoConfig::damper`] (the wall damper's
 /// [`DamperLaw`]); [`ConfigField::Damper`] names it in a refusal.
-pub const PROTOCOL_VERSION: u8 = 2;
+///
+/// Version 3: [`ServoConfig`] ends with the travel window [`ServoConfig::travel_min`] and
+/// [`ServoConfig::travel_max`] (after `damper`); [`ConfigField::TravelMin`] and
+/// [`ConfigField::TravelMax`] name them in a refusal; the supervisor's fault bit
+/// [`fault::TRAVEL`] is new.
+pub const PROTOCOL_VERSION: u8 = 3;
 
 /// Telemetry samples per [`TelemetryBatch`].
 pub const TELEMETRY_BATCH: usize = 24;
@@ -76,8 +81,10 @@ pub enum HostMsg {
         /// Servo ticks to run after the release, 1..=10⁷.
         ticks: u32,
     },
-    /// Open-loop excitation with the wall off, streaming every tick. Answer: `Ack`, later
-    /// [`DeviceMsg::ExperimentDone`].
+    /// Open-loop excitation, streaming every tick: the profile's code plus the configured
+    /// wall's centring spring and damper (see [`ExciteProfile`]; with K = 0 and B = 0, the
+    /// default, the wall is off and the output is the profile's code alone). Answer: `Ack`,
+    /// later [`DeviceMsg::ExperimentDone`].
     Excite {
         /// The force profile.
         profile: ExciteProfile,
@@ -219,7 +226,19 @@ pub enum ExperimentKind {
     Impact,
 }
 
-/// Open-loop excitation profiles (force codes, wall off).
+/// Open-loop excitation profiles (force codes).
+///
+/// The code output on each tick of an excitation is the profile's code plus the configured
+/// wall's *centring spring*: the spring of eq. (2) with the config's stiffness K acting on
+/// both sides of `wall_position` whatever [`ServoConfig::wall`] says (the same fixed-point
+/// code as the release test's hold spring: beyond the spring's count clamp, where its force
+/// alone exceeds the force limit, it keeps its value there), plus the wall's virtual damper
+/// (`damping` B with its [`ServoConfig::damper`] law), summed with saturation, then delayed
+/// and clamped to the force limit like any code. So a host can run a chirp against a weak,
+/// known spring that keeps the device centred. With K = 0 and B = 0 (the defaults) the output
+/// is exactly the profile's code and samples carry [`flags::WALL_OFF`]. A sample's
+/// `force_code` is always the total code output. The energy monitor is off during an
+/// excitation; the other supervisor checks (including the travel window) act.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum ExciteProfile {
     /// Square wave: `high` for `half_period_ticks`, then `low`, repeated.
@@ -314,6 +333,18 @@ pub struct ServoConfig {
     /// written before it) it is [`DamperLaw::legacy`], the law such a record ran with.
     #[serde(default = "DamperLaw::legacy")]
     pub damper: DamperLaw,
+    /// Travel window, lower end: the supervisor latches [`fault::TRAVEL`] (and enters
+    /// `safe_mode`) on the first tick the raw count (the unwrapped encoder count, the frame of
+    /// `wall_position`) is below it; `None` (the default) for no lower end. With both ends set
+    /// it must be below `travel_max`. Added in protocol 3, after `damper`; absent from a
+    /// self-describing record written before it, it is `None`.
+    #[serde(default)]
+    pub travel_min: Option<i32>,
+    /// Travel window, upper end, raw counts: [`fault::TRAVEL`] when the raw count is above it;
+    /// `None` (the default) for no upper end. With both ends set it must exceed `travel_min`
+    /// (the window `[travel_min, travel_max]` holds at least two counts). Protocol 3.
+    #[serde(default)]
+    pub travel_max: Option<i32>,
 }
 
 impl Default for ServoConfig {
@@ -321,7 +352,7 @@ impl Default for ServoConfig {
     /// 1 kHz, no extra delay, no coarsening, bidirectional wall at count 0, 0.1 N force limit,
     /// velocity fault off, energy monitor on (1 J, 4 growing peaks), 1000-count jump limit,
     /// 500 ms heartbeat timeout, zero force in safe mode, the damper's dead band of one count
-    /// ([`DamperLaw::default`]).
+    /// ([`DamperLaw::default`]), no travel window.
     fn default() -> Self {
         Self {
             stiffness: 0.0,
@@ -341,6 +372,8 @@ impl Default for ServoConfig {
             safe_mode: SafeMode::ZeroForce,
             safe_damping: 0.0,
             damper: DamperLaw::default(),
+            travel_min: None,
+            travel_max: None,
         }
     }
 }
@@ -421,7 +454,8 @@ pub mod flags {
     pub const EXCITE: u16 = 1 << 3;
     /// The output was clamped to the force limit.
     pub const CLAMPED: u16 = 1 << 4;
-    /// The wall is off (one-sided wall outside contact, or excitation).
+    /// The wall is off (one-sided wall outside contact, or an excitation without a centring
+    /// spring or damper: K = 0 and B = 0).
     pub const WALL_OFF: u16 = 1 << 5;
     /// The energy monitor saw a turning point this tick.
     pub const TURN: u16 = 1 << 6;
@@ -441,17 +475,25 @@ pub mod fault {
     pub const ENCODER_JUMP: u32 = 1 << 4;
     /// The energy monitor saw a persistent oscillation of more than one count ("buzz").
     pub const BUZZ: u32 = 1 << 5;
+    /// The raw count left the travel window [`super::ServoConfig::travel_min`,
+    /// [`super::ServoConfig::travel_max`]] (protocol 3).
+    pub const TRAVEL: u32 = 1 << 6;
 
     /// Every fault bit with its machine name (kebab-case: the CLI's text and JSON) and its
     /// label for people (the live view's banner), in bit order.
-    pub const NAMES: [(u32, &str, &str); 6] = [
+    pub const NAMES: [(u32, &str, &str); 7] = [
         (ENERGY_GROWTH, "energy-growth", "energy growth"),
         (ENERGY_LIMIT, "energy-limit", "energy limit"),
         (OVER_VELOCITY, "over-velocity", "over-velocity"),
         (HEARTBEAT, "heartbeat", "heartbeat lost"),
         (ENCODER_JUMP, "encoder-jump", "encoder jump"),
         (BUZZ, "buzz", "buzz"),
+        (TRAVEL, "travel", "outside travel"),
     ];
+
+    /// Every fault bit above, or-ed.
+    pub const ALL: u32 =
+        ENERGY_GROWTH | ENERGY_LIMIT | OVER_VELOCITY | HEARTBEAT | ENCODER_JUMP | BUZZ | TRAVEL;
 }
 
 /// A sequence of telemetry samples.
@@ -532,6 +574,11 @@ pub enum ConfigField {
     Argument,
     /// [`ServoConfig::damper`] (protocol 2; its range is the dead band's, in counts).
     Damper,
+    /// [`ServoConfig::travel_min`] (protocol 3).
+    TravelMin,
+    /// [`ServoConfig::travel_max`] (protocol 3; refused when not above `travel_min`, with the
+    /// range `[travel_min + 1, i32::MAX]`).
+    TravelMax,
 }
 
 impl ConfigField {
@@ -557,6 +604,8 @@ impl ConfigField {
             Self::SafeDamping => "safe_damping",
             Self::Argument => "argument",
             Self::Damper => "damper",
+            Self::TravelMin => "travel_min",
+            Self::TravelMax => "travel_max",
         }
     }
 }
@@ -609,11 +658,12 @@ mod tests {
 
     /// The default config's postcard bytes, written out by hand from postcard's rules (f32:
     /// 4 bytes LE; u32: varint; i32: zigzag varint; u8 and bool: one byte; an enum: its
-    /// variant index as a varint, then its fields).
+    /// variant index as a varint, then its fields; an `Option`: `00` for `None`, `01` then the
+    /// value for `Some`).
     #[test]
-    fn default_config_literal_bytes_end_with_the_damper() {
+    fn default_config_literal_bytes_end_with_the_damper_and_the_travel_window() {
         #[rustfmt::skip]
-        let mut want = std::vec![
+        let protocol_2 = std::vec![
             0x00, 0x00, 0x00, 0x00, // stiffness 0.0
             0x00, 0x00, 0x00, 0x00, // damping 0.0
             0xe8, 0x07,             // servo_rate_hz 1000 = 0x68 | 0x80, 1000 >> 7 = 7
@@ -632,21 +682,39 @@ mod tests {
             0x00, 0x00, 0x00, 0x00, // safe_damping 0.0
             0x01, 0x01,             // damper: DeadBand (variant 1), counts 1
         ];
+        let mut want = protocol_2.clone();
+        want.extend_from_slice(&[
+            0x00, // travel_min: None
+            0x00, // travel_max: None
+        ]);
         let mut buf = [0u8; 64];
         let c = ServoConfig::default();
         assert_eq!(postcard::to_slice(&c, &mut buf).unwrap(), &want[..]);
         // Difference is variant 0 with no fields: one byte.
-        want.truncate(want.len() - 2);
-        want.push(0x00);
+        let mut diff = protocol_2.clone();
+        diff.truncate(diff.len() - 2);
+        diff.push(0x00);
+        diff.extend_from_slice(&[0x00, 0x00]);
         let d = ServoConfig {
             damper: DamperLaw::Difference,
             ..c
         };
-        assert_eq!(postcard::to_slice(&d, &mut buf).unwrap(), &want[..]);
-        assert_eq!(postcard::from_bytes::<ServoConfig>(&want), Ok(d));
-        // A protocol-1 config (no damper byte) does not decode as a protocol-2 one.
-        want.pop();
-        assert!(postcard::from_bytes::<ServoConfig>(&want).is_err());
+        assert_eq!(postcard::to_slice(&d, &mut buf).unwrap(), &diff[..]);
+        assert_eq!(postcard::from_bytes::<ServoConfig>(&diff), Ok(d));
+        // A travel window: Some(-5) = 01, zigzag 9; Some(1000) = 01, zigzag 2000 = d0 0f.
+        let t = ServoConfig {
+            travel_min: Some(-5),
+            travel_max: Some(1000),
+            ..c
+        };
+        let mut travel = protocol_2.clone();
+        travel.extend_from_slice(&[0x01, 0x09, 0x01, 0xd0, 0x0f]);
+        assert_eq!(postcard::to_slice(&t, &mut buf).unwrap(), &travel[..]);
+        assert_eq!(postcard::from_bytes::<ServoConfig>(&travel), Ok(t));
+        // A protocol-2 config (no travel bytes) does not decode as a protocol-3 one, nor a
+        // protocol-1 one (no damper byte either).
+        assert!(postcard::from_bytes::<ServoConfig>(&protocol_2).is_err());
+        assert!(postcard::from_bytes::<ServoConfig>(&protocol_2[..protocol_2.len() - 2]).is_err());
     }
 
     #[test]
@@ -711,12 +779,18 @@ mod tests {
                 fault::OVER_VELOCITY,
                 fault::HEARTBEAT,
                 fault::ENCODER_JUMP,
-                fault::BUZZ
+                fault::BUZZ,
+                fault::TRAVEL,
             ]
         );
         for (i, (b, name, label)) in fault::NAMES.iter().enumerate() {
             assert_eq!(*b, 1 << i, "{name}");
             assert!(!name.contains(' ') && !label.is_empty(), "{name} / {label}");
         }
+        assert_eq!(fault::ALL, bits.iter().fold(0, |a, b| a | b));
+        assert_eq!(
+            fault::NAMES.last(),
+            Some(&(fault::TRAVEL, "travel", "outside travel"))
+        );
     }
 }

@@ -2,6 +2,18 @@
 //! impact launch, excitation), its advance from tick to tick, and its end (the active config
 //! restored, the decided end reported once).
 //!
+//! Excitation with a centring spring: an excitation's code is the profile's code plus the
+//! configured wall's spring and damper, `code = exc + spring_raw(n) − g_B·v` (saturating; the
+//! delay line and the output clamp follow as for every code), where `spring_raw` is the
+//! two-sided spring of eq. (2) around `wall_position` with the config's K (also on a
+//! one-sided wall: it centres the device, it is not the wall), in the same fixed point as the
+//! wall's and the hold's (beyond its count clamp n_sat, where the spring alone passes the
+//! force limit, it keeps its value at n_sat), and −g_B·v the wall's damper with its law
+//! ([`Servo::damping`]). A host can so run a chirp against a weak, known centring spring.
+//! With K = 0 and B = 0 (the default) nothing is added: the codes are bit for bit the profile's
+//! and the samples carry `WALL_OFF` as before; with either set they do not. The sample's
+//! `force_code` is the total code output (after the delay and the clamp), as on every tick.
+//!
 //! Units: effective counts, output codes, ticks. Invariants: bounded work per tick, no
 //! allocation or panic; the experiment's state lives in the servo (`exp`, `end`, `settle`).
 
@@ -49,10 +61,15 @@ impl<N: Numeric> Servo<'_, N> {
                 let d = if l.launched() { launch_damp } else { hold_damp };
                 (self.spring_raw(e).saturating_add(d), flags::HOLD)
             }
-            Experiment::Excite(x) => (
-                x.next_code(&self.table, self.g.rate_hz),
-                flags::EXCITE | flags::WALL_OFF,
-            ),
+            Experiment::Excite(x) => {
+                let code = x.next_code(&self.table, self.g.rate_hz);
+                if self.g.excite_centring {
+                    let centring = self.spring_raw(n).saturating_add(self.damping(dn));
+                    (code.saturating_add(centring), flags::EXCITE)
+                } else {
+                    (code, flags::EXCITE | flags::WALL_OFF)
+                }
+            }
         }
     }
 

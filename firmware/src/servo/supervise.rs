@@ -1,6 +1,8 @@
 //! The supervisor's fault path: the heartbeat watchdog, the halted tick (safe mode: force 0 or
 //! the safe damper, the delay line bypassed), the first reading that primes the loop, and the
-//! latching of new fault bits (published to the main loop, ending any experiment).
+//! latching of new fault bits (published to the main loop, ending any experiment). The tick's
+//! own tests (encoder jump, the travel window on the raw count, over-velocity, the energy
+//! monitor) run in `Servo::step`, which hands the bits they raise to this path.
 //!
 //! Units: ticks (`now`), fault bits of `stiffwall_proto::fault`. Invariants: a latched fault
 //! stays until cleared by a command; no allocation, blocking or panic.

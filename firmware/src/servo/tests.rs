@@ -755,6 +755,8 @@ fn a_prepared_test_is_not_ended_by_the_buzz_detector() {
     assert_eq!(faults & fault::BUZZ, fault::BUZZ, "{faults:#x}");
 }
 
+/// The profiles on a K = 8 wall at count 7, whose centring spring adds −7 to every code
+/// (`travel_excite_tests` has the profile alone at K = 0 and the sum at other counts).
 #[test]
 fn excitation_profiles() {
     let b = board();
@@ -782,7 +784,10 @@ fn excitation_profiles() {
             ticks: 6,
         },
     );
-    assert_eq!(run(&mut s, &mut out, 6), [5, 5, -3, -3, 5, 5]);
+    assert_eq!(
+        run(&mut s, &mut out, 6),
+        [5 - 7, 5 - 7, -3 - 7, -3 - 7, 5 - 7, 5 - 7]
+    );
     assert!(matches!(
         hp.events.dequeue(),
         Some(ServoEvent::ExperimentDone {
@@ -805,7 +810,7 @@ fn excitation_profiles() {
             ticks: 2000,
         },
     );
-    let c = run(&mut s, &mut out, 2000);
+    let c: std::vec::Vec<i32> = run(&mut s, &mut out, 2000).iter().map(|v| v + 7).collect();
     assert!(c.iter().all(|v| v.abs() <= 1000));
     let flips = |w: &[i32]| w.windows(2).filter(|p| (p[0] >= 0) != (p[1] >= 0)).count();
     assert!(flips(&c[..500]) < flips(&c[1500..]));
@@ -822,7 +827,10 @@ fn excitation_profiles() {
             ticks: 8,
         },
     );
-    assert_eq!(run(&mut s, &mut out, 8), [1, 1, 2, 2, 3, 3, 1, 1]);
+    assert_eq!(
+        run(&mut s, &mut out, 8),
+        [1, 1, 2, 2, 3, 3, 1, 1].map(|v| v - 7)
+    );
 }
 
 #[test]

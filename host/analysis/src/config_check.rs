@@ -1,7 +1,7 @@
 //! The host-side checks of a servo-configuration change (`hostctl config set`, `stream`,
 //! `record` and the `config` command of `hostctl ui`), before anything is sent: a real field
 //! finite and > 0 or >= 0, an integer field within its range, a damper law within the
-//! firmware's.
+//! firmware's, a travel window whose ends are in order.
 //!
 //! Units: those of the field (SI: N/m or N·m/rad, N·s/m or N·m·s/rad, N or N·m, m/s or rad/s,
 //! J; Hz, ticks, counts, shifts and milliseconds as integers). Invariants: a refusal names the
@@ -30,6 +30,17 @@ pub enum FlagError {
         value: DamperLaw,
         /// What is wrong with it.
         reason: ParseDamperLawError,
+    },
+    /// A travel window whose upper end is not above its lower end (both in raw counts).
+    #[error(
+        "--travel-max must be above --travel-min (got the window [{min}, {max}] raw counts; \
+         give `off` for no end on that side)"
+    )]
+    Travel {
+        /// The lower end given (or kept).
+        min: i32,
+        /// The upper end given (or kept).
+        max: i32,
     },
     /// An integer field.
     #[error("--{flag} must be within [{lo}, {hi}] (got {value})")]
@@ -84,6 +95,18 @@ pub fn int<T: TryFrom<i64>>(
     T::try_from(value).map_err(|_| err)
 }
 
+/// The travel window `[min, max]` (raw counts; `None`: no end on that side): with both ends,
+/// `max` must be above `min`, as the firmware requires.
+///
+/// # Errors
+/// [`FlagError::Travel`] with both ends.
+pub fn travel(min: Option<i32>, max: Option<i32>) -> Result<(), FlagError> {
+    match (min, max) {
+        (Some(min), Some(max)) if max <= min => Err(FlagError::Travel { min, max }),
+        _ => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -105,5 +128,23 @@ mod tests {
         );
         // In range but not representable: refused, not wrapped.
         assert!(int::<u8>("x", 300, 0, 1000).is_err());
+    }
+
+    #[test]
+    fn travel_window_ends_in_order() {
+        for ok in [
+            (None, None),
+            (Some(5), None),
+            (None, Some(-5)),
+            (Some(-5), Some(-4)),
+        ] {
+            assert_eq!(travel(ok.0, ok.1), Ok(()), "{ok:?}");
+        }
+        assert_eq!(
+            travel(Some(10), Some(10)).unwrap_err().to_string(),
+            "--travel-max must be above --travel-min (got the window [10, 10] raw counts; give \
+             `off` for no end on that side)"
+        );
+        assert!(travel(Some(10), Some(-10)).is_err());
     }
 }

@@ -40,6 +40,9 @@ pub enum ConnectSpec {
         plant: VirtualPlant,
         /// In real time, or as fast as the host reads.
         pace: Pace,
+        /// Where to write the plant's true state every tick (`--trace FILE`;
+        /// [`crate::virtual_device::TRACE_HEADER`]). `None`: no trace.
+        trace: Option<PathBuf>,
     },
     /// A real board on a serial port.
     Serial {
@@ -67,6 +70,22 @@ impl ConnectSpec {
         Self::Virtual {
             plant: VirtualPlant::File(path.into()),
             pace,
+            trace: None,
+        }
+    }
+
+    /// The same target, with the virtual device writing its plant's true state every tick to
+    /// `path` (no effect on other targets).
+    #[must_use]
+    pub fn with_trace(self, path: Option<PathBuf>) -> Self {
+        match self {
+            #[cfg(feature = "virtual")]
+            Self::Virtual { plant, pace, .. } => Self::Virtual {
+                plant,
+                pace,
+                trace: path,
+            },
+            other => other,
         }
     }
 
@@ -77,6 +96,7 @@ impl ConnectSpec {
         Self::Virtual {
             plant: VirtualPlant::Preset(name.into()),
             pace,
+            trace: None,
         }
     }
 
@@ -120,12 +140,16 @@ impl ConnectSpec {
     /// preset or the plant file's bad key and its range.
     #[cfg(feature = "virtual")]
     pub fn virtual_spec(&self) -> Result<Option<crate::virtual_device::Spec>> {
-        let Self::Virtual { plant, pace } = self else {
+        let Self::Virtual { plant, pace, trace } = self else {
             return Ok(None);
         };
         let name = match plant {
             VirtualPlant::File(path) => {
-                return crate::virtual_device::Spec::from_plant_file(path, *pace).map(Some)
+                let spec = crate::virtual_device::Spec::from_plant_file(path, *pace)?;
+                return Ok(Some(crate::virtual_device::Spec {
+                    trace: trace.clone(),
+                    ..spec
+                }));
             }
             VirtualPlant::Preset(name) => name,
         };
@@ -150,6 +174,8 @@ impl ConnectSpec {
             initial_position: 0.0,
             output_range: Some(d.force_limit),
             scene: None,
+            travel: d.travel,
+            trace: trace.clone(),
         }))
     }
 }

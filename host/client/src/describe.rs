@@ -41,6 +41,12 @@ pub fn describe_error_named(code: ErrorCode, detail: &ErrorDetail, label: FieldL
                     readable(*min),
                     readable(*max)
                 )
+            } else if *field == ConfigField::TravelMax {
+                // The window's ends are whole raw counts; its lower end is min − 1.
+                format!(
+                    "{what}: {name} must be above {}, within [{min:.0}, {max:.0}] raw counts",
+                    label(ConfigField::TravelMin)
+                )
             } else if *min == f64::from(f32::MIN_POSITIVE) {
                 format!("{what}: {name} must be > 0 and ≤ {}", readable(*max))
             } else {
@@ -117,6 +123,29 @@ mod tests {
             describe_error_named(ErrorCode::InvalidConfig, &detail, |_| "--damper"),
             "configuration refused: --damper: the dead band must be within [1, 8] counts (use \
              `difference` for no dead band)"
+        );
+    }
+
+    #[test]
+    fn a_refused_travel_window_names_both_ends_in_whole_counts() {
+        let detail = ErrorDetail::Field {
+            field: ConfigField::TravelMax,
+            min: 101.0,
+            max: f64::from(i32::MAX),
+        };
+        assert_eq!(
+            describe_error(ErrorCode::InvalidConfig, &detail),
+            "configuration refused: travel_max must be above travel_min, within [101, \
+             2147483647] raw counts"
+        );
+        let flag = |f: ConfigField| match f {
+            ConfigField::TravelMin => "--travel-min",
+            _ => "--travel-max",
+        };
+        assert_eq!(
+            describe_error_named(ErrorCode::InvalidConfig, &detail, flag),
+            "configuration refused: --travel-max must be above --travel-min, within [101, \
+             2147483647] raw counts"
         );
     }
 }

@@ -477,6 +477,8 @@ mod tests {
             initial_position: 0.0,
             output_range: None,
             scene: None,
+            travel: None,
+            trace: None,
         };
         let b = spec.board();
         DeviceInfo {

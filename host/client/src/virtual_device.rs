@@ -31,7 +31,7 @@ use stiffwall_firmware::{
 };
 use stiffwall_proto::ServoConfig;
 use stiffwall_proto::{DamperLaw, WallMode};
-use stiffwall_sim::rich::{Controller, PlantModel, RichPlant, WallDamper};
+use stiffwall_sim::rich::{Controller, PlantModel, RichPlant, Travel, WallDamper};
 
 // A plant file's `controller.damper` takes the firmware's dead bands.
 const _: () =
@@ -62,10 +62,21 @@ pub struct Spec {
     /// a scene's `amplifier.force_limit_n` takes precedence. `None`: 32.767 × c, ≥ 1 mN.
     pub output_range: Option<f64>,
     /// The plant and controller of a scene file (`--plant`). `None`: the rigid plant of
-    /// `plant`, wall off at boot. The firmware always quantises, so `controller.quantization`
-    /// and the scene's `[initial]`/`[run]` are not used by the device.
+    /// `plant` (with `travel`), wall off at boot. The firmware always quantises, so
+    /// `controller.quantization`, the scene's `[initial]` velocity and `[run]` are not used by
+    /// the device (it starts at rest at `initial_position`).
     pub scene: Option<ScenePlant>,
+    /// The travel of a preset's rigid plant, [min, max] m (rad) (`None`: unbounded); a scene
+    /// file's `effects.travel` is in its model.
+    pub travel: Option<[f64; 2]>,
+    /// Where to write the plant's true state every tick (`--trace FILE`): CSV of time,
+    /// position, velocity, end-stop contact force, encoder count and commanded force
+    /// ([`TRACE_HEADER`]). `None`: no trace.
+    pub trace: Option<std::path::PathBuf>,
 }
+
+/// The trace's header line (SI units; rotary devices: rad, rad/s, N·m in the same columns).
+pub const TRACE_HEADER: &str = "t_s,position_m,velocity_m_per_s,stop_force_n,count,force_cmd_n";
 
 /// What a scene file gives the virtual device.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,8 +104,8 @@ impl Spec {
             message,
         };
         let text = std::fs::read_to_string(path).map_err(|e| plant_error(e.to_string()))?;
-        let (model, ctl) =
-            PlantModel::from_scene_toml(&text).map_err(|e| plant_error(e.to_string()))?;
+        let (model, ctl, start_m) = PlantModel::from_scene_toml_with_start(&text)
+            .map_err(|e| plant_error(e.to_string()))?;
         let spec = Self {
             plant: PhysicalParams {
                 mass: model.mass_kg,
@@ -108,12 +119,14 @@ impl Spec {
             },
             counts_per_rev: model.counts_per_rev.unwrap_or(0),
             pace,
-            initial_position: 0.0,
+            initial_position: start_m,
             output_range: None,
             scene: Some(ScenePlant {
                 model,
                 controller: ctl,
             }),
+            travel: None,
+            trace: None,
         };
         if let Err(e) = stiffwall_firmware::validate(&spec.defaults(), &spec.board()) {
             use stiffwall_proto::ConfigField as F;
@@ -170,7 +183,8 @@ impl Spec {
         }
     }
 
-    /// Boot configuration: wall off (a plant file: its controller's stiffness, virtual damping
+    /// Boot configuration: the plant's travel (when it has one) as the firmware's travel
+    /// window; wall off (a plant file: its controller's stiffness, virtual damping
     /// `controller.virtual_damping_ns_per_m`, damper law `controller.damper` (when given; else
     /// the firmware's default), extra delay in
     /// whole ticks and wall mode), the spec's servo rate, force limit at full scale. In fast
@@ -179,12 +193,24 @@ impl Spec {
     #[must_use]
     pub fn defaults(&self) -> ServoConfig {
         let b = self.board();
+        // The plant's travel as the firmware's travel window: the counts wholly inside it, as a
+        // user configures a board's (`hostctl config set`).
+        let res = self.plant.resolution;
+        let (travel_min, travel_max) = match self.travel_m() {
+            Some([lo, hi]) => (
+                i32::try_from((lo / res).ceil() as i64).ok(),
+                i32::try_from((hi / res).floor() as i64 - 1).ok(),
+            ),
+            None => (None, None),
+        };
         let base = ServoConfig {
             heartbeat_timeout_ms: if self.pace.is_fast() { 0 } else { 500 },
             stiffness: 0.0,
             servo_rate_hz: (1.0 / self.plant.period_s).round().clamp(100.0, 20_000.0) as u32,
             force_limit: b.force_per_code * b.max_code as f32,
             energy_limit: 1.0e3,
+            travel_min,
+            travel_max,
             ..ServoConfig::default()
         };
         match self.scene.map(|s| s.controller) {
@@ -204,19 +230,36 @@ impl Spec {
         }
     }
 
-    /// The plant model the device runs: the file's, or the rigid plant of `plant`.
+    /// The plant model the device runs: the file's, or the rigid plant of `plant` with the
+    /// preset's `travel` (hard stops).
     pub fn plant_model(&self) -> Result<PlantModel> {
+        let plant_error = |e: stiffwall_sim::rich::ModelError| ClientError::Plant {
+            path: None,
+            message: format!("virtual device plant: {e}"),
+        };
         match self.scene {
             Some(s) => Ok(s.model),
             None => {
                 let p = &self.plant;
-                PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution).map_err(|e| {
-                    ClientError::Plant {
-                        path: None,
-                        message: format!("virtual device plant: {e}"),
-                    }
-                })
+                let rigid = PlantModel::rigid(p.mass, p.viscous, p.coulomb, p.resolution)
+                    .map_err(plant_error)?;
+                let model = PlantModel {
+                    travel: self
+                        .travel
+                        .map(|[lo, hi]| Travel::with_defaults(lo, hi, None, None, p.mass)),
+                    ..rigid
+                };
+                model.validate().map_err(plant_error)?;
+                Ok(model)
             }
+        }
+    }
+
+    /// The travel of the plant the device runs, [min, max] m (rad), when it has one.
+    pub fn travel_m(&self) -> Option<[f64; 2]> {
+        match self.scene {
+            Some(s) => s.model.travel.map(|t| [t.min_m, t.max_m]),
+            None => self.travel,
         }
     }
 }
@@ -271,6 +314,10 @@ pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPor
         }
     };
     plant.set_state(spec.initial_position, 0.0);
+    let trace = match &spec.trace {
+        Some(path) => Some(Trace::create(path)?),
+        None => None,
+    };
     let (mut master, host, pty) = transport::pty_pair()?;
     master
         .set_timeout(Duration::from_millis(1))
@@ -279,7 +326,7 @@ pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPor
     let stop2 = Arc::clone(&stop);
     let thread = std::thread::Builder::new()
         .name("virtual-device".into())
-        .spawn(move || run(&spec, plant, &mut master, &stop2))
+        .spawn(move || run(&spec, plant, trace, &mut master, &stop2))
         .map_err(|e| ClientError::Io {
             op: "starting the virtual device for",
             source: e,
@@ -296,7 +343,13 @@ pub fn spawn(spec: Spec) -> Result<(VirtualDevice, Box<dyn serialport::SerialPor
 
 /// The virtual device's loop until `stop` or the host hangs up: bytes from the host, the
 /// firmware's `Device`, the servo ticks due (each against `plant`), bytes to the host.
-fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &AtomicBool) {
+fn run(
+    spec: &Spec,
+    mut plant: RichPlant,
+    mut trace: Option<Trace>,
+    pty: &mut serialport::TTYPort,
+    stop: &AtomicBool,
+) {
     let board = spec.board();
     let mut channels = Box::new(Channels::new());
     let (servo_port, host_port) = channels.split();
@@ -339,7 +392,11 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
             let raw = (plant.encoder_count() as u64 & mask) as u32;
             let mut out = HeldCode(0);
             servo.tick(tick, &mut SampledCount(raw), &mut out);
-            plant.advance(f64::from(out.0) * f64::from(board.force_per_code), period_s);
+            let force = f64::from(out.0) * f64::from(board.force_per_code);
+            if let Some(t) = &mut trace {
+                t.sample(&plant, force, period_s);
+            }
+            plant.advance(force, period_s);
             // Let the main loop drain telemetry before the servo's queue fills.
             device.poll(tick, &mut link);
         }
@@ -353,6 +410,63 @@ fn run(spec: &Spec, mut plant: RichPlant, pty: &mut serialport::TTYPort, stop: &
             && !spec.pace.is_fast()
         {
             std::thread::sleep(Duration::from_micros(200));
+        }
+    }
+}
+
+/// The plant's true state, one CSV line per servo tick ([`TRACE_HEADER`]): at each sample
+/// instant, before the tick's force is applied. Written through a buffer, flushed when the
+/// device stops; a write error ends the trace (reported once on stderr), never the device.
+struct Trace {
+    out: Option<std::io::BufWriter<std::fs::File>>,
+    path: std::path::PathBuf,
+    t_s: f64,
+}
+
+impl Trace {
+    fn create(path: &std::path::Path) -> Result<Self> {
+        let file = std::fs::File::create(path).map_err(|e| ClientError::Io {
+            op: "creating the trace file",
+            source: e,
+        })?;
+        let mut out = std::io::BufWriter::new(file);
+        writeln!(out, "{TRACE_HEADER}").map_err(|e| ClientError::Io {
+            op: "writing the trace file",
+            source: e,
+        })?;
+        Ok(Self {
+            out: Some(out),
+            path: path.to_path_buf(),
+            t_s: 0.0,
+        })
+    }
+
+    fn sample(&mut self, plant: &RichPlant, force_n: f64, period_s: f64) {
+        let Some(out) = &mut self.out else { return };
+        let r = writeln!(
+            out,
+            "{:.9},{:e},{:e},{:e},{},{:e}",
+            self.t_s,
+            plant.position_m(),
+            plant.velocity_m_per_s(),
+            plant.stop_force_n(),
+            plant.encoder_count(),
+            force_n
+        );
+        self.t_s += period_s;
+        if let Err(e) = r {
+            eprintln!("trace {}: {e}; the trace stops here", self.path.display());
+            self.out = None;
+        }
+    }
+}
+
+impl Drop for Trace {
+    fn drop(&mut self) {
+        if let Some(out) = &mut self.out {
+            if let Err(e) = out.flush() {
+                eprintln!("trace {}: {e}", self.path.display());
+            }
         }
     }
 }

@@ -2,7 +2,8 @@
 //! fields to change on the device before anything else happens.
 //!
 //! Units: SI (N/m or N·m/rad, N·s/m or N·m·s/rad, N or N·m, m/s or rad/s, J, Hz); ticks,
-//! counts and shifts are integers. Invariants: obviously bad numbers (NaN, infinite, negative,
+//! counts and shifts are integers (the travel window's ends are raw encoder counts, or `off`).
+//! Invariants: obviously bad numbers (NaN, infinite, negative,
 //! zero where a positive value is needed) are refused on the host, naming the flag and its
 //! range, before anything is sent (by `stiffwall_analysis::config_check`); the device validates
 //! the rest and a refused config changes nothing.
@@ -10,7 +11,7 @@
 use crate::device::connect::ConnectArgs;
 use anyhow::{bail, Context, Result};
 pub use stiffwall_analysis::config_check::FlagError;
-use stiffwall_analysis::config_check::{int, real};
+use stiffwall_analysis::config_check::{int, real, travel};
 use stiffwall_client::Client;
 use stiffwall_proto::{DamperLaw, ParseDamperLawError, SafeMode, ServoConfig, WallMode};
 
@@ -42,6 +43,75 @@ pub enum SafeModeArg {
     ZeroForce,
     /// Virtual damping (`--safe-damping`) after a fault.
     Damping,
+}
+
+/// One end of the travel window on the command line: a raw encoder count, or `off` (no end
+/// on that side). In JSON (`hostctl ui`): an integer or `"off"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TravelEnd {
+    /// No end on this side.
+    Off,
+    /// The end, raw encoder counts (inclusive: the window holds it).
+    Counts(i32),
+}
+
+impl TravelEnd {
+    /// The config field's value: `None` for `off`.
+    #[must_use]
+    pub fn counts(self) -> Option<i32> {
+        match self {
+            Self::Off => None,
+            Self::Counts(n) => Some(n),
+        }
+    }
+}
+
+impl std::fmt::Display for TravelEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Off => f.write_str("off"),
+            Self::Counts(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+impl std::str::FromStr for TravelEnd {
+    type Err = String;
+
+    /// `off`, or an integer count within the `i32` range.
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "off" {
+            return Ok(Self::Off);
+        }
+        s.parse::<i32>().map(Self::Counts).map_err(|_| {
+            format!(
+                "{s:?} is neither a raw encoder count (an integer within [{}, {}]) nor `off`",
+                i32::MIN,
+                i32::MAX
+            )
+        })
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for TravelEnd {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Json {
+            Counts(i64),
+            Text(String),
+        }
+        match Json::deserialize(d)? {
+            Json::Counts(n) => i32::try_from(n).map(Self::Counts).map_err(|_| {
+                serde::de::Error::custom(format!(
+                    "{n} is outside the raw count range [{}, {}]",
+                    i32::MIN,
+                    i32::MAX
+                ))
+            }),
+            Json::Text(t) => t.parse().map_err(serde::de::Error::custom),
+        }
+    }
 }
 
 /// Configuration fields to change; fields not given keep their current value. Shared by
@@ -105,6 +175,16 @@ pub struct Overrides {
     #[arg(long, value_name = "difference|dead-band-N", value_parser = parse_damper)]
     #[serde(default, deserialize_with = "deserialize_damper")]
     pub damper: Option<DamperLaw>,
+    /// Travel window, lower end [raw encoder counts], or `off`: the supervisor latches the
+    /// `travel` fault (and the safe mode) when the raw count goes below it.
+    #[arg(long, value_name = "COUNTS|off", allow_negative_numbers = true)]
+    #[serde(default)]
+    pub travel_min: Option<TravelEnd>,
+    /// Travel window, upper end [raw encoder counts], or `off`: the `travel` fault when the
+    /// raw count goes above it. With both ends, above `--travel-min`.
+    #[arg(long, value_name = "COUNTS|off", allow_negative_numbers = true)]
+    #[serde(default)]
+    pub travel_max: Option<TravelEnd>,
 }
 
 /// `--damper`'s value: exactly `difference` or `dead-band-N` (N in 1..=8).
@@ -148,6 +228,8 @@ pub fn flag_name(field: stiffwall_proto::ConfigField) -> &'static str {
         F::SafeMode => "--safe-mode",
         F::SafeDamping => "--safe-damping",
         F::Damper => "--damper",
+        F::TravelMin => "--travel-min",
+        F::TravelMax => "--travel-max",
         F::Argument => "argument",
     }
 }
@@ -173,6 +255,8 @@ impl Overrides {
             && self.safe_mode.is_none()
             && self.safe_damping.is_none()
             && self.damper.is_none()
+            && self.travel_min.is_none()
+            && self.travel_max.is_none()
     }
 
     /// `base` with the given fields changed; host-side validation of each given number.
@@ -249,6 +333,15 @@ impl Overrides {
             // Parsed values are in range; a value built otherwise is checked as the text is.
             c.damper = parse_damper(&d.to_string())
                 .map_err(|reason| FlagError::Damper { value: d, reason })?;
+        }
+        if let Some(v) = self.travel_min {
+            c.travel_min = v.counts();
+        }
+        if let Some(v) = self.travel_max {
+            c.travel_max = v.counts();
+        }
+        if self.travel_min.is_some() || self.travel_max.is_some() {
+            travel(c.travel_min, c.travel_max)?;
         }
         Ok(c)
     }
@@ -335,6 +428,81 @@ mod tests {
             "--damper dead-band-9: dead band 9 counts is outside 1..=8 (use `difference` for no \
              dead band)"
         );
+    }
+
+    #[test]
+    fn travel_flags_set_either_end_or_turn_it_off() {
+        assert_eq!("off".parse(), Ok(TravelEnd::Off));
+        assert_eq!("-4000".parse(), Ok(TravelEnd::Counts(-4000)));
+        for bad in ["", "Off", "1.5", "2147483648", "none"] {
+            let e = bad.parse::<TravelEnd>().unwrap_err();
+            assert!(e.contains("nor `off`"), "{bad:?}: {e}");
+        }
+        let base = ServoConfig::default();
+        let both = Overrides {
+            travel_min: Some(TravelEnd::Counts(-4000)),
+            travel_max: Some(TravelEnd::Counts(4000)),
+            ..Overrides::default()
+        };
+        assert!(!both.is_empty());
+        let set = both.apply(&base).unwrap();
+        assert_eq!(
+            set,
+            ServoConfig {
+                travel_min: Some(-4000),
+                travel_max: Some(4000),
+                ..base
+            }
+        );
+        // One end changed, the other kept; `off` removes one.
+        let lower = Overrides {
+            travel_min: Some(TravelEnd::Counts(3999)),
+            ..Overrides::default()
+        };
+        assert_eq!(lower.apply(&set).unwrap().travel_min, Some(3999));
+        let off = Overrides {
+            travel_max: Some(TravelEnd::Off),
+            ..Overrides::default()
+        };
+        assert_eq!(
+            (
+                off.apply(&set).unwrap().travel_min,
+                off.apply(&set).unwrap().travel_max
+            ),
+            (Some(-4000), None)
+        );
+        // Out of order against the kept end: refused on the host.
+        let crossed = Overrides {
+            travel_min: Some(TravelEnd::Counts(4000)),
+            ..Overrides::default()
+        };
+        let e = crossed.apply(&set).unwrap_err().to_string();
+        assert!(
+            e.starts_with("--travel-max must be above --travel-min"),
+            "{e}"
+        );
+        assert_eq!(
+            flag_name(stiffwall_proto::ConfigField::TravelMax),
+            "--travel-max"
+        );
+        // JSON (`hostctl ui`): an integer or "off".
+        let o: Overrides =
+            serde_json::from_value(serde_json::json!({"travel-min": -10, "travel-max": "off"}))
+                .unwrap();
+        assert_eq!(
+            (o.travel_min, o.travel_max),
+            (Some(TravelEnd::Counts(-10)), Some(TravelEnd::Off))
+        );
+        for bad in [
+            serde_json::json!({"travel-min": 1.5}),
+            serde_json::json!({"travel-min": 3_000_000_000_i64}),
+            serde_json::json!({"travel-max": "none"}),
+        ] {
+            assert!(
+                serde_json::from_value::<Overrides>(bad.clone()).is_err(),
+                "{bad}"
+            );
+        }
     }
 
     /// `hostctl ui`'s JSON `set` spells the law as the flag does.

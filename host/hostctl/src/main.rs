@@ -23,6 +23,8 @@ enum Command {
     Info(cmd::info::Args),
     /// Read, change, save or reset the device's servo configuration.
     Config(cmd::config::Args),
+    /// Show the device's latched faults by name (`faults clear` clears them).
+    Faults(cmd::faults::Args),
     /// Show live telemetry from the device.
     Stream(cmd::stream::Args),
     /// Record telemetry losslessly to CSV.
@@ -48,6 +50,7 @@ fn main() -> std::process::ExitCode {
         Command::Map(a) => cmd::map::run(a),
         Command::Info(a) => cmd::info::run(a),
         Command::Config(a) => cmd::config::run(a),
+        Command::Faults(a) => cmd::faults::run(a),
         Command::Stream(a) => cmd::stream::run(a),
         Command::Record(a) => cmd::record::run(a),
         Command::Replay(a) => cmd::replay::run(a),

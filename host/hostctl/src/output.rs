@@ -6,7 +6,7 @@
 
 use serde::Serialize;
 use std::fmt::Write as _;
-use stiffwall_proto::{SafeMode, ServoConfig, WallMode};
+use stiffwall_proto::{fault, SafeMode, ServoConfig, WallMode};
 
 /// Why a report could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -64,12 +64,41 @@ pub fn emit_report<T: Serialize + ?Sized>(
     }
 }
 
+/// The machine names ([`fault::NAMES`], kebab-case: `energy-growth`, `travel`) of the fault
+/// bits set in `bits`, in bit order; bits no name covers (a newer device's) as one
+/// `unknown 0x…` entry. How every command prints a fault mask.
+#[must_use]
+pub fn fault_name_list(bits: u32) -> Vec<String> {
+    let mut v: Vec<String> = fault::NAMES
+        .iter()
+        .filter(|(b, _, _)| bits & b != 0)
+        .map(|(_, n, _)| (*n).to_string())
+        .collect();
+    let unknown = bits & !fault::ALL;
+    if unknown != 0 {
+        v.push(format!("unknown {unknown:#x}"));
+    }
+    v
+}
+
+/// [`fault_name_list`] joined with `, `, or `none` when no bit is set.
+#[must_use]
+pub fn fault_names(bits: u32) -> String {
+    let v = fault_name_list(bits);
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
+    }
+}
+
 /// Text rendering of a servo configuration, one `name value unit` row per field (the table of
 /// `hostctl config get` and of the live view's config panel).
 #[must_use]
 pub fn config_table(c: &ServoConfig) -> String {
     let mut s = String::new();
-    let rows: [(&str, String); 17] = [
+    let travel_end = |end: Option<i32>| end.map_or_else(|| "off".into(), |n| format!("{n} counts"));
+    let rows: [(&str, String); 19] = [
         ("stiffness", format!("{} N/m (N·m/rad)", c.stiffness)),
         ("damping", format!("{} N·s/m (N·m·s/rad)", c.damping)),
         ("damper", c.damper.to_string()),
@@ -122,6 +151,8 @@ pub fn config_table(c: &ServoConfig) -> String {
             "safe-damping",
             format!("{} N·s/m (N·m·s/rad)", c.safe_damping),
         ),
+        ("travel-min", travel_end(c.travel_min)),
+        ("travel-max", travel_end(c.travel_max)),
     ];
     for (k, v) in rows {
         let _ = writeln!(s, "{k:<21} {v}");
@@ -142,6 +173,24 @@ mod tests {
         fn flush(&mut self) -> std::io::Result<()> {
             Ok(())
         }
+    }
+
+    #[test]
+    fn fault_masks_print_as_names() {
+        assert_eq!(fault_names(0), "none");
+        assert_eq!(fault_name_list(0), Vec::<String>::new());
+        assert_eq!(
+            fault_names(fault::TRAVEL | fault::ENERGY_GROWTH),
+            "energy-growth, travel"
+        );
+        assert_eq!(
+            fault_names(fault::ALL).split(", ").count(),
+            fault::NAMES.len()
+        );
+        assert_eq!(
+            fault_name_list(fault::BUZZ | 1 << 20 | 1 << 30),
+            ["buzz", "unknown 0x40100000"]
+        );
     }
 
     #[test]

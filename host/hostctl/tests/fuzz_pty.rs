@@ -87,6 +87,8 @@ fn maxon() -> Spec {
         initial_position: 0.0,
         output_range: None,
         scene: None,
+        travel: None,
+        trace: None,
     }
 }
 

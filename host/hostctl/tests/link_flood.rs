@@ -121,6 +121,8 @@ fn maxon(fast: bool) -> Spec {
         initial_position: 0.0,
         output_range: None,
         scene: None,
+        travel: None,
+        trace: None,
     }
 }
 

@@ -26,9 +26,46 @@ pub(super) fn device_scale(c: &Client) -> Result<(f64, f64)> {
     Ok((res, 1.0 / rate))
 }
 
-/// One chirp excitation of `amplitude` codes and its identification.
+/// The chirp's and the ramps' config: `cfg` with a centring spring (issue 46) that deflects
+/// by [`crate::travel::CENTRING_SHARE`] of `room` counts under `peak_codes` and a damper of
+/// ratio [`crate::travel::CENTRING_DAMPING_RATIO`] with the device's `mass` (on the plain
+/// difference) when the mass is known; without it (the first probe) a stiffer spring,
+/// [`crate::travel::PROBE_CENTRING_SHARE`], and no damper. The firmware adds both to the
+/// excitation's code and records the total, so the fit sees the whole force.
+fn centred(
+    c: &Client,
+    cfg: &ServoConfig,
+    peak_codes: i32,
+    room: i64,
+    mass: Option<f64>,
+) -> ServoConfig {
+    let fpc = f64::from(c.info.force_per_code);
+    let res = f64::from(c.info.resolution) * f64::from(1u32 << cfg.coarsen_shift.min(16));
+    let room = room >> cfg.coarsen_shift.min(16);
+    let share = if mass.is_some() {
+        super::travel::CENTRING_SHARE
+    } else {
+        super::travel::PROBE_CENTRING_SHARE
+    };
+    let k = f64::from(peak_codes) * fpc / ((room.max(1) as f64 * share).max(1.0) * res);
+    let b = mass.map_or(0.0, |m| {
+        2.0 * super::travel::CENTRING_DAMPING_RATIO * (k * m.max(0.0)).sqrt()
+    });
+    ServoConfig {
+        stiffness: k as f32,
+        damping: b as f32,
+        damper: stiffwall_proto::DamperLaw::Difference,
+        ..*cfg
+    }
+}
+
+/// One chirp excitation of `amplitude` codes against the centring spring of `cfg` and `room`,
+/// and its identification.
 fn excite_and_identify(
     c: &mut Client,
+    cfg: &ServoConfig,
+    room: i64,
+    mass: Option<f64>,
     amplitude: i32,
     ticks: u32,
     f1: f32,
@@ -40,6 +77,7 @@ fn excite_and_identify(
         f1_hz: f1,
         ticks,
     });
+    c.set_config(&centred(c, cfg, amplitude, room, mass))?;
     super::verify::clear_faults(c)?;
     // From rest, so that the record does not depend on how long the host took since the
     // previous excitation (determinism: `--fast` and real time see the same counts).
@@ -112,6 +150,7 @@ pub(crate) fn identify(
     cfg: &ServoConfig,
     s: &Settings,
     progress: &Reporter<'_>,
+    room: i64,
 ) -> Result<(Identified, i32, i32)> {
     let rate = f64::from(c.info.servo_rate_hz);
     let ticks = (s.excite_seconds * rate).round().clamp(500.0, 1e6) as u32;
@@ -128,7 +167,16 @@ pub(crate) fn identify(
         check_cancel(c)?;
         let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
         // A probe of half the length finds the level; the full chirp then gives the fit.
-        match excite_and_identify(c, amplitude, (ticks / 2).max(500), f1, progress) {
+        match excite_and_identify(
+            c,
+            cfg,
+            room,
+            None,
+            amplitude,
+            (ticks / 2).max(500),
+            f1,
+            progress,
+        ) {
             Ok((probe, end)) => {
                 let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
                     .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
@@ -136,7 +184,9 @@ pub(crate) fn identify(
                     wanted = amplitude;
                 }
                 check_cancel(c)?;
-                if let Ok((full, end2)) = excite_and_identify(c, wanted, ticks, f1, progress) {
+                if let Ok((full, end2)) =
+                    excite_and_identify(c, cfg, room, Some(probe.mass), wanted, ticks, f1, progress)
+                {
                     return Ok((full, wanted, end2));
                 }
                 return Ok((probe, amplitude, end));
@@ -187,6 +237,7 @@ pub(super) fn breakaway(
     rest: i32,
     e: &mut Evidence,
     progress: &Reporter<'_>,
+    room: i64,
 ) -> Result<()> {
     let (res, t) = device_scale(c)?;
     let rate = f64::from(c.info.servo_rate_hz);
@@ -214,7 +265,7 @@ pub(super) fn breakaway(
                 values,
             })?;
         }
-        c.set_config(base)?;
+        c.set_config(&centred(c, base, peak, room, Some(id.mass)))?;
         rest_position(c)?;
         super::verify::clear_faults(c)?;
         let rec = c.excite(

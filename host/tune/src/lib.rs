@@ -54,6 +54,7 @@ mod release;
 mod search;
 mod settings;
 mod steps;
+mod travel;
 mod verdict;
 mod verify;
 
@@ -70,6 +71,10 @@ pub use settings::{
     MISMATCH_MARGIN,
 };
 pub use steps::{deflection_for, df_equivalent};
+pub use travel::{
+    DeviceLeft, TravelSource, Workspace, DEFAULT_WINDOW_LINEAR_M, DEFAULT_WINDOW_ROTARY_RAD,
+    LEFT_TOLERANCE_COUNTS,
+};
 pub use verify::{
     clear_faults, impact, rest_position, run_test, ChatterReport, Judging, Test, TestResult,
     TestRun, WallSides,

@@ -77,6 +77,12 @@ pub struct Outcome {
     pub margin_used: f64,
     /// Whether the config was saved.
     pub saved: bool,
+    /// The travel the experiments kept to (issue 46).
+    #[serde(default)]
+    pub workspace: Option<crate::travel::Workspace>,
+    /// The final check: where the device was left, at rest, without a fault (issue 46).
+    #[serde(default)]
+    pub device_left: Option<crate::travel::DeviceLeft>,
 }
 
 /// One point of the verified frontier.

@@ -33,7 +33,7 @@
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
 use super::error::TuneError;
-use super::error::{Context, Result, StepError};
+use super::error::{Result, StepError};
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
 use super::launch::Delivered;
@@ -116,25 +116,100 @@ pub fn tune(
     // The client's experiments check the caller's token for the whole tune.
     let outer = c.set_cancel(cancel.clone());
     let reporter = Reporter::new(progress);
-    let result = tune_inner(c, s, &original, &reporter)
+    let mut place = Place::default();
+    let result = tune_inner(c, s, &original, &reporter, &mut place)
         .map_err(|e| TuneError::from_step(e, cancel.is_cancelled()));
+    // The way back is not cancelled: a cancelled tune still leaves the device where it was.
+    c.set_cancel(stiffwall_client::Cancel::default());
+    let finished = finish(c, s, &original, &place, result, &reporter);
     c.set_cancel(outer);
-    // Leave the device as it was unless a new config was deliberately set.
-    let keep = matches!(&result, Ok(o) if !s.dry_run && o.saved);
-    if !keep {
+    finished
+}
+
+/// What the procedure learnt about where the device is, for the way back (issue 46).
+#[derive(Debug, Default)]
+struct Place {
+    /// Where the device started, raw counts.
+    start: Option<i64>,
+    /// The travel the experiments kept to.
+    ws: Option<super::travel::Workspace>,
+    /// The tests' config (the travel window set), the base of the way back.
+    test_base: Option<ServoConfig>,
+    /// The spring of the way back: the wall found (verified to rest), else the centring one.
+    home: Option<super::travel::GentleMove>,
+    /// The config to set and save when the tune succeeds (not on a dry run).
+    final_cfg: Option<ServoConfig>,
+}
+
+/// The end of every tune (success, error or cancel): the device back where it started,
+/// gently; the final config set (the wall found, or the original); the check that it is at
+/// rest, without a fault, where it started (`DeviceLeft`); then saved, or an error.
+fn finish(
+    c: &mut Client,
+    s: &Settings,
+    original: &ServoConfig,
+    place: &Place,
+    result: Result<Outcome, TuneError>,
+    progress: &Reporter<'_>,
+) -> Result<Outcome, TuneError> {
+    let mut problem = None;
+    let start = place.start;
+    if let (Some(start), Some(how)) = (start, place.home) {
+        progress.report(Progress::Returning { target: start });
+        let base = place.test_base.unwrap_or(*original);
         c.clear_faults().ok();
-        if let Err(restore) = c.set_config(&original) {
-            let error = match result {
-                Ok(_) => TuneError::Procedure("the tune finished but was not saved".into()),
-                Err(e) => e,
-            };
-            return Err(TuneError::NotRestored {
-                error: Box::new(error),
-                restore,
-            });
+        if let Err(e) = super::travel::move_to(c, &base, start, how) {
+            problem = Some(format!("the way back failed: {e}"));
         }
     }
-    result
+    let wall = place.final_cfg.filter(|_| result.is_ok() && !s.dry_run);
+    let final_cfg = wall.unwrap_or(*original);
+    // Only this tune's faults are latched now (the procedure cleared any before its tests).
+    c.clear_faults().ok();
+    if let Err(restore) = c.set_config(&final_cfg) {
+        let error = result
+            .err()
+            .unwrap_or_else(|| TuneError::Procedure("the tune finished but was not set".into()));
+        return Err(TuneError::NotRestored {
+            error: Box::new(error),
+            restore,
+        });
+    }
+    let left = start.map(|st| super::travel::check_left(c, st, &final_cfg, problem));
+    if let Some(l) = &left {
+        progress.report(Progress::Left(l.clone()));
+    }
+    let bad = left.clone().filter(|l| !l.ok);
+    match result {
+        Ok(mut o) => {
+            if let Some(l) = bad {
+                // A wall that does not hold is never saved: the previous config is back.
+                c.clear_faults().ok();
+                c.set_config(original).ok();
+                return Err(TuneError::Left {
+                    error: None,
+                    left: Box::new(l),
+                });
+            }
+            if wall.is_some() {
+                c.save_config().map_err(|e| TuneError::Device {
+                    during: format!("saving the tuned config: {e}"),
+                    source: e,
+                })?;
+                o.saved = true;
+            }
+            o.device_left = left;
+            o.workspace = place.ws;
+            Ok(o)
+        }
+        Err(e) => match bad {
+            Some(l) => Err(TuneError::Left {
+                error: Some(Box::new(e)),
+                left: Box::new(l),
+            }),
+            None => Err(e),
+        },
+    }
 }
 
 /// The spring-only search starts at the expected limit, but not below this fraction of the
@@ -170,8 +245,9 @@ fn tune_inner(
     s: &Settings,
     original: &ServoConfig,
     progress: &Reporter<'_>,
+    place: &mut Place,
 ) -> Result<Outcome> {
-    let mut ident = identify_and_predict(c, s, original, progress)?;
+    let mut ident = identify_and_predict(c, s, original, progress, place)?;
     let ceiling = quiet_ceiling(&ident);
     // The quiet search runs on a copy: where no wall rests, the search for the least chatter
     // starts again from what identification found.
@@ -209,8 +285,20 @@ fn tune_inner(
     if let Some(why) = &no_rest {
         model_mismatch.push(why.clone());
     }
-    // Step 5: set and save.
-    let saved = !s.dry_run && set_wall(c, original, &wall)?;
+    // Step 5 (in `finish`, after the way back): set, check and save.
+    place.home = Some(super::travel::GentleMove {
+        k: wall.k_set,
+        b: wall.b_set,
+        damper: wall.damper,
+        force_n: MOVE_FORCE_SHARE * f64::from(original.force_limit),
+    });
+    place.final_cfg = Some(ServoConfig {
+        stiffness: wall.k_set as f32,
+        damping: wall.b_set as f32,
+        damper: wall.damper,
+        ..*original
+    });
+    let saved = false;
     let quiet = Quiet {
         ceiling,
         no_rest,
@@ -385,6 +473,7 @@ fn identify_and_predict(
     s: &Settings,
     original: &ServoConfig,
     progress: &Reporter<'_>,
+    place: &mut Place,
 ) -> Result<Identification> {
     let (res, t) = device_scale(c)?;
     // Experiments run with the wall off between them, without extra damping and with the
@@ -401,7 +490,9 @@ fn identify_and_predict(
     // K the device cannot hold) would otherwise latch again as soon as it is cleared.
     c.set_config(&base)?;
     super::verify::clear_faults(c)?;
-    let (id, amplitude, _) = identify(c, &base, s, progress)?;
+    let (base, room) = enter_workspace(c, s, original, base, progress, place)?;
+    let (id, amplitude, _) = identify(c, &base, s, progress, room)?;
+    c.set_config(&base)?;
     let rest = rest_position(c)?;
     // The chirp leaves the device wherever it stopped: the tests put the wall there (the
     // user's wall position is kept in the config that is finally set).
@@ -413,7 +504,7 @@ fn identify_and_predict(
         residual_rel: id.residual_rel,
         ..Evidence::default()
     };
-    breakaway(c, &base, &id, rest, &mut evidence, progress)?;
+    breakaway(c, &base, &id, rest, &mut evidence, progress, room)?;
     let delta = res * f64::from(1u32 << base.coarsen_shift);
     let rotational = c.info.counts_per_rev > 0;
     let p = PhysicalParams {
@@ -426,8 +517,16 @@ fn identify_and_predict(
         delay_s: f64::from(base.extra_delay_ticks) * t,
         rotational,
     };
-    let v = s.max_velocity.unwrap_or(DEFAULT_XIDOT * delta / t);
-    let predicted = predict(&p, v)?;
+    let asked = s.max_velocity.unwrap_or(DEFAULT_XIDOT * delta / t);
+    let mut predicted = predict(&p, asked)?;
+    let ws = place
+        .ws
+        .ok_or_else(|| StepError::Failed("no workspace".into()))?;
+    let room = ws.room_at(i64::from(base.wall_position)) >> base.coarsen_shift.min(16);
+    let v = velocity_within(&p, asked, &predicted, room, rotational, progress)?;
+    if v < asked {
+        predicted = predict(&p, v)?;
+    }
     progress.report(Progress::Identified {
         mass: id.mass,
         viscous: id.viscous,
@@ -450,6 +549,105 @@ fn identify_and_predict(
         predicted,
         units,
     })
+}
+
+/// Share of the force limit the way back and the move to the middle push with at most.
+const MOVE_FORCE_SHARE: f64 = 0.1;
+
+/// The workspace (issue 46): where the device starts, the travel the experiments keep to
+/// (reported), the firmware's travel window in the tests' config, and the device moved to the
+/// middle of the travel when it starts near an end. Returns the tests' base config (the wall
+/// at the test centre) and the room each side of it, counts.
+fn enter_workspace(
+    c: &mut Client,
+    s: &Settings,
+    original: &ServoConfig,
+    base: ServoConfig,
+    progress: &Reporter<'_>,
+    place: &mut Place,
+) -> Result<(ServoConfig, i64)> {
+    use super::travel::{centring_stiffness, GentleMove, Workspace};
+    let res = f64::from(c.info.resolution);
+    let rotational = c.info.counts_per_rev > 0;
+    let start = super::travel::where_now(c, &base)?;
+    let ws = Workspace::resolve(s, original, start, res, rotational)?;
+    progress.report(Progress::Travel {
+        text: ws.describe(if rotational { "rad" } else { "m" }),
+    });
+    let (travel_min, travel_max) = ws.firmware_window(original);
+    let base = ServoConfig {
+        travel_min,
+        travel_max,
+        ..base
+    };
+    let force = MOVE_FORCE_SHARE * f64::from(original.force_limit);
+    let centre = ws.test_centre();
+    // The spring of the way back until a wall is found: the centring spring of the move's force.
+    let how = GentleMove {
+        k: centring_stiffness(force, ws.room_at(centre).max(1), res),
+        b: 0.0,
+        damper: base.damper,
+        force_n: force,
+    };
+    place.start = Some(start);
+    place.ws = Some(ws);
+    place.test_base = Some(base);
+    place.home = Some(how);
+    if centre != start {
+        progress.report(Progress::Travel {
+            text: format!(
+                "the device starts {} counts from the nearer end of the window: the experiments \
+             run from the middle, count {centre}",
+                ws.room_at(start)
+            ),
+        });
+        super::travel::move_to(c, &base, centre, how)?;
+    }
+    let base = ServoConfig {
+        wall_position: i32::try_from(centre).unwrap_or(base.wall_position),
+        ..base
+    };
+    c.set_config(&base)?;
+    Ok((base, ws.room_at(centre)))
+}
+
+/// The maximum velocity the travel leaves room for: `asked`, or less when a release or impact
+/// test at the lowest K the search may try (a quarter of the smaller predicted limit) would
+/// reach beyond `room` counts each side of the wall (saying so); an error naming the test and
+/// the travel it needs when even a tenth of a count per tick does not fit.
+fn velocity_within(
+    p: &PhysicalParams,
+    asked: f64,
+    predicted: &Predicted,
+    room: i64,
+    rotational: bool,
+    progress: &Reporter<'_>,
+) -> Result<f64> {
+    let k_low = predicted.guaranteed.min(predicted.expected).max(1e-12) / 4.0;
+    let ticks_per = p.period_s / p.resolution;
+    let reach = super::travel::test_reach_counts(asked * ticks_per, p.mass, k_low, p.period_s);
+    if reach <= room as f64 {
+        return Ok(asked);
+    }
+    let unit = if rotational { "rad/s" } else { "m/s" };
+    let v = asked * room as f64 / reach;
+    if v * ticks_per < 0.1 {
+        return Err(StepError::Failed(format!(
+            "the travel is too short to tune: the release and impact tests at K = {k_low:.4} \
+             and the maximum velocity {asked:.4} {unit} reach {reach:.0} counts each side of the \
+             wall, and the travel leaves {room} counts (even 0.1 count per tick would not fit); \
+             give the device's full travel with --travel MIN:MAX"
+        )));
+    }
+    progress.report(Progress::Travel {
+        text: format!(
+            "the release and impact tests at K = {k_low:.4} and the maximum velocity \
+             {asked:.4} {unit} need {reach:.0} counts of travel each side of the wall, and the \
+             travel leaves {room}: the maximum velocity is lowered to {v:.4} {unit} (walls are \
+             verified for hits up to that speed only)"
+        ),
+    });
+    Ok(v)
 }
 
 /// Force regime: above this K the wall's peak force at v, K·Δ·(d + ½) with d = v√(m/K)/Δ,
@@ -527,19 +725,6 @@ fn launch_findings(run: &Run<'_>, notes: &Notes, ident: &Identification) -> Vec<
     .collect()
 }
 
-/// Step 5: the user's config with the wall's K and B, set and saved; whether it was saved.
-fn set_wall(c: &mut Client, original: &ServoConfig, wall: &super::frontier::Wall) -> Result<bool> {
-    c.clear_faults().ok();
-    c.set_config(&ServoConfig {
-        stiffness: wall.k_set as f32,
-        damping: wall.b_set as f32,
-        damper: wall.damper,
-        ..*original
-    })?;
-    c.save_config().context("saving the tuned config")?;
-    Ok(true)
-}
-
 fn outcome(
     ident: Identification,
     found: super::search::Found,
@@ -590,6 +775,8 @@ fn outcome(
         model_evidence: evidence,
         margin_used: wall.margin,
         saved,
+        workspace: None,
+        device_left: None,
     }
 }
 

@@ -105,6 +105,18 @@ pub enum Progress {
         /// The finding, in words.
         text: String,
     },
+    /// The travel the experiments keep to, and what it changed (issue 46).
+    Travel {
+        /// In words: the travel, its source, the window, a lowered velocity.
+        text: String,
+    },
+    /// Bringing the device back to where it started, to raw count `target`.
+    Returning {
+        /// The start, raw counts.
+        target: i64,
+    },
+    /// The final check of the device (also in the outcome).
+    Left(crate::travel::DeviceLeft),
 }
 
 impl fmt::Display for Progress {
@@ -177,6 +189,14 @@ impl fmt::Display for Progress {
                  without them (releases at full energy from both sides, slower impacts)"
             ),
             Self::Finding { text } => write!(f, "model mismatch: {text}"),
+            Self::Travel { text } => write!(f, "workspace: {text}"),
+            Self::Returning { target } => {
+                write!(
+                    f,
+                    "returning the device to count {target}, where it started"
+                )
+            }
+            Self::Left(left) => write!(f, "{left}"),
         }
     }
 }

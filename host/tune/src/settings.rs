@@ -51,6 +51,11 @@ pub struct Settings {
     /// ([`DamperLaw::default`](stiffwall_proto::DamperLaw), stiffest over `sim/plants/` by
     /// docs/DAMPER-LAWS.md), and the plain difference where that buys no stiffness.
     pub damper: Option<stiffwall_proto::DamperLaw>,
+    /// The device's travel [min, max], m (rad), as positions of the encoder's frame (count ×
+    /// Δ): every experiment stays inside it with a margin. None (default): the device config's
+    /// travel window when it has one, else a default window around the start
+    /// (`crate::travel`).
+    pub travel: Option<[f64; 2]>,
 }
 
 /// How `tune` chooses the virtual damping B.
@@ -120,6 +125,7 @@ impl Default for Settings {
             dry_run: false,
             criterion: Criterion::Rest,
             damper: None,
+            travel: None,
         }
     }
 }
@@ -144,6 +150,16 @@ impl Settings {
         if let Some(v) = self.max_velocity {
             if !(v.is_finite() && v > 0.0) {
                 return bad("max_velocity", "finite and > 0", v.to_string());
+            }
+        }
+        if let Some([lo, hi]) = self.travel {
+            if !(lo.is_finite() && hi.is_finite() && lo < hi && lo.abs() <= 1e3 && hi.abs() <= 1e3)
+            {
+                return bad(
+                    "travel",
+                    "MIN:MAX finite within [-1000, 1000] m (rad) with MIN < MAX",
+                    format!("{lo}:{hi}"),
+                );
             }
         }
         if let Damping::Fixed(b) = self.damping {

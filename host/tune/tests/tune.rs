@@ -41,6 +41,8 @@ fn connect_paced(p: PhysicalParams, fast: bool) -> Client {
         initial_position: 0.0,
         output_range: None,
         scene: None,
+        travel: None,
+        trace: None,
     })
     .unwrap();
     Client::connect(port, Some(Box::new(vd))).unwrap()

@@ -17,6 +17,8 @@ fn connect() -> Client {
         initial_position: 0.0,
         output_range: None,
         scene: None,
+        travel: None,
+        trace: None,
     })
     .unwrap();
     Client::connect(port, Some(Box::new(vd))).unwrap()

@@ -17,6 +17,18 @@ impl PlantModel {
     /// # Errors
     /// [`SceneError`] naming the offending key.
     pub fn from_scene_toml(text: &str) -> Result<(PlantModel, Controller), SceneError> {
+        from_scene_toml(text).map(|(m, c, _)| (m, c))
+    }
+
+    /// [`PlantModel::from_scene_toml`] and the file's start position `[initial] position_m`,
+    /// m (rad; 0 without `[initial]`): where the virtual device's plant starts, at rest (inside
+    /// `effects.travel` when the file has one).
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the offending key.
+    pub fn from_scene_toml_with_start(
+        text: &str,
+    ) -> Result<(PlantModel, Controller, f64), SceneError> {
         from_scene_toml(text)
     }
 }
@@ -47,7 +59,7 @@ fn default_stiffness(table: &toml::Table) -> Option<f64> {
 /// x = 0, v = 0 and Dormand–Prince are assumed), and whose `[controller]` may be omitted (then
 /// T = 1 ms, no extra delay, and a boot stiffness with σ = c/(KΔ) = 4: a passive wall, which
 /// `hostctl tune` replaces). Errors name the key and the allowed range.
-fn from_scene_toml(text: &str) -> Result<(PlantModel, Controller), SceneError> {
+fn from_scene_toml(text: &str) -> Result<(PlantModel, Controller, f64), SceneError> {
     let table: toml::Table = toml::from_str(text)?;
     let mut full = String::from(text);
     if !table.contains_key("controller") {
@@ -74,5 +86,6 @@ fn from_scene_toml(text: &str) -> Result<(PlantModel, Controller), SceneError> {
                 .into(),
         )
     })?;
-    Ok((rich.model, rich.controller))
+    let start_m = scene.init.x * rich.model.resolution_m;
+    Ok((rich.model, rich.controller, start_m))
 }

@@ -8,7 +8,7 @@
 use crate::analysis;
 use crate::device::connect::ConnectArgs;
 use crate::figure;
-use crate::output::{emit, emit_json};
+use crate::output::{emit, emit_json, fault_name_list, fault_names};
 use anyhow::{bail, Result};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -210,6 +210,7 @@ impl ReleaseDone<'_> {
             "ticks": self.counts.len(),
             "completed": self.rec.completed,
             "faults": self.rec.faults,
+            "fault_names": fault_name_list(self.rec.faults),
             "tail_peak_ticks": self.peak_tail(),
             "stiffness": self.stiffness,
             "equivalent_velocity": self.v_eq,
@@ -234,9 +235,9 @@ impl ReleaseDone<'_> {
         let _ = writeln!(s, "  verdict: {}", self.verdict.describe());
         let _ = writeln!(
             s,
-            "  peak |x| over the last quarter: {:.1} ticks; faults {:#x}",
+            "  peak |x| over the last quarter: {:.1} ticks; faults: {}",
             self.peak_tail(),
-            self.rec.faults
+            fault_names(self.rec.faults)
         );
         if let Some(r) = self.report {
             let _ = writeln!(

@@ -4,10 +4,10 @@
 //! device integers. Read-only: nothing on the device changes.
 
 use crate::device::connect::ConnectArgs;
-use crate::output::{emit, emit_json};
+use crate::output::{emit, emit_json, fault_names};
 use anyhow::Result;
 use std::fmt::Write as _;
-use stiffwall_proto::{fault, DeviceInfo, FaultReport};
+use stiffwall_proto::{DeviceInfo, FaultReport};
 
 /// Arguments of `hostctl info`.
 #[derive(Debug, clap::Args)]
@@ -19,25 +19,6 @@ pub struct Args {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Names of the latched fault bits, `"none"` when clear.
-#[must_use]
-pub fn fault_names(bits: u32) -> String {
-    let mut v: Vec<String> = fault::NAMES
-        .iter()
-        .filter(|(b, _, _)| bits & b != 0)
-        .map(|(_, n, _)| (*n).to_string())
-        .collect();
-    let unknown = bits & !fault::NAMES.iter().fold(0, |a, (b, _, _)| a | b);
-    if unknown != 0 {
-        v.push(format!("unknown {unknown:#x}"));
-    }
-    if v.is_empty() {
-        "none".into()
-    } else {
-        v.join(", ")
-    }
 }
 
 /// The text report of `hostctl info`.

@@ -3,6 +3,7 @@
 pub mod analyze;
 pub mod config;
 pub mod experiment;
+pub mod faults;
 pub mod info;
 pub mod map;
 pub mod record;

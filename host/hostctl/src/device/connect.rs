@@ -37,6 +37,11 @@ pub struct ConnectArgs {
     /// Run the virtual device as fast as the host reads, not in real time.
     #[arg(long, global = true)]
     pub fast: bool,
+    /// The built-in virtual device writes its plant's true state every servo tick to this CSV
+    /// file: time [s], position [m or rad], velocity [m/s or rad/s], end-stop contact force
+    /// [N or N·m], encoder count and commanded force. Only with the virtual device.
+    #[arg(long, global = true, value_name = "FILE.csv", conflicts_with_all = ["qemu", "port", "board_emulator"])]
+    pub trace: Option<PathBuf>,
     /// Boot the QEMU board image and talk to it over `-serial pty`.
     #[arg(long, global = true)]
     pub qemu: bool,
@@ -105,6 +110,7 @@ impl ConnectArgs {
         ConnectSpec::Virtual {
             plant,
             pace: Pace::fast_if(self.fast),
+            trace: self.trace.clone(),
         }
     }
 

@@ -1,0 +1,446 @@
+//! The device's workspace during tune (issue 46): where the experiments may go, how far each
+//! test reaches, and how the device is brought back to where it started.
+//!
+//! Units: positions are raw encoder counts (the frame of `ServoConfig::wall_position`) inside
+//! this module and SI (m or rad) in the report; forces N (N·m); stiffness N/m (N·m/rad).
+//!
+//! Where the travel comes from, first found first: the caller's [`Settings::travel`] (SI, the
+//! encoder's frame), the device config's travel window (`travel_min`/`travel_max`, raw
+//! counts), else a default window of ±[`DEFAULT_WINDOW_LINEAR_M`] (linear) or
+//! ±[`DEFAULT_WINDOW_ROTARY_RAD`] (rotary) around the start, which the report states. Every
+//! experiment keeps inside the travel less a margin ([`MARGIN_SHARE`] of the half-span, at
+//! least [`MIN_MARGIN_COUNTS`]): the chirp and the breakaway ramps against a weak centring
+//! spring whose static deflection under the drive is [`CENTRING_SHARE`] of the room, the
+//! releases and impacts by their reach ([`test_reach_counts`]), lowering the maximum velocity
+//! when the room is short. The test configs carry the travel as the firmware's travel window,
+//! so a run that leaves it trips the supervisor instead of reaching a stop.
+//!
+//! Invariant: nothing here assumes unbounded travel; a workspace always has two finite ends.
+
+use super::error::{bail, Result};
+use super::settings::Settings;
+use stiffwall_client::Client;
+use stiffwall_proto::{fault, ServoConfig};
+
+/// Half-width of the default window of a linear device, m (a few cm each side is the least a
+/// desktop haptic device has; `--travel MIN:MAX` widens it).
+pub const DEFAULT_WINDOW_LINEAR_M: f64 = 0.01;
+/// Half-width of the default window of a rotary device, rad (±45°: a knob with ±135° of
+/// travel started anywhere in its middle half has it).
+pub const DEFAULT_WINDOW_ROTARY_RAD: f64 = core::f64::consts::FRAC_PI_4;
+/// Share of the half-span kept free at each end.
+pub const MARGIN_SHARE: f64 = 0.1;
+/// Least margin at each end, counts.
+pub const MIN_MARGIN_COUNTS: i64 = 4;
+/// Static deflection of the centring spring under the chirp's or a ramp's peak force, as a
+/// share of the room each side (the rest is for the resonance and the friction's drift).
+pub const CENTRING_SHARE: f64 = 0.2;
+
+/// Static deflection of the first probe's centring spring, share of the room: the mass is not
+/// known yet, so the spring's resonance with the device may lie in the chirp's band undamped;
+/// a quarter of [`CENTRING_SHARE`] leaves room for a ringing of four times the drive.
+pub const PROBE_CENTRING_SHARE: f64 = 0.05;
+/// Damping ratio of the centring spring with the probe's mass on the full chirp and the ramps
+/// (B = 2ζ√(K·m)): a resonance in the chirp's band does not ring the device out of its room.
+pub const CENTRING_DAMPING_RATIO: f64 = 0.7;
+
+/// Where the travel tune kept to came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TravelSource {
+    /// The caller's `--travel MIN:MAX`.
+    Given,
+    /// The device config's travel window.
+    DeviceConfig,
+    /// No travel known: the default window around the start.
+    DefaultWindow,
+}
+
+impl core::fmt::Display for TravelSource {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Given => "--travel",
+            Self::DeviceConfig => "the device's travel window",
+            Self::DefaultWindow => "the default window (no travel given or configured)",
+        })
+    }
+}
+
+/// The travel tune keeps to, and where the device started.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Workspace {
+    /// Where it came from.
+    pub source: TravelSource,
+    /// Travel ends, raw counts.
+    pub ends: [i64; 2],
+    /// The window the experiments keep inside (the ends less the margin), raw counts.
+    pub inner: [i64; 2],
+    /// Where the device started, raw counts.
+    pub start: i64,
+    /// Raw count resolution Δ, m (rad).
+    pub resolution: f64,
+}
+
+impl Workspace {
+    /// The travel for a device at rest at raw count `start` (module header for the order).
+    ///
+    /// # Errors
+    /// The start outside the travel given or configured.
+    pub fn resolve(
+        s: &Settings,
+        original: &ServoConfig,
+        start: i64,
+        resolution: f64,
+        rotational: bool,
+    ) -> Result<Self> {
+        let (source, ends) = if let Some([lo, hi]) = s.travel {
+            let ends = [
+                (lo / resolution).ceil() as i64,
+                (hi / resolution).floor() as i64,
+            ];
+            (TravelSource::Given, ends)
+        } else if let (Some(lo), Some(hi)) = (original.travel_min, original.travel_max) {
+            (TravelSource::DeviceConfig, [i64::from(lo), i64::from(hi)])
+        } else {
+            let half = if rotational {
+                DEFAULT_WINDOW_ROTARY_RAD
+            } else {
+                DEFAULT_WINDOW_LINEAR_M
+            };
+            let n = ((half / resolution).floor() as i64).max(1);
+            (TravelSource::DefaultWindow, [start - n, start + n])
+        };
+        if !(ends[0]..=ends[1]).contains(&start) {
+            bail!(
+                "the device is at count {start} ({:.4e}), outside the travel [{}, {}] counts \
+                 ({:.4e}..{:.4e}) of {source}: bring it inside, or give --travel MIN:MAX",
+                start as f64 * resolution,
+                ends[0],
+                ends[1],
+                ends[0] as f64 * resolution,
+                ends[1] as f64 * resolution
+            );
+        }
+        let margin = (((ends[1] - ends[0]) as f64 * 0.5 * MARGIN_SHARE) as i64)
+            .max(MIN_MARGIN_COUNTS)
+            .min((ends[1] - ends[0]) / 4);
+        Ok(Self {
+            source,
+            ends,
+            inner: [ends[0] + margin, ends[1] - margin],
+            start,
+            resolution,
+        })
+    }
+
+    /// Room each side of raw count `at` inside the inner window, counts (0 when outside).
+    #[must_use]
+    pub fn room_at(&self, at: i64) -> i64 {
+        (at - self.inner[0]).min(self.inner[1] - at).max(0)
+    }
+
+    /// Where the experiments run: the start, or the middle of the inner window when the start
+    /// is closer to an end than a third of the inner half-span.
+    #[must_use]
+    pub fn test_centre(&self) -> i64 {
+        let mid = (self.inner[0] + self.inner[1]) / 2;
+        let half = (self.inner[1] - self.inner[0]) / 2;
+        if self.room_at(self.start) * 3 < half * 2 {
+            mid
+        } else {
+            self.start
+        }
+    }
+
+    /// The firmware travel window for the test configs: the device's own when configured,
+    /// else the travel's ends (a run that leaves them trips the supervisor).
+    #[must_use]
+    pub fn firmware_window(&self, original: &ServoConfig) -> (Option<i32>, Option<i32>) {
+        if original.travel_min.is_some() || original.travel_max.is_some() {
+            return (original.travel_min, original.travel_max);
+        }
+        let clamp = |n: i64| i32::try_from(n).ok();
+        (clamp(self.ends[0]), clamp(self.ends[1]))
+    }
+
+    /// The travel in SI, [min, max] m (rad).
+    #[must_use]
+    pub fn ends_si(&self) -> [f64; 2] {
+        [
+            self.ends[0] as f64 * self.resolution,
+            self.ends[1] as f64 * self.resolution,
+        ]
+    }
+
+    /// The report's line: the travel, where it came from, and how to widen a default.
+    #[must_use]
+    pub fn describe(&self, unit: &str) -> String {
+        let [lo, hi] = self.ends_si();
+        let widen = if self.source == TravelSource::DefaultWindow {
+            "; give the device's travel with --travel MIN:MAX (or set its travel window, \
+             `hostctl config set`) to use more of it"
+        } else {
+            ""
+        };
+        format!(
+            "travel {lo:.4e}..{hi:.4e} {unit} (counts {}..{}) from {}, experiments kept within \
+             counts {}..{}{widen}",
+            self.ends[0], self.ends[1], self.source, self.inner[0], self.inner[1]
+        )
+    }
+}
+
+/// Stiffness of a centring spring that deflects by [`CENTRING_SHARE`] of `room_counts` under
+/// `force_n`, N/m (N·m/rad), with Δ = `resolution`.
+#[must_use]
+pub fn centring_stiffness(force_n: f64, room_counts: i64, resolution: f64) -> f64 {
+    let reach = (room_counts as f64 * CENTRING_SHARE).max(1.0) * resolution;
+    force_n.abs() / reach
+}
+
+/// How far from the wall a release or impact test at stiffness `k` and speed `v_ticks`
+/// (counts per tick) reaches, counts: the impact's launch distance (the larger of 20 ticks and
+/// one natural period of motion, plus two) or the release's deflection v·√(m/K)/Δ, whichever
+/// is larger, times 1.5 for the overshoot of a wall that rings.
+#[must_use]
+pub fn test_reach_counts(v_ticks: f64, mass: f64, k: f64, period_s: f64) -> f64 {
+    let natural_ticks = core::f64::consts::TAU * (mass / k).sqrt() / period_s;
+    let launch = v_ticks.abs() * (natural_ticks.max(20.0) + 2.0);
+    let deflection = v_ticks.abs() * natural_ticks / core::f64::consts::TAU;
+    1.5 * launch.max(deflection)
+}
+
+/// What the device was left as: the report's `device left` line and the JSON's.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DeviceLeft {
+    /// Raw count where it came to rest (or was last seen).
+    pub count: i64,
+    /// Raw count where it started.
+    pub start: i64,
+    /// Whether it was at rest.
+    pub at_rest: bool,
+    /// Faults latched after the final config was set, by name.
+    pub faults: Vec<String>,
+    /// Whether the final check passed: at rest, no fault, within [`LEFT_TOLERANCE_COUNTS`] of
+    /// the start (or where the set wall holds it, when that wall pulls it elsewhere).
+    pub ok: bool,
+    /// Why it failed, when it did.
+    pub problem: Option<String>,
+}
+
+/// The final check's tolerance on the position, counts.
+pub const LEFT_TOLERANCE_COUNTS: i64 = 2;
+
+impl core::fmt::Display for DeviceLeft {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "device left: count {} (started at {}), {}, {}",
+            self.count,
+            self.start,
+            if self.at_rest { "at rest" } else { "moving" },
+            if self.faults.is_empty() {
+                "no fault".to_string()
+            } else {
+                format!("faults latched: {}", self.faults.join(", "))
+            }
+        )?;
+        if let Some(p) = &self.problem {
+            write!(f, ": {p}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Names of the fault bits in `latched`.
+#[must_use]
+pub fn fault_names(latched: u32) -> Vec<String> {
+    fault::NAMES
+        .iter()
+        .filter(|(bit, _, _)| latched & bit != 0)
+        .map(|(_, name, _)| (*name).to_string())
+        .collect()
+}
+
+/// Largest wall-position step of the return move, counts: the move's spring never pushes
+/// harder than `force_n` (its K·Δ·step), at least one count.
+fn move_step(force_n: f64, k: f64, resolution: f64) -> i64 {
+    ((force_n / (k * resolution)).floor() as i64).max(1)
+}
+
+/// The gentle move of [`move_to`]: a spring `k` with damper `b` (the firmware's default law)
+/// whose origin steps so that the spring never pushes harder than `force_n`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GentleMove {
+    /// Spring, N/m (N·m/rad), > 0.
+    pub k: f64,
+    /// Damper, N·s/m (N·m·s/rad), ≥ 0.
+    pub b: f64,
+    /// The damper's law.
+    pub damper: stiffwall_proto::DamperLaw,
+    /// Largest push of one step, N (N·m).
+    pub force_n: f64,
+}
+
+/// Raw count of a count `n` read relative to the wall of `cfg` (effective counts).
+fn raw_of(cfg: &ServoConfig, n: i32) -> i64 {
+    i64::from(cfg.wall_position) + (i64::from(n) << cfg.coarsen_shift.min(16))
+}
+
+/// Where the device is now, raw counts: it is let come to rest with `base`'s wall off.
+///
+/// # Errors
+/// The device failing or not coming to rest.
+pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
+    let cfg = ServoConfig {
+        stiffness: 0.0,
+        damping: 0.0,
+        ..*base
+    };
+    c.set_config(&cfg)?;
+    Ok(raw_of(&cfg, super::verify::rest_position(c)?))
+}
+
+/// Brings the device gently to raw count `target` (module header): the spring's origin walks
+/// from where the device is to `target` in steps, each followed by a wait for rest; the spring
+/// is left at `target` (the caller sets the config it wants next). `base` gives the other
+/// settings (stiffness, damping, wall and wall position are replaced; the energy monitor is
+/// off, the travel window kept). Returns the raw count reached.
+///
+/// # Errors
+/// The device failing, or not at rest within the wait of
+/// [`crate::verify::rest_position`].
+pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove) -> Result<i64> {
+    let res = f64::from(c.info.resolution) * f64::from(1u32 << base.coarsen_shift.min(16));
+    let step = move_step(how.force_n, how.k, res) << base.coarsen_shift.min(16);
+    let to_i32 = |n: i64| i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX });
+    // A fault the tests latched (the travel window, the energy monitor) would keep the move's
+    // spring off: this tune's own faults are cleared first, with the travel window lifted for
+    // the move (a device a test left outside it would latch it again at once; the move's force
+    // is bounded, and the caller's next config has the window again).
+    let base = &ServoConfig {
+        travel_min: None,
+        travel_max: None,
+        ..*base
+    };
+    c.set_config(&ServoConfig {
+        stiffness: 0.0,
+        damping: 0.0,
+        ..*base
+    })?;
+    super::verify::clear_faults(c)?;
+    let mut at = where_now(c, base)?;
+    let mut cfg = ServoConfig {
+        stiffness: how.k as f32,
+        damping: how.b as f32,
+        damper: how.damper,
+        wall: stiffwall_proto::WallMode::Bidirectional,
+        energy_monitor: false,
+        ..*base
+    };
+    let steps = (target - at).unsigned_abs() / step.unsigned_abs().max(1) + 50;
+    for _ in 0..steps {
+        let gap = target - at;
+        let origin = if gap.abs() <= step {
+            target
+        } else {
+            at + step * gap.signum()
+        };
+        cfg.wall_position = to_i32(origin);
+        c.set_config(&cfg)?;
+        at = raw_of(&cfg, super::verify::rest_position(c)?);
+        let latched = c.faults()?.latched;
+        if latched != 0 {
+            bail!(
+                "the move to count {target} stopped at count {at}: the supervisor latched {}",
+                fault_names(latched).join(", ")
+            );
+        }
+        if origin == target {
+            return Ok(at);
+        }
+    }
+    bail!("the move to count {target} did not get there in {steps} steps (at count {at})")
+}
+
+/// Watches the device with `cfg` set for up to `seconds` of host time: whether it came to rest
+/// (50 samples 2 ms apart on one count) and its last raw count (None: no sample arrived).
+///
+/// # Errors
+/// The device failing.
+pub fn watch_rest(c: &mut Client, cfg: &ServoConfig, seconds: f64) -> Result<(bool, Option<i64>)> {
+    let rate = c.info.servo_rate_hz.max(1);
+    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
+    c.stream_start(decimation)?;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
+    let (mut last, mut same) = (None::<i32>, 0u32);
+    let at_rest = loop {
+        if std::time::Instant::now() > deadline {
+            break false;
+        }
+        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+            for x in &b.samples {
+                if last == Some(x.count) {
+                    same += 1;
+                } else {
+                    (last, same) = (Some(x.count), 0);
+                }
+            }
+            if same >= 50 {
+                break true;
+            }
+        }
+    };
+    c.stream_stop()?;
+    Ok((at_rest, last.map(|n| raw_of(cfg, n))))
+}
+
+/// The final check (issue 46): with `cfg` (the config tune leaves) set, the device must come to
+/// rest, have no latched fault, and be within [`LEFT_TOLERANCE_COUNTS`] of `start` — or, when
+/// `cfg`'s bidirectional wall has its origin away from the start, rest where that wall holds
+/// it. `problem_before`: what went wrong on the way back, if anything.
+#[must_use]
+pub fn check_left(
+    c: &mut Client,
+    start: i64,
+    cfg: &ServoConfig,
+    problem_before: Option<String>,
+) -> DeviceLeft {
+    let watched = watch_rest(c, cfg, 20.0);
+    let faults = c.faults().map(|f| f.latched);
+    let (at_rest, count) = match &watched {
+        Ok((r, n)) => (*r, n.unwrap_or(start)),
+        Err(_) => (false, start),
+    };
+    let latched = faults.as_ref().copied().unwrap_or(0);
+    let pulls_elsewhere = cfg.stiffness > 0.0
+        && cfg.wall == stiffwall_proto::WallMode::Bidirectional
+        && (i64::from(cfg.wall_position) - start).abs() > LEFT_TOLERANCE_COUNTS;
+    let near = (count - start).abs() <= LEFT_TOLERANCE_COUNTS;
+    let problem = if let Err(e) = &watched {
+        Some(format!("the device did not answer: {e}"))
+    } else if let Err(e) = &faults {
+        Some(format!("reading its faults failed: {e}"))
+    } else if let Some(p) = problem_before {
+        Some(p)
+    } else if !at_rest {
+        Some("it did not come to rest within 20 s".into())
+    } else if latched != 0 {
+        Some("the config left raised a fault".into())
+    } else if !near && !pulls_elsewhere {
+        Some(format!(
+            "it rests {} counts from where it started (tolerance {LEFT_TOLERANCE_COUNTS})",
+            count - start
+        ))
+    } else {
+        None
+    };
+    DeviceLeft {
+        count,
+        start,
+        at_rest,
+        faults: fault_names(latched),
+        ok: problem.is_none(),
+        problem,
+    }
+}
