@@ -48,6 +48,11 @@ pub struct Args {
     /// Default: `dead-band-1`, and `difference` where that buys no stiffness.
     #[arg(long, value_name = "LAW")]
     pub damper: Option<String>,
+    /// The device's travel MIN:MAX, m (rad for rotary devices), as positions of the encoder's
+    /// frame (count × resolution): every experiment stays inside it with a margin. Default: the
+    /// device's configured travel window, else ±10 mm (±45°) around where the device starts.
+    #[arg(long, value_name = "MIN:MAX", allow_hyphen_values = true)]
+    pub travel: Option<String>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -67,7 +72,9 @@ pub fn settings(a: &Args) -> Result<Settings> {
                 .map_err(|e| anyhow!("--damper: {e} (got {law:?}); nothing was changed"))
         })
         .transpose()?;
+    let travel = a.travel.as_deref().map(parse_travel).transpose()?;
     let s = Settings {
+        travel,
         damper,
         damping: a.damping.map_or(Damping::Search, Damping::Fixed),
         max_velocity: a.max_velocity,
@@ -84,6 +91,23 @@ pub fn settings(a: &Args) -> Result<Settings> {
     };
     s.validate().map_err(|e| anyhow!(flag_error(&e)))?;
     Ok(s)
+}
+
+/// `--travel MIN:MAX` in m (rad).
+fn parse_travel(text: &str) -> Result<[f64; 2]> {
+    let bad = || {
+        anyhow!(
+            "--travel must be MIN:MAX, two finite numbers in m (rad on a rotary device) with \
+             MIN < MAX, e.g. -0.05:0.05 (got {text:?}); nothing was changed"
+        )
+    };
+    let (lo, hi) = text.split_once(':').ok_or_else(bad)?;
+    let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
+    let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(bad());
+    }
+    Ok([lo, hi])
 }
 
 /// A settings error in the command line's words: the field as its `--flag`.
@@ -251,11 +275,21 @@ fn render(a: &Args, o: &Outcome, r: &analysis::Report, kb: Option<&Path>) -> Str
             "dry run: the device's config was left unchanged"
         }
     );
+    if let Some(w) = &o.workspace {
+        let _ = writeln!(
+            s,
+            "workspace: {}",
+            w.describe(if o.params.rotational { "rad" } else { "m" })
+        );
+    }
     if let Some(p) = &a.plot {
         let _ = writeln!(s, "plot: {}", p.display());
     }
     if let Some(p) = kb {
         let _ = writeln!(s, "(K, B) frontier plot: {}", p.display());
+    }
+    if let Some(left) = &o.device_left {
+        let _ = writeln!(s, "{left}");
     }
     s
 }
