@@ -550,17 +550,16 @@ mod tests {
         assert_eq!(r.segments(), [0..2, 2..3]);
     }
 
-    /// A recording written before protocol 2 has no `damper` in its config line: it reads as
-    /// the plain difference it ran with (so `hostctl replay` replays it bit for bit).
+    /// A recording written before protocol 2 has no `damper` (nor the travel window of
+    /// protocol 3) in its config line: it reads as the plain difference it ran with, without a
+    /// travel window (so `hostctl replay` replays it bit for bit).
     #[test]
     fn a_config_line_without_damper_reads_as_the_plain_difference() {
         let text = sample_file();
         let line = text.lines().find(|l| l.starts_with("# config: ")).unwrap();
-        assert!(
-            line.contains(r#","damper":{"DeadBand":{"counts":1}}}"#),
-            "{line}"
-        );
-        let old = text.replace(r#","damper":{"DeadBand":{"counts":1}}}"#, "}");
+        let tail = r#","damper":{"DeadBand":{"counts":1}},"travel_min":null,"travel_max":null}"#;
+        assert!(line.ends_with(tail), "{line}");
+        let old = text.replace(tail, "}");
         assert_ne!(old, text);
         let r = parse(&old).unwrap();
         assert_eq!(
@@ -570,6 +569,23 @@ mod tests {
                 ..ServoConfig::default()
             }
         );
+    }
+
+    /// A recording of protocol 2 (a `damper`, no travel window) reads with its damper and no
+    /// travel window; one of protocol 3 keeps its window.
+    #[test]
+    fn a_config_line_without_the_travel_window_reads_without_one() {
+        let text = sample_file();
+        let old = text.replace(r#","travel_min":null,"travel_max":null}"#, "}");
+        assert_ne!(old, text);
+        assert_eq!(parse(&old).unwrap().header.config, ServoConfig::default());
+        let with = text.replace(
+            r#""travel_min":null,"travel_max":null}"#,
+            r#""travel_min":-40,"travel_max":null}"#,
+        );
+        assert_ne!(with, text);
+        let c = parse(&with).unwrap().header.config;
+        assert_eq!((c.travel_min, c.travel_max), (Some(-40), None));
     }
 
     fn err_of(text: &str) -> String {
