@@ -552,7 +552,7 @@ fn identify_and_predict(
 }
 
 /// Share of the force limit the way back and the move to the middle push with at most.
-const MOVE_FORCE_SHARE: f64 = 0.1;
+const MOVE_FORCE_SHARE: f64 = 0.02;
 
 /// The workspace (issue 46): where the device starts, the travel the experiments keep to
 /// (reported), the firmware's travel window in the tests' config, and the device moved to the

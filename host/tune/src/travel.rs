@@ -312,7 +312,11 @@ pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
 /// [`crate::verify::rest_position`].
 pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove) -> Result<i64> {
     let res = f64::from(c.info.resolution) * f64::from(1u32 << base.coarsen_shift.min(16));
-    let step = move_step(how.force_n, how.k, res) << base.coarsen_shift.min(16);
+    // Also a bounded speed: a step of s counts rings the spring at most s·ωT counts per tick,
+    // ωT ≤ 2 on any stable sampled spring, so s ≤ an eighth of the encoder-jump limit keeps
+    // the move far from that fault.
+    let jump_cap = i64::from(base.encoder_jump_counts / 8).max(1);
+    let step = (move_step(how.force_n, how.k, res) << base.coarsen_shift.min(16)).min(jump_cap);
     let to_i32 = |n: i64| i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX });
     // A fault the tests latched (the travel window, the energy monitor) would keep the move's
     // spring off: this tune's own faults are cleared first, with the travel window lifted for
@@ -338,13 +342,16 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
         energy_monitor: false,
         ..*base
     };
-    let steps = (target - at).unsigned_abs() / step.unsigned_abs().max(1) + 50;
+    // The spring's origin walks from where the device is to the target at a bounded step a
+    // wait, whether or not friction lets the device follow at once (it lags by at most F_s/K).
+    let mut origin = at;
+    let steps = (target - at).unsigned_abs() / step.unsigned_abs().max(1) + 2;
     for _ in 0..steps {
-        let gap = target - at;
-        let origin = if gap.abs() <= step {
+        let gap = target - origin;
+        origin = if gap.abs() <= step {
             target
         } else {
-            at + step * gap.signum()
+            origin + step * gap.signum()
         };
         cfg.wall_position = to_i32(origin);
         c.set_config(&cfg)?;

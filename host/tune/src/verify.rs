@@ -590,7 +590,7 @@ fn recentre(c: &mut Client, base: &ServoConfig, k: f64, rest: i32) -> Result<Opt
         k: k / 16.0,
         b: 0.0,
         damper: base.damper,
-        force_n: 0.1 * f64::from(base.force_limit),
+        force_n: 0.02 * f64::from(base.force_limit),
     };
     crate::travel::move_to(c, base, wall, how)?;
     c.set_config(&ServoConfig {
