@@ -547,7 +547,8 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         }
     }
 
-    /// Starts an excitation of `ticks` ticks (wall off) after checking its length and profile.
+    /// Starts an excitation of `ticks` ticks (the profile plus the wall's centring spring and
+    /// damper, none with K = 0 and B = 0) after checking its length and profile.
     fn excite(&mut self, profile: ExciteProfile, ticks: u32) -> DeviceMsg {
         if ticks == 0 || ticks > MAX_EXPERIMENT_TICKS {
             return invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS));
