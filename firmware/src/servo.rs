@@ -291,12 +291,6 @@ impl<'a, N: Numeric> Servo<'a, N> {
         if self.g.jump_bound.exceeded(d) {
             new_faults |= fault::ENCODER_JUMP;
         }
-        // The raw count outside the travel window (one compare; a window that is off is the
-        // whole `i32` range, never left). It stands on the first reading too: a device that
-        // boots outside its window is outside it.
-        if self.g.travel.outside(self.pos) {
-            new_faults |= fault::TRAVEL;
-        }
         let vi = (now & VEL_MASK) as usize;
         let old = core::mem::replace(&mut self.vel_hist[vi], self.pos);
         if self.g.vel_bound.exceeded(self.pos.saturating_sub(old)) {
@@ -344,7 +338,13 @@ impl<'a, N: Numeric> Servo<'a, N> {
         // keeps the fault handling (the latch, safe mode) out of the normal path.
         // The flags gather in `fl` on the path that sets them (the wall's usual path sets
         // none), not merged from each stage.
-        let (code, dn) = if (self.halt | new_faults) == 0 {
+        // The raw count outside the travel window: one compare, a window that is off being
+        // the whole `i32` range, never left. Tested here, as a branch to the fault path
+        // (which adds its bit), not or-ed into `new_faults` with the supervisor's other bits:
+        // that cost the full tick three instructions more (`cargo xtask bench-firmware`). It
+        // stands on the first reading too: a device that boots outside its window is outside.
+        let travel = self.g.travel.outside(self.pos);
+        let (code, dn) = if (self.halt | new_faults) == 0 && !travel {
             let c = if WALL {
                 self.wall_force_into(n, dn, free, &mut fl)
             } else {
@@ -354,6 +354,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             };
             (self.delay(c), dn)
         } else {
+            let new_faults = new_faults | if travel { fault::TRAVEL } else { 0 };
             let (c, f, dn) = self.halted::<WALL>(now, new_faults, d, n, free);
             fl |= f;
             (c, dn)

@@ -7,7 +7,7 @@
 //! <tick> <ticks>` lines (the longest single tick of each phase of one run through a config
 //! change, two prepared tests, a fault and its clearing), prints the tables, writes them into
 //! `docs/BENCHMARKS.md` between the `firmware-icount` markers, and fails when the default
-//! back-end (I32F32) exceeds the full-tick budget of 150 instructions (mean, with B = 0 or with
+//! back-end (I32F32) exceeds the full-tick budget of 155 instructions (mean, with B = 0 or with
 //! the damper on, its default dead band of one count, at two counts per tick so that the damper
 //! acts on every tick), the spring stage's budget of 31, or the worst-tick budget of
 //! [`WORST_BUDGET`] (see docs/BENCHMARKS.md).
@@ -21,23 +21,25 @@ use std::process::Command;
 
 /// Budget of the spring stage, instructions per tick (29.0 measured + 10 %, rounded down).
 pub const SPRING_BUDGET: f64 = 31.0;
-/// Budget of the full tick, with and without the damper, mean instructions per tick (135.3
-/// measured with B = 0, 146.3 with B > 0 and the damper acting on every tick (147.2 before the
-/// bench image gained its worst-tick run: the same servo code, inlined differently into the
-/// bench's `full`); was 157 with 142.3 and 153.3 before the damper law and the tick's `halt`
-/// word).
-pub const FULL_BUDGET: f64 = 150.0;
+/// Budget of the full tick, with and without the damper, mean instructions per tick (140.2
+/// measured with B = 0, 151.2 with B > 0 and the damper acting on every tick, since the
+/// supervisor's travel window (protocol 3: one load pair, the raw count's reload, a subtract, a
+/// compare and a branch, 5 instructions, on every tick whether a window is set or not); was
+/// 150 with 135.3 and 146.3 before it (147.2 before the bench image gained its worst-tick run:
+/// the same servo code, inlined differently into the bench's `full`), and 157 with 142.3 and
+/// 153.3 before the damper law and the tick's `halt` word).
+pub const FULL_BUDGET: f64 = 155.0;
 /// Budget of the longest single tick of the worst-tick run (any phase: a config change, a
 /// prepared test's first and last tick, a fault, clearing it), instructions. Those ticks derive
 /// the servo's gains from a config (`Gains::from_config`, f64 in software on the M4F):
-/// 7140 (config change), 7938 (a prepared test's first tick: its own config), 7530 (its last:
+/// 7034 (config change), 7589 (a prepared test's first tick: its own config), 7569 (its last:
 /// the active config back) measured. 9000 is half the 18 000 cycles of a 100 µs tick (the
 /// boards' highest rate, 10 kHz) on the nucleo-f446re's 180 MHz core, at one cycle per
 /// instruction.
 pub const WORST_BUDGET: f64 = 9000.0;
 /// Budget of the longest tick that applies no config (the phases but `config-change`,
 /// `prepared-test-start` and `test-end`: a first reading, the wall, a test running, a fault,
-/// clearing it), instructions: 645 measured (an impact's release after its launch).
+/// clearing it), instructions: 650 measured (an impact's release after its launch).
 pub const NO_CONFIG_BUDGET: f64 = 700.0;
 /// The phases whose ticks apply a config (`Gains::from_config`).
 const CONFIG_PHASES: [&str; 3] = ["config-change", "prepared-test-start", "test-end"];
