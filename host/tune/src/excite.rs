@@ -29,16 +29,25 @@ pub(super) fn device_scale(c: &Client) -> Result<(f64, f64)> {
 /// The chirp's and the ramps' config: `cfg` with a centring spring (issue 46) that deflects
 /// by [`crate::travel::CENTRING_SHARE`] of `room` counts under `peak_codes` and a damper of
 /// ratio [`crate::travel::CENTRING_DAMPING_RATIO`] with the device's `mass` (on the plain
-/// difference) when the mass is known; without it (the first probe) a stiffer spring,
-/// [`crate::travel::PROBE_CENTRING_SHARE`], and no damper. The firmware adds both to the
+/// difference) when the mass is known, at least K·T; without it (the first probe) a stiffer
+/// spring, [`crate::travel::PROBE_CENTRING_SHARE`], and the damper K·T. The firmware adds both to the
 /// excitation's code and records the total, so the fit sees the whole force.
 fn centred(
     c: &Client,
     cfg: &ServoConfig,
     peak_codes: i32,
-    room: i64,
+    room: Option<i64>,
     mass: Option<f64>,
 ) -> ServoConfig {
+    let Some(room) = room else {
+        // The open-loop fallback: the wall off, the travel window the only guard.
+        return ServoConfig {
+            stiffness: 0.0,
+            damping: 0.0,
+            energy_monitor: false,
+            ..*cfg
+        };
+    };
     let fpc = f64::from(c.info.force_per_code);
     let res = f64::from(c.info.resolution) * f64::from(1u32 << cfg.coarsen_shift.min(16));
     let room = room >> cfg.coarsen_shift.min(16);
@@ -47,14 +56,21 @@ fn centred(
     } else {
         super::travel::PROBE_CENTRING_SHARE
     };
+    let t = 1.0 / f64::from(c.info.servo_rate_hz.max(1));
     let k = f64::from(peak_codes) * fpc / ((room.max(1) as f64 * share).max(1.0) * res);
-    let b = mass.map_or(0.0, |m| {
-        2.0 * super::travel::CENTRING_DAMPING_RATIO * (k * m.max(0.0)).sqrt()
+    // The sampled spring's own negative damping is about K·T/2: a damper of K·T (β_v = 1)
+    // more than cancels it whatever the mass (as long as K·T²/m < 1), so the spring cannot
+    // grow even on a device without friction; with the mass known, also ζ = 0.7.
+    let b = mass.map_or(k * t, |m| {
+        (2.0 * super::travel::CENTRING_DAMPING_RATIO * (k * m.max(0.0)).sqrt()).max(k * t)
     });
     ServoConfig {
         stiffness: k as f32,
         damping: b as f32,
         damper: stiffwall_proto::DamperLaw::Difference,
+        // The centring spring is no wall under test: its one-count toggling at rest (a buzz to
+        // the monitor) must not latch a fault between excitations.
+        energy_monitor: false,
         ..*cfg
     }
 }
@@ -64,7 +80,7 @@ fn centred(
 fn excite_and_identify(
     c: &mut Client,
     cfg: &ServoConfig,
-    room: i64,
+    room: Option<i64>,
     mass: Option<f64>,
     amplitude: i32,
     ticks: u32,
@@ -77,11 +93,18 @@ fn excite_and_identify(
         f1_hz: f1,
         ticks,
     });
-    c.set_config(&centred(c, cfg, amplitude, room, mass))?;
+    // From rest with the wall off, so that the record does not depend on how long the host took
+    // since the previous excitation (determinism: `--fast` and real time see the same counts);
+    // the centring spring comes on with the chirp (its damper, which answers every count
+    // change, would keep a device behind a slow amplifier from ever resting first).
+    c.set_config(&ServoConfig {
+        stiffness: 0.0,
+        damping: 0.0,
+        ..*cfg
+    })?;
     super::verify::clear_faults(c)?;
-    // From rest, so that the record does not depend on how long the host took since the
-    // previous excitation (determinism: `--fast` and real time see the same counts).
     rest_position(c)?;
+    c.set_config(&centred(c, cfg, amplitude, room, mass))?;
     let rec = c.excite(
         ExciteProfile::Chirp {
             amplitude,
@@ -150,7 +173,7 @@ pub(crate) fn identify(
     cfg: &ServoConfig,
     s: &Settings,
     progress: &Reporter<'_>,
-    room: i64,
+    room: Option<i64>,
 ) -> Result<(Identified, i32, i32)> {
     let rate = f64::from(c.info.servo_rate_hz);
     let ticks = (s.excite_seconds * rate).round().clamp(500.0, 1e6) as u32;
@@ -166,14 +189,16 @@ pub(crate) fn identify(
         i += 1;
         check_cancel(c)?;
         let amplitude = ((f64::from(limit_code) * frac) as i32).max(1);
-        // A probe of half the length finds the level; the full chirp then gives the fit.
+        // A probe finds the level; the full chirp then gives the fit. Both are full length:
+        // against the centring spring the device sticks near each turn, and half the windows
+        // of a slow servo's chirp are too few for a fit.
         match excite_and_identify(
             c,
             cfg,
             room,
             None,
             amplitude,
-            (ticks / 2).max(500),
+            ticks,
             f1,
             progress,
         ) {
@@ -265,7 +290,7 @@ pub(super) fn breakaway(
                 values,
             })?;
         }
-        c.set_config(&centred(c, base, peak, room, Some(id.mass)))?;
+        c.set_config(&centred(c, base, peak, Some(room), Some(id.mass)))?;
         rest_position(c)?;
         super::verify::clear_faults(c)?;
         let rec = c.excite(

@@ -36,6 +36,7 @@ use super::error::TuneError;
 use super::error::{Result, StepError};
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
+use super::travel::TravelSource;
 use super::launch::Delivered;
 use super::model_check::{self, Evidence};
 use super::progress::{Progress, Reporter};
@@ -491,7 +492,32 @@ fn identify_and_predict(
     c.set_config(&base)?;
     super::verify::clear_faults(c)?;
     let (base, room) = enter_workspace(c, s, original, base, progress, place)?;
-    let (id, amplitude, _) = identify(c, &base, s, progress, room)?;
+    let (id, amplitude, _) = match identify(c, &base, s, progress, Some(room)) {
+        Ok(found) => found,
+        // Travel unknown: the device may turn or slide freely, so the chirp with the wall off
+        // (which identifies every plant of the repository) runs with the default window as the
+        // firmware's guard; a known travel is never left to that guard.
+        Err(e) if matches!(place.ws, Some(w) if w.source == TravelSource::DefaultWindow) => {
+            progress.report(Progress::Travel {
+                text: format!(
+                    "identification against the centring spring failed ({e}); the chirp runs \
+                     with the wall off, the default window as the supervisor's travel limit"
+                ),
+            });
+            super::travel::move_to(c, &base, i64::from(base.wall_position), home_of(place)?)?;
+            let open = ServoConfig {
+                travel_min: None,
+                travel_max: None,
+                ..base
+            };
+            c.set_config(&open)?;
+            let found = identify(c, &open, s, progress, None)?;
+            super::travel::move_to(c, &base, i64::from(base.wall_position), home_of(place)?)?;
+            c.set_config(&base)?;
+            found
+        }
+        Err(e) => return Err(e),
+    };
     c.set_config(&base)?;
     let rest = rest_position(c)?;
     // The chirp leaves the device wherever it stopped: the tests put the wall there (the
@@ -549,6 +575,13 @@ fn identify_and_predict(
         predicted,
         units,
     })
+}
+
+/// The spring of the moves so far (the centring one until a wall is found).
+fn home_of(place: &Place) -> Result<super::travel::GentleMove> {
+    place
+        .home
+        .ok_or_else(|| StepError::Failed("no spring to move the device with".into()))
 }
 
 /// Share of the force limit the way back and the move to the middle push with at most.

@@ -27,19 +27,20 @@ use stiffwall_proto::{fault, ServoConfig};
 pub const DEFAULT_WINDOW_LINEAR_M: f64 = 0.01;
 /// Half-width of the default window of a rotary device, rad (±45°: a knob with ±135° of
 /// travel started anywhere in its middle half has it).
-pub const DEFAULT_WINDOW_ROTARY_RAD: f64 = core::f64::consts::FRAC_PI_4;
+pub const DEFAULT_WINDOW_ROTARY_RAD: f64 = core::f64::consts::TAU;
 /// Share of the half-span kept free at each end.
 pub const MARGIN_SHARE: f64 = 0.1;
 /// Least margin at each end, counts.
 pub const MIN_MARGIN_COUNTS: i64 = 4;
 /// Static deflection of the centring spring under the chirp's or a ramp's peak force, as a
 /// share of the room each side (the rest is for the resonance and the friction's drift).
-pub const CENTRING_SHARE: f64 = 0.2;
+pub const CENTRING_SHARE: f64 = 0.3;
 
 /// Static deflection of the first probe's centring spring, share of the room: the mass is not
 /// known yet, so the spring's resonance with the device may lie in the chirp's band undamped;
-/// a quarter of [`CENTRING_SHARE`] leaves room for a ringing of four times the drive.
-pub const PROBE_CENTRING_SHARE: f64 = 0.05;
+/// a third of [`CENTRING_SHARE`] leaves room for a ringing of three times the drive (its
+/// damper K·T only keeps it from growing).
+pub const PROBE_CENTRING_SHARE: f64 = 0.1;
 /// Damping ratio of the centring spring with the probe's mass on the full chirp and the ramps
 /// (B = 2ζ√(K·m)): a resonance in the chirp's band does not ring the device out of its room.
 pub const CENTRING_DAMPING_RATIO: f64 = 0.7;
@@ -301,27 +302,38 @@ pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
     Ok(raw_of(&cfg, super::verify::rest_position(c)?))
 }
 
-/// Brings the device gently to raw count `target` (module header): the spring's origin walks
-/// from where the device is to `target` in steps, each followed by a wait for rest; the spring
-/// is left at `target` (the caller sets the config it wants next). `base` gives the other
-/// settings (stiffness, damping, wall and wall position are replaced; the energy monitor is
-/// off, the travel window kept). Returns the raw count reached.
+/// Steps of the coarse phase of a long move at most: its spring is chosen so that the whole
+/// distance takes about this many steps of the move's force.
+const COARSE_STEPS: i64 = 20;
+/// Corrections of the final approach at most ([`move_to`]).
+const NUDGES: usize = 12;
+
+/// Brings the device gently to raw count `target` (module header), in three phases:
+/// - *coarse*, while the device is more than 20 of the fine steps away: a spring weak enough
+///   that the remaining distance takes [`COARSE_STEPS`] steps of the move's force, damped by
+///   B = K·T on the plain difference (more than the sampled spring's own −K·T/2);
+/// - *fine*: `how`'s spring, its origin walking to the target in steps of `how.force_n`;
+/// - *nudges*: the origin moved by the device's remaining offset, up to [`NUDGES`] times,
+///   until it rests within a count of the target (static friction holds a spring's device up
+///   to F_s/(KΔ) counts off its origin).
+///
+/// Each step waits for rest. `base` gives the other settings (stiffness, damping, wall and wall
+/// position are replaced; the energy monitor is off, the travel window lifted: a device a test
+/// left outside it would latch it again at once; the caller's next config has it again).
+/// Returns the raw count reached.
 ///
 /// # Errors
-/// The device failing, or not at rest within the wait of
+/// The device failing, a fault latched on the way, or not at rest within the wait of
 /// [`crate::verify::rest_position`].
 pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove) -> Result<i64> {
-    let res = f64::from(c.info.resolution) * f64::from(1u32 << base.coarsen_shift.min(16));
-    // Also a bounded speed: a step of s counts rings the spring at most s·ωT counts per tick,
+    let shift = base.coarsen_shift.min(16);
+    let res = f64::from(c.info.resolution) * f64::from(1u32 << shift);
+    let t = 1.0 / f64::from(c.info.servo_rate_hz.max(1));
+    // A bounded speed too: a step of s counts rings the spring at most s·ωT counts per tick,
     // ωT ≤ 2 on any stable sampled spring, so s ≤ an eighth of the encoder-jump limit keeps
     // the move far from that fault.
     let jump_cap = i64::from(base.encoder_jump_counts / 8).max(1);
-    let step = (move_step(how.force_n, how.k, res) << base.coarsen_shift.min(16)).min(jump_cap);
-    let to_i32 = |n: i64| i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX });
-    // A fault the tests latched (the travel window, the energy monitor) would keep the move's
-    // spring off: this tune's own faults are cleared first, with the travel window lifted for
-    // the move (a device a test left outside it would latch it again at once; the move's force
-    // is bounded, and the caller's next config has the window again).
+    let fine_step = (move_step(how.force_n, how.k, res) << shift).min(jump_cap);
     let base = &ServoConfig {
         travel_min: None,
         travel_max: None,
@@ -333,41 +345,97 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
         ..*base
     })?;
     super::verify::clear_faults(c)?;
-    let mut at = where_now(c, base)?;
-    let mut cfg = ServoConfig {
-        stiffness: how.k as f32,
-        damping: how.b as f32,
-        damper: how.damper,
-        wall: stiffwall_proto::WallMode::Bidirectional,
-        energy_monitor: false,
-        ..*base
+    let mut walk = Walk {
+        cfg: ServoConfig {
+            wall: stiffwall_proto::WallMode::Bidirectional,
+            energy_monitor: false,
+            ..*base
+        },
+        at: where_now(c, base)?,
+        target,
     };
-    // The spring's origin walks from where the device is to the target at a bounded step a
-    // wait, whether or not friction lets the device follow at once (it lags by at most F_s/K).
-    let mut origin = at;
-    let steps = (target - at).unsigned_abs() / step.unsigned_abs().max(1) + 2;
-    for _ in 0..steps {
-        let gap = target - origin;
-        origin = if gap.abs() <= step {
-            target
-        } else {
-            origin + step * gap.signum()
+    let far = COARSE_STEPS * fine_step;
+    if (target - walk.at).abs() > far {
+        let distance = (target - walk.at).abs() - far / 2;
+        let step = (distance / COARSE_STEPS).clamp(1, jump_cap);
+        let k = (how.force_n / (step >> shift).max(1) as f64 / res).min(how.k);
+        let coarse = GentleMove {
+            k,
+            b: k * t,
+            damper: stiffwall_proto::DamperLaw::Difference,
+            force_n: how.force_n,
         };
-        cfg.wall_position = to_i32(origin);
-        c.set_config(&cfg)?;
-        at = raw_of(&cfg, super::verify::rest_position(c)?);
+        let stop = target - (target - walk.at).signum() * far / 2;
+        walk.go(c, stop, coarse, step)?;
+    }
+    walk.go(c, target, how, fine_step)?;
+    let mut origin = target;
+    for _ in 0..NUDGES {
+        let off = target - walk.at;
+        if off.abs() <= 1 {
+            break;
+        }
+        origin += off;
+        walk.set(c, origin, how)?;
+    }
+    Ok(walk.at)
+}
+
+/// The state of a [`move_to`]: the config it sets, where the device is, the target.
+struct Walk {
+    cfg: ServoConfig,
+    at: i64,
+    target: i64,
+}
+
+impl Walk {
+    /// The spring `how` with its origin at `origin`, then a wait for rest.
+    fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
+        let to_i32 = |n: i64| i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX });
+        self.cfg = ServoConfig {
+            stiffness: how.k as f32,
+            damping: how.b as f32,
+            damper: how.damper,
+            wall_position: to_i32(origin),
+            ..self.cfg
+        };
+        c.set_config(&self.cfg)?;
+        self.at = raw_of(&self.cfg, super::verify::rest_position(c)?);
         let latched = c.faults()?.latched;
         if latched != 0 {
             bail!(
-                "the move to count {target} stopped at count {at}: the supervisor latched {}",
+                "the move to count {} stopped at count {}: the supervisor latched {}",
+                self.target,
+                self.at,
                 fault_names(latched).join(", ")
             );
         }
-        if origin == target {
-            return Ok(at);
-        }
+        Ok(())
     }
-    bail!("the move to count {target} did not get there in {steps} steps (at count {at})")
+
+    /// Walks the spring's origin from where the device is to `to` in steps of `step` counts
+    /// (whether or not friction lets the device follow at once: it lags by at most F_s/K).
+    fn go(&mut self, c: &mut Client, to: i64, how: GentleMove, step: i64) -> Result<()> {
+        let mut origin = self.at;
+        let steps = (to - origin).unsigned_abs() / step.unsigned_abs().max(1) + 2;
+        for _ in 0..steps {
+            let gap = to - origin;
+            origin = if gap.abs() <= step {
+                to
+            } else {
+                origin + step * gap.signum()
+            };
+            self.set(c, origin, how)?;
+            if origin == to {
+                return Ok(());
+            }
+        }
+        bail!(
+            "the move to count {} did not get there in {steps} steps (at count {})",
+            self.target,
+            self.at
+        )
+    }
 }
 
 /// Watches the device with `cfg` set for up to `seconds` of host time: whether it came to rest
