@@ -60,7 +60,7 @@ pub enum TuneError {
         /// Why the tune failed, if it did.
         error: Option<Box<TuneError>>,
         /// The check.
-        left: Box<crate::travel::DeviceLeft>,
+        left: Box<crate::left::DeviceLeft>,
     },
     /// The tune failed and restoring the previous config failed too.
     #[error("{error}; restoring the previous config failed as well: {restore}")]

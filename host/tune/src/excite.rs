@@ -192,16 +192,7 @@ pub(crate) fn identify(
         // A probe finds the level; the full chirp then gives the fit. Both are full length:
         // against the centring spring the device sticks near each turn, and half the windows
         // of a slow servo's chirp are too few for a fit.
-        match excite_and_identify(
-            c,
-            cfg,
-            room,
-            None,
-            amplitude,
-            ticks,
-            f1,
-            progress,
-        ) {
+        match excite_and_identify(c, cfg, room, None, amplitude, ticks, f1, progress) {
             Ok((probe, end)) => {
                 let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
                     .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);

@@ -46,11 +46,13 @@ mod frontier;
 mod ident;
 mod judged;
 mod launch;
+mod left;
 mod model_check;
 mod outcome;
 mod procedure;
 mod progress;
 mod release;
+mod rest;
 mod search;
 mod settings;
 mod steps;
@@ -60,6 +62,7 @@ mod verify;
 
 pub use error::{NoWallPassed, SettingsError, StepError, TuneError};
 pub use launch::Delivered;
+pub use left::{DeviceLeft, LEFT_TOLERANCE_COUNTS};
 pub use model_check::Evidence;
 pub use outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted};
 pub use procedure::{predict, tune};
@@ -71,10 +74,7 @@ pub use settings::{
     MISMATCH_MARGIN,
 };
 pub use steps::{deflection_for, df_equivalent};
-pub use travel::{
-    DeviceLeft, TravelSource, Workspace, DEFAULT_WINDOW_LINEAR_M, DEFAULT_WINDOW_ROTARY_RAD,
-    LEFT_TOLERANCE_COUNTS,
-};
+pub use travel::{TravelSource, Workspace, DEFAULT_WINDOW_LINEAR_M, DEFAULT_WINDOW_ROTARY_RAD};
 pub use verify::{
     clear_faults, impact, rest_position, run_test, ChatterReport, Judging, Test, TestResult,
     TestRun, WallSides,

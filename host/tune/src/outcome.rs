@@ -82,7 +82,7 @@ pub struct Outcome {
     pub workspace: Option<crate::travel::Workspace>,
     /// The final check: where the device was left, at rest, without a fault (issue 46).
     #[serde(default)]
-    pub device_left: Option<crate::travel::DeviceLeft>,
+    pub device_left: Option<crate::left::DeviceLeft>,
 }
 
 /// One point of the verified frontier.

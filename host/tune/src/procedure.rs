@@ -36,12 +36,12 @@ use super::error::TuneError;
 use super::error::{Result, StepError};
 use super::excite::{breakaway, device_scale};
 use super::frontier::{b_cap, choose_wall};
-use super::travel::TravelSource;
 use super::launch::Delivered;
 use super::model_check::{self, Evidence};
 use super::progress::{Progress, Reporter};
 use super::search::{largest_settling_k, Search};
 use super::steps::{Notes, Run};
+use super::travel::TravelSource;
 use super::verify::rest_position;
 use stiffwall_client::{Cancel, Client};
 use stiffwall_core::criteria;
@@ -140,6 +140,8 @@ struct Place {
     home: Option<super::travel::GentleMove>,
     /// The config to set and save when the tune succeeds (not on a dry run).
     final_cfg: Option<ServoConfig>,
+    /// The static friction F_s the quiet ceiling counts on, N (N·m), once identified.
+    static_friction: Option<f64>,
 }
 
 /// The end of every tune (success, error or cancel): the device back where it started,
@@ -176,7 +178,8 @@ fn finish(
             restore,
         });
     }
-    let left = start.map(|st| super::travel::check_left(c, st, &final_cfg, problem));
+    let left = start
+        .map(|st| super::travel::check_left(c, st, &final_cfg, place.static_friction, problem));
     if let Some(l) = &left {
         progress.report(Progress::Left(l.clone()));
     }
@@ -250,6 +253,7 @@ fn tune_inner(
 ) -> Result<Outcome> {
     let mut ident = identify_and_predict(c, s, original, progress, place)?;
     let ceiling = quiet_ceiling(&ident);
+    place.static_friction = Some(ceiling * ident.p.resolution / 2.0);
     // The quiet search runs on a copy: where no wall rests, the search for the least chatter
     // starts again from what identification found.
     let mut tried = ident.clone();
@@ -603,7 +607,7 @@ fn enter_workspace(
     let res = f64::from(c.info.resolution);
     let rotational = c.info.counts_per_rev > 0;
     let start = super::travel::where_now(c, &base)?;
-    let ws = Workspace::resolve(s, original, start, res, rotational)?;
+    let ws = Workspace::resolve(s.travel, original, start, res, rotational)?;
     progress.report(Progress::Travel {
         text: ws.describe(if rotational { "rad" } else { "m" }),
     });

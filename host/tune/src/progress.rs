@@ -116,7 +116,7 @@ pub enum Progress {
         target: i64,
     },
     /// The final check of the device (also in the outcome).
-    Left(crate::travel::DeviceLeft),
+    Left(crate::left::DeviceLeft),
 }
 
 impl fmt::Display for Progress {

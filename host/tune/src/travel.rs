@@ -4,7 +4,7 @@
 //! Units: positions are raw encoder counts (the frame of `ServoConfig::wall_position`) inside
 //! this module and SI (m or rad) in the report; forces N (N·m); stiffness N/m (N·m/rad).
 //!
-//! Where the travel comes from, first found first: the caller's [`Settings::travel`] (SI, the
+//! Where the travel comes from, first found first: the caller's `Settings::travel` (SI, the
 //! encoder's frame), the device config's travel window (`travel_min`/`travel_max`, raw
 //! counts), else a default window of ±[`DEFAULT_WINDOW_LINEAR_M`] (linear) or
 //! ±[`DEFAULT_WINDOW_ROTARY_RAD`] (rotary) around the start, which the report states. Every
@@ -18,9 +18,9 @@
 //! Invariant: nothing here assumes unbounded travel; a workspace always has two finite ends.
 
 use super::error::{bail, Result};
-use super::settings::Settings;
+pub use super::left::{fault_names, DeviceLeft, LEFT_TOLERANCE_COUNTS};
 use stiffwall_client::Client;
-use stiffwall_proto::{fault, ServoConfig};
+use stiffwall_proto::ServoConfig;
 
 /// Half-width of the default window of a linear device, m (a few cm each side is the least a
 /// desktop haptic device has; `--travel MIN:MAX` widens it).
@@ -88,13 +88,13 @@ impl Workspace {
     /// # Errors
     /// The start outside the travel given or configured.
     pub fn resolve(
-        s: &Settings,
+        given: Option<[f64; 2]>,
         original: &ServoConfig,
         start: i64,
         resolution: f64,
         rotational: bool,
     ) -> Result<Self> {
-        let (source, ends) = if let Some([lo, hi]) = s.travel {
+        let (source, ends) = if let Some([lo, hi]) = given {
             let ends = [
                 (lo / resolution).ceil() as i64,
                 (hi / resolution).floor() as i64,
@@ -211,58 +211,6 @@ pub fn test_reach_counts(v_ticks: f64, mass: f64, k: f64, period_s: f64) -> f64 
     1.5 * launch.max(deflection)
 }
 
-/// What the device was left as: the report's `device left` line and the JSON's.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct DeviceLeft {
-    /// Raw count where it came to rest (or was last seen).
-    pub count: i64,
-    /// Raw count where it started.
-    pub start: i64,
-    /// Whether it was at rest.
-    pub at_rest: bool,
-    /// Faults latched after the final config was set, by name.
-    pub faults: Vec<String>,
-    /// Whether the final check passed: at rest, no fault, within [`LEFT_TOLERANCE_COUNTS`] of
-    /// the start (or where the set wall holds it, when that wall pulls it elsewhere).
-    pub ok: bool,
-    /// Why it failed, when it did.
-    pub problem: Option<String>,
-}
-
-/// The final check's tolerance on the position, counts.
-pub const LEFT_TOLERANCE_COUNTS: i64 = 2;
-
-impl core::fmt::Display for DeviceLeft {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(
-            f,
-            "device left: count {} (started at {}), {}, {}",
-            self.count,
-            self.start,
-            if self.at_rest { "at rest" } else { "moving" },
-            if self.faults.is_empty() {
-                "no fault".to_string()
-            } else {
-                format!("faults latched: {}", self.faults.join(", "))
-            }
-        )?;
-        if let Some(p) = &self.problem {
-            write!(f, ": {p}")?;
-        }
-        Ok(())
-    }
-}
-
-/// Names of the fault bits in `latched`.
-#[must_use]
-pub fn fault_names(latched: u32) -> Vec<String> {
-    fault::NAMES
-        .iter()
-        .filter(|(bit, _, _)| latched & bit != 0)
-        .map(|(_, name, _)| (*name).to_string())
-        .collect()
-}
-
 /// Largest wall-position step of the return move, counts: the move's spring never pushes
 /// harder than `force_n` (its K·Δ·step), at least one count.
 fn move_step(force_n: f64, k: f64, resolution: f64) -> i64 {
@@ -299,7 +247,7 @@ pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
         ..*base
     };
     c.set_config(&cfg)?;
-    Ok(raw_of(&cfg, super::verify::rest_position(c)?))
+    Ok(raw_of(&cfg, super::rest::rest_position(c)?))
 }
 
 /// Steps of the coarse phase of a long move at most: its spring is chosen so that the whole
@@ -344,7 +292,7 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
         damping: 0.0,
         ..*base
     })?;
-    super::verify::clear_faults(c)?;
+    super::rest::clear_faults(c)?;
     let mut walk = Walk {
         cfg: ServoConfig {
             wall: stiffwall_proto::WallMode::Bidirectional,
@@ -400,7 +348,7 @@ impl Walk {
             ..self.cfg
         };
         c.set_config(&self.cfg)?;
-        self.at = raw_of(&self.cfg, super::verify::rest_position(c)?);
+        self.at = raw_of(&self.cfg, super::rest::rest_position(c)?);
         let latched = c.faults()?.latched;
         if latched != 0 {
             bail!(
@@ -472,13 +420,16 @@ pub fn watch_rest(c: &mut Client, cfg: &ServoConfig, seconds: f64) -> Result<(bo
 
 /// The final check (issue 46): with `cfg` (the config tune leaves) set, the device must come to
 /// rest, have no latched fault, and be within [`LEFT_TOLERANCE_COUNTS`] of `start` — or, when
-/// `cfg`'s bidirectional wall has its origin away from the start, rest where that wall holds
-/// it. `problem_before`: what went wrong on the way back, if anything.
+/// `cfg` has a wall, within the band its spring cannot pull the device out of against the
+/// static friction `static_friction_n` (N or N·m, when identified), or, when `cfg`'s
+/// bidirectional wall has its origin away from the start, rest where that wall holds it.
+/// `problem_before`: what went wrong on the way back, if anything.
 #[must_use]
 pub fn check_left(
     c: &mut Client,
     start: i64,
     cfg: &ServoConfig,
+    static_friction_n: Option<f64>,
     problem_before: Option<String>,
 ) -> DeviceLeft {
     let watched = watch_rest(c, cfg, 20.0);
@@ -491,7 +442,16 @@ pub fn check_left(
     let pulls_elsewhere = cfg.stiffness > 0.0
         && cfg.wall == stiffwall_proto::WallMode::Bidirectional
         && (i64::from(cfg.wall_position) - start).abs() > LEFT_TOLERANCE_COUNTS;
-    let near = (count - start).abs() <= LEFT_TOLERANCE_COUNTS;
+    // A wall left on at the start holds the device anywhere its force K·Δ·(|n| + ½) stays
+    // below the static friction F_s: that band is where the user's own wall keeps it.
+    let res = f64::from(c.info.resolution) * f64::from(1u32 << cfg.coarsen_shift.min(16));
+    let band = match static_friction_n {
+        Some(fs) if cfg.stiffness > 0.0 => {
+            (fs / (f64::from(cfg.stiffness) * res) + 0.5).ceil() as i64
+        }
+        _ => 0,
+    };
+    let near = (count - start).abs() <= LEFT_TOLERANCE_COUNTS.max(band);
     let problem = if let Err(e) = &watched {
         Some(format!("the device did not answer: {e}"))
     } else if let Err(e) = &faults {

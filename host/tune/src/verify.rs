@@ -39,9 +39,10 @@
 //! encoder sees (a heavy hand ringing on a soft transmission) is not judged a buzz while it
 //! decays, and a persistent buzz is still judged at the base length.
 
-use super::error::{bail, Result, StepError};
+use super::error::{bail, Result};
 use super::judged::{judged_len_within, max_test_len};
 use super::launch::{judge_impact, Delivered, LAUNCH_REAIMS};
+pub use super::rest::{clear_faults, rest_position};
 use super::verdict::{classify, Criterion, Verdict, Wall, MIN_TAIL};
 use stiffwall_client::Client;
 use stiffwall_proto::{ServoConfig, WallMode};
@@ -208,58 +209,6 @@ pub fn test_set(
         }
     }
     set
-}
-
-/// Waits until the device (wall off) has stopped; returns its count from the wall position.
-pub fn rest_position(c: &mut Client) -> Result<i32> {
-    let rate = c.info.servo_rate_hz.max(1);
-    // One sample every 2 ms of device time; at rest when 50 consecutive samples agree.
-    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
-    c.stream_start(decimation)?;
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
-    let (mut last, mut same) = (i32::MIN, 0u32);
-    let result = loop {
-        if std::time::Instant::now() > deadline {
-            break Err(StepError::Failed(
-                "the device did not come to rest within 20 s with the wall off".into(),
-            ));
-        }
-        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
-            for x in &b.samples {
-                if x.count == last {
-                    same += 1;
-                } else {
-                    (last, same) = (x.count, 0);
-                }
-            }
-            if same >= 50 {
-                break Ok(last);
-            }
-        }
-    };
-    c.stream_stop()?;
-    result
-}
-
-/// Clears the latched faults and waits until the servo has taken the command (the device
-/// answers `GetFaults` from state the servo updates on its next tick).
-pub fn clear_faults(c: &mut Client) -> Result<()> {
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(2);
-    loop {
-        c.clear_faults()?;
-        let f = c.faults()?;
-        if f.latched == 0 {
-            return Ok(());
-        }
-        if std::time::Instant::now() > deadline {
-            bail!(
-                "faults {:#x} stay latched (first at tick {})",
-                f.latched,
-                f.first_tick
-            );
-        }
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
 }
 
 /// Release tests re-aimed at most this many times when the hold stopped off its target.

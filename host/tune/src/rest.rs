@@ -1,0 +1,60 @@
+//! The device at rest and its faults cleared: the two waits every experiment of tune starts
+//! with (a leaf of the crate: it imports only the error type).
+//!
+//! Units: counts are effective counts from the configured wall position; times are host
+//! seconds (the waits' limits).
+
+use super::error::{bail, Result, StepError};
+use stiffwall_client::Client;
+
+/// Waits until the device (wall off) has stopped; returns its count from the wall position.
+pub fn rest_position(c: &mut Client) -> Result<i32> {
+    let rate = c.info.servo_rate_hz.max(1);
+    // One sample every 2 ms of device time; at rest when 50 consecutive samples agree.
+    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
+    c.stream_start(decimation)?;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let (mut last, mut same) = (i32::MIN, 0u32);
+    let result = loop {
+        if std::time::Instant::now() > deadline {
+            break Err(StepError::Failed(
+                "the device did not come to rest within 20 s with the wall off".into(),
+            ));
+        }
+        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+            for x in &b.samples {
+                if x.count == last {
+                    same += 1;
+                } else {
+                    (last, same) = (x.count, 0);
+                }
+            }
+            if same >= 50 {
+                break Ok(last);
+            }
+        }
+    };
+    c.stream_stop()?;
+    result
+}
+
+/// Clears the latched faults and waits until the servo has taken the command (the device
+/// answers `GetFaults` from state the servo updates on its next tick).
+pub fn clear_faults(c: &mut Client) -> Result<()> {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(2);
+    loop {
+        c.clear_faults()?;
+        let f = c.faults()?;
+        if f.latched == 0 {
+            return Ok(());
+        }
+        if std::time::Instant::now() > deadline {
+            bail!(
+                "faults {:#x} stay latched (first at tick {})",
+                f.latched,
+                f.first_tick
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
