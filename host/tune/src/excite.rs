@@ -27,9 +27,9 @@ pub(super) fn device_scale(c: &Client) -> Result<(f64, f64)> {
 }
 
 /// The chirp's and the ramps' config: `cfg` with a centring spring (issue 46) that deflects
-/// by [`crate::travel::CENTRING_SHARE`] of `room` counts under `peak_codes` and a damper of
-/// ratio [`crate::travel::CENTRING_DAMPING_RATIO`] with the device's `mass` (on the plain
-/// difference) when the mass is known, at least K·T; without it (the first probe) a stiffer
+/// by [`crate::travel::CENTRING_SHARE`] of `room` counts under `peak_codes` and a damper (dead band of one count) of
+/// ratio [`crate::travel::CENTRING_DAMPING_RATIO`] with the device's `mass` (its law a
+/// dead band of one count) when the mass is known, at least K·T; without it (the first probe) a stiffer
 /// spring, [`crate::travel::PROBE_CENTRING_SHARE`], and the damper K·T. The firmware adds both to the
 /// excitation's code and records the total, so the fit sees the whole force.
 fn centred(
@@ -67,12 +67,26 @@ fn centred(
     ServoConfig {
         stiffness: k as f32,
         damping: b as f32,
-        damper: stiffwall_proto::DamperLaw::Difference,
+        // A dead band of one count: the damper answers motion, not a count toggling at rest,
+        // so that the same config lets the device come to rest after the excitation.
+        damper: stiffwall_proto::DamperLaw::DeadBand { counts: 1 },
         // The centring spring is no wall under test: its one-count toggling at rest (a buzz to
         // the monitor) must not latch a fault between excitations.
         energy_monitor: false,
         ..*cfg
     }
+}
+
+/// After an excitation the centring spring stays on until the host's next config, a delay that
+/// depends on the link: the device is let come to rest under it first (the same config, so
+/// nothing changes with the link's delay), so that where the next step starts depends on the
+/// device's counts alone (the determinism of
+/// [`crate::procedure`]). Nothing to wait for when the excitation ran with the wall off.
+fn settle(c: &mut Client, spring: &ServoConfig) -> Result<()> {
+    if spring.stiffness <= 0.0 {
+        return Ok(());
+    }
+    rest_position(c).map(drop)
 }
 
 /// One chirp excitation of `amplitude` codes against the centring spring of `cfg` and `room`,
@@ -103,8 +117,18 @@ fn excite_and_identify(
         ..*cfg
     })?;
     super::verify::clear_faults(c)?;
-    rest_position(c)?;
-    c.set_config(&centred(c, cfg, amplitude, room, mass))?;
+    let rest = rest_position(c)?;
+    // The spring's origin where the device rests, so that it holds still until the chirp
+    // starts however long the host takes (its force there, K·Δ/2, is below friction); the
+    // chirp then swings it about that point, a few counts from the centre at most.
+    let at_rest = ServoConfig {
+        wall_position: cfg
+            .wall_position
+            .saturating_add(rest << cfg.coarsen_shift.min(16)),
+        ..*cfg
+    };
+    let spring = centred(c, &at_rest, amplitude, room, mass);
+    c.set_config(&spring)?;
     let rec = c.excite(
         ExciteProfile::Chirp {
             amplitude,
@@ -113,6 +137,7 @@ fn excite_and_identify(
         },
         ticks,
     )?;
+    settle(c, &spring)?;
     if rec.gaps.missing > 0 {
         bail!(
             "{} telemetry samples lost during identification; use a faster link or --fast",
@@ -281,7 +306,8 @@ pub(super) fn breakaway(
                 values,
             })?;
         }
-        c.set_config(&centred(c, base, peak, Some(room), Some(id.mass)))?;
+        let spring = centred(c, base, peak, Some(room), Some(id.mass));
+        c.set_config(&spring)?;
         rest_position(c)?;
         super::verify::clear_faults(c)?;
         let rec = c.excite(
@@ -291,6 +317,7 @@ pub(super) fn breakaway(
             },
             u32::try_from(len * hold)?,
         )?;
+        settle(c, &spring)?;
         let (counts, force): (Vec<i64>, Vec<f64>) = rec
             .samples
             .iter()

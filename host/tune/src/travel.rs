@@ -22,11 +22,13 @@ pub use super::left::{fault_names, DeviceLeft, LEFT_TOLERANCE_COUNTS};
 use stiffwall_client::Client;
 use stiffwall_proto::ServoConfig;
 
-/// Half-width of the default window of a linear device, m (a few cm each side is the least a
-/// desktop haptic device has; `--travel MIN:MAX` widens it).
-pub const DEFAULT_WINDOW_LINEAR_M: f64 = 0.01;
-/// Half-width of the default window of a rotary device, rad (±45°: a knob with ±135° of
-/// travel started anywhere in its middle half has it).
+/// Half-width of the default window of a linear device, m: room for the release and impact
+/// tests of a desktop haptic device at the default maximum velocity (a Phantom-class device
+/// needs about 35 mm each side); a device with less travel declares it (`--travel MIN:MAX` or
+/// its travel window), or tune lowers the velocity or refuses.
+pub const DEFAULT_WINDOW_LINEAR_M: f64 = 0.05;
+/// Half-width of the default window of a rotary device, rad (one turn each way: a motor turns
+/// freely; a knob with stops declares them).
 pub const DEFAULT_WINDOW_ROTARY_RAD: f64 = core::f64::consts::TAU;
 /// Share of the half-span kept free at each end.
 pub const MARGIN_SHARE: f64 = 0.1;

@@ -50,7 +50,7 @@ pub struct Args {
     pub damper: Option<String>,
     /// The device's travel MIN:MAX, m (rad for rotary devices), as positions of the encoder's
     /// frame (count × resolution): every experiment stays inside it with a margin. Default: the
-    /// device's configured travel window, else ±10 mm (±45°) around where the device starts.
+    /// device's configured travel window, else ±50 mm (±1 turn) around where the device starts.
     #[arg(long, value_name = "MIN:MAX", allow_hyphen_values = true)]
     pub travel: Option<String>,
     /// Print the report as JSON.
