@@ -52,13 +52,10 @@ pub enum TuneError {
     /// message names the step and what to try).
     #[error("{0}")]
     Procedure(String),
-    /// The final check failed (the device not at rest, a fault latched, or not back where it
-    /// started), after the tune succeeded (`error` None: nothing was saved, the previous
-    /// config is back) or failed (`error`).
-    #[error("{}{left}", error.as_ref().map(|e| format!("{e}; ")).unwrap_or_default())]
+    /// The tune found a wall but the final check failed (the device not at rest, a fault
+    /// latched, or not back where it started): nothing was saved, the previous config is back.
+    #[error("the tune found a wall but {left}")]
     Left {
-        /// Why the tune failed, if it did.
-        error: Option<Box<TuneError>>,
         /// The check.
         left: Box<crate::left::DeviceLeft>,
     },

@@ -27,11 +27,12 @@ pub(super) fn device_scale(c: &Client) -> Result<(f64, f64)> {
 }
 
 /// The chirp's and the ramps' config: `cfg` with a centring spring (issue 46) that deflects
-/// by [`crate::travel::CENTRING_SHARE`] of `room` counts under `peak_codes` and a damper (dead band of one count) of
-/// ratio [`crate::travel::CENTRING_DAMPING_RATIO`] with the device's `mass` (its law a
-/// dead band of one count) when the mass is known, at least K·T; without it (the first probe) a stiffer
-/// spring, [`crate::travel::PROBE_CENTRING_SHARE`], and the damper K·T. The firmware adds both to the
-/// excitation's code and records the total, so the fit sees the whole force.
+/// by [`crate::travel::CENTRING_SHARE`] of `room` counts under `peak_codes` and a damper of
+/// ratio [`crate::travel::CENTRING_DAMPING_RATIO`] with the device's `mass`, at least K·T,
+/// when the mass is known; without it (the first probe) a stiffer spring,
+/// [`crate::travel::PROBE_CENTRING_SHARE`], and the damper K·T. The damper's law is a dead
+/// band of one count. The firmware adds both to the excitation's code and records the total,
+/// so the fit sees the whole force.
 fn centred(
     c: &Client,
     cfg: &ServoConfig,

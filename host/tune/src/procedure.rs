@@ -190,10 +190,7 @@ fn finish(
                 // A wall that does not hold is never saved: the previous config is back.
                 c.clear_faults().ok();
                 c.set_config(original).ok();
-                return Err(TuneError::Left {
-                    error: None,
-                    left: Box::new(l),
-                });
+                return Err(TuneError::Left { left: Box::new(l) });
             }
             if wall.is_some() {
                 c.save_config().map_err(|e| TuneError::Device {
@@ -206,13 +203,8 @@ fn finish(
             o.workspace = place.ws;
             Ok(o)
         }
-        Err(e) => match bad {
-            Some(l) => Err(TuneError::Left {
-                error: Some(Box::new(e)),
-                left: Box::new(l),
-            }),
-            None => Err(e),
-        },
+        // A failed (or cancelled) tune stays that error; its check was reported as progress.
+        Err(e) => Err(e),
     }
 }
 
