@@ -92,11 +92,18 @@ fn settle(c: &mut Client, spring: &ServoConfig) -> Result<()> {
 
 /// One chirp excitation of `amplitude` codes against the centring spring of `cfg` and `room`,
 /// and its identification.
+/// The centring spring of one chirp: the room each side (None: the wall off) and the device's
+/// mass when known (see [`centred`]).
+#[derive(Debug, Clone, Copy)]
+struct Centring {
+    room: Option<i64>,
+    mass: Option<f64>,
+}
+
 fn excite_and_identify(
     c: &mut Client,
     cfg: &ServoConfig,
-    room: Option<i64>,
-    mass: Option<f64>,
+    Centring { room, mass }: Centring,
     amplitude: i32,
     ticks: u32,
     f1: f32,
@@ -218,7 +225,15 @@ pub(crate) fn identify(
         // A probe finds the level; the full chirp then gives the fit. Both are full length:
         // against the centring spring the device sticks near each turn, and half the windows
         // of a slow servo's chirp are too few for a fit.
-        match excite_and_identify(c, cfg, room, None, amplitude, ticks, f1, progress) {
+        match excite_and_identify(
+            c,
+            cfg,
+            Centring { room, mass: None },
+            amplitude,
+            ticks,
+            f1,
+            progress,
+        ) {
             Ok((probe, end)) => {
                 let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
                     .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
@@ -226,9 +241,18 @@ pub(crate) fn identify(
                     wanted = amplitude;
                 }
                 check_cancel(c)?;
-                if let Ok((full, end2)) =
-                    excite_and_identify(c, cfg, room, Some(probe.mass), wanted, ticks, f1, progress)
-                {
+                if let Ok((full, end2)) = excite_and_identify(
+                    c,
+                    cfg,
+                    Centring {
+                        room,
+                        mass: Some(probe.mass),
+                    },
+                    wanted,
+                    ticks,
+                    f1,
+                    progress,
+                ) {
                     return Ok((full, wanted, end2));
                 }
                 return Ok((probe, amplitude, end));

@@ -156,11 +156,18 @@ impl Workspace {
     }
 
     /// The firmware travel window for the test configs: the device's own when configured,
-    /// else the travel's ends (a run that leaves them trips the supervisor).
+    /// else the ends of a given travel (a run that leaves them trips the supervisor), none for
+    /// the default window.
     #[must_use]
     pub fn firmware_window(&self, original: &ServoConfig) -> (Option<i32>, Option<i32>) {
         if original.travel_min.is_some() || original.travel_max.is_some() {
             return (original.travel_min, original.travel_max);
+        }
+        // The default window is tune's own limit on a device whose travel nobody stated (it
+        // may turn freely): the supervisor is not told, so a test that overshoots it is walked
+        // back rather than latched out of reach.
+        if self.source == TravelSource::DefaultWindow {
+            return (None, None);
         }
         let clamp = |n: i64| i32::try_from(n).ok();
         (clamp(self.ends[0]), clamp(self.ends[1]))

@@ -532,7 +532,7 @@ fn recentre(c: &mut Client, base: &ServoConfig, k: f64, rest: i32) -> Result<Opt
     };
     let wall = i64::from(base.wall_position);
     let room = (wall - i64::from(lo)).min(i64::from(hi) - wall) >> base.coarsen_shift.min(16);
-    if i64::from(rest).abs() * 2 <= room || !(k > 0.0) {
+    if i64::from(rest).abs() * 2 <= room || k.is_nan() || k <= 0.0 {
         return Ok(None);
     }
     let how = crate::travel::GentleMove {
