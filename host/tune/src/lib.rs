@@ -59,6 +59,7 @@ mod steps;
 mod travel;
 mod verdict;
 mod verify;
+mod workspace;
 
 pub use error::{NoWallPassed, SettingsError, StepError, TuneError};
 pub use launch::Delivered;

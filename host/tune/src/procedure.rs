@@ -43,6 +43,9 @@ use super::search::{largest_settling_k, Search};
 use super::steps::{Notes, Run};
 use super::travel::TravelSource;
 use super::verify::rest_position;
+use super::workspace::{
+    enter_workspace, finish, home_of, velocity_within, Place, MOVE_FORCE_SHARE,
+};
 use stiffwall_client::{Cancel, Client};
 use stiffwall_core::criteria;
 use stiffwall_core::params::PhysicalParams;
@@ -125,87 +128,6 @@ pub fn tune(
     let finished = finish(c, s, &original, &place, result, &reporter);
     c.set_cancel(outer);
     finished
-}
-
-/// What the procedure learnt about where the device is, for the way back (issue 46).
-#[derive(Debug, Default)]
-struct Place {
-    /// Where the device started, raw counts.
-    start: Option<i64>,
-    /// The travel the experiments kept to.
-    ws: Option<super::travel::Workspace>,
-    /// The tests' config (the travel window set), the base of the way back.
-    test_base: Option<ServoConfig>,
-    /// The spring of the way back: the wall found (verified to rest), else the centring one.
-    home: Option<super::travel::GentleMove>,
-    /// The config to set and save when the tune succeeds (not on a dry run).
-    final_cfg: Option<ServoConfig>,
-    /// The static friction F_s the quiet ceiling counts on, N (N·m), once identified.
-    static_friction: Option<f64>,
-}
-
-/// The end of every tune (success, error or cancel): the device back where it started,
-/// gently; the final config set (the wall found, or the original); the check that it is at
-/// rest, without a fault, where it started (`DeviceLeft`); then saved, or an error.
-fn finish(
-    c: &mut Client,
-    s: &Settings,
-    original: &ServoConfig,
-    place: &Place,
-    result: Result<Outcome, TuneError>,
-    progress: &Reporter<'_>,
-) -> Result<Outcome, TuneError> {
-    let mut problem = None;
-    let start = place.start;
-    if let (Some(start), Some(how)) = (start, place.home) {
-        progress.report(Progress::Returning { target: start });
-        let base = place.test_base.unwrap_or(*original);
-        c.clear_faults().ok();
-        if let Err(e) = super::travel::move_to(c, &base, start, how) {
-            problem = Some(format!("the way back failed: {e}"));
-        }
-    }
-    let wall = place.final_cfg.filter(|_| result.is_ok() && !s.dry_run);
-    let final_cfg = wall.unwrap_or(*original);
-    // Only this tune's faults are latched now (the procedure cleared any before its tests).
-    c.clear_faults().ok();
-    if let Err(restore) = c.set_config(&final_cfg) {
-        let error = result
-            .err()
-            .unwrap_or_else(|| TuneError::Procedure("the tune finished but was not set".into()));
-        return Err(TuneError::NotRestored {
-            error: Box::new(error),
-            restore,
-        });
-    }
-    let left = start
-        .map(|st| super::travel::check_left(c, st, &final_cfg, place.static_friction, problem));
-    if let Some(l) = &left {
-        progress.report(Progress::Left(l.clone()));
-    }
-    let bad = left.clone().filter(|l| !l.ok);
-    match result {
-        Ok(mut o) => {
-            if let Some(l) = bad {
-                // A wall that does not hold is never saved: the previous config is back.
-                c.clear_faults().ok();
-                c.set_config(original).ok();
-                return Err(TuneError::Left { left: Box::new(l) });
-            }
-            if wall.is_some() {
-                c.save_config().map_err(|e| TuneError::Device {
-                    during: format!("saving the tuned config: {e}"),
-                    source: e,
-                })?;
-                o.saved = true;
-            }
-            o.device_left = left;
-            o.workspace = place.ws;
-            Ok(o)
-        }
-        // A failed (or cancelled) tune stays that error; its check was reported as progress.
-        Err(e) => Err(e),
-    }
 }
 
 /// The spring-only search starts at the expected limit, but not below this fraction of the
@@ -583,112 +505,6 @@ fn identify_and_predict(
         predicted,
         units,
     })
-}
-
-/// The spring of the moves so far (the centring one until a wall is found).
-fn home_of(place: &Place) -> Result<super::travel::GentleMove> {
-    place
-        .home
-        .ok_or_else(|| StepError::Failed("no spring to move the device with".into()))
-}
-
-/// Share of the force limit the way back and the move to the middle push with at most.
-const MOVE_FORCE_SHARE: f64 = 0.02;
-
-/// The workspace (issue 46): where the device starts, the travel the experiments keep to
-/// (reported), the firmware's travel window in the tests' config, and the device moved to the
-/// middle of the travel when it starts near an end. Returns the tests' base config (the wall
-/// at the test centre) and the room each side of it, counts.
-fn enter_workspace(
-    c: &mut Client,
-    s: &Settings,
-    original: &ServoConfig,
-    base: ServoConfig,
-    progress: &Reporter<'_>,
-    place: &mut Place,
-) -> Result<(ServoConfig, i64)> {
-    use super::travel::{centring_stiffness, GentleMove, Workspace};
-    let res = f64::from(c.info.resolution);
-    let rotational = c.info.counts_per_rev > 0;
-    let start = super::travel::where_now(c, &base)?;
-    let ws = Workspace::resolve(s.travel, original, start, res, rotational)?;
-    progress.report(Progress::Travel {
-        text: ws.describe(if rotational { "rad" } else { "m" }),
-    });
-    let (travel_min, travel_max) = ws.firmware_window(original);
-    let base = ServoConfig {
-        travel_min,
-        travel_max,
-        ..base
-    };
-    let force = MOVE_FORCE_SHARE * f64::from(original.force_limit);
-    let centre = ws.test_centre();
-    // The spring of the way back until a wall is found: the centring spring of the move's force.
-    let how = GentleMove {
-        k: centring_stiffness(force, ws.room_at(centre).max(1), res),
-        b: 0.0,
-        damper: base.damper,
-        force_n: force,
-    };
-    place.start = Some(start);
-    place.ws = Some(ws);
-    place.test_base = Some(base);
-    place.home = Some(how);
-    if centre != start {
-        progress.report(Progress::Travel {
-            text: format!(
-                "the device starts {} counts from the nearer end of the window: the experiments \
-             run from the middle, count {centre}",
-                ws.room_at(start)
-            ),
-        });
-        super::travel::move_to(c, &base, centre, how)?;
-    }
-    let base = ServoConfig {
-        wall_position: i32::try_from(centre).unwrap_or(base.wall_position),
-        ..base
-    };
-    c.set_config(&base)?;
-    Ok((base, ws.room_at(centre)))
-}
-
-/// The maximum velocity the travel leaves room for: `asked`, or less when a release or impact
-/// test at the lowest K the search may try (a quarter of the smaller predicted limit) would
-/// reach beyond `room` counts each side of the wall (saying so); an error naming the test and
-/// the travel it needs when even a tenth of a count per tick does not fit.
-fn velocity_within(
-    p: &PhysicalParams,
-    asked: f64,
-    predicted: &Predicted,
-    room: i64,
-    rotational: bool,
-    progress: &Reporter<'_>,
-) -> Result<f64> {
-    let k_low = predicted.guaranteed.min(predicted.expected).max(1e-12) / 4.0;
-    let ticks_per = p.period_s / p.resolution;
-    let reach = super::travel::test_reach_counts(asked * ticks_per, p.mass, k_low, p.period_s);
-    if reach <= room as f64 {
-        return Ok(asked);
-    }
-    let unit = if rotational { "rad/s" } else { "m/s" };
-    let v = asked * room as f64 / reach;
-    if v * ticks_per < 0.1 {
-        return Err(StepError::Failed(format!(
-            "the travel is too short to tune: the release and impact tests at K = {k_low:.4} \
-             and the maximum velocity {asked:.4} {unit} reach {reach:.0} counts each side of the \
-             wall, and the travel leaves {room} counts (even 0.1 count per tick would not fit); \
-             give the device's full travel with --travel MIN:MAX"
-        )));
-    }
-    progress.report(Progress::Travel {
-        text: format!(
-            "the release and impact tests at K = {k_low:.4} and the maximum velocity \
-             {asked:.4} {unit} need {reach:.0} counts of travel each side of the wall, and the \
-             travel leaves {room}: the maximum velocity is lowered to {v:.4} {unit} (walls are \
-             verified for hits up to that speed only)"
-        ),
-    });
-    Ok(v)
 }
 
 /// Force regime: above this K the wall's peak force at v, K·Δ·(d + ½) with d = v√(m/K)/Δ,
