@@ -156,6 +156,8 @@ struct Identification {
     predicted: Predicted,
     /// Force and stiffness units, for findings.
     units: (&'static str, &'static str),
+    /// Room each side of the tests' wall, raw counts.
+    room: i64,
 }
 
 fn tune_inner(
@@ -328,6 +330,7 @@ fn search_walls(
         progress: &report,
         slow_launch: std::cell::Cell::new(None),
         missed_launch: std::cell::Cell::new(None),
+        room: ident.room,
     };
     // Above the quiet ceiling no count can hold the wall's force KΔ/2 against friction: a test
     // that rests there rested on a bias (a hand or cable pulling to one side of the wall, a
@@ -478,7 +481,8 @@ fn identify_and_predict(
     let ws = place
         .ws
         .ok_or_else(|| StepError::Failed("no workspace".into()))?;
-    let room = ws.room_at(i64::from(base.wall_position)) >> base.coarsen_shift.min(16);
+    let room_raw = ws.room_at(i64::from(base.wall_position));
+    let room = room_raw >> base.coarsen_shift.min(16);
     let v = velocity_within(&p, asked, &predicted, room, rotational, progress)?;
     if v < asked {
         predicted = predict(&p, v)?;
@@ -504,6 +508,7 @@ fn identify_and_predict(
         v,
         predicted,
         units,
+        room: room_raw,
     })
 }
 

@@ -48,6 +48,9 @@ pub(crate) struct Run<'a> {
     pub(crate) slow_launch: std::cell::Cell<Option<Delivered>>,
     /// The last impact launch that failed off its asked speed ([`Verdict::NotLaunched`]).
     pub(crate) missed_launch: std::cell::Cell<Option<Delivered>>,
+    /// Room each side of the tests' wall, raw counts (issue 46): a device a test left farther
+    /// than half of it away is walked back before the next test.
+    pub(crate) room: i64,
 }
 
 /// What the searches found beside their result.
@@ -106,6 +109,7 @@ impl Run<'_> {
         test: Test,
         thorough: bool,
     ) -> Result<TestRun> {
+        crate::travel::recentre(c, base, k, self.room)?;
         let run = run_test(
             c,
             base,

@@ -488,3 +488,34 @@ pub fn check_left(
         problem,
     }
 }
+
+/// Where tests drift (each puts its wall where the last left the device): when the device
+/// rests farther than half the `room` (raw counts; 0: no limit) from `base`'s wall, it is
+/// walked back there gently (a spring of K/16 of the K under test, far below it and so far
+/// more stable, pushing at most 2 % of the force limit; [`move_to`]) and the wall is off again.
+///
+/// # Errors
+/// The device failing, or the move's.
+pub fn recentre(c: &mut Client, base: &ServoConfig, k: f64, room: i64) -> Result<()> {
+    if room <= 0 || k.is_nan() || k <= 0.0 {
+        return Ok(());
+    }
+    let wall = i64::from(base.wall_position);
+    let at = where_now(c, base)?;
+    if (at - wall).abs() * 2 <= room {
+        return Ok(());
+    }
+    let how = GentleMove {
+        k: k / 16.0,
+        b: 0.0,
+        damper: base.damper,
+        force_n: 0.02 * f64::from(base.force_limit),
+    };
+    move_to(c, base, wall, how)?;
+    c.set_config(&ServoConfig {
+        stiffness: 0.0,
+        damping: 0.0,
+        ..*base
+    })?;
+    Ok(())
+}

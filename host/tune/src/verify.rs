@@ -497,10 +497,7 @@ fn wall_under_test(c: &mut Client, base: &ServoConfig, k: f64, test: Test) -> Re
         damping: 0.0,
         ..*base
     })?;
-    let mut rest = rest_position(c)?;
-    if let Some(back) = recentre(c, base, k, rest)? {
-        rest = back;
-    }
+    let rest = rest_position(c)?;
     let one_sided = matches!(
         test,
         Test::Impact {
@@ -518,36 +515,6 @@ fn wall_under_test(c: &mut Client, base: &ServoConfig, k: f64, test: Test) -> Re
         },
         ..*base
     })
-}
-
-/// Where tests drift (each puts its wall where the last left the device): when `base` carries
-/// a travel window and the device rests (at `rest`, counts from `base`'s wall) farther than
-/// half the room each side of `base`'s wall, it is walked back there gently (a spring of K/16,
-/// far below the K under test and so far more stable, pushing at most a tenth of the force
-/// limit;
-/// [`crate::travel::move_to`]) and the new rest is returned (issue 46).
-fn recentre(c: &mut Client, base: &ServoConfig, k: f64, rest: i32) -> Result<Option<i32>> {
-    let (Some(lo), Some(hi)) = (base.travel_min, base.travel_max) else {
-        return Ok(None);
-    };
-    let wall = i64::from(base.wall_position);
-    let room = (wall - i64::from(lo)).min(i64::from(hi) - wall) >> base.coarsen_shift.min(16);
-    if i64::from(rest).abs() * 2 <= room || k.is_nan() || k <= 0.0 {
-        return Ok(None);
-    }
-    let how = crate::travel::GentleMove {
-        k: k / 16.0,
-        b: 0.0,
-        damper: base.damper,
-        force_n: 0.02 * f64::from(base.force_limit),
-    };
-    crate::travel::move_to(c, base, wall, how)?;
-    c.set_config(&ServoConfig {
-        stiffness: 0.0,
-        damping: 0.0,
-        ..*base
-    })?;
-    Ok(Some(rest_position(c)?))
 }
 
 /// How a test's record is cut and judged.
