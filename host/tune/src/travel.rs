@@ -338,6 +338,42 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
     Ok(walk.at)
 }
 
+/// Waits until the device stays within one count (50 samples 2 ms apart spanning at most two
+/// neighbouring counts: a spring that chatters within one count is as settled as a move needs);
+/// returns the lower of the two counts, from the wall.
+///
+/// # Errors
+/// The device failing, or not settled within 20 s.
+fn settled_within_one(c: &mut Client) -> Result<i32> {
+    let rate = c.info.servo_rate_hz.max(1);
+    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
+    c.stream_start(decimation)?;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let mut recent = std::collections::VecDeque::with_capacity(51);
+    let result = loop {
+        if std::time::Instant::now() > deadline {
+            break Err(super::error::StepError::Failed(
+                "the device did not settle within one count within 20 s".into(),
+            ));
+        }
+        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+            for x in &b.samples {
+                recent.push_back(x.count);
+                if recent.len() > 50 {
+                    recent.pop_front();
+                }
+            }
+            let lo = recent.iter().copied().min().unwrap_or(0);
+            let hi = recent.iter().copied().max().unwrap_or(0);
+            if recent.len() == 50 && i64::from(hi) - i64::from(lo) <= 1 {
+                break Ok(lo);
+            }
+        }
+    };
+    c.stream_stop()?;
+    result
+}
+
 /// The state of a [`move_to`]: the config it sets, where the device is, the target.
 struct Walk {
     cfg: ServoConfig,
@@ -357,7 +393,7 @@ impl Walk {
             ..self.cfg
         };
         c.set_config(&self.cfg)?;
-        self.at = raw_of(&self.cfg, super::rest::rest_position(c)?);
+        self.at = raw_of(&self.cfg, settled_within_one(c)?);
         let latched = c.faults()?.latched;
         if latched != 0 {
             bail!(
