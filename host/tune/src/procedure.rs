@@ -212,6 +212,7 @@ fn tune_inner(
         b: wall.b_set,
         damper: wall.damper,
         force_n: MOVE_FORCE_SHARE * f64::from(original.force_limit),
+        chatters: !wall.rests(),
     });
     place.final_cfg = Some(ServoConfig {
         stiffness: wall.k_set as f32,

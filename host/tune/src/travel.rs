@@ -238,6 +238,10 @@ pub struct GentleMove {
     pub damper: stiffwall_proto::DamperLaw,
     /// Largest push of one step, N (N·m).
     pub force_n: f64,
+    /// The spring may chatter within one count (a wall set with `--accept-chatter`): a step
+    /// then waits until the device stays within one count, not for exact rest (which makes
+    /// where it stops depend on the link's timing, so only the way back uses it).
+    pub chatters: bool,
 }
 
 /// Raw count of a count `n` read relative to the wall of `cfg` (effective counts).
@@ -321,6 +325,7 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
             b: k * t,
             damper: stiffwall_proto::DamperLaw::Difference,
             force_n: how.force_n,
+            chatters: how.chatters,
         };
         let stop = target - (target - walk.at).signum() * far / 2;
         walk.go(c, stop, coarse, step)?;
@@ -393,7 +398,12 @@ impl Walk {
             ..self.cfg
         };
         c.set_config(&self.cfg)?;
-        self.at = raw_of(&self.cfg, settled_within_one(c)?);
+        let n = if how.chatters {
+            settled_within_one(c)?
+        } else {
+            super::rest::rest_position(c)?
+        };
+        self.at = raw_of(&self.cfg, n);
         let latched = c.faults()?.latched;
         if latched != 0 {
             bail!(
@@ -546,6 +556,7 @@ pub fn recentre(c: &mut Client, base: &ServoConfig, k: f64, room: i64) -> Result
         b: 0.0,
         damper: base.damper,
         force_n: 0.02 * f64::from(base.force_limit),
+        chatters: false,
     };
     move_to(c, base, wall, how)?;
     c.set_config(&ServoConfig {

@@ -140,6 +140,7 @@ pub(super) fn enter_workspace(
         b: 0.0,
         damper: base.damper,
         force_n: force,
+        chatters: false,
     };
     place.start = Some(start);
     place.ws = Some(ws);
