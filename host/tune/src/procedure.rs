@@ -44,7 +44,8 @@ use super::steps::{Notes, Run};
 use super::travel::TravelSource;
 use super::verify::rest_position;
 use super::workspace::{
-    enter_workspace, finish, home_of, velocity_within, Place, MOVE_FORCE_SHARE,
+    enter_workspace, finish, home_of, velocity_within, Place, BREAKAWAY_MARGIN,
+    MOVE_MAX_FORCE_SHARE,
 };
 use stiffwall_client::{Cancel, Client};
 use stiffwall_core::criteria;
@@ -158,6 +159,8 @@ struct Identification {
     units: (&'static str, &'static str),
     /// Room each side of the tests' wall, raw counts.
     room: i64,
+    /// The push of the moves that walk a drifting device back, N (N·m).
+    move_force_n: f64,
 }
 
 fn tune_inner(
@@ -207,12 +210,16 @@ fn tune_inner(
         model_mismatch.push(why.clone());
     }
     // Step 5 (in `finish`, after the way back): set, check and save.
+    // The way back walks with a sixteenth of the wall found (as the search's own walks do):
+    // far below the stiffness verified, so a step of the walk, a deflection of up to its push
+    // F/(KΔ), cannot ring it (at the wall's own K, behind a delay, it can: a light rotor with
+    // two ticks of delay grew from a 20-count step to the force limit's limit cycle).
     place.home = Some(super::travel::GentleMove {
-        k: wall.k_set,
-        b: wall.b_set,
+        k: wall.k_set / 16.0,
+        b: 0.0,
         damper: wall.damper,
-        force_n: MOVE_FORCE_SHARE * f64::from(original.force_limit),
         chatters: !wall.rests(),
+        ..home_of(place)?
     });
     place.final_cfg = Some(ServoConfig {
         stiffness: wall.k_set as f32,
@@ -332,6 +339,7 @@ fn search_walls(
         slow_launch: std::cell::Cell::new(None),
         missed_launch: std::cell::Cell::new(None),
         room: ident.room,
+        move_force_n: ident.move_force_n,
     };
     // Above the quiet ceiling no count can hold the wall's force KΔ/2 against friction: a test
     // that rests there rested on a bias (a hand or cable pulling to one side of the wall, a
@@ -453,6 +461,20 @@ fn identify_and_predict(
         ..Evidence::default()
     };
     breakaway(c, &base, &id, rest, &mut evidence, progress, room)?;
+    // The moves from now on know the mass (it bounds the glide's damper) and push harder
+    // than the breakaway measured (a push below static friction never moves the device).
+    if let Some(home) = place.home.as_mut() {
+        let breakaway = evidence
+            .breakaway_measured
+            .iter()
+            .flatten()
+            .fold(0.0f64, |a, f| a.max(f.abs()));
+        home.mass = Some(id.mass);
+        home.force_n = home
+            .force_n
+            .max(BREAKAWAY_MARGIN * breakaway)
+            .min(MOVE_MAX_FORCE_SHARE * f64::from(original.force_limit));
+    }
     // The tests start from the middle of the room, wherever the excitations left the device.
     let centre = i64::from(base.wall_position) - (i64::from(rest) << base.coarsen_shift.min(16));
     let at = super::travel::move_to(c, &base, centre, home_of(place)?)?;
@@ -510,6 +532,7 @@ fn identify_and_predict(
         predicted,
         units,
         room: room_raw,
+        move_force_n: home_of(place)?.force_n,
     })
 }
 

@@ -7,19 +7,33 @@
 use super::error::{bail, Result, StepError};
 use stiffwall_client::Client;
 
+/// Host time the device gets to come to rest, s ([`rest_position`]).
+pub const REST_WAIT_S: f64 = 20.0;
+
 /// Waits until the device (wall off) has stopped; returns its count from the wall position.
+///
+/// # Errors
+/// The device failing, or not at rest within [`REST_WAIT_S`].
 pub fn rest_position(c: &mut Client) -> Result<i32> {
+    rest_position_within(c, REST_WAIT_S)
+}
+
+/// [`rest_position`] with a wait of `seconds` of host time (a long gentle move needs more).
+///
+/// # Errors
+/// The device failing, or not at rest within `seconds`.
+pub fn rest_position_within(c: &mut Client, seconds: f64) -> Result<i32> {
     let rate = c.info.servo_rate_hz.max(1);
     // One sample every 2 ms of device time; at rest when 50 consecutive samples agree.
     let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
     c.stream_start(decimation)?;
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
     let (mut last, mut same) = (i32::MIN, 0u32);
     let result = loop {
         if std::time::Instant::now() > deadline {
-            break Err(StepError::Failed(
-                "the device did not come to rest within 20 s with the wall off".into(),
-            ));
+            break Err(StepError::Failed(format!(
+                "the device did not come to rest within {seconds:.0} s"
+            )));
         }
         if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
             for x in &b.samples {

@@ -51,6 +51,8 @@ pub(crate) struct Run<'a> {
     /// Room each side of the tests' wall, raw counts (issue 46): a device a test left farther
     /// than half of it away is walked back before the next test.
     pub(crate) room: i64,
+    /// The push of the move that walks a drifting device back, N (N·m).
+    pub(crate) move_force_n: f64,
 }
 
 /// What the searches found beside their result.
@@ -109,7 +111,15 @@ impl Run<'_> {
         test: Test,
         thorough: bool,
     ) -> Result<TestRun> {
-        crate::travel::recentre(c, base, k, self.room)?;
+        let back = crate::travel::GentleMove {
+            k: k / 16.0,
+            b: 0.0,
+            damper: base.damper,
+            force_n: self.move_force_n,
+            chatters: false,
+            mass: Some(self.p.mass),
+        };
+        crate::travel::recentre(c, base, back, self.room)?;
         let run = run_test(
             c,
             base,

@@ -242,6 +242,8 @@ pub struct GentleMove {
     /// then waits until the device stays within one count, not for exact rest (which makes
     /// where it stops depend on the link's timing, so only the way back uses it).
     pub chatters: bool,
+    /// The device's mass (inertia), kg (kg·m²), once identified: it bounds the glide's damper.
+    pub mass: Option<f64>,
 }
 
 /// Raw count of a count `n` read relative to the wall of `cfg` (effective counts).
@@ -263,16 +265,16 @@ pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
     Ok(raw_of(&cfg, super::rest::rest_position(c)?))
 }
 
-/// Steps of the coarse phase of a long move at most: its spring is chosen so that the whole
-/// distance takes about this many steps of the move's force.
+/// Steps of the fine phase's reach: a move farther than this many fine steps glides first.
 const COARSE_STEPS: i64 = 20;
 /// Corrections of the final approach at most ([`move_to`]).
 const NUDGES: usize = 12;
 
 /// Brings the device gently to raw count `target` (module header), in three phases:
-/// - *coarse*, while the device is more than 20 of the fine steps away: a spring weak enough
-///   that the remaining distance takes [`COARSE_STEPS`] steps of the move's force, damped by
-///   B = K·T on the plain difference (more than the sampled spring's own −K·T/2);
+/// - *glide* ([`glide`]), while the device is more than [`COARSE_STEPS`] fine steps away: the
+///   firmware's force limit lowered to the move's push, a weak spring centred on the target
+///   and a damper that holds the speed to what the push can reach (force and speed bounded
+///   whatever the device does);
 /// - *fine*: `how`'s spring, its origin walking to the target in steps of `how.force_n`;
 /// - *nudges*: the origin moved by the device's remaining offset, up to [`NUDGES`] times,
 ///   until it rests within a count of the target (static friction holds a spring's device up
@@ -289,7 +291,6 @@ const NUDGES: usize = 12;
 pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove) -> Result<i64> {
     let shift = base.coarsen_shift.min(16);
     let res = f64::from(c.info.resolution) * f64::from(1u32 << shift);
-    let t = 1.0 / f64::from(c.info.servo_rate_hz.max(1));
     // A bounded speed too: a step of s counts rings the spring at most s·ωT counts per tick,
     // ωT ≤ 2 on any stable sampled spring, so s ≤ an eighth of the encoder-jump limit keeps
     // the move far from that fault.
@@ -306,10 +307,14 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
         ..*base
     })?;
     super::rest::clear_faults(c)?;
+    // No tick of the walk pushes harder than twice its step's push (a spring that rings
+    // cannot feed a limit cycle with the full force range).
+    let walk_limit = (2.0 * how.force_n).min(f64::from(base.force_limit)) as f32;
     let mut walk = Walk {
         cfg: ServoConfig {
             wall: stiffwall_proto::WallMode::Bidirectional,
             energy_monitor: false,
+            force_limit: walk_limit,
             ..*base
         },
         at: where_now(c, base)?,
@@ -317,18 +322,7 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
     };
     let far = COARSE_STEPS * fine_step;
     if (target - walk.at).abs() > far {
-        let distance = (target - walk.at).abs() - far / 2;
-        let step = (distance / COARSE_STEPS).clamp(1, jump_cap);
-        let k = (how.force_n / (step >> shift).max(1) as f64 / res).min(how.k);
-        let coarse = GentleMove {
-            k,
-            b: k * t,
-            damper: stiffwall_proto::DamperLaw::Difference,
-            force_n: how.force_n,
-            chatters: how.chatters,
-        };
-        let stop = target - (target - walk.at).signum() * far / 2;
-        walk.go(c, stop, coarse, step)?;
+        glide(c, &mut walk, how, far)?;
     }
     walk.go(c, target, how, fine_step)?;
     let mut origin = target;
@@ -341,6 +335,135 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
         walk.set(c, origin, how)?;
     }
     Ok(walk.at)
+}
+
+/// Host time a glide aims to take, s (longer when a speed cap below holds it back).
+const GLIDE_SECONDS: f64 = 2.0;
+/// A glide's speed, at most this share of the encoder-jump limit per tick.
+const GLIDE_JUMP_SHARE: f64 = 1.0 / 16.0;
+/// A glide's speed, at most this share of the over-velocity limit when one is set.
+const GLIDE_VELOCITY_SHARE: f64 = 0.5;
+/// The glide's damper, B·T/m at most when the mass is known: a sampled damper alone is
+/// stable up to B·T/m = 2 without delay, and a delay of d ticks lowers that to about π/(2d).
+const GLIDE_DAMPER_BT_PER_M: f64 = 0.25;
+/// Most the glide's push grows to, share of the force limit, when the device does not move
+/// (static friction above the push): it doubles from `GentleMove::force_n` up to this.
+const GLIDE_MAX_FORCE_SHARE: f64 = 0.25;
+/// Glides at most (each doubling the push when the device stalled).
+const GLIDES: usize = 6;
+/// Telemetry samples (2 ms apart) without a count's progress after which a glide has stalled.
+const GLIDE_STALL_SAMPLES: usize = 250;
+/// The glide's push is a spring whose origin lies this many times the distance beyond the
+/// target: its force changes by less than a tenth on the way (a nearly constant push).
+const GLIDE_ORIGIN_BEYOND: f64 = 10.0;
+
+/// The glide of [`move_to`]: a nearly constant push F toward the target (a spring whose origin
+/// lies [`GLIDE_ORIGIN_BEYOND`] distances beyond it, the firmware's force limit at 1.1 F so no
+/// tick pushes harder) against a damper B = F/v (the plain difference), so the device moves at
+/// no more than v: a speed that covers the distance in about [`GLIDE_SECONDS`], capped by
+/// [`GLIDE_JUMP_SHARE`] of the encoder-jump limit and [`GLIDE_VELOCITY_SHARE`] of the
+/// over-velocity limit. The host watches the count and, within `far / 2` of the target or past
+/// it, stops the device with the damper alone. A device that stalls (static friction above the
+/// push) gets twice the push, up to [`GLIDE_MAX_FORCE_SHARE`] of the force limit.
+fn glide(c: &mut Client, walk: &mut Walk, how: GentleMove, far: i64) -> Result<()> {
+    let raw_res = f64::from(c.info.resolution);
+    let t = 1.0 / f64::from(walk.cfg.servo_rate_hz.max(1));
+    let limit = f64::from(walk.cfg.force_limit);
+    let mut force = how.force_n.min(limit);
+    for _ in 0..GLIDES {
+        let distance = (walk.target - walk.at).abs();
+        if distance <= far / 2 {
+            return Ok(());
+        }
+        let mut v = distance as f64 * raw_res / GLIDE_SECONDS;
+        v = v.min(GLIDE_JUMP_SHARE * f64::from(walk.cfg.encoder_jump_counts) * raw_res / t);
+        if walk.cfg.max_velocity > 0.0 {
+            v = v.min(GLIDE_VELOCITY_SHARE * f64::from(walk.cfg.max_velocity));
+        }
+        let mut b = force / v.max(f64::MIN_POSITIVE);
+        if let Some(m) = how.mass {
+            b = b.min(GLIDE_DAMPER_BT_PER_M * m / t);
+        }
+        let dir = (walk.target - walk.at).signum();
+        let beyond = (GLIDE_ORIGIN_BEYOND * distance as f64) as i64;
+        let origin = walk.target + dir * beyond;
+        let k = force / ((origin - walk.at).abs() as f64 * raw_res);
+        let push = ServoConfig {
+            stiffness: k as f32,
+            damping: b as f32,
+            damper: stiffwall_proto::DamperLaw::Difference,
+            force_limit: (1.1 * force).min(limit) as f32,
+            wall_position: clamp_i32(origin),
+            coarsen_shift: 0,
+            ..walk.cfg
+        };
+        let wait_s = 3.0 * distance as f64 * raw_res / v + super::rest::REST_WAIT_S;
+        let (moved, stalled) = watch_glide(c, walk, &push, far / 2, wait_s)?;
+        // Stopped by the damper alone, then at rest with nothing on.
+        c.set_config(&ServoConfig {
+            stiffness: 0.0,
+            ..push
+        })?;
+        walk.at = where_now(c, &walk.cfg)?;
+        walk.check_faults(c)?;
+        if stalled || moved * 4 < distance {
+            force = (force * 2.0).min(GLIDE_MAX_FORCE_SHARE * limit).max(force);
+        }
+    }
+    Ok(())
+}
+
+/// Sets `push` and watches the device until it is within `near` counts of `walk.target` or
+/// past it, stalls ([`GLIDE_STALL_SAMPLES`] without progress) or `seconds` of host time pass.
+/// Returns how far it moved toward the target, counts, and whether it stalled.
+fn watch_glide(
+    c: &mut Client,
+    walk: &Walk,
+    push: &ServoConfig,
+    near: i64,
+    seconds: f64,
+) -> Result<(i64, bool)> {
+    let dir = (walk.target - walk.at).signum();
+    c.set_config(push)?;
+    let rate = c.info.servo_rate_hz.max(1);
+    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
+    c.stream_start(decimation)?;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
+    let (mut best, mut since_best) = (0i64, 0usize);
+    let stalled = loop {
+        if std::time::Instant::now() > deadline {
+            break false;
+        }
+        let Some(batch) = c.next_batch(std::time::Duration::from_millis(200))? else {
+            continue;
+        };
+        let mut done = None;
+        for x in &batch.samples {
+            let at = i64::from(push.wall_position) + i64::from(x.count);
+            let progress = (at - walk.at) * dir;
+            if progress > best {
+                (best, since_best) = (progress, 0);
+            } else {
+                since_best += 1;
+            }
+            if (walk.target - at) * dir <= near || x.flags & stiffwall_proto::flags::SAFE_MODE != 0
+            {
+                done = Some(false);
+            } else if since_best >= GLIDE_STALL_SAMPLES {
+                done = Some(true);
+            }
+        }
+        if let Some(stalled) = done {
+            break stalled;
+        }
+    };
+    c.stream_stop()?;
+    Ok((best, stalled))
+}
+
+/// `n` as an i32, saturated.
+fn clamp_i32(n: i64) -> i32 {
+    i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX })
 }
 
 /// Waits until the device stays within one count (50 samples 2 ms apart spanning at most two
@@ -389,12 +512,11 @@ struct Walk {
 impl Walk {
     /// The spring `how` with its origin at `origin`, then a wait for rest.
     fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
-        let to_i32 = |n: i64| i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX });
         self.cfg = ServoConfig {
             stiffness: how.k as f32,
             damping: how.b as f32,
             damper: how.damper,
-            wall_position: to_i32(origin),
+            wall_position: clamp_i32(origin),
             ..self.cfg
         };
         c.set_config(&self.cfg)?;
@@ -404,6 +526,11 @@ impl Walk {
             super::rest::rest_position(c)?
         };
         self.at = raw_of(&self.cfg, n);
+        self.check_faults(c)
+    }
+
+    /// An error naming the faults the supervisor latched on the way, if any.
+    fn check_faults(&self, c: &mut Client) -> Result<()> {
         let latched = c.faults()?.latched;
         if latched != 0 {
             bail!(
@@ -537,13 +664,13 @@ pub fn check_left(
 
 /// Where tests drift (each puts its wall where the last left the device): when the device
 /// rests farther than half the `room` (raw counts; 0: no limit) from `base`'s wall, it is
-/// walked back there gently (a spring of K/16 of the K under test, far below it and so far
-/// more stable, pushing at most 2 % of the force limit; [`move_to`]) and the wall is off again.
+/// walked back there gently with `how` ([`move_to`]; the search uses a spring of K/16 of the K
+/// under test, far below it and so far more stable) and the wall is off again.
 ///
 /// # Errors
 /// The device failing, or the move's.
-pub fn recentre(c: &mut Client, base: &ServoConfig, k: f64, room: i64) -> Result<()> {
-    if room <= 0 || k.is_nan() || k <= 0.0 {
+pub fn recentre(c: &mut Client, base: &ServoConfig, how: GentleMove, room: i64) -> Result<()> {
+    if room <= 0 || how.k.is_nan() || how.k <= 0.0 {
         return Ok(());
     }
     let wall = i64::from(base.wall_position);
@@ -551,13 +678,6 @@ pub fn recentre(c: &mut Client, base: &ServoConfig, k: f64, room: i64) -> Result
     if (at - wall).abs() * 2 <= room {
         return Ok(());
     }
-    let how = GentleMove {
-        k: k / 16.0,
-        b: 0.0,
-        damper: base.damper,
-        force_n: 0.02 * f64::from(base.force_limit),
-        chatters: false,
-    };
     move_to(c, base, wall, how)?;
     c.set_config(&ServoConfig {
         stiffness: 0.0,

@@ -103,8 +103,13 @@ pub(super) fn home_of(place: &Place) -> Result<super::travel::GentleMove> {
         .ok_or_else(|| StepError::Failed("no spring to move the device with".into()))
 }
 
-/// Share of the force limit the way back and the move to the middle push with at most.
+/// Share of the force limit the way back and the move to the middle push with, before the
+/// breakaway ramps have measured the static friction.
 pub(super) const MOVE_FORCE_SHARE: f64 = 0.02;
+/// Once measured, the moves push at least this many times the breakaway force.
+pub(super) const BREAKAWAY_MARGIN: f64 = 1.5;
+/// The moves' push, share of the force limit at most.
+pub(super) const MOVE_MAX_FORCE_SHARE: f64 = 0.25;
 
 /// The workspace (issue 46): where the device starts, the travel the experiments keep to
 /// (reported), the firmware's travel window in the tests' config, and the device moved to the
@@ -141,6 +146,7 @@ pub(super) fn enter_workspace(
         damper: base.damper,
         force_n: force,
         chatters: false,
+        mass: None,
     };
     place.start = Some(start);
     place.ws = Some(ws);
