@@ -215,11 +215,24 @@ fn refuses_other_boards_and_corrupt_files_before_running() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `hostctl tune --json` on `target`: (set K, every set wall rests, the largest resting K its
-/// release search found).
+/// `hostctl tune --json` on `target` (not a dry run: the wall is set and saved): (set K, every
+/// set wall rests, the largest resting K its release search found). Every tune must leave the
+/// device within 2 counts of where it started, at rest, with no fault (issue 46), by its own
+/// final check.
 fn tune(target: &[&str]) -> (f64, bool, f64) {
     let (o, _) = run_ok(hostctl().args(["tune", "--fast", "--json"]).args(target));
     let t = &json(&o)["tune"];
+    let left = &t["device_left"];
+    let moved = left["count"].as_i64().expect("device_left.count")
+        - left["start"].as_i64().expect("device_left.start");
+    assert!(
+        left["ok"].as_bool() == Some(true)
+            && left["at_rest"].as_bool() == Some(true)
+            && left["faults"].as_array().is_some_and(Vec::is_empty)
+            && moved.abs() <= 2,
+        "tune {target:?} left the device {moved} counts from its start: {left}"
+    );
+    assert_eq!(t["saved"].as_bool(), Some(true), "tune {target:?}: not saved");
     (
         t["k_set"].as_f64().expect("k_set"),
         t["rests"].as_bool().expect("rests"),

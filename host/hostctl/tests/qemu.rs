@@ -1,7 +1,8 @@
 //! The QEMU scenarios: a real Cortex-M firmware image driven through hostctl's own serial
 //! client, each scenario's transcript compared with an expected file. Opt-in (`#[ignore]`).
 //!
-//! Two targets run the same six scenarios:
+//! Two targets run the same seven scenarios (the last, a saved tune, is checked by assertions,
+//! not a transcript):
 //! - the QEMU image (`qemu-an386`, its own simulated Impulse Engine) under
 //!   `qemu-system-arm -serial pty`: `cargo xtask qemu` builds it, sets `STIFFWALL_QEMU_IMAGE` and
 //!   runs these; expected transcripts in `firmware/boards/qemu-an386/scenarios/`;
@@ -362,6 +363,44 @@ fn tune_dry_run_identifies_the_plant() {
     eprintln!("{o:#?}");
     finish(q, c);
     check("tune_dry_run", &t);
+}
+
+/// Issue 46 on the image: a tune that is not a dry run saves its wall, and the device it leaves
+/// is where it started (within 2 counts), at rest, with no fault latched, by the tune's own
+/// final check and by the image's fault state read afterwards. Not a transcript: where the
+/// device rests within those counts depends on the link's timing.
+#[test]
+#[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
+fn tune_leaves_the_device_where_it_found_it() {
+    use stiffwall_tune::{tune, Settings};
+    let (q, mut c) = boot();
+    let o = tune(
+        &mut c,
+        &Settings {
+            excite_seconds: 2.0,
+            ..Settings::default()
+        },
+        &stiffwall_client::Cancel::default(),
+        &mut |m| eprintln!("tune: {m}"),
+    )
+    .expect("tune");
+    let left = o.device_left.clone().expect("tune.device_left");
+    eprintln!("{left}");
+    assert!(o.saved, "a tune that is not a dry run saves its wall");
+    assert!(
+        left.ok && left.at_rest && left.faults.is_empty(),
+        "{left:?}"
+    );
+    assert!((left.count - left.start).abs() <= 2, "{left:?}");
+    let faults = c.faults().expect("faults");
+    assert_eq!(faults.latched, 0, "a fault is latched after tune");
+    let cfg = c.get_config().expect("config");
+    assert_eq!(
+        f64::from(cfg.stiffness),
+        f64::from(o.k_set as f32),
+        "the wall set"
+    );
+    finish(q, c);
 }
 
 /// Issue 11, acceptance on the image: `record --seconds 10` while a second writer floods the

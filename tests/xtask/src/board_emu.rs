@@ -12,7 +12,7 @@
 //! hostctl and runs the emulated-board tests (`host/board-emu/tests/board.rs`, `#[ignore]`d,
 //! all must run): boot and clock tree, info over the pty, tune against the virtual device,
 //! release counts, config across a power cycle, the watchdog, refusals, and the mutation checks
-//! (each mutant must fail its test); then the six QEMU scenarios of `host/hostctl/tests/qemu.rs`
+//! (each mutant must fail its test); then the seven QEMU scenarios of `host/hostctl/tests/qemu.rs`
 //! on each image (`STIFFWALL_SCENARIO_BOARD`), against the transcripts in
 //! `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`. `--bench` prints the cycles per servo tick and the CPU load
 //! at 1, 5 and 10 kHz for docs/BENCHMARKS.md.
@@ -131,7 +131,7 @@ pub fn board_emu(args: &[String]) -> Result<()> {
     scenarios()
 }
 
-/// The six QEMU scenarios (`host/hostctl/tests/qemu.rs`) on each Nucleo image, against
+/// The seven QEMU scenarios (`host/hostctl/tests/qemu.rs`) on each Nucleo image, against
 /// `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`.
 fn scenarios() -> Result<()> {
     for output in ["dac", "pwm"] {

@@ -69,4 +69,4 @@ pub fn scenarios_command() -> std::process::Command {
 }
 
 /// The scenarios of `host/hostctl/tests/qemu.rs` (all must run, here and on the emulated board).
-pub const QEMU_SCENARIOS: usize = 6;
+pub const QEMU_SCENARIOS: usize = 7;
