@@ -384,6 +384,9 @@ fn glide(c: &mut Client, walk: &mut Walk, how: GentleMove, far: i64) -> Result<(
         if let Some(m) = how.mass {
             b = b.min(GLIDE_DAMPER_BT_PER_M * m / t);
         }
+        // The firmware's largest damping at shift 0 (its gain of 2^14 codes per count per
+        // tick, half the stiffness limit's per tick), with a margin for rounding.
+        b = b.min(0.99 * f64::from(c.info.limits.max_stiffness) * t / 2.0);
         let dir = (walk.target - walk.at).signum();
         let beyond = (GLIDE_ORIGIN_BEYOND * distance as f64) as i64;
         let origin = walk.target + dir * beyond;

@@ -45,16 +45,16 @@ pub(super) fn finish(
 ) -> Result<Outcome, TuneError> {
     let mut problem = None;
     let start = place.start;
+    let wall = place.final_cfg.filter(|_| result.is_ok() && !s.dry_run);
+    let final_cfg = wall.unwrap_or(*original);
     if let (Some(start), Some(how)) = (start, place.home) {
         progress.report(Progress::Returning { target: start });
         let base = place.test_base.unwrap_or(*original);
         c.clear_faults().ok();
-        if let Err(e) = super::travel::move_to(c, &base, start, how) {
+        if let Err(e) = super::travel::move_to(c, &base, free_side_of(&final_cfg, start), how) {
             problem = Some(format!("the way back failed: {e}"));
         }
     }
-    let wall = place.final_cfg.filter(|_| result.is_ok() && !s.dry_run);
-    let final_cfg = wall.unwrap_or(*original);
     // Only this tune's faults are latched now (the procedure cleared any before its tests).
     c.clear_faults().ok();
     if let Err(restore) = c.set_config(&final_cfg) {
@@ -93,6 +93,20 @@ pub(super) fn finish(
         }
         // A failed (or cancelled) tune stays that error; its check was reported as progress.
         Err(e) => Err(e),
+    }
+}
+
+/// Where the way back aims: `start`, or a count short of it on the free side when the final
+/// config's one-sided wall would be in contact there (n = count − wall ≥ 0): a device a count
+/// inside a stiff wall is pushed out by it, at rest a count outside nothing touches it.
+fn free_side_of(final_cfg: &ServoConfig, start: i64) -> i64 {
+    let in_contact = final_cfg.stiffness > 0.0
+        && final_cfg.wall == stiffwall_proto::WallMode::OneSided
+        && start >= i64::from(final_cfg.wall_position);
+    if in_contact {
+        start - 1
+    } else {
+        start
     }
 }
 
