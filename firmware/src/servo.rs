@@ -46,6 +46,8 @@ mod damper_monitor_tests;
 #[cfg(test)]
 mod excite_tests;
 #[cfg(test)]
+mod fixture;
+#[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod travel_tests;

@@ -9,16 +9,7 @@ use crate::numeric::{Fx32, F32};
 use proptest::prelude::*;
 use stiffwall_proto::{DamperLaw, ExciteProfile, WallMode, MAX_DEADBAND_COUNTS};
 
-/// Binary-exact units: Δ = 2^-13 m, 2^-10 N per code, so k_half = K/16 codes exactly.
-fn board() -> BoardInfo {
-    BoardInfo {
-        resolution: 1.0 / 8192.0,
-        force_per_code: 1.0 / 1024.0,
-        max_code: 30000,
-        encoder_bits: 32,
-        ..BoardInfo::default()
-    }
-}
+use super::fixture::board;
 
 /// Exact force in codes for count n, from the SI config (f64).
 fn exact(cfg: &ServoConfig, b: &BoardInfo, n: i32) -> f64 {

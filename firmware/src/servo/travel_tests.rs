@@ -1,46 +1,11 @@
 //! Unit tests of the travel window: the supervisor's `TRAVEL` fault on the raw count.
 
 use super::*;
-use crate::channels::{Channels, HostPort};
-use crate::hal::{HeldCode as Out, SampledCount as Enc};
+use crate::channels::Channels;
+use crate::hal::HeldCode as Out;
 use stiffwall_proto::{ExciteProfile, SafeMode};
 
-/// Binary-exact units (as `tests::board`): Δ = 2^-13 m, 2^-10 N per code, so k_half = K/16
-/// codes exactly, and at 1024 Hz g_B = 128·B codes per count per tick.
-fn board() -> BoardInfo {
-    BoardInfo {
-        resolution: 1.0 / 8192.0,
-        force_per_code: 1.0 / 1024.0,
-        max_code: 30000,
-        encoder_bits: 32,
-        ..BoardInfo::default()
-    }
-}
-
-/// A K = 8 wall (k_half = ½: the spring's code at effective count n is exactly −n) at
-/// 1024 Hz, 20 N limit, no heartbeat (no host here).
-fn wall() -> ServoConfig {
-    ServoConfig {
-        stiffness: 8.0,
-        servo_rate_hz: 1024,
-        force_limit: 20.0,
-        heartbeat_timeout_ms: 0,
-        ..ServoConfig::default()
-    }
-}
-
-fn count(c: i32) -> Enc {
-    Enc(c as u32)
-}
-
-/// The telemetry samples queued so far.
-fn samples(hp: &mut HostPort<'_>) -> std::vec::Vec<Sample> {
-    let mut v = std::vec::Vec::new();
-    while let Some(i) = hp.telemetry.dequeue() {
-        v.push(i.sample);
-    }
-    v
-}
+use super::fixture::{board, count, samples, wall};
 
 /// Inside the window (its ends included) the servo is bit for bit the servo without one;
 /// the tick the raw count leaves it latches `TRAVEL`, publishes it with its tick and outputs
