@@ -4,47 +4,13 @@
 //! virtual`, so that one device (and its latched faults) outlives several hostctl runs.
 
 use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use stiffwall_proto::fault;
 
-fn hostctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hostctl"))
-        .args(args)
-        .output()
-        .expect("run hostctl")
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = hostctl(args);
-    let (out, err) = (
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    );
-    assert!(o.status.success(), "hostctl {args:?} failed:\n{out}\n{err}");
-    out
-}
-
-/// Runs a command that must fail cleanly (exit 2, no panic); returns stderr.
-fn fails(args: &[&str]) -> String {
-    let o = hostctl(args);
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "hostctl {args:?}: {}\n{err}",
-        String::from_utf8_lossy(&o.stdout)
-    );
-    assert!(
-        !err.contains("panicked"),
-        "hostctl {args:?} panicked:\n{err}"
-    );
-    err
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::{fails, json, ok};
 
 /// `hostctl virtual` (paced, the default preset) serving its pty; stopped with SIGINT (its
 /// Ctrl-C) when dropped.

@@ -4,7 +4,6 @@
 //! exit code 2 and a message naming the key and its range, without a panic.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 /// A rotary rig like `maxon-re35` with stiction 1.2 × Coulomb, a 250 Hz transmission
 /// resonance (damping ratio 0.16) and a 60 mN·m current limit. (With stiction 1.5 × Coulomb and
@@ -34,12 +33,9 @@ stiction = { static_n = 2.4e-3, stribeck_m_per_s = 0.0 }
 transmission = { link_mass_kg = 3e-6, stiffness_n_per_m = 5.0, damping_ns_per_m = 1e-3 }
 "#;
 
-fn hostctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hostctl"))
-        .args(args)
-        .output()
-        .expect("run hostctl")
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::{fails, ok};
 
 fn file(name: &str, text: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("stiffwall-plant-file-{}", std::process::id()));
@@ -47,25 +43,6 @@ fn file(name: &str, text: &str) -> PathBuf {
     let p = d.join(name);
     std::fs::write(&p, text).unwrap();
     p
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = hostctl(args);
-    let (out, err) = (
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    );
-    assert!(o.status.success(), "hostctl {args:?} failed:\n{out}\n{err}");
-    out
-}
-
-/// Fails with exit code 2 and no panic; returns stderr.
-fn fails(args: &[&str]) -> String {
-    let o = hostctl(args);
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(o.status.code(), Some(2), "hostctl {args:?}:\n{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    err
 }
 
 #[test]
