@@ -100,6 +100,23 @@ struct Centring {
     mass: Option<f64>,
 }
 
+/// What one chirp gave: the fit, where the device ended (counts from the wall position) and
+/// the span of its counts during the excitation.
+struct Excited {
+    id: Identified,
+    end: i32,
+    span_counts: i64,
+}
+
+/// Least span of counts (peak to peak) the full chirp should move the device over: a device
+/// held by a spring (a hand) that the probe moved over fewer counts gets a stronger full chirp
+/// (up to [`MAX_CHIRP_BOOST`] times the probe), since a fit over a few counts is biased by
+/// quantization (freedom6-firm-grip, a 1500 N/m grip: from a 16-count chirp m = 0.39 kg and
+/// c = 0.044 N, from twice the amplitude 0.743 kg and 0.059 N, the plant's 0.75 and 0.06).
+const MIN_CHIRP_SPAN_COUNTS: i64 = 32;
+/// Most the full chirp's amplitude grows over the probe's for [`MIN_CHIRP_SPAN_COUNTS`].
+const MAX_CHIRP_BOOST: f64 = 4.0;
+
 fn excite_and_identify(
     c: &mut Client,
     cfg: &ServoConfig,
@@ -108,7 +125,7 @@ fn excite_and_identify(
     ticks: u32,
     f1: f32,
     progress: &Reporter<'_>,
-) -> Result<(Identified, i32)> {
+) -> Result<Excited> {
     let (res, t) = device_scale(c)?;
     progress.report(Progress::Chirp {
         amplitude_codes: amplitude,
@@ -190,7 +207,13 @@ fn excite_and_identify(
         );
     }
     let last = rec.samples.last().map_or(0, |x| x.count);
-    Ok((id, last))
+    let lo = samples.iter().map(|x| x.count).min().unwrap_or(0);
+    let hi = samples.iter().map(|x| x.count).max().unwrap_or(0);
+    Ok(Excited {
+        id,
+        end: last,
+        span_counts: hi - lo,
+    })
 }
 
 /// Step 1: identification with the wall off. A low-frequency chirp (0.5 Hz up to 4 Hz, or
@@ -234,14 +257,26 @@ pub(crate) fn identify(
             f1,
             progress,
         ) {
-            Ok((probe, end)) => {
+            Ok(Excited {
+                id: probe,
+                end,
+                span_counts,
+            }) => {
+                let boost = (MIN_CHIRP_SPAN_COUNTS as f64 / span_counts.max(1) as f64)
+                    .clamp(1.0, MAX_CHIRP_BOOST);
+                let floor = (f64::from(amplitude) * boost) as i32;
                 let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
+                    .max(floor)
                     .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
                 if wanted <= amplitude * 5 / 4 {
                     wanted = amplitude;
                 }
                 check_cancel(c)?;
-                if let Ok((full, end2)) = excite_and_identify(
+                if let Ok(Excited {
+                    id: full,
+                    end: end2,
+                    ..
+                }) = excite_and_identify(
                     c,
                     cfg,
                     Centring {
