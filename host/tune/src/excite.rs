@@ -169,12 +169,16 @@ fn excite_and_identify(
             rec.gaps.missing
         );
     }
+    // The counts in the frame of `cfg`'s wall (the record's are from the spring's origin at
+    // the rest): a spring-like force the fit finds (a hand) has its offset there, where the
+    // breakaway ramps' model places its preload.
+    let origin = i64::from(rest) << cfg.coarsen_shift.min(16);
     let samples: Vec<ident::Sample> = rec
         .samples
         .iter()
         .filter(|x| x.flags & flags::EXCITE != 0)
         .map(|x| ident::Sample {
-            count: i64::from(x.count),
+            count: i64::from(x.count) + origin,
             force: f64::from(x.force_code) * f64::from(c.info.force_per_code),
         })
         .collect();
@@ -206,7 +210,9 @@ fn excite_and_identify(
             id.equations
         );
     }
-    let last = rec.samples.last().map_or(0, |x| x.count);
+    let last = rec.samples.last().map_or(0, |x| {
+        x.count.saturating_add(i32::try_from(origin).unwrap_or(0))
+    });
     let lo = samples.iter().map(|x| x.count).min().unwrap_or(0);
     let hi = samples.iter().map(|x| x.count).max().unwrap_or(0);
     Ok(Excited {
