@@ -15,6 +15,12 @@ fn repo() -> PathBuf {
 /// Runs `hostctl tune --fast --json --trace` with `target` (device options); returns the JSON
 /// report and the trace's (position, stop force) rows.
 fn tune(target: &[&str], name: &str) -> (serde_json::Value, Vec<(f64, f64)>) {
+    let (report, rows, _) = tune_with_progress(target, name);
+    (report, rows)
+}
+
+/// [`tune`], with the progress lines it printed (stderr) too.
+fn tune_with_progress(target: &[&str], name: &str) -> (serde_json::Value, Vec<(f64, f64)>, String) {
     let trace = std::env::temp_dir().join(format!(
         "stiffwall-travel-{name}-{}.csv",
         std::process::id()
@@ -27,7 +33,7 @@ fn tune(target: &[&str], name: &str) -> (serde_json::Value, Vec<(f64, f64)>) {
         .current_dir(repo())
         .output()
         .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(out.status.success(), "{name}: {stderr}");
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let text = std::fs::read_to_string(&trace).unwrap();
@@ -43,7 +49,7 @@ fn tune(target: &[&str], name: &str) -> (serde_json::Value, Vec<(f64, f64)>) {
             (f[1].parse().unwrap(), f[3].parse().unwrap())
         })
         .collect();
-    (report, rows)
+    (report, rows, stderr)
 }
 
 /// The report's final check and the trace against the travel [lo, hi] (m or rad).
@@ -96,8 +102,22 @@ fn plants_with_end_stops_are_tuned_without_touching_them() {
         ("linear-3cm-stops.toml", [-0.03, 0.03]),
         ("rotary-knob-135deg.toml", [-2.356, 2.356]),
     ] {
-        let path = format!("sim/plants/travel/{file}");
+        let path = format!("sim/plants/{file}");
         let (report, rows) = tune(&["--plant", path.as_str()], file);
         check(file, &report, &rows, travel);
     }
+}
+
+/// A travel too short for a full-energy release at the default maximum velocity (hard stops
+/// 4 mm each side): tune lowers the velocity, says which tests need how much travel, and still
+/// never touches a stop.
+#[test]
+fn a_travel_too_short_for_the_default_velocity_lowers_it_and_says_so() {
+    let path = "sim/plants/travel/linear-short-travel.toml";
+    let (report, rows, progress) = tune_with_progress(&["--plant", path], "short");
+    assert!(
+        progress.contains("need") && progress.contains("the maximum velocity is lowered to"),
+        "{progress}"
+    );
+    check("linear-short-travel", &report, &rows, [-0.004, 0.004]);
 }

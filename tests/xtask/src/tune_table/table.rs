@@ -40,6 +40,9 @@ struct Tuned {
     coulomb: f64,
     mismatch: Option<Vec<String>>,
     seconds: f64,
+    /// The plant's positions over the whole tune (least, largest), m (rad), and whether it
+    /// touched an end stop on any tick, by its trace.
+    travel_used: ([f64; 2], bool),
 }
 
 struct Row {
@@ -138,19 +141,49 @@ fn deadband_of(law: &str) -> Result<i64> {
         .with_context(|| format!("tune.damper {law:?} is neither `difference` nor `dead-band-N`"))
 }
 
-/// A dry-run tune of the fast virtual device running the plant of `file` (what `hostctl tune
-/// --plant FILE --fast --dry-run` runs), in this process.
-fn run_tune(file: &Path) -> Result<Tuned> {
+/// Half-width of the travel the table declares for a plant without end stops, m (linear) or
+/// rad (rotary): such a plant is unbounded, and its user says so (`--travel`); tune's default
+/// window (±50 mm, ±1 turn, for a device whose travel nobody stated) would lower the maximum
+/// velocity on a coarse encoder (0.1 mm at 5 counts per tick needs about 0.22 m each side),
+/// and K*'s impacts run at that full velocity.
+const UNBOUNDED_TRAVEL: f64 = 1.0;
+/// The same for a rotary plant, rad (about 16 turns).
+const UNBOUNDED_TRAVEL_RAD: f64 = 100.0;
+
+/// A dry-run tune of the fast virtual device running the plant of `case` (what `hostctl tune
+/// --plant FILE --fast --dry-run [--travel MIN:MAX]` runs), in this process, with the plant's
+/// true state traced: the plant's own travel when it declares one (the device's travel
+/// window), else ±[`UNBOUNDED_TRAVEL`] given.
+fn run_tune(case: &PlantCase) -> Result<Tuned> {
     use stiffwall_client::{connect, Cancel, ConnectSpec, Pace};
     let t0 = Instant::now();
-    let mut client = connect(&ConnectSpec::plant_file(file, Pace::Fast))
-        .with_context(|| format!("connecting to the virtual device of {}", file.display()))?;
+    let trace = std::env::temp_dir().join(format!(
+        "stiffwall-tune-table-{}-{}.csv",
+        std::process::id(),
+        case.name
+    ));
+    let spec = ConnectSpec::plant_file(&case.path, Pace::Fast).with_trace(Some(trace.clone()));
+    let mut client = connect(&spec).with_context(|| {
+        format!(
+            "connecting to the virtual device of {}",
+            case.path.display()
+        )
+    })?;
+    let half = if case.model.counts_per_rev.is_some() {
+        UNBOUNDED_TRAVEL_RAD
+    } else {
+        UNBOUNDED_TRAVEL
+    };
     let settings = stiffwall_tune::Settings {
         dry_run: true,
+        travel: case.model.travel.is_none().then_some([-half, half]),
         ..stiffwall_tune::Settings::default()
     };
-    let o = stiffwall_tune::tune(&mut client, &settings, &Cancel::default(), &mut |_| {})
-        .context("tune failed")?;
+    let o = stiffwall_tune::tune(&mut client, &settings, &Cancel::default(), &mut |_| {});
+    drop(client);
+    let used = traced_range(&trace);
+    let _ = std::fs::remove_file(&trace);
+    let o = o.context("tune failed")?;
     let seconds = t0.elapsed().as_secs_f64();
     Ok(Tuned {
         k_set: o.k_set,
@@ -164,7 +197,31 @@ fn run_tune(file: &Path) -> Result<Tuned> {
         coulomb: o.identified.coulomb[0],
         mismatch: Some(o.model_mismatch),
         seconds,
+        travel_used: used?,
     })
+}
+
+/// The least and largest position of a `--trace` file (`t_s,position_m,…`), m (rad), and
+/// whether any tick had an end-stop force.
+fn traced_range(path: &Path) -> Result<([f64; 2], bool)> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading the trace {}", path.display()))?;
+    let mut range = [f64::INFINITY, f64::NEG_INFINITY];
+    let mut contact = false;
+    for line in text.lines().skip(1) {
+        let mut cells = line.split(',');
+        let x: f64 = cells
+            .nth(1)
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(f64::NAN);
+        let stop: f64 = cells.nth(1).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+        range = [range[0].min(x), range[1].max(x)];
+        contact |= stop != 0.0;
+    }
+    if !range[0].is_finite() {
+        bail!("the trace {} has no rows", path.display());
+    }
+    Ok((range, contact))
 }
 
 fn describe_trial(k: &KStar) -> String {
@@ -386,11 +443,11 @@ fn render(rows: &[Row], quick: bool) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| plant | effects | K*(0) | first failure above K*(0) | best K*(B) of the grid (B) | K set | B set | damper | K*(B set) | K/K*(B set) | rests in every run at (K, B) set | K/K*(0) | tune s | m id / true | b id / true | c id / true (static) | quiet ceiling 2·max(c, F_s)/Δ id / true | mismatch findings | v_max impact at 1.5 K*(B set), B set: ticks to trip (+/−) | other unstable trials there | all safe |"
+        "| plant | effects | K*(0) | first failure above K*(0) | best K*(B) of the grid (B) | K set | B set | damper | K*(B set) | K/K*(B set) | rests in every run at (K, B) set | K/K*(0) | tune s | m id / true | b id / true | c id / true (static) | quiet ceiling 2·max(c, F_s)/Δ id / true | mismatch findings | v_max impact at 1.5 K*(B set), B set: ticks to trip (+/−) | other unstable trials there | all safe | travel used / travel |"
     );
     let _ = writeln!(
         s,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for r in rows {
         let sup = &r.supervisor;
@@ -405,7 +462,7 @@ fn render(rows: &[Row], quick: bool) -> String {
             .map_or("—".to_string(), |(b, k)| format!("{} ({b:.3e})", g(k)));
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {best} | {} | {trips} | {} | {} |",
+            "| {} | {} | {} | {} | {best} | {} | {trips} | {} | {} | {} |",
             r.case.name,
             effects(&r.case),
             g(r.k_star.k_star),
@@ -413,12 +470,43 @@ fn render(rows: &[Row], quick: bool) -> String {
             tune_cells(r, quick).join(" | "),
             others(sup),
             if sup.all_safe() { "yes" } else { "NO" },
+            travel_cell(r),
         );
     }
     if let Some(summary) = summary(rows) {
         let _ = writeln!(s, "\n{summary}");
     }
     s
+}
+
+/// The "travel used / travel" cell: the range the plant's trace covered over the whole tune
+/// (identification, tests, the way back), in mm or rad, against the plant's travel (its end
+/// stops; "none" for an unbounded plant, tuned with ±[`UNBOUNDED_TRAVEL`] given), and whether
+/// an end stop was touched.
+fn travel_cell(r: &Row) -> String {
+    let Some(Ok(t)) = &r.tune else {
+        return "—".into();
+    };
+    let rotary = r.case.model.counts_per_rev.is_some();
+    let (scale, unit) = if rotary { (1.0, "rad") } else { (1e3, "mm") };
+    let ([lo, hi], contact) = t.travel_used;
+    let travel = match &r.case.model.travel {
+        Some(tr) => format!("{:.4}..{:.4} {unit}", tr.min_m * scale, tr.max_m * scale),
+        None => format!(
+            "none (±{} {unit} given)",
+            if rotary {
+                UNBOUNDED_TRAVEL_RAD
+            } else {
+                UNBOUNDED_TRAVEL * 1e3
+            }
+        ),
+    };
+    format!(
+        "{:.4}..{:.4} {unit} / {travel}{}",
+        lo * scale,
+        hi * scale,
+        if contact { ", END STOP TOUCHED" } else { "" }
+    )
 }
 
 /// The dead band of the firmware's default damper law (`DamperLaw::default()`), counts.
@@ -494,6 +582,12 @@ fn failures(rows: &[Row], whole_family: bool, quick: bool) -> Vec<String> {
             None => continue,
         };
         gains.push(t.k_set / r.k_star.k_star);
+        if t.travel_used.1 {
+            out.push(format!(
+                "{name}: tune touched an end stop (the plant's trace: {})",
+                travel_cell(r)
+            ));
+        }
         if let Some(a) = &r.at_set {
             if !a.all_rest() {
                 out.push(format!(
@@ -542,6 +636,12 @@ toggling within one count is chatter (worst toggles per second and force swing i
 Coulomb friction c listed), one that buzzes over more counts or grows is unstable. The generator\n\
 exits non-zero when a set wall does not rest in every run, K set lies below 0.7 × K*(B set),\n\
 the supervisor does not stop a run, or the median gain over `sim/plants/` is below 2.\n\
+A plant with end stops (`[effects] travel`) is tuned inside them (the virtual device boots\n\
+with them as its travel window); one without is unbounded and tuned with `--travel` ±1 m\n\
+(±100 rad): tune's default window for a device whose travel nobody stated would lower the\n\
+maximum velocity on a coarse encoder, below the velocity K*'s impacts use. The last column is\n\
+the range the plant's true position covered over the whole tune (its `--trace`: identification,\n\
+tests, the way back) against that travel; a tune that touches an end stop fails the table.\n\
 K*(0) is the spring alone; the best K*(B) is the stiffest of the frontier (with the law tune set;\n\
 dead band 1 when it set no damper) over\n\
 B = β·K*(0)·T, β ∈ {{0, 0.5, 1, 2, 3, 4, 6}} (`kstar::FRONTIER_BETA`); K set / K*(0) is what the\n\
@@ -636,7 +736,7 @@ pub fn generate(args: &[String]) -> Result<()> {
         if !o.only.is_empty() && !o.only.contains(&case.name) {
             continue;
         }
-        match plant_row(case, &f, &o) {
+        match plant_row(case, &o) {
             Ok(row) => rows.push(row),
             Err(e) => {
                 eprintln!("skipped: {e}");
@@ -803,15 +903,15 @@ impl Options {
     }
 }
 
-/// One plant's row: K*(0), the frontier's best, tune's (K, B) from `f`, K*(B set), the set
+/// One plant's row: K*(0), the frontier's best, tune's (K, B), K*(B set), the set
 /// point's stability and the supervisor at 1.5 K*(B set). Err (the reason, for the skipped
 /// list) when K*(0) has no finite value.
-fn plant_row(case: PlantCase, f: &Path, o: &Options) -> Result<Row, String> {
+fn plant_row(case: PlantCase, o: &Options) -> Result<Row, String> {
     let t0 = Instant::now();
-    let k_star = k_star_or_reason(&case, f, o)?;
+    let k_star = k_star_or_reason(&case, o)?;
     let best = best_of_frontier(&case, k_star.k_star);
     let k_star_seconds = t0.elapsed().as_secs_f64();
-    let tune = (!o.quick).then(|| run_tune(f).map_err(|e| format!("{e:#}")));
+    let tune = (!o.quick).then(|| run_tune(&case).map_err(|e| format!("{e:#}")));
     let (b_set, deadband_counts) = match &tune {
         Some(Ok(t)) => (t.b_set, t.deadband_counts),
         _ => (0.0, 0),
@@ -847,14 +947,14 @@ fn plant_row(case: PlantCase, f: &Path, o: &Options) -> Result<Row, String> {
     Ok(row)
 }
 
-/// K*(0) of `case`, or the reason it has none (with what tune from `f` sets there, unless
+/// K*(0) of `case`, or the reason it has none (with what tune sets there, unless
 /// `--quick`: with no finite K*, it cannot be unsafe).
-fn k_star_or_reason(case: &PlantCase, f: &Path, o: &Options) -> Result<KStar, String> {
+fn k_star_or_reason(case: &PlantCase, o: &Options) -> Result<KStar, String> {
     match kstar::k_star(&case.proto, &case.rig, case.k_start(), 1e12) {
         Ok(k) => Ok(k),
         Err(e) => {
             // Still say what tune sets there: with no finite K*, it cannot be unsafe.
-            let tune = (!o.quick).then(|| run_tune(f));
+            let tune = (!o.quick).then(|| run_tune(case));
             Err(format!(
                 "{}: K*: {e}{}",
                 case.name,
