@@ -48,7 +48,7 @@ pub fn tune_table(args: &[String]) -> Result<()> {
     table::generate(&pass)
 }
 
-/// The tune tables' check in `cargo xtask ci`: docs/TUNE.md (the 21 plants of `sim/plants/`)
+/// The tune tables' check in `cargo xtask ci`: docs/TUNE.md (the plants of `sim/plants/`)
 /// and docs/TUNE-holdout.md (`sim/plants-holdout/`) against a fresh run, every tune included:
 /// a row that fails what the docs claim (a set wall that does not rest in every run of the
 /// criterion, K below 0.7 K*(B), a supervisor that does not stop a run, a median gain below 2

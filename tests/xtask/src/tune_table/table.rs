@@ -43,6 +43,10 @@ struct Tuned {
     /// The plant's positions over the whole tune (least, largest), m (rad), and whether it
     /// touched an end stop on any tick, by its trace.
     travel_used: ([f64; 2], bool),
+    /// The maximum velocity tune tested with, counts per period.
+    xidot: f64,
+    /// The travel tune kept to (m or rad) and where it came from.
+    window: Option<(f64, f64, stiffwall_tune::TravelSource)>,
 }
 
 struct Row {
@@ -141,20 +145,34 @@ fn deadband_of(law: &str) -> Result<i64> {
         .with_context(|| format!("tune.damper {law:?} is neither `difference` nor `dead-band-N`"))
 }
 
-/// Half-width of the travel the table declares for a plant without end stops, m (linear) or
-/// rad (rotary): such a plant is unbounded, and its user says so (`--travel`); tune's default
-/// window (±50 mm, ±1 turn, for a device whose travel nobody stated) would lower the maximum
-/// velocity on a coarse encoder (0.1 mm at 5 counts per tick needs about 0.22 m each side),
-/// and K*'s impacts run at that full velocity.
-const UNBOUNDED_TRAVEL: f64 = 1.0;
-/// The same for a rotary plant, rad (about 16 turns).
-const UNBOUNDED_TRAVEL_RAD: f64 = 100.0;
+/// Half-width of the travel the table declares for a plant without end stops whose tune in
+/// the default window lowered the maximum velocity, m (linear): such a plant is unbounded,
+/// and its user says so (`--travel`); K*'s impacts run at the full velocity (a 0.1 mm encoder
+/// at 5 counts per tick needs about 0.22 m each side).
+const UNBOUNDED_TRAVEL: f64 = 10.0;
+/// The same for a rotary plant, rad (about 160 turns).
+const UNBOUNDED_TRAVEL_RAD: f64 = 1000.0;
 
 /// A dry-run tune of the fast virtual device running the plant of `case` (what `hostctl tune
-/// --plant FILE --fast --dry-run [--travel MIN:MAX]` runs), in this process, with the plant's
-/// true state traced: the plant's own travel when it declares one (the device's travel
-/// window), else ±[`UNBOUNDED_TRAVEL`] given.
+/// --plant FILE --fast --dry-run` runs), in this process, with the plant's true state traced.
+/// A plant with end stops is tuned inside them (the device's travel window); one without in
+/// tune's default window, and again with ±[`UNBOUNDED_TRAVEL`] given when that window made
+/// tune lower the maximum velocity below K*'s ([`kstar::DEFAULT_XIDOT`] counts per period).
 fn run_tune(case: &PlantCase) -> Result<Tuned> {
+    let first = tune_once(case, None)?;
+    if case.model.travel.is_some() || first.xidot >= kstar::DEFAULT_XIDOT * (1.0 - 1e-6) {
+        return Ok(first);
+    }
+    let half = if case.model.counts_per_rev.is_some() {
+        UNBOUNDED_TRAVEL_RAD
+    } else {
+        UNBOUNDED_TRAVEL
+    };
+    tune_once(case, Some([-half, half]))
+}
+
+/// One traced dry-run tune of `case` with `travel` given (None: the device's or the default).
+fn tune_once(case: &PlantCase, travel: Option<[f64; 2]>) -> Result<Tuned> {
     use stiffwall_client::{connect, Cancel, ConnectSpec, Pace};
     let t0 = Instant::now();
     let trace = std::env::temp_dir().join(format!(
@@ -169,14 +187,9 @@ fn run_tune(case: &PlantCase) -> Result<Tuned> {
             case.path.display()
         )
     })?;
-    let half = if case.model.counts_per_rev.is_some() {
-        UNBOUNDED_TRAVEL_RAD
-    } else {
-        UNBOUNDED_TRAVEL
-    };
     let settings = stiffwall_tune::Settings {
         dry_run: true,
-        travel: case.model.travel.is_none().then_some([-half, half]),
+        travel,
         ..stiffwall_tune::Settings::default()
     };
     let o = stiffwall_tune::tune(&mut client, &settings, &Cancel::default(), &mut |_| {});
@@ -185,6 +198,10 @@ fn run_tune(case: &PlantCase) -> Result<Tuned> {
     let _ = std::fs::remove_file(&trace);
     let o = o.context("tune failed")?;
     let seconds = t0.elapsed().as_secs_f64();
+    let window = o.workspace.map(|w| {
+        let [lo, hi] = w.ends_si();
+        (lo, hi, w.source)
+    });
     Ok(Tuned {
         k_set: o.k_set,
         b_set: o.b_set,
@@ -198,6 +215,8 @@ fn run_tune(case: &PlantCase) -> Result<Tuned> {
         mismatch: Some(o.model_mismatch),
         seconds,
         travel_used: used?,
+        xidot: o.xidot,
+        window,
     })
 }
 
@@ -490,16 +509,20 @@ fn travel_cell(r: &Row) -> String {
     let rotary = r.case.model.counts_per_rev.is_some();
     let (scale, unit) = if rotary { (1.0, "rad") } else { (1e3, "mm") };
     let ([lo, hi], contact) = t.travel_used;
-    let travel = match &r.case.model.travel {
-        Some(tr) => format!("{:.4}..{:.4} {unit}", tr.min_m * scale, tr.max_m * scale),
-        None => format!(
-            "none (±{} {unit} given)",
-            if rotary {
-                UNBOUNDED_TRAVEL_RAD
-            } else {
-                UNBOUNDED_TRAVEL * 1e3
-            }
+    let travel = match (&r.case.model.travel, t.window) {
+        (Some(tr), _) => format!(
+            "stops {:.4}..{:.4} {unit}",
+            tr.min_m * scale,
+            tr.max_m * scale
         ),
+        (None, Some((a, b, source))) => {
+            let why = match source {
+                stiffwall_tune::TravelSource::DefaultWindow => "tune's default window",
+                _ => "given: the default window lowered v",
+            };
+            format!("none; {:.4}..{:.4} {unit} ({why})", a * scale, b * scale)
+        }
+        (None, None) => "none".into(),
     };
     format!(
         "{:.4}..{:.4} {unit} / {travel}{}",
@@ -637,9 +660,9 @@ Coulomb friction c listed), one that buzzes over more counts or grows is unstabl
 exits non-zero when a set wall does not rest in every run, K set lies below 0.7 × K*(B set),\n\
 the supervisor does not stop a run, or the median gain over `sim/plants/` is below 2.\n\
 A plant with end stops (`[effects] travel`) is tuned inside them (the virtual device boots\n\
-with them as its travel window); one without is unbounded and tuned with `--travel` ±1 m\n\
-(±100 rad): tune's default window for a device whose travel nobody stated would lower the\n\
-maximum velocity on a coarse encoder, below the velocity K*'s impacts use. The last column is\n\
+with them as its travel window); one without in tune's default window (±50 mm, ±1 turn), and\n\
+again with `--travel` ±10 m (±1000 rad) when that window made tune lower the maximum velocity\n\
+below the one K*'s impacts use (a coarse encoder). The last column is\n\
 the range the plant's true position covered over the whole tune (its `--trace`: identification,\n\
 tests, the way back) against that travel; a tune that touches an end stop fails the table.\n\
 K*(0) is the spring alone; the best K*(B) is the stiffest of the frontier (with the law tune set;\n\
