@@ -365,28 +365,45 @@ fn tune_dry_run_identifies_the_plant() {
     check("tune_dry_run", &t);
 }
 
-/// Issue 46 on the image: a tune that is not a dry run saves its wall, and the device it leaves
+/// Issue 46 on the image: a tune that is not a dry run sets its wall, and the device it leaves
 /// is where it started (within 2 counts), at rest, with no fault latched, by the tune's own
-/// final check and by the image's fault state read afterwards. Not a transcript: where the
+/// final check and by the image's fault state read afterwards. The Nucleo images save the wall;
+/// the QEMU image has no config store (`SaveConfig` answers `StoreFailed`), so there the tune
+/// ends in that refusal after its final check, with the wall set. Not a transcript: where the
 /// device rests within those counts depends on the link's timing.
 #[test]
 #[ignore = "needs an image: run `cargo xtask qemu` or `cargo xtask board-emu`"]
 fn tune_leaves_the_device_where_it_found_it() {
-    use stiffwall_tune::{tune, Settings};
+    use stiffwall_tune::{tune, Progress, Settings, TuneError};
     let (q, mut c) = boot();
-    let o = tune(
+    let mut left = None;
+    let result = tune(
         &mut c,
         &Settings {
             excite_seconds: 2.0,
             ..Settings::default()
         },
         &stiffwall_client::Cancel::default(),
-        &mut |m| eprintln!("tune: {m}"),
-    )
-    .expect("tune");
-    let left = o.device_left.clone().expect("tune.device_left");
-    eprintln!("{left}");
-    assert!(o.saved, "a tune that is not a dry run saves its wall");
+        &mut |m| {
+            eprintln!("tune: {m}");
+            if let Progress::Left(l) = m {
+                left = Some(l);
+            }
+        },
+    );
+    let has_store = target().nucleo_output.is_some();
+    let k_set = match result {
+        Ok(o) => {
+            assert!(o.saved, "a tune that is not a dry run saves its wall");
+            Some(o.k_set)
+        }
+        Err(TuneError::Device { source, .. }) if !has_store => {
+            assert!(format!("{source}").contains("SaveConfig"), "{source}");
+            None
+        }
+        Err(e) => panic!("tune: {e:?}"),
+    };
+    let left = left.expect("the final check (Progress::Left)");
     assert!(
         left.ok && left.at_rest && left.faults.is_empty(),
         "{left:?}"
@@ -395,11 +412,14 @@ fn tune_leaves_the_device_where_it_found_it() {
     let faults = c.faults().expect("faults");
     assert_eq!(faults.latched, 0, "a fault is latched after tune");
     let cfg = c.get_config().expect("config");
-    assert_eq!(
-        f64::from(cfg.stiffness),
-        f64::from(o.k_set as f32),
-        "the wall set"
-    );
+    assert!(cfg.stiffness > 0.0, "the wall is set");
+    if let Some(k) = k_set {
+        assert_eq!(
+            f64::from(cfg.stiffness),
+            f64::from(k as f32),
+            "the wall set"
+        );
+    }
     finish(q, c);
 }
 
