@@ -40,6 +40,7 @@
 
 #![warn(missing_docs)]
 
+mod approach;
 mod error;
 mod excite;
 mod frontier;

@@ -172,7 +172,20 @@ fn tune_inner(
 ) -> Result<Outcome> {
     let mut ident = identify_and_predict(c, s, original, progress, place)?;
     let ceiling = quiet_ceiling(&ident);
-    place.static_friction = Some(ceiling * ident.p.resolution / 2.0);
+    // The band the user's own wall holds the device in (the final check) counts on the
+    // breakaway measured, the smaller direction's; the quiet ceiling's credit is a bound.
+    let breakaway = ident
+        .evidence
+        .breakaway_measured
+        .iter()
+        .flatten()
+        .map(|f| f.abs())
+        .fold(f64::INFINITY, f64::min);
+    place.static_friction = Some(if breakaway.is_finite() {
+        breakaway.max(ident.p.coulomb)
+    } else {
+        ceiling * ident.p.resolution / 2.0
+    });
     // The quiet search runs on a copy: where no wall rests, the search for the least chatter
     // starts again from what identification found.
     let mut tried = ident.clone();
@@ -219,6 +232,15 @@ fn tune_inner(
         b: 0.0,
         damper: wall.damper,
         chatters: !wall.rests(),
+        // The final approach may stiffen to a quarter of the spring-only wall that rested:
+        // still far below it (at the wall's own K a light rotor behind two ticks of delay,
+        // rotary-light-stiction-delay2, went from a 13-count nudge into a limit cycle at the
+        // walk's force limit: a start the verification had not tried).
+        k_settle: if wall.rests() {
+            wall.k_spring_only / 4.0
+        } else {
+            0.0
+        },
         ..home_of(place)?
     });
     place.final_cfg = Some(ServoConfig {
@@ -470,6 +492,10 @@ fn identify_and_predict(
             .flatten()
             .fold(0.0f64, |a, f| a.max(f.abs()));
         home.mass = Some(id.mass);
+        home.friction = Some(super::approach::MoveFriction {
+            coulomb_n: id.coulomb.max(0.0),
+            viscous: id.viscous.max(0.0),
+        });
         home.force_n = home
             .force_n
             .max(BREAKAWAY_MARGIN * breakaway)

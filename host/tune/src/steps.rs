@@ -118,6 +118,11 @@ impl Run<'_> {
             force_n: self.move_force_n,
             chatters: false,
             mass: Some(self.p.mass),
+            k_settle: 0.0,
+            friction: Some(crate::approach::MoveFriction {
+                coulomb_n: self.p.coulomb,
+                viscous: self.p.viscous,
+            }),
         };
         crate::travel::recentre(c, base, back, self.room)?;
         let run = run_test(

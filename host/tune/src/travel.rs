@@ -244,6 +244,12 @@ pub struct GentleMove {
     pub chatters: bool,
     /// The device's mass (inertia), kg (kg·m²), once identified: it bounds the glide's damper.
     pub mass: Option<f64>,
+    /// The device's friction, once identified: the final approach aims with it.
+    pub friction: Option<super::approach::MoveFriction>,
+    /// The stiffest spring (with damper `b`) the final approach may use when static friction
+    /// throws the device past the target with `k` ([`super::approach::nudge`]): a spring-only
+    /// wall verified to rest, N/m (N·m/rad), else `k`.
+    pub k_settle: f64,
 }
 
 /// Raw count of a count `n` read relative to the wall of `cfg` (effective counts).
@@ -267,8 +273,6 @@ pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
 
 /// Steps of the fine phase's reach: a move farther than this many fine steps glides first.
 const COARSE_STEPS: i64 = 20;
-/// Corrections of the final approach at most ([`move_to`]).
-const NUDGES: usize = 12;
 
 /// Brings the device gently to raw count `target` (module header), in three phases:
 /// - *glide* ([`glide`]), while the device is more than [`COARSE_STEPS`] fine steps away: the
@@ -276,9 +280,10 @@ const NUDGES: usize = 12;
 ///   and a damper that holds the speed to what the push can reach (force and speed bounded
 ///   whatever the device does);
 /// - *fine*: `how`'s spring, its origin walking to the target in steps of `how.force_n`;
-/// - *nudges*: the origin moved by the device's remaining offset, up to [`NUDGES`] times,
-///   until it rests within a count of the target (static friction holds a spring's device up
-///   to F_s/(KΔ) counts off its origin).
+/// - *nudges* ([`super::approach::nudge`]): the origin placed where the friction model says
+///   the device stops at the target, up to [`super::approach::NUDGES`] times, until it rests
+///   within a count of it (friction holds a spring's device up to F_s/(KΔ) counts off its
+///   origin, so the origin alone at the target is not enough).
 ///
 /// Each step waits for rest. `base` gives the other settings (stiffness, damping, wall and wall
 /// position are replaced; the energy monitor is off, the travel window lifted: a device a test
@@ -325,20 +330,10 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
         glide(c, &mut walk, how, far)?;
     }
     walk.go(c, target, how, fine_step)?;
-    let mut origin = target;
-    for _ in 0..NUDGES {
-        let off = target - walk.at;
-        if off.abs() <= 1 {
-            break;
-        }
-        origin += off;
-        walk.set(c, origin, how)?;
-    }
+    super::approach::nudge(c, &mut walk, how, target, f64::from(c.info.resolution))?;
     Ok(walk.at)
 }
 
-/// Host time a glide aims to take, s (longer when a speed cap below holds it back).
-const GLIDE_SECONDS: f64 = 2.0;
 /// A glide's speed, at most this share of the encoder-jump limit per tick.
 const GLIDE_JUMP_SHARE: f64 = 1.0 / 16.0;
 /// A glide's speed, at most this share of the over-velocity limit when one is set.
@@ -353,21 +348,23 @@ const GLIDE_MAX_FORCE_SHARE: f64 = 0.25;
 const GLIDES: usize = 6;
 /// Telemetry samples (2 ms apart) without a count's progress after which a glide has stalled.
 const GLIDE_STALL_SAMPLES: usize = 250;
-/// The glide's push is a spring whose origin lies this many times the distance beyond the
-/// target: its force changes by less than a tenth on the way (a nearly constant push).
-const GLIDE_ORIGIN_BEYOND: f64 = 10.0;
+/// Time constant of the glide's approach, s, at least: a tenth of the distance is left after
+/// about 2.3 of them.
+const GLIDE_TAU_S: f64 = 0.4;
 
-/// The glide of [`move_to`]: a nearly constant push F toward the target (a spring whose origin
-/// lies [`GLIDE_ORIGIN_BEYOND`] distances beyond it, the firmware's force limit at 1.1 F so no
-/// tick pushes harder) against a damper B = F/v (the plain difference), so the device moves at
-/// no more than v: a speed that covers the distance in about [`GLIDE_SECONDS`], capped by
+/// The glide of [`move_to`]: a spring and a plain-difference damper that bring the device to
+/// the target by themselves, without overshoot, whatever the host's link does, so the glide
+/// ends in the same place every time. The spring's origin lies the kinetic band c/(KΔ) beyond
+/// the target, so with the device's Coulomb friction c (once identified) its equilibrium is
+/// the target; it pushes F at the start (K·Δ·distance = F − c) and less on the way. The damper
+/// holds the start's speed to v, which covers the distance in about [`GLIDE_TAU_S`], capped by
 /// [`GLIDE_JUMP_SHARE`] of the encoder-jump limit and [`GLIDE_VELOCITY_SHARE`] of the
-/// over-velocity limit. The host watches the count and, within `far / 2` of the target or past
-/// it, stops the device with the damper alone. A device that stalls (static friction above the
-/// push) gets twice the push, up to [`GLIDE_MAX_FORCE_SHARE`] of the force limit.
+/// over-velocity limit, and is at least critical (B ≥ 2√(K·m), when the mass is known, K
+/// lowered where the damper's cap would not allow it). The firmware's force limit is lowered
+/// to 1.1 F so no tick pushes harder. A device that stalls (static friction above the push,
+/// or a Stribeck friction that holds it short) glides again from there, with twice the push
+/// when it moved less than a quarter of the way, up to [`GLIDE_MAX_FORCE_SHARE`] of the limit.
 fn glide(c: &mut Client, walk: &mut Walk, how: GentleMove, far: i64) -> Result<()> {
-    let raw_res = f64::from(c.info.resolution);
-    let t = 1.0 / f64::from(walk.cfg.servo_rate_hz.max(1));
     let limit = f64::from(walk.cfg.force_limit);
     let mut force = how.force_n.min(limit);
     for _ in 0..GLIDES {
@@ -375,57 +372,72 @@ fn glide(c: &mut Client, walk: &mut Walk, how: GentleMove, far: i64) -> Result<(
         if distance <= far / 2 {
             return Ok(());
         }
-        let mut v = distance as f64 * raw_res / GLIDE_SECONDS;
-        v = v.min(GLIDE_JUMP_SHARE * f64::from(walk.cfg.encoder_jump_counts) * raw_res / t);
-        if walk.cfg.max_velocity > 0.0 {
-            v = v.min(GLIDE_VELOCITY_SHARE * f64::from(walk.cfg.max_velocity));
-        }
-        let mut b = force / v.max(f64::MIN_POSITIVE);
-        if let Some(m) = how.mass {
-            b = b.min(GLIDE_DAMPER_BT_PER_M * m / t);
-        }
-        // The firmware's largest damping at shift 0 (its gain of 2^14 codes per count per
-        // tick, half the stiffness limit's per tick), with a margin for rounding.
-        b = b.min(0.99 * f64::from(c.info.limits.max_stiffness) * t / 2.0);
-        let dir = (walk.target - walk.at).signum();
-        let beyond = (GLIDE_ORIGIN_BEYOND * distance as f64) as i64;
-        let origin = walk.target + dir * beyond;
-        let k = force / ((origin - walk.at).abs() as f64 * raw_res);
-        let push = ServoConfig {
-            stiffness: k as f32,
-            damping: b as f32,
-            damper: stiffwall_proto::DamperLaw::Difference,
-            force_limit: (1.1 * force).min(limit) as f32,
-            wall_position: clamp_i32(origin),
-            coarsen_shift: 0,
-            ..walk.cfg
-        };
-        let wait_s = 3.0 * distance as f64 * raw_res / v + super::rest::REST_WAIT_S;
-        let (moved, stalled) = watch_glide(c, walk, &push, far / 2, wait_s)?;
-        // Stopped by the damper alone, then at rest with nothing on.
-        c.set_config(&ServoConfig {
-            stiffness: 0.0,
-            ..push
-        })?;
+        let (push, v) = glide_config(c, walk, how, force, distance);
+        let wait_s = 6.0 * distance as f64 * f64::from(c.info.resolution) / v
+            + 10.0 * GLIDE_TAU_S
+            + super::rest::REST_WAIT_S;
+        let moved = watch_glide(c, walk, &push, wait_s)?;
         walk.at = where_now(c, &walk.cfg)?;
         walk.check_faults(c)?;
-        if stalled || moved * 4 < distance {
+        if moved * 4 < distance {
             force = (force * 2.0).min(GLIDE_MAX_FORCE_SHARE * limit).max(force);
         }
     }
     Ok(())
 }
 
-/// Sets `push` and watches the device until it is within `near` counts of `walk.target` or
-/// past it, stalls ([`GLIDE_STALL_SAMPLES`] without progress) or `seconds` of host time pass.
-/// Returns how far it moved toward the target, counts, and whether it stalled.
-fn watch_glide(
-    c: &mut Client,
+/// The config of one glide ([`glide`]) of `distance` counts with push `force`, and the start's
+/// speed the damper allows, m/s (rad/s), > 0.
+fn glide_config(
+    c: &Client,
     walk: &Walk,
-    push: &ServoConfig,
-    near: i64,
-    seconds: f64,
-) -> Result<(i64, bool)> {
+    how: GentleMove,
+    force: f64,
+    distance: i64,
+) -> (ServoConfig, f64) {
+    let raw_res = f64::from(c.info.resolution);
+    let t = 1.0 / f64::from(walk.cfg.servo_rate_hz.max(1));
+    let span = distance.max(1) as f64 * raw_res;
+    let mut v = span / GLIDE_TAU_S;
+    v = v.min(GLIDE_JUMP_SHARE * f64::from(walk.cfg.encoder_jump_counts) * raw_res / t);
+    if walk.cfg.max_velocity > 0.0 {
+        v = v.min(GLIDE_VELOCITY_SHARE * f64::from(walk.cfg.max_velocity));
+    }
+    let coulomb = how.friction.map_or(0.0, |f| f.coulomb_n).max(0.0);
+    // What drives the device against its friction; at least a tenth of the push (a push below
+    // the friction stalls, and the next glide doubles it).
+    let drive = (force - coulomb).max(0.1 * force);
+    let mut k = drive / span;
+    // The firmware's largest damping at shift 0 (its gain of 2^14 codes per count per tick,
+    // half the stiffness limit's per tick), with a margin for rounding.
+    let mut b_cap = 0.99 * f64::from(c.info.limits.max_stiffness) * t / 2.0;
+    if let Some(m) = how.mass.filter(|m| *m > 0.0) {
+        b_cap = b_cap.min(GLIDE_DAMPER_BT_PER_M * m / t);
+        k = k.min(b_cap * b_cap / (4.0 * m));
+    }
+    let mut b = drive / v.max(f64::MIN_POSITIVE);
+    if let Some(m) = how.mass.filter(|m| *m > 0.0) {
+        b = b.max(2.0 * (k * m).sqrt());
+    }
+    let b = b.min(b_cap);
+    let dir = (walk.target - walk.at).signum();
+    let band = (coulomb / (k * raw_res)).round() as i64;
+    let cfg = ServoConfig {
+        stiffness: k as f32,
+        damping: b as f32,
+        damper: stiffwall_proto::DamperLaw::Difference,
+        force_limit: (1.1 * force).min(f64::from(walk.cfg.force_limit)) as f32,
+        wall_position: clamp_i32(walk.target + dir * band),
+        coarsen_shift: 0,
+        ..walk.cfg
+    };
+    (cfg, (drive / b).max(f64::MIN_POSITIVE))
+}
+
+/// Sets `push` and watches the device until it stops ([`GLIDE_STALL_SAMPLES`] without
+/// progress), the supervisor stops it, or `seconds` of host time pass. Returns how far it moved
+/// toward the target, counts.
+fn watch_glide(c: &mut Client, walk: &Walk, push: &ServoConfig, seconds: f64) -> Result<i64> {
     let dir = (walk.target - walk.at).signum();
     c.set_config(push)?;
     let rate = c.info.servo_rate_hz.max(1);
@@ -433,14 +445,10 @@ fn watch_glide(
     c.stream_start(decimation)?;
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
     let (mut best, mut since_best) = (0i64, 0usize);
-    let stalled = loop {
-        if std::time::Instant::now() > deadline {
-            break false;
-        }
+    'watch: while std::time::Instant::now() <= deadline {
         let Some(batch) = c.next_batch(std::time::Duration::from_millis(200))? else {
             continue;
         };
-        let mut done = None;
         for x in &batch.samples {
             let at = i64::from(push.wall_position) + i64::from(x.count);
             let progress = (at - walk.at) * dir;
@@ -449,19 +457,14 @@ fn watch_glide(
             } else {
                 since_best += 1;
             }
-            if (walk.target - at) * dir <= near || x.flags & stiffwall_proto::flags::SAFE_MODE != 0
+            if since_best >= GLIDE_STALL_SAMPLES || x.flags & stiffwall_proto::flags::SAFE_MODE != 0
             {
-                done = Some(false);
-            } else if since_best >= GLIDE_STALL_SAMPLES {
-                done = Some(true);
+                break 'watch;
             }
         }
-        if let Some(stalled) = done {
-            break stalled;
-        }
-    };
+    }
     c.stream_stop()?;
-    Ok((best, stalled))
+    Ok(best)
 }
 
 /// `n` as an i32, saturated.
@@ -506,15 +509,18 @@ fn settled_within_one(c: &mut Client) -> Result<i32> {
 }
 
 /// The state of a [`move_to`]: the config it sets, where the device is, the target.
-struct Walk {
-    cfg: ServoConfig,
-    at: i64,
-    target: i64,
+pub(super) struct Walk {
+    /// The config the move sets (its spring replaced at every step).
+    pub(super) cfg: ServoConfig,
+    /// Where the device rests, raw counts.
+    pub(super) at: i64,
+    /// Where the move goes, raw counts.
+    pub(super) target: i64,
 }
 
 impl Walk {
     /// The spring `how` with its origin at `origin`, then a wait for rest.
-    fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
+    pub(super) fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
         self.cfg = ServoConfig {
             stiffness: how.k as f32,
             damping: how.b as f32,

@@ -168,6 +168,8 @@ pub(super) fn enter_workspace(
         force_n: force,
         chatters: false,
         mass: None,
+        friction: None,
+        k_settle: 0.0,
     };
     place.start = Some(start);
     place.ws = Some(ws);
