@@ -114,6 +114,8 @@ struct Excited {
 /// quantization (freedom6-firm-grip, a 1500 N/m grip: from a 16-count chirp m = 0.39 kg and
 /// c = 0.044 N, from twice the amplitude 0.743 kg and 0.059 N, the plant's 0.75 and 0.06).
 const MIN_CHIRP_SPAN_COUNTS: i64 = 32;
+/// Fewest ticks of a chirp.
+const MIN_CHIRP_TICKS: f64 = 1500.0;
 /// Most the full chirp's amplitude grows over the probe's for [`MIN_CHIRP_SPAN_COUNTS`].
 const MAX_CHIRP_BOOST: f64 = 4.0;
 
@@ -238,7 +240,12 @@ pub(crate) fn identify(
     room: Option<i64>,
 ) -> Result<(Identified, i32, i32)> {
     let rate = f64::from(c.info.servo_rate_hz);
-    let ticks = (s.excite_seconds * rate).round().clamp(500.0, 1e6) as u32;
+    // At least [`MIN_CHIRP_TICKS`]: against the centring spring a device sticks near each
+    // turn, and a slow servo's 3 s (600 ticks at 200 Hz) left 16 sliding windows, too few for
+    // a fit (maxon-re35-slow-servo then fell back to the chirp with the wall off).
+    let ticks = (s.excite_seconds * rate)
+        .round()
+        .clamp(MIN_CHIRP_TICKS, 1e6) as u32;
     let f1 = (rate / 250.0).min(4.0) as f32;
     let fpc = f64::from(c.info.force_per_code);
     let max_code = c.info.max_code.max(1);

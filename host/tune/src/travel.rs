@@ -346,8 +346,9 @@ const GLIDE_DAMPER_BT_PER_M: f64 = 0.25;
 const GLIDE_MAX_FORCE_SHARE: f64 = 0.25;
 /// Glides at most (each doubling the push when the device stalled).
 const GLIDES: usize = 6;
-/// Telemetry samples (2 ms apart) without a count's progress after which a glide has stalled.
-const GLIDE_STALL_SAMPLES: usize = 250;
+/// Telemetry samples (2 ms apart) on one count after which a glide has ended (stopped where
+/// its spring holds it, or stalled).
+const GLIDE_REST_SAMPLES: usize = 50;
 /// Time constant of the glide's approach, s, at least: a tenth of the distance is left after
 /// about 2.3 of them.
 const GLIDE_TAU_S: f64 = 0.4;
@@ -434,9 +435,10 @@ fn glide_config(
     (cfg, (drive / b).max(f64::MIN_POSITIVE))
 }
 
-/// Sets `push` and watches the device until it stops ([`GLIDE_STALL_SAMPLES`] without
-/// progress), the supervisor stops it, or `seconds` of host time pass. Returns how far it moved
-/// toward the target, counts.
+/// Sets `push` and watches the device until it is at rest ([`GLIDE_REST_SAMPLES`] samples on
+/// one count: where it then is follows from the device alone, not from when the host looked),
+/// the supervisor stops it, or `seconds` of host time pass. Returns how far it moved toward the
+/// target, counts (0: it stalled).
 fn watch_glide(c: &mut Client, walk: &Walk, push: &ServoConfig, seconds: f64) -> Result<i64> {
     let dir = (walk.target - walk.at).signum();
     c.set_config(push)?;
@@ -444,21 +446,20 @@ fn watch_glide(c: &mut Client, walk: &Walk, push: &ServoConfig, seconds: f64) ->
     let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
     c.stream_start(decimation)?;
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
-    let (mut best, mut since_best) = (0i64, 0usize);
+    let (mut best, mut last, mut same) = (0i64, None::<i32>, 0usize);
     'watch: while std::time::Instant::now() <= deadline {
         let Some(batch) = c.next_batch(std::time::Duration::from_millis(200))? else {
             continue;
         };
         for x in &batch.samples {
             let at = i64::from(push.wall_position) + i64::from(x.count);
-            let progress = (at - walk.at) * dir;
-            if progress > best {
-                (best, since_best) = (progress, 0);
+            best = best.max((at - walk.at) * dir);
+            if last == Some(x.count) {
+                same += 1;
             } else {
-                since_best += 1;
+                (last, same) = (Some(x.count), 0);
             }
-            if since_best >= GLIDE_STALL_SAMPLES || x.flags & stiffwall_proto::flags::SAFE_MODE != 0
-            {
+            if same >= GLIDE_REST_SAMPLES || x.flags & stiffwall_proto::flags::SAFE_MODE != 0 {
                 break 'watch;
             }
         }
