@@ -1,4 +1,5 @@
-//! The final approach of a move (issue 46): the last counts to the target, against friction.
+//! A move's spring walk and its final approach (issue 46): the walk's state and one step of it
+//! ([`Walk`], [`GentleMove`]), and the last counts to the target, against friction ([`nudge`]).
 //!
 //! Units: raw encoder counts (the frame of `ServoConfig::wall_position`); forces N (N·m);
 //! stiffness N/m (N·m/rad).
@@ -24,9 +25,151 @@
 //! they stop: any move would land the device farther off than it is. Invariants: each nudge's push
 //! is K·Δ·D, just above the friction; at most [`NUDGES`] nudges; no allocation.
 
-use super::error::Result;
-use super::travel::{GentleMove, Walk};
+use super::error::{bail, Result};
+use super::left::fault_names;
 use stiffwall_client::Client;
+use stiffwall_proto::ServoConfig;
+
+/// The gentle move of [`super::travel::move_to`]: a spring `k` with damper `b` (the firmware's default law)
+/// whose origin steps so that the spring never pushes harder than `force_n`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GentleMove {
+    /// Spring, N/m (N·m/rad), > 0.
+    pub k: f64,
+    /// Damper, N·s/m (N·m·s/rad), ≥ 0.
+    pub b: f64,
+    /// The damper's law.
+    pub damper: stiffwall_proto::DamperLaw,
+    /// Largest push of one step, N (N·m).
+    pub force_n: f64,
+    /// The spring may chatter within one count (a wall set with `--accept-chatter`): a step
+    /// then waits until the device stays within one count, not for exact rest (which makes
+    /// where it stops depend on the link's timing, so only the way back uses it).
+    pub chatters: bool,
+    /// The device's mass (inertia), kg (kg·m²), once identified: it bounds the glide's damper.
+    pub mass: Option<f64>,
+    /// The device's friction, once identified: the final approach aims with it.
+    pub friction: Option<super::approach::MoveFriction>,
+    /// The stiffest spring (with damper `b`) the final approach may use when static friction
+    /// throws the device past the target with `k` ([`super::approach::nudge`]): a spring-only
+    /// wall verified to rest, N/m (N·m/rad), else `k`.
+    pub k_settle: f64,
+}
+
+/// Raw count of a count `n` read relative to the wall of `cfg` (effective counts).
+pub(super) fn raw_of(cfg: &ServoConfig, n: i32) -> i64 {
+    i64::from(cfg.wall_position) + (i64::from(n) << cfg.coarsen_shift.min(16))
+}
+
+/// `n` as an i32, saturated.
+pub(super) fn clamp_i32(n: i64) -> i32 {
+    i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX })
+}
+
+/// Waits until the device stays within one count (50 samples 2 ms apart spanning at most two
+/// neighbouring counts: a spring that chatters within one count is as settled as a move needs);
+/// returns the lower of the two counts, from the wall.
+///
+/// # Errors
+/// The device failing, or not settled within 20 s.
+fn settled_within_one(c: &mut Client) -> Result<i32> {
+    let rate = c.info.servo_rate_hz.max(1);
+    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
+    c.stream_start(decimation)?;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let mut recent = std::collections::VecDeque::with_capacity(51);
+    let result = loop {
+        if std::time::Instant::now() > deadline {
+            break Err(super::error::StepError::Failed(
+                "the device did not settle within one count within 20 s".into(),
+            ));
+        }
+        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+            for x in &b.samples {
+                recent.push_back(x.count);
+                if recent.len() > 50 {
+                    recent.pop_front();
+                }
+            }
+            let lo = recent.iter().copied().min().unwrap_or(0);
+            let hi = recent.iter().copied().max().unwrap_or(0);
+            if recent.len() == 50 && i64::from(hi) - i64::from(lo) <= 1 {
+                break Ok(lo);
+            }
+        }
+    };
+    c.stream_stop()?;
+    result
+}
+
+/// The state of a [`super::travel::move_to`]: the config it sets, where the device is, the target.
+pub struct Walk {
+    /// The config the move sets (its spring replaced at every step).
+    pub cfg: ServoConfig,
+    /// Where the device rests, raw counts.
+    pub at: i64,
+    /// Where the move goes, raw counts.
+    pub target: i64,
+}
+
+impl Walk {
+    /// The spring `how` with its origin at `origin`, then a wait for rest.
+    pub fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
+        self.cfg = ServoConfig {
+            stiffness: how.k as f32,
+            damping: how.b as f32,
+            damper: how.damper,
+            wall_position: clamp_i32(origin),
+            ..self.cfg
+        };
+        c.set_config(&self.cfg)?;
+        let n = if how.chatters {
+            settled_within_one(c)?
+        } else {
+            super::rest::rest_position(c)?
+        };
+        self.at = raw_of(&self.cfg, n);
+        self.check_faults(c)
+    }
+
+    /// An error naming the faults the supervisor latched on the way, if any.
+    pub fn check_faults(&self, c: &mut Client) -> Result<()> {
+        let latched = c.faults()?.latched;
+        if latched != 0 {
+            bail!(
+                "the move to count {} stopped at count {}: the supervisor latched {}",
+                self.target,
+                self.at,
+                fault_names(latched).join(", ")
+            );
+        }
+        Ok(())
+    }
+
+    /// Walks the spring's origin from where the device is to `to` in steps of `step` counts
+    /// (whether or not friction lets the device follow at once: it lags by at most F_s/K).
+    pub fn go(&mut self, c: &mut Client, to: i64, how: GentleMove, step: i64) -> Result<()> {
+        let mut origin = self.at;
+        let steps = (to - origin).unsigned_abs() / step.unsigned_abs().max(1) + 2;
+        for _ in 0..steps {
+            let gap = to - origin;
+            origin = if gap.abs() <= step {
+                to
+            } else {
+                origin + step * gap.signum()
+            };
+            self.set(c, origin, how)?;
+            if origin == to {
+                return Ok(());
+            }
+        }
+        bail!(
+            "the move to count {} did not get there in {steps} steps (at count {})",
+            self.target,
+            self.at
+        )
+    }
+}
 
 /// Corrections of the final approach at most.
 pub const NUDGES: usize = 16;

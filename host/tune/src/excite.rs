@@ -68,6 +68,10 @@ fn centred(
     ServoConfig {
         stiffness: k as f32,
         damping: b as f32,
+        // It centres from both sides, whatever the user's wall: a one-sided spring (the
+        // user's `wall = one-sided`) let omega-one-sided-delay's probe chirp drive the device
+        // out of its room on the free side, where it coasted 0.22 m.
+        wall: stiffwall_proto::WallMode::Bidirectional,
         // A dead band of one count: the damper answers motion, not a count toggling at rest,
         // so that the same config lets the device come to rest after the excitation.
         damper: stiffwall_proto::DamperLaw::DeadBand { counts: 1 },

@@ -52,6 +52,7 @@ mod model_check;
 mod outcome;
 mod procedure;
 mod progress;
+mod reach;
 mod release;
 mod rest;
 mod search;

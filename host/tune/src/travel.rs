@@ -17,8 +17,14 @@
 //!
 //! Invariant: nothing here assumes unbounded travel; a workspace always has two finite ends.
 
+pub use super::approach::GentleMove;
+use super::approach::{clamp_i32, raw_of, Walk};
 use super::error::{bail, Result};
 pub use super::left::{fault_names, DeviceLeft, LEFT_TOLERANCE_COUNTS};
+pub use super::reach::{
+    centring_stiffness, test_reach_counts, CENTRING_DAMPING_RATIO, CENTRING_SHARE,
+    PROBE_CENTRING_SHARE,
+};
 use stiffwall_client::Client;
 use stiffwall_proto::ServoConfig;
 
@@ -34,18 +40,6 @@ pub const DEFAULT_WINDOW_ROTARY_RAD: f64 = core::f64::consts::TAU;
 pub const MARGIN_SHARE: f64 = 0.1;
 /// Least margin at each end, counts.
 pub const MIN_MARGIN_COUNTS: i64 = 4;
-/// Static deflection of the centring spring under the chirp's or a ramp's peak force, as a
-/// share of the room each side (the rest is for the resonance and the friction's drift).
-pub const CENTRING_SHARE: f64 = 0.3;
-
-/// Static deflection of the first probe's centring spring, share of the room: the mass is not
-/// known yet, so the spring's resonance with the device may lie in the chirp's band undamped;
-/// a third of [`CENTRING_SHARE`] leaves room for a ringing of three times the drive (its
-/// damper K·T only keeps it from growing).
-pub const PROBE_CENTRING_SHARE: f64 = 0.1;
-/// Damping ratio of the centring spring with the probe's mass on the full chirp and the ramps
-/// (B = 2ζ√(K·m)): a resonance in the chirp's band does not ring the device out of its room.
-pub const CENTRING_DAMPING_RATIO: f64 = 0.7;
 
 /// Where the travel tune kept to came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -200,61 +194,10 @@ impl Workspace {
     }
 }
 
-/// Stiffness of a centring spring that deflects by [`CENTRING_SHARE`] of `room_counts` under
-/// `force_n`, N/m (N·m/rad), with Δ = `resolution`.
-#[must_use]
-pub fn centring_stiffness(force_n: f64, room_counts: i64, resolution: f64) -> f64 {
-    let reach = (room_counts as f64 * CENTRING_SHARE).max(1.0) * resolution;
-    force_n.abs() / reach
-}
-
-/// How far from the wall a release or impact test at stiffness `k` and speed `v_ticks`
-/// (counts per tick) reaches, counts: the impact's launch distance (the larger of 20 ticks and
-/// one natural period of motion, plus two) or the release's deflection v·√(m/K)/Δ, whichever
-/// is larger, times 1.5 for the overshoot of a wall that rings.
-#[must_use]
-pub fn test_reach_counts(v_ticks: f64, mass: f64, k: f64, period_s: f64) -> f64 {
-    let natural_ticks = core::f64::consts::TAU * (mass / k).sqrt() / period_s;
-    let launch = v_ticks.abs() * (natural_ticks.max(20.0) + 2.0);
-    let deflection = v_ticks.abs() * natural_ticks / core::f64::consts::TAU;
-    1.5 * launch.max(deflection)
-}
-
 /// Largest wall-position step of the return move, counts: the move's spring never pushes
 /// harder than `force_n` (its K·Δ·step), at least one count.
 fn move_step(force_n: f64, k: f64, resolution: f64) -> i64 {
     ((force_n / (k * resolution)).floor() as i64).max(1)
-}
-
-/// The gentle move of [`move_to`]: a spring `k` with damper `b` (the firmware's default law)
-/// whose origin steps so that the spring never pushes harder than `force_n`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GentleMove {
-    /// Spring, N/m (N·m/rad), > 0.
-    pub k: f64,
-    /// Damper, N·s/m (N·m·s/rad), ≥ 0.
-    pub b: f64,
-    /// The damper's law.
-    pub damper: stiffwall_proto::DamperLaw,
-    /// Largest push of one step, N (N·m).
-    pub force_n: f64,
-    /// The spring may chatter within one count (a wall set with `--accept-chatter`): a step
-    /// then waits until the device stays within one count, not for exact rest (which makes
-    /// where it stops depend on the link's timing, so only the way back uses it).
-    pub chatters: bool,
-    /// The device's mass (inertia), kg (kg·m²), once identified: it bounds the glide's damper.
-    pub mass: Option<f64>,
-    /// The device's friction, once identified: the final approach aims with it.
-    pub friction: Option<super::approach::MoveFriction>,
-    /// The stiffest spring (with damper `b`) the final approach may use when static friction
-    /// throws the device past the target with `k` ([`super::approach::nudge`]): a spring-only
-    /// wall verified to rest, N/m (N·m/rad), else `k`.
-    pub k_settle: f64,
-}
-
-/// Raw count of a count `n` read relative to the wall of `cfg` (effective counts).
-fn raw_of(cfg: &ServoConfig, n: i32) -> i64 {
-    i64::from(cfg.wall_position) + (i64::from(n) << cfg.coarsen_shift.min(16))
 }
 
 /// Where the device is now, raw counts: it is let come to rest with `base`'s wall off.
@@ -466,116 +409,6 @@ fn watch_glide(c: &mut Client, walk: &Walk, push: &ServoConfig, seconds: f64) ->
     }
     c.stream_stop()?;
     Ok(best)
-}
-
-/// `n` as an i32, saturated.
-fn clamp_i32(n: i64) -> i32 {
-    i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX })
-}
-
-/// Waits until the device stays within one count (50 samples 2 ms apart spanning at most two
-/// neighbouring counts: a spring that chatters within one count is as settled as a move needs);
-/// returns the lower of the two counts, from the wall.
-///
-/// # Errors
-/// The device failing, or not settled within 20 s.
-fn settled_within_one(c: &mut Client) -> Result<i32> {
-    let rate = c.info.servo_rate_hz.max(1);
-    let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
-    c.stream_start(decimation)?;
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
-    let mut recent = std::collections::VecDeque::with_capacity(51);
-    let result = loop {
-        if std::time::Instant::now() > deadline {
-            break Err(super::error::StepError::Failed(
-                "the device did not settle within one count within 20 s".into(),
-            ));
-        }
-        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
-            for x in &b.samples {
-                recent.push_back(x.count);
-                if recent.len() > 50 {
-                    recent.pop_front();
-                }
-            }
-            let lo = recent.iter().copied().min().unwrap_or(0);
-            let hi = recent.iter().copied().max().unwrap_or(0);
-            if recent.len() == 50 && i64::from(hi) - i64::from(lo) <= 1 {
-                break Ok(lo);
-            }
-        }
-    };
-    c.stream_stop()?;
-    result
-}
-
-/// The state of a [`move_to`]: the config it sets, where the device is, the target.
-pub(super) struct Walk {
-    /// The config the move sets (its spring replaced at every step).
-    pub(super) cfg: ServoConfig,
-    /// Where the device rests, raw counts.
-    pub(super) at: i64,
-    /// Where the move goes, raw counts.
-    pub(super) target: i64,
-}
-
-impl Walk {
-    /// The spring `how` with its origin at `origin`, then a wait for rest.
-    pub(super) fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
-        self.cfg = ServoConfig {
-            stiffness: how.k as f32,
-            damping: how.b as f32,
-            damper: how.damper,
-            wall_position: clamp_i32(origin),
-            ..self.cfg
-        };
-        c.set_config(&self.cfg)?;
-        let n = if how.chatters {
-            settled_within_one(c)?
-        } else {
-            super::rest::rest_position(c)?
-        };
-        self.at = raw_of(&self.cfg, n);
-        self.check_faults(c)
-    }
-
-    /// An error naming the faults the supervisor latched on the way, if any.
-    fn check_faults(&self, c: &mut Client) -> Result<()> {
-        let latched = c.faults()?.latched;
-        if latched != 0 {
-            bail!(
-                "the move to count {} stopped at count {}: the supervisor latched {}",
-                self.target,
-                self.at,
-                fault_names(latched).join(", ")
-            );
-        }
-        Ok(())
-    }
-
-    /// Walks the spring's origin from where the device is to `to` in steps of `step` counts
-    /// (whether or not friction lets the device follow at once: it lags by at most F_s/K).
-    fn go(&mut self, c: &mut Client, to: i64, how: GentleMove, step: i64) -> Result<()> {
-        let mut origin = self.at;
-        let steps = (to - origin).unsigned_abs() / step.unsigned_abs().max(1) + 2;
-        for _ in 0..steps {
-            let gap = to - origin;
-            origin = if gap.abs() <= step {
-                to
-            } else {
-                origin + step * gap.signum()
-            };
-            self.set(c, origin, how)?;
-            if origin == to {
-                return Ok(());
-            }
-        }
-        bail!(
-            "the move to count {} did not get there in {steps} steps (at count {})",
-            self.target,
-            self.at
-        )
-    }
 }
 
 /// Watches the device with `cfg` set for up to `seconds` of host time: whether it came to rest
