@@ -290,8 +290,11 @@ const GLIDE_MAX_FORCE_SHARE: f64 = 0.25;
 /// Glides at most (each doubling the push when the device stalled).
 const GLIDES: usize = 6;
 /// Telemetry samples (2 ms apart) on one count after which a glide has ended (stopped where
-/// its spring holds it, or stalled).
-const GLIDE_REST_SAMPLES: usize = 50;
+/// its spring holds it, or stalled): half a second, since the damped approach's last counts
+/// are slow (at 50 samples the glide ended a count or so early, and the tests of
+/// maxon-re35-amp-3khz and rotary-ironcore-cogging, starting from there, set walls that
+/// buzz by the truth).
+const GLIDE_REST_SAMPLES: usize = 250;
 /// Time constant of the glide's approach, s, at least: a tenth of the distance is left after
 /// about 2.3 of them.
 const GLIDE_TAU_S: f64 = 0.4;
