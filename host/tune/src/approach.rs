@@ -56,6 +56,25 @@ pub struct GentleMove {
     pub k_settle: f64,
 }
 
+/// The damper that keeps a walk's spring `k` passive behind `delay_ticks` of extra delay,
+/// N·s/m (N·m·s/rad): B = K·T·(d + 1), above the paper's passivity bound K·(T/2 + τ_d)
+/// (region A), so a walk released from far off cannot pump energy into a limit cycle.
+/// Without it a light rotor behind two ticks of delay (random-launch-1 of the launch family)
+/// grew from a re-centring nudge to a limit cycle at the walk's force limit, 600 counts wide,
+/// because K/16 of the wall under test is far above its passive K. Capped at B·T/m = ¼ when the
+/// mass is known (a sampled damper alone is stable up to about π/(2d + 1)).
+#[must_use]
+pub fn passive_walk_damping(k: f64, period_s: f64, delay_ticks: u8, mass: Option<f64>) -> f64 {
+    let b = k * period_s * (f64::from(delay_ticks) + 1.0);
+    match mass {
+        Some(m) if m > 0.0 && period_s > 0.0 => b.min(WALK_DAMPER_BT_PER_M * m / period_s),
+        _ => b,
+    }
+}
+
+/// A walk's damper, B·T/m at most ([`passive_walk_damping`]).
+const WALK_DAMPER_BT_PER_M: f64 = 0.25;
+
 /// Raw count of a count `n` read relative to the wall of `cfg` (effective counts).
 pub(super) fn raw_of(cfg: &ServoConfig, n: i32) -> i64 {
     i64::from(cfg.wall_position) + (i64::from(n) << cfg.coarsen_shift.min(16))
@@ -115,9 +134,11 @@ pub struct Walk {
 impl Walk {
     /// The spring `how` with its origin at `origin`, then a wait for rest.
     pub fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
+        let period_s = 1.0 / f64::from(c.info.servo_rate_hz.max(1));
+        let passive = passive_walk_damping(how.k, period_s, self.cfg.extra_delay_ticks, how.mass);
         self.cfg = ServoConfig {
             stiffness: how.k as f32,
-            damping: how.b as f32,
+            damping: how.b.max(passive) as f32,
             damper: how.damper,
             wall_position: clamp_i32(origin),
             ..self.cfg

@@ -503,7 +503,7 @@ fn identify_and_predict(
     }
     // The tests start from the middle of the room, wherever the excitations left the device.
     let centre = i64::from(base.wall_position) - (i64::from(rest) << base.coarsen_shift.min(16));
-    let at = super::travel::move_to(c, &base, centre, home_of(place)?)?;
+    let at = super::travel::move_into(c, &base, centre, home_of(place)?, room)?;
     let base = ServoConfig {
         wall_position: i32::try_from(at).unwrap_or(base.wall_position),
         ..base

@@ -277,6 +277,47 @@ pub fn move_to(c: &mut Client, base: &ServoConfig, target: i64, how: GentleMove)
     Ok(walk.at)
 }
 
+/// Least band, share of the room, of the spring a move aims again with ([`move_into`]).
+const AIM_BAND_SHARE: f64 = 0.125;
+
+/// [`move_to`], and when the device then rests farther than half of `room` (raw counts each
+/// side of `target`) from it, a second move whose final nudges aim with the friction model and
+/// may stiffen the spring until static friction F_s holds the device within an eighth of the
+/// room of the spring's origin ([`AIM_BAND_SHARE`]; needs `how.friction`). A move's weak spring
+/// (its push a small share of the force limit) holds a device with F_s above it anywhere within
+/// thousands of counts; its plain nudges build up the push until the device breaks away and
+/// throws it farther than it was (random-launch-3 of the launch family: from count −690 to
+/// 5001, outside the default window of ±4095, after the breakaway ramps). The second move runs
+/// only then, so a move that lands inside the room is the same as [`move_to`]'s.
+///
+/// # Errors
+/// As [`move_to`].
+pub fn move_into(
+    c: &mut Client,
+    base: &ServoConfig,
+    target: i64,
+    how: GentleMove,
+    room: i64,
+) -> Result<i64> {
+    let at = move_to(c, base, target, how)?;
+    let Some(friction) = how.friction else {
+        return Ok(at);
+    };
+    if room <= 0 || (at - target).abs() * 2 <= room {
+        return Ok(at);
+    }
+    let res = f64::from(c.info.resolution) * f64::from(1u32 << base.coarsen_shift.min(16));
+    let band = (AIM_BAND_SHARE * room as f64).max(1.0) * res;
+    let holds = friction
+        .coulomb_n
+        .max(how.force_n / super::workspace::BREAKAWAY_MARGIN);
+    let aimed = GentleMove {
+        k_settle: how.k.max(how.k_settle).max(holds / band),
+        ..how
+    };
+    move_to(c, base, target, aimed)
+}
+
 /// A glide's speed, at most this share of the encoder-jump limit per tick.
 const GLIDE_JUMP_SHARE: f64 = 1.0 / 16.0;
 /// A glide's speed, at most this share of the over-velocity limit when one is set.
@@ -524,7 +565,7 @@ pub fn recentre(c: &mut Client, base: &ServoConfig, how: GentleMove, room: i64) 
     if (at - wall).abs() * 2 <= room {
         return Ok(());
     }
-    move_to(c, base, wall, how)?;
+    move_into(c, base, wall, how, room)?;
     c.set_config(&ServoConfig {
         stiffness: 0.0,
         damping: 0.0,
