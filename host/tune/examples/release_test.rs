@@ -35,6 +35,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         period_s: 1.0 / f64::from(client.info.servo_rate_hz),
         force_per_code: f64::from(client.info.force_per_code),
         coulomb_n: preset.params.coulomb,
+        brake_damping: 0.0,
+        window: None,
     };
     let test = Test::Release {
         deflection_ticks: 10,

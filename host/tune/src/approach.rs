@@ -72,6 +72,17 @@ pub fn passive_walk_damping(k: f64, period_s: f64, delay_ticks: u8, mass: Option
     }
 }
 
+/// The firmware's largest damping for `cfg`'s servo rate and coarsening, with a margin for
+/// rounding, N·s/m (N·m·s/rad): its damper gain is at most 2^14 codes per effective count per
+/// tick, half the stiffness limit's per tick.
+#[must_use]
+pub fn firmware_damping_cap(c: &Client, cfg: &ServoConfig) -> f64 {
+    let t = 1.0 / f64::from(cfg.servo_rate_hz.max(1));
+    0.99 * f64::from(c.info.limits.max_stiffness) * t
+        / 2.0
+        / f64::from(1u32 << cfg.coarsen_shift.min(16))
+}
+
 /// A walk's damper, B·T/m at most ([`passive_walk_damping`]).
 const WALK_DAMPER_BT_PER_M: f64 = 0.25;
 
@@ -135,7 +146,8 @@ impl Walk {
     /// The spring `how` with its origin at `origin`, then a wait for rest.
     pub fn set(&mut self, c: &mut Client, origin: i64, how: GentleMove) -> Result<()> {
         let period_s = 1.0 / f64::from(c.info.servo_rate_hz.max(1));
-        let passive = passive_walk_damping(how.k, period_s, self.cfg.extra_delay_ticks, how.mass);
+        let passive = passive_walk_damping(how.k, period_s, self.cfg.extra_delay_ticks, how.mass)
+            .min(firmware_damping_cap(c, &self.cfg));
         self.cfg = ServoConfig {
             stiffness: how.k as f32,
             damping: how.b.max(passive) as f32,

@@ -161,6 +161,9 @@ struct Identification {
     room: i64,
     /// The push of the moves that walk a drifting device back, N (N·m).
     move_force_n: f64,
+    /// The default window (no travel stated), raw counts: the release and impact tests carry
+    /// it as the firmware's travel window (a stated travel is in `base` already).
+    window: Option<(i32, i32)>,
 }
 
 fn tune_inner(
@@ -362,6 +365,7 @@ fn search_walls(
         missed_launch: std::cell::Cell::new(None),
         room: ident.room,
         move_force_n: ident.move_force_n,
+        window: ident.window,
     };
     // Above the quiet ceiling no count can hold the wall's force KΔ/2 against friction: a test
     // that rests there rested on a bias (a hand or cable pulling to one side of the wall, a
@@ -559,6 +563,11 @@ fn identify_and_predict(
         units,
         room: room_raw,
         move_force_n: home_of(place)?.force_n,
+        window: (ws.source == TravelSource::DefaultWindow).then(|| {
+            let clamp =
+                |n: i64| i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX });
+            (clamp(ws.ends[0]), clamp(ws.ends[1]))
+        }),
     })
 }
 

@@ -205,9 +205,23 @@ fn move_step(force_n: f64, k: f64, resolution: f64) -> i64 {
 /// # Errors
 /// The device failing or not coming to rest.
 pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
+    where_now_braked(c, base, 0.0)
+}
+
+/// [`where_now`] with the wall off but a damper `brake` (N·s/m, N·m·s/rad; a dead band of
+/// one count, so it never acts at rest) bringing a device that still moves to rest.
+///
+/// # Errors
+/// The device failing or not coming to rest.
+pub fn where_now_braked(c: &mut Client, base: &ServoConfig, brake: f64) -> Result<i64> {
     let cfg = ServoConfig {
         stiffness: 0.0,
-        damping: 0.0,
+        damping: brake.max(0.0) as f32,
+        damper: if brake > 0.0 {
+            stiffwall_proto::DamperLaw::DeadBand { counts: 1 }
+        } else {
+            base.damper
+        },
         ..*base
     };
     c.set_config(&cfg)?;
@@ -422,12 +436,24 @@ fn glide_config(
     (cfg, (drive / b).max(f64::MIN_POSITIVE))
 }
 
+/// Least motion away from the target, counts, that stops a glide as going the wrong way
+/// ([`watch_glide`]; or a quarter of the distance, whichever is more).
+const GLIDE_WRONG_WAY_COUNTS: i64 = 16;
+
 /// Sets `push` and watches the device until it is at rest ([`GLIDE_REST_SAMPLES`] samples on
 /// one count: where it then is follows from the device alone, not from when the host looked),
 /// the supervisor stops it, or `seconds` of host time pass. Returns how far it moved toward the
 /// target, counts (0: it stalled).
+///
+/// # Errors
+/// The device failing, or moving away from the target by more than a quarter of the distance
+/// (at least [`GLIDE_WRONG_WAY_COUNTS`]): a glide starts at rest and never overshoots, so that
+/// is a force or encoder of the wrong sign (a board whose encoder counts backwards ran away
+/// under the glide's spring, and each glide's wait grew with the distance, for tens of
+/// minutes); the spring and damper are then switched off at once.
 fn watch_glide(c: &mut Client, walk: &Walk, push: &ServoConfig, seconds: f64) -> Result<i64> {
     let dir = (walk.target - walk.at).signum();
+    let wrong_way = ((walk.target - walk.at).abs() / 4).max(GLIDE_WRONG_WAY_COUNTS);
     c.set_config(push)?;
     let rate = c.info.servo_rate_hz.max(1);
     let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
@@ -440,6 +466,20 @@ fn watch_glide(c: &mut Client, walk: &Walk, push: &ServoConfig, seconds: f64) ->
         };
         for x in &batch.samples {
             let at = i64::from(push.wall_position) + i64::from(x.count);
+            if (walk.at - at) * dir > wrong_way {
+                c.set_config(&ServoConfig {
+                    stiffness: 0.0,
+                    damping: 0.0,
+                    ..*push
+                })?;
+                c.stream_stop()?;
+                bail!(
+                    "the move to count {} pushed the device the wrong way, from count {} to {at}: \
+                     the force's sign or the encoder's direction is inverted",
+                    walk.target,
+                    walk.at
+                );
+            }
             best = best.max((at - walk.at) * dir);
             if last == Some(x.count) {
                 same += 1;
@@ -552,16 +592,25 @@ pub fn check_left(
 /// Where tests drift (each puts its wall where the last left the device): when the device
 /// rests farther than half the `room` (raw counts; 0: no limit) from `base`'s wall, it is
 /// walked back there gently with `how` ([`move_to`]; the search uses a spring of K/16 of the K
-/// under test, far below it and so far more stable) and the wall is off again.
+/// under test, far below it and so far more stable) and the wall is off again. Where the device
+/// rests is read with the damper `brake` on (N·s/m, N·m·s/rad; 0: none): a test whose wall
+/// grew leaves it moving.
 ///
 /// # Errors
 /// The device failing, or the move's.
-pub fn recentre(c: &mut Client, base: &ServoConfig, how: GentleMove, room: i64) -> Result<()> {
+pub fn recentre(
+    c: &mut Client,
+    base: &ServoConfig,
+    how: GentleMove,
+    room: i64,
+    brake: f64,
+) -> Result<()> {
     if room <= 0 || how.k.is_nan() || how.k <= 0.0 {
         return Ok(());
     }
     let wall = i64::from(base.wall_position);
-    let at = where_now(c, base)?;
+    let brake = brake.min(super::approach::firmware_damping_cap(c, base));
+    let at = where_now_braked(c, base, brake)?;
     if (at - wall).abs() * 2 <= room {
         return Ok(());
     }

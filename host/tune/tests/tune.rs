@@ -240,6 +240,8 @@ fn impacts_from_both_sides_pass_below_the_limit_and_fail_far_above_it() {
         period_s: truth.period_s,
         force_per_code: f64::from(c.info.force_per_code),
         coulomb_n: truth.coulomb,
+        brake_damping: 0.0,
+        window: None,
     };
     let base = stiffwall_proto::ServoConfig {
         energy_monitor: true,
