@@ -126,6 +126,15 @@ fn invalid_config(e: ConfigError) -> DeviceMsg {
     }
 }
 
+/// The servo's command queue had no room for the request's command (transient: the host
+/// repeats the request).
+fn queue_full() -> DeviceMsg {
+    DeviceMsg::Error {
+        code: ErrorCode::QueueFull,
+        detail: ErrorDetail::None,
+    }
+}
+
 fn busy(text: &str) -> DeviceMsg {
     DeviceMsg::Error {
         code: ErrorCode::Busy,
@@ -393,7 +402,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             return busy("experiment running");
         }
         if !self.send_servo(ServoCmd::Config(cfg)) {
-            return busy("servo queue full");
+            return queue_full();
         }
         if cfg.servo_rate_hz != self.config.servo_rate_hz {
             self.rate_change = Some(cfg.servo_rate_hz);
@@ -543,7 +552,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
         if self.send_servo(cmd) {
             DeviceMsg::Ack(done)
         } else {
-            busy("servo queue full")
+            queue_full()
         }
     }
 
@@ -563,7 +572,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             self.port.shared.experiment.store(true, Ordering::Relaxed);
             DeviceMsg::Ack(Request::Excite)
         } else {
-            busy("servo queue full")
+            queue_full()
         }
     }
 
@@ -676,7 +685,7 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             },
         };
         if !self.send_servo(cmd) {
-            return busy("servo queue full");
+            return queue_full();
         }
         self.end_rule = None;
         self.port.shared.experiment.store(true, Ordering::Relaxed);
@@ -791,6 +800,54 @@ mod tests {
             }
         );
         assert_eq!(f[3], DeviceMsg::Config(ServoConfig::default()));
+    }
+
+    /// Requests beyond the servo's command queue are answered `QueueFull` (a code of its own,
+    /// no text), and accepted again once the servo has taken the queued commands.
+    #[test]
+    fn a_full_command_queue_answers_queue_full_by_its_code() {
+        let mut ch = Channels::new();
+        let (sp, hp) = ch.split();
+        let b = BoardInfo::default();
+        let mut dev = Device::new(
+            b,
+            ConfigStore::new(MemStorage::default()),
+            hp,
+            ServoConfig::default(),
+        );
+        let mut servo: Servo<'_> = Servo::new(b, dev.config(), sp);
+        let mut link = Link::default();
+        let sent = 3 * crate::channels::COMMAND_QUEUE;
+        for _ in 0..sent {
+            link.send(&HostMsg::ClearFaults);
+        }
+        for t in 0..(4 * sent as u32) {
+            dev.poll(t, &mut link);
+        }
+        let f = link.frames();
+        assert_eq!(f.len(), sent);
+        let acked = f
+            .iter()
+            .filter(|m| **m == DeviceMsg::Ack(Request::ClearFaults))
+            .count();
+        let full = DeviceMsg::Error {
+            code: ErrorCode::QueueFull,
+            detail: ErrorDetail::None,
+        };
+        assert!(
+            (1..=crate::channels::COMMAND_QUEUE).contains(&acked),
+            "{f:?}"
+        );
+        assert!(f[acked..].iter().all(|m| *m == full), "{f:?}");
+        // The servo takes the queued commands; the next request is accepted.
+        for t in 0..(2 * sent as u32) {
+            servo.tick(t, &mut SampledCount(0), &mut HeldCode(0));
+        }
+        link.send(&HostMsg::ClearFaults);
+        for t in 0..8 {
+            dev.poll(t, &mut link);
+        }
+        assert_eq!(link.frames(), [DeviceMsg::Ack(Request::ClearFaults)]);
     }
 
     /// `PrepareTest` with a bad rule or config is refused naming the field and its range and

@@ -5,6 +5,8 @@
 //!   servo configuration, serialized with postcard. Physical quantities are SI (`f32`); force
 //!   and position on the device side are output codes and encoder counts, named as such.
 //! - [`damper`]: the virtual damper's law in the servo configuration and its text form.
+//! - [`kinds`]: what a message is, as values (its name, the request an `Ack` echoes, which
+//!   error codes are framing errors and which are transient).
 //! - [`frame`]: the framing. One frame on the wire is
 //!   `COBS( version:u8 ++ postcard(msg) ++ CRC-32/ISO-HDLC(version ++ postcard) as 4 LE bytes ) ++ 0x00`.
 //!   [`encode`] writes one frame into a caller buffer; [`FrameDecoder`] is fed byte by byte and
@@ -20,6 +22,7 @@ extern crate std;
 
 pub mod damper;
 pub mod frame;
+pub mod kinds;
 pub mod msg;
 
 pub use damper::{DamperLaw, ParseDamperLawError, LAW_NAME_LEN, MAX_DEADBAND_COUNTS};

@@ -26,7 +26,11 @@ use crate::damper::DamperLaw;
 /// [`ServoConfig::travel_max`] (after `damper`); [`ConfigField::TravelMin`] and
 /// [`ConfigField::TravelMax`] name them in a refusal; the supervisor's fault bit
 /// [`fault::TRAVEL`] is new.
-pub const PROTOCOL_VERSION: u8 = 3;
+///
+/// Version 4: [`ErrorCode::QueueFull`] answers a request the servo's command queue had no room
+/// for (before: `Busy` with the text "servo queue full", which a host could only recognise by
+/// its text); a version-3 host would not decode it, so the handshake refuses one.
+pub const PROTOCOL_VERSION: u8 = 4;
 
 /// Telemetry samples per [`TelemetryBatch`].
 pub const TELEMETRY_BATCH: usize = 24;
@@ -548,6 +552,9 @@ pub enum ErrorCode {
     Busy,
     /// Request parameters out of range (experiments, table chunks).
     InvalidArgument,
+    /// The servo's command queue is full (it takes one command per tick): transient, the
+    /// request may be repeated unchanged (protocol version 4).
+    QueueFull,
 }
 
 /// Fields of [`ServoConfig`] (for error details).

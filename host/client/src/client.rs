@@ -12,14 +12,14 @@ use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 use stiffwall_proto::{
-    encode, DeviceInfo, DeviceMsg, ErrorCode, FaultReport, FrameDecoder, HostMsg, Request, Sample,
-    ServoConfig, TelemetryBatch, MAX_FRAME, PROTOCOL_VERSION,
+    encode, DeviceInfo, DeviceMsg, FaultReport, FrameDecoder, HostMsg, Sample, ServoConfig,
+    TelemetryBatch, MAX_FRAME, PROTOCOL_VERSION,
 };
 
 mod experiment;
 
 use crate::describe::describe_error;
-use crate::describe::{is_framing, is_framing_reply};
+use crate::describe::is_framing_reply;
 
 /// How long a request waits for its answer.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
@@ -111,7 +111,7 @@ impl Client {
             })?;
             match c.wait(ANSWER_TIMEOUT, "Hello", |m| match m {
                 DeviceMsg::HelloReply(_) => true,
-                DeviceMsg::Error { code, .. } => !is_framing(*code),
+                DeviceMsg::Error { code, .. } => !code.is_framing(),
                 _ => false,
             }) {
                 Ok(DeviceMsg::HelloReply(info)) => {
@@ -127,7 +127,7 @@ impl Client {
                     // or a banner): they are about no request of the caller's, so they are not
                     // handed on as if they had come later.
                     c.pending.retain(
-                        |m| !matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code)),
+                        |m| !matches!(m, DeviceMsg::Error { code, .. } if code.is_framing()),
                     );
                     return Ok(c);
                 }
@@ -212,7 +212,7 @@ impl Client {
                     .pending
                     .iter()
                     .skip(queued)
-                    .any(|m| matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code)));
+                    .any(|m| matches!(m, DeviceMsg::Error { code, .. } if code.is_framing()));
                 if answered_garbage && start.elapsed() < BACKLOG_WAIT_MAX {
                     device_reading = true;
                     stalled_since = Instant::now();
@@ -366,18 +366,18 @@ impl Client {
     /// through input queued ahead of the request, so each restarts the answer timeout, for at
     /// most [`BACKLOG_WAIT_MAX`]; if no answer comes, the timeout names the last one seen.
     ///
-    /// A full servo command queue (`Busy`, "servo queue full": the servo takes one command per
-    /// tick) is transient: the request is repeated, for at most [`QUEUE_FULL_RETRY`].
+    /// A full servo command queue (`QueueFull`: the servo takes one command per tick) is
+    /// transient ([`stiffwall_proto::ErrorCode::is_transient`]): the request is repeated, for at most
+    /// [`QUEUE_FULL_RETRY`].
     pub fn request(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
         let deadline = Instant::now() + QUEUE_FULL_RETRY;
         loop {
             let m = self.request_once(msg)?;
-            let full = matches!(&m, DeviceMsg::Error { code: ErrorCode::Busy, detail }
-                if describe_error(ErrorCode::Busy, detail).contains("queue full"));
+            let full = matches!(&m, DeviceMsg::Error { code, .. } if code.is_transient());
             if !full || Instant::now() > deadline {
                 if let DeviceMsg::Error { code, detail } = m {
                     return Err(ClientError::Refused {
-                        request: short(msg),
+                        request: msg.name().to_string(),
                         code,
                         detail,
                     });
@@ -390,14 +390,14 @@ impl Client {
 
     fn request_once(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
         self.send(msg)?;
-        let ack = ack_kind(msg);
+        let ack = msg.ack_kind();
         let last_framing = std::cell::Cell::new(None);
         let m = self
             .wait_extending(
                 ANSWER_TIMEOUT,
                 BACKLOG_WAIT_MAX,
                 |m| match m {
-                    DeviceMsg::Error { code, detail } if is_framing(*code) => {
+                    DeviceMsg::Error { code, detail } if code.is_framing() => {
                         last_framing.set(Some(describe_error(*code, detail)));
                         false
                     }
@@ -414,7 +414,7 @@ impl Client {
             )
             .map_err(|e| match e {
                 ClientError::Timeout { waited, .. } => ClientError::Timeout {
-                    request: Some(short(msg)),
+                    request: Some(msg.name().to_string()),
                     waited,
                     bad_frames: last_framing.take(),
                 },
@@ -530,38 +530,11 @@ impl Client {
     }
 }
 
-fn ack_kind(msg: &HostMsg) -> Option<Request> {
-    Some(match msg {
-        HostMsg::SetConfig(_) => Request::SetConfig,
-        HostMsg::SaveConfig => Request::SaveConfig,
-        HostMsg::StreamStart { .. } => Request::StreamStart,
-        HostMsg::StreamStop => Request::StreamStop,
-        HostMsg::Release { .. } => Request::Release,
-        HostMsg::Excite { .. } => Request::Excite,
-        HostMsg::TableChunk { .. } => Request::TableChunk,
-        HostMsg::Heartbeat => Request::Heartbeat,
-        HostMsg::ClearFaults => Request::ClearFaults,
-        HostMsg::Stop => Request::Stop,
-        HostMsg::Shutdown { .. } => Request::Shutdown,
-        HostMsg::Impact { .. } => Request::Impact,
-        HostMsg::PrepareTest { .. } => Request::PrepareTest,
-        _ => return None,
-    })
-}
-
 fn unexpected(request: &str, answer: &DeviceMsg) -> ClientError {
     ClientError::Unexpected {
         request: request.to_string(),
-        answer: format!("{answer:?}"),
+        answer: answer.name().to_string(),
     }
-}
-
-fn short(msg: &HostMsg) -> String {
-    let s = format!("{msg:?}");
-    s.split(['(', ' ', '{'])
-        .next()
-        .unwrap_or("request")
-        .to_string()
 }
 
 fn placeholder_info() -> DeviceInfo {
@@ -594,6 +567,7 @@ mod tests {
     use super::*;
     use crate::transport::pty_pair;
     use stiffwall_proto::ErrorDetail;
+    use stiffwall_proto::{ErrorCode, Request};
 
     fn is_hangup(e: &ClientError) -> bool {
         e.is_hangup()
@@ -679,6 +653,73 @@ mod tests {
         let mut c = scripted(|_, msg| assert_eq!(msg, HostMsg::Shutdown { exit_code: 3 }));
         c.shutdown(3)
             .expect("the board hung up after reading Shutdown");
+    }
+
+    /// A device that answers the handshake, then each request by `answer(n, msg)` (n = 1 for
+    /// the first after the handshake) until `answer` returns None; counts the requests.
+    fn answering(
+        answer: fn(usize, &HostMsg) -> Option<DeviceMsg>,
+    ) -> (Client, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
+        let (mut master, host, _name) = pty_pair().unwrap();
+        let seen = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let counter = seen.clone();
+        std::thread::spawn(move || {
+            let mut dec = FrameDecoder::new();
+            let mut byte = [0u8; 1];
+            while master.read_exact(&mut byte).is_ok() {
+                let Some(Ok(msg)) = dec.feed::<HostMsg>(byte[0]) else {
+                    continue;
+                };
+                if let HostMsg::Hello { .. } = msg {
+                    let mut info = placeholder_info();
+                    info.protocol_version = PROTOCOL_VERSION;
+                    reply(&mut master, &DeviceMsg::HelloReply(info));
+                    continue;
+                }
+                let n = counter.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+                match answer(n, &msg) {
+                    Some(m) => reply(&mut master, &m),
+                    None => return,
+                }
+            }
+        });
+        (Client::connect(host, None).unwrap(), seen)
+    }
+
+    #[test]
+    fn a_full_servo_queue_is_retried_by_its_code_and_a_busy_device_is_not() {
+        let (mut c, seen) = answering(|n, msg| {
+            assert_eq!(*msg, HostMsg::ClearFaults);
+            Some(if n < 3 {
+                DeviceMsg::Error {
+                    code: ErrorCode::QueueFull,
+                    detail: ErrorDetail::None,
+                }
+            } else {
+                DeviceMsg::Ack(Request::ClearFaults)
+            })
+        });
+        c.clear_faults().expect("acknowledged on the third try");
+        assert_eq!(seen.load(std::sync::atomic::Ordering::SeqCst), 3);
+        // `Busy` (an experiment running, faults latched) is a refusal, whatever its text.
+        let (mut c, seen) = answering(|_, _| {
+            Some(DeviceMsg::Error {
+                code: ErrorCode::Busy,
+                detail: ErrorDetail::Text(heapless::String::try_from("servo queue full").unwrap()),
+            })
+        });
+        let e = c.clear_faults().unwrap_err();
+        assert!(
+            matches!(
+                e,
+                ClientError::Refused {
+                    code: ErrorCode::Busy,
+                    ..
+                }
+            ),
+            "{e:#}"
+        );
+        assert_eq!(seen.load(std::sync::atomic::Ordering::SeqCst), 1);
     }
 
     #[test]

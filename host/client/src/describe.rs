@@ -27,6 +27,7 @@ pub fn describe_error_named(code: ErrorCode, detail: &ErrorDetail, label: FieldL
         ErrorCode::StoreFailed => "config store failed",
         ErrorCode::Busy => "device busy",
         ErrorCode::InvalidArgument => "argument out of range",
+        ErrorCode::QueueFull => "the servo's command queue is full",
     };
     match detail {
         ErrorDetail::None => what.to_string(),
@@ -86,21 +87,9 @@ pub fn readable(x: f64) -> String {
     }
 }
 
-/// Error codes a device gives to frames that did not decode (not to a refused request).
-pub(crate) fn is_framing(code: ErrorCode) -> bool {
-    matches!(
-        code,
-        ErrorCode::Oversize
-            | ErrorCode::Crc
-            | ErrorCode::Cobs
-            | ErrorCode::UnknownTag
-            | ErrorCode::Deserialize
-    )
-}
-
-/// A device reply to a frame that did not decode (see [`is_framing`]).
+/// A device reply to a frame that did not decode ([`ErrorCode::is_framing`]).
 pub(crate) fn is_framing_reply(m: &DeviceMsg) -> bool {
-    matches!(m, DeviceMsg::Error { code, .. } if is_framing(*code))
+    matches!(m, DeviceMsg::Error { code, .. } if code.is_framing())
 }
 
 #[cfg(test)]
