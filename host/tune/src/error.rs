@@ -91,7 +91,10 @@ pub enum StepError {
     NoWallPassed(#[from] NoWallPassed),
     /// The supervisor latched faults (`latched`, the fault bits) during an identification
     /// chirp.
-    #[error("the supervisor latched faults {latched:#x} during the excitation")]
+    #[error(
+        "the supervisor latched faults {} during the excitation",
+        super::left::fault_names(*latched).join(", ")
+    )]
     ExcitationTripped {
         /// The latched fault bits.
         latched: u32,

@@ -328,8 +328,8 @@ pub(crate) fn identify(
         let jump = latched & stiffwall_proto::fault::ENCODER_JUMP != 0;
         return Err(e).context(format!(
             "identification failed at every excitation level from 0.08 % to 40 % of the \
-             force limit: the supervisor latched faults {:#x}{} during the chirp",
-            latched,
+             force limit: the supervisor latched faults {}{} during the chirp",
+            super::left::fault_names(latched).join(", "),
             if jump {
                 format!(
                     " (encoder jump: more than {} counts in one tick; a fine encoder needs a \

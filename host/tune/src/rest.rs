@@ -64,8 +64,8 @@ pub fn clear_faults(c: &mut Client) -> Result<()> {
         }
         if std::time::Instant::now() > deadline {
             bail!(
-                "faults {:#x} stay latched (first at tick {})",
-                f.latched,
+                "faults {} stay latched (first at tick {})",
+                super::left::fault_names(f.latched).join(", "),
                 f.first_tick
             );
         }
