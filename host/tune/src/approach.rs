@@ -72,6 +72,9 @@ pub fn passive_walk_damping(k: f64, period_s: f64, delay_ticks: u8, mass: Option
     }
 }
 
+/// Once measured, the moves push at least this many times the breakaway force.
+pub const BREAKAWAY_MARGIN: f64 = 1.5;
+
 /// The firmware's largest damping for `cfg`'s servo rate and coarsening, with a margin for
 /// rounding, N·s/m (N·m·s/rad): its damper gain is at most 2^14 codes per effective count per
 /// tick, half the stiffness limit's per tick.

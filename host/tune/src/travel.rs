@@ -324,7 +324,7 @@ pub fn move_into(
     let band = (AIM_BAND_SHARE * room as f64).max(1.0) * res;
     let holds = friction
         .coulomb_n
-        .max(how.force_n / super::workspace::BREAKAWAY_MARGIN);
+        .max(how.force_n / super::approach::BREAKAWAY_MARGIN);
     let aimed = GentleMove {
         k_settle: how.k.max(how.k_settle).max(holds / band),
         ..how

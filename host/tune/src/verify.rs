@@ -453,6 +453,7 @@ fn run_aimed(
         },
         _ => cfg,
     };
+    let cfg = free_side_window(cfg, test);
     clear_faults(c)?;
     // A test ends when its wall has come to rest ([`settled_within`]: the last third of the
     // record at one count), or within one count only when chatter is accepted
@@ -572,6 +573,49 @@ fn wall_under_test(
         },
         ..*base
     })
+}
+
+/// Effective counts past a one-sided impact's launch start at which its free side's window
+/// ends, at least ([`free_side_window`]).
+const FREE_SIDE_MARGIN_TICKS: i64 = 16;
+
+/// `cfg` for `test` with, for a one-sided impact, the travel window's end on the free side
+/// (the launch's side of the wall) moved in to just past the launch start: the launch distance
+/// or twice the exit window at the launch speed (at least [`FREE_SIDE_MARGIN_TICKS`]) beyond
+/// it. A one-sided wall has no force on its free side, so a device it throws out coasts on
+/// with the speed it left with: on a device of little friction (omega-one-sided-delay with
+/// ±40 mm of travel, 0.67 m/s² of friction) into its end stop, where a window at the travel's
+/// end tripped the brake too late. Leaving this window trips the supervisor (its safe mode is
+/// the brake), and a test whose device had left the wall is judged by what it did there.
+fn free_side_window(cfg: ServoConfig, test: Test) -> ServoConfig {
+    let Test::Impact {
+        start_ticks,
+        velocity_milliticks,
+        one_sided: true,
+    } = test
+    else {
+        return cfg;
+    };
+    let v_ticks = i64::from(velocity_milliticks.unsigned_abs() / 1000 + 1);
+    let start = i64::from(start_ticks).abs();
+    let margin = start
+        .max(2 * super::verdict::EXIT_WINDOW as i64 * v_ticks)
+        .max(FREE_SIDE_MARGIN_TICKS);
+    let reach = (start + margin) << cfg.coarsen_shift.min(16);
+    let wall = i64::from(cfg.wall_position);
+    if start_ticks < 0 {
+        let edge = i32::try_from(wall - reach).unwrap_or(i32::MIN);
+        ServoConfig {
+            travel_min: Some(cfg.travel_min.map_or(edge, |m| m.max(edge))),
+            ..cfg
+        }
+    } else {
+        let edge = i32::try_from(wall + reach).unwrap_or(i32::MAX);
+        ServoConfig {
+            travel_max: Some(cfg.travel_max.map_or(edge, |m| m.min(edge))),
+            ..cfg
+        }
+    }
 }
 
 /// How a test's record is cut and judged.

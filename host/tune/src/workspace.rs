@@ -127,8 +127,7 @@ pub(super) fn home_of(place: &Place) -> Result<super::travel::GentleMove> {
 /// Share of the force limit the way back and the move to the middle push with, before the
 /// breakaway ramps have measured the static friction.
 pub(super) const MOVE_FORCE_SHARE: f64 = 0.02;
-/// Once measured, the moves push at least this many times the breakaway force.
-pub(super) const BREAKAWAY_MARGIN: f64 = 1.5;
+pub(super) use super::approach::BREAKAWAY_MARGIN;
 /// The moves' push, share of the force limit at most.
 pub(super) const MOVE_MAX_FORCE_SHARE: f64 = 0.25;
 
