@@ -350,6 +350,12 @@ const GLIDES: usize = 6;
 /// maxon-re35-amp-3khz and rotary-ironcore-cogging, starting from there, set walls that
 /// buzz by the truth).
 const GLIDE_REST_SAMPLES: usize = 250;
+/// Host time one glide is watched at most, s: a glide covers its distance in a few time
+/// constants ([`GLIDE_TAU_S`]) at a speed capped by the encoder-jump limit, seconds in real
+/// time even from far off; a device that neither rests nor turns back by then is not
+/// following its spring (a board whose encoder counts backwards, far off after its tests, kept
+/// the way back watching for tens of minutes while the wait grew with the distance).
+const GLIDE_MAX_WAIT_S: f64 = 30.0;
 /// Time constant of the glide's approach, s, at least: a tenth of the distance is left after
 /// about 2.3 of them.
 const GLIDE_TAU_S: f64 = 0.4;
@@ -375,10 +381,25 @@ fn glide(c: &mut Client, walk: &mut Walk, how: GentleMove, far: i64) -> Result<(
             return Ok(());
         }
         let (push, v) = glide_config(c, walk, how, force, distance);
-        let wait_s = 6.0 * distance as f64 * f64::from(c.info.resolution) / v
+        let wait_s = (6.0 * distance as f64 * f64::from(c.info.resolution) / v
             + 10.0 * GLIDE_TAU_S
-            + super::rest::REST_WAIT_S;
+            + super::rest::REST_WAIT_S)
+            .min(GLIDE_MAX_WAIT_S);
+        let watched = std::time::Instant::now();
         let moved = watch_glide(c, walk, &push, wait_s)?;
+        if watched.elapsed().as_secs_f64() >= GLIDE_MAX_WAIT_S {
+            c.set_config(&ServoConfig {
+                stiffness: 0.0,
+                damping: 0.0,
+                ..push
+            })?;
+            bail!(
+                "the move to count {} did not come to rest under its spring within {GLIDE_MAX_WAIT_S:.0} s \
+                 (from count {}): the device does not follow the spring",
+                walk.target,
+                walk.at
+            );
+        }
         walk.at = where_now(c, &walk.cfg)?;
         walk.check_faults(c)?;
         if moved * 4 < distance {
