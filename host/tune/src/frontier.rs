@@ -8,6 +8,7 @@ use super::error::Result;
 use super::outcome::FrontierPoint;
 use super::progress::Progress;
 use super::release::Verdict;
+use super::repeat::{margin_for_spread, repeated, Repeat};
 use super::search::{largest_settling_k, Found, Search};
 use super::settings::*;
 use super::steps::{df_equivalent, Notes, Run};
@@ -54,25 +55,34 @@ fn damped(base: &ServoConfig, b: f64) -> ServoConfig {
     }
 }
 
-/// The largest resting K at damping `b`: from `start` down by [`FRONTIER_STEP`] until a step
-/// passes, then up and bisected ([`FRONTIER_REL_TOL`]); None when no K above `floor` passes.
-#[allow(clippy::too_many_arguments)]
+/// Where a search at one damping starts and what bounds it.
+struct AtB<'a> {
+    base: &'a ServoConfig,
+    /// The damping searched, N·s/m (N·m·s/rad).
+    b: f64,
+    /// The first K tried.
+    start: f64,
+    /// No K below this counts.
+    floor: f64,
+    search: &'a Search,
+    thorough: bool,
+}
+
+/// The largest resting K at damping `at.b`: from `at.start` down by [`FRONTIER_STEP`] until a
+/// step passes, then up and bisected ([`FRONTIER_REL_TOL`]), then repeated from a new start
+/// ([`crate::repeat`]); None when no K above `at.floor` passes, or none passes its repeat.
 fn search_at(
     run: &Run<'_>,
     c: &mut Client,
-    base: &ServoConfig,
-    b: f64,
-    start: f64,
-    floor: f64,
-    search: &Search,
-    thorough: bool,
+    at: &AtB<'_>,
     notes: &mut Notes,
-) -> Result<Option<Found>> {
-    let cfg = damped(base, b);
+) -> Result<Option<(Found, Repeat)>> {
+    let cfg = damped(at.base, at.b);
+    let thorough = at.thorough;
     // Verdicts already measured, looked up by K (the bracketing revisits the K it came down
     // from).
     let mut seen: Vec<(f64, Verdict)> = Vec::new();
-    let mut k = start;
+    let mut k = at.start;
     loop {
         let v = run.step(c, &cfg, k, thorough, notes)?;
         seen.push((k, v));
@@ -80,22 +90,32 @@ fn search_at(
             break;
         }
         k /= FRONTIER_STEP;
-        if k < floor {
+        if k < at.floor {
             return Ok(None);
         }
     }
     let search = Search {
         step: FRONTIER_STEP,
-        rel_tol: search.rel_tol.max(FRONTIER_REL_TOL),
-        ..*search
+        rel_tol: at.search.rel_tol.max(FRONTIER_REL_TOL),
+        ..*at.search
     };
-    largest_settling_k(k, &search, |k| {
+    let mut found = largest_settling_k(k, &search, |k| {
         match seen.iter().find(|(k0, _)| (k / k0 - 1.0).abs() < 1e-9) {
             Some(&(_, v)) => Ok(v),
             None => run.step(c, &cfg, k, thorough, notes),
         }
-    })
-    .map(Some)
+    })?;
+    let repeat = repeated(found.k_pass, found.k_fail, search.rel_tol, |k| {
+        (run.progress)(Progress::Repeating { k, b: at.b });
+        run.step(c, &cfg, k, thorough, notes)
+    })?;
+    match repeat.k_repeated {
+        Some(k) if k >= at.floor => {
+            found.k_pass = k;
+            Ok(Some((found, repeat)))
+        }
+        _ => Ok(None),
+    }
 }
 
 /// The K predicted at damping `b` for a device whose spring-only search found `k0`: the exact
@@ -108,12 +128,28 @@ fn predicted_k(run: &Run<'_>, k0: f64, b: f64) -> Option<f64> {
     (at_0 > 0.0 && at_b > 0.0).then(|| k0 * at_b / at_0)
 }
 
+/// The K the damping levels are scaled by (B = β·K·T): the identified model's spring-only
+/// limit (the exact linear boundary with Coulomb friction as describing-function damping at v)
+/// where the spring-only search's `k0` agrees with it within [`DAMPING_SCALE_AGREEMENT`], else
+/// `k0`. Issue 42: near its limit a spring's release verdict turns on where it starts, so `k0`
+/// lands on one of two values run to run (1.19 or 1.30 on the emulated maxon-re35 board), and
+/// a B scaled by it moved with it, and with B the wall set (a release that buzzes at 0.8 × the
+/// frontier at the smaller B only). The model's K is the same every run.
+fn damping_scale_k(run: &Run<'_>, k0: f64) -> f64 {
+    let eq = df_equivalent(&run.p, run.v);
+    match criteria::k_max_exact_linear(&eq, 0.0) {
+        Ok(k) if k > 0.0 && (k0 / k - 1.0).abs() <= DAMPING_SCALE_AGREEMENT => k,
+        _ => k0,
+    }
+}
+
 /// The damping levels of [`DAMPING_BETAS`] within the firmware's limit `cap`, with their
 /// predicted K, stiffest first; only those predicted to gain [`DAMPING_MIN_GAIN`] over `k0`.
 fn predicted_frontier(run: &Run<'_>, k0: f64, cap: f64) -> Vec<(f64, f64)> {
+    let k_ref = damping_scale_k(run, k0);
     let mut levels: Vec<(f64, f64)> = DAMPING_BETAS
         .iter()
-        .map(|beta| beta * k0 * run.period_s())
+        .map(|beta| beta * k_ref * run.period_s())
         .filter(|&b| b <= cap)
         .filter_map(|b| predicted_k(run, k0, b).map(|k| (b, k)))
         .filter(|&(_, k)| k > k0 * (1.0 + DAMPING_MIN_GAIN))
@@ -122,75 +158,49 @@ fn predicted_frontier(run: &Run<'_>, k0: f64, cap: f64) -> Vec<(f64, f64)> {
     levels
 }
 
-/// Chooses the wall after the spring-only search `found`: spring only, a fixed B, or the
-/// stiffest verified pair of the frontier ([`DAMPING_BETAS`]); the chosen pair is confirmed
-/// with the whole verification set, the spring only is the fallback of the search.
-#[allow(clippy::too_many_arguments)]
+/// Chooses the wall after the spring-only search (`at.found`, repeated as `at.repeat`): spring
+/// only, a fixed B, or the stiffest verified pair of the frontier ([`DAMPING_BETAS`]); the
+/// chosen pair is confirmed with the whole verification set, the spring only is the fallback
+/// of the search. Each wall's margin is `at.margin` (at most [`DAMPED_MARGIN`] with a damper),
+/// lowered where its frontier K's repeat measured a spread it has no room for
+/// ([`margin_for_spread`]).
 pub(crate) fn choose_wall(
     run: &Run<'_>,
     c: &mut Client,
     base: &ServoConfig,
-    found: &Found,
-    search: &Search,
-    thorough: bool,
-    margin: f64,
+    at: &Searched<'_>,
     notes: &mut Notes,
 ) -> Result<Wall> {
-    let k_spring = found.k_pass * margin;
+    let found = at.found;
+    let spring_margin = margin_for_spread(at.margin, at.repeat.spread());
+    let k_spring = found.k_pass * spring_margin;
     let mut frontier = vec![FrontierPoint {
         b: 0.0,
         k_verified: Some(found.k_pass),
         damper: base.damper,
+        repeat: Some(at.repeat),
     }];
-    let mut law = base.damper;
-    let best = match run.s.damping {
-        Damping::Fixed(b) if b > 0.0 => fixed_damping(
-            run,
-            c,
-            base,
-            b,
-            found,
-            search,
-            thorough,
-            notes,
-            &mut frontier,
-        )?,
-        Damping::Fixed(_) => (0.0, found.k_pass),
-        Damping::Search => {
-            let at = Searched {
-                found,
-                search,
-                thorough,
-                margin,
-            };
-            let best = search_frontier(run, c, base, &at, notes, &mut frontier)?;
-            if best.0 > 0.0 || run.s.damper.is_some() || base.damper == DamperLaw::Difference {
-                best
-            } else {
-                // The default law bought nothing here: the plain difference is stiffer on some
-                // devices (docs/DAMPER-LAWS.md), and is tried before the spring alone is set.
-                law = DamperLaw::Difference;
-                let plain = ServoConfig {
-                    damper: law,
-                    ..*base
-                };
-                search_frontier(run, c, &plain, &at, notes, &mut frontier)?
-            }
-        }
-    };
+    let (law, best) = damped_best(run, c, base, at, notes, &mut frontier)?;
     if best.0 > 0.0 {
         let cfg = ServoConfig {
             damper: law,
             ..damped(base, best.0)
         };
+        let spread = frontier
+            .iter()
+            .rev()
+            .find(|p| p.b == best.0)
+            .and_then(|p| p.repeat)
+            .map_or(0.0, |r| r.spread());
+        let margin = margin_for_spread(at.margin.min(DAMPED_MARGIN), spread);
         if let Some((k_set, verification)) =
-            run.confirm(c, &cfg, best.1 * margin.min(DAMPED_MARGIN), thorough, notes)?
+            run.confirm(c, &cfg, best.1 * margin, at.thorough, notes)?
         {
             return Ok(Wall {
                 k_set,
                 b_set: best.0,
                 damper: law,
-                margin: margin.min(DAMPED_MARGIN),
+                margin,
                 k_spring_only: k_spring,
                 verification,
                 frontier,
@@ -204,48 +214,86 @@ pub(crate) fn choose_wall(
         }
         (run.progress)(Progress::DamperDropped { b: best.0 });
     }
-    let (k_set, verification) = confirm_spring(run, c, base, k_spring, thorough, notes)?;
+    let (k_set, verification) = confirm_spring(run, c, base, k_spring, at.thorough, notes)?;
     Ok(Wall {
         k_set,
         b_set: 0.0,
         damper: base.damper,
-        margin,
+        margin: spring_margin,
         k_spring_only: k_set,
         verification,
         frontier,
     })
 }
 
+/// The damped wall to confirm: its law and (B, largest resting K), or B = 0 when no damper
+/// buys stiffness (or `--damping 0`). The default law is tried first; where it buys nothing,
+/// the plain difference (stiffer on some devices, docs/DAMPER-LAWS.md) before the spring alone.
+fn damped_best(
+    run: &Run<'_>,
+    c: &mut Client,
+    base: &ServoConfig,
+    at: &Searched<'_>,
+    notes: &mut Notes,
+    frontier: &mut Vec<FrontierPoint>,
+) -> Result<(DamperLaw, (f64, f64))> {
+    let best = match run.s.damping {
+        Damping::Fixed(b) if b > 0.0 => fixed_damping(run, c, base, b, at, notes, frontier)?,
+        Damping::Fixed(_) => return Ok((base.damper, (0.0, at.found.k_pass))),
+        Damping::Search => search_frontier(run, c, base, at, notes, frontier)?,
+    };
+    if best.0 > 0.0
+        || run.s.damper.is_some()
+        || base.damper == DamperLaw::Difference
+        || matches!(run.s.damping, Damping::Fixed(_))
+    {
+        return Ok((base.damper, best));
+    }
+    let plain = ServoConfig {
+        damper: DamperLaw::Difference,
+        ..*base
+    };
+    let best = search_frontier(run, c, &plain, at, notes, frontier)?;
+    Ok((DamperLaw::Difference, best))
+}
+
 /// The spring-only search's result and the settings the frontier search runs with.
-struct Searched<'a> {
-    found: &'a Found,
-    search: &'a Search,
-    thorough: bool,
-    /// The spring-only wall's margin.
-    margin: f64,
+pub(crate) struct Searched<'a> {
+    pub(crate) found: &'a Found,
+    /// The repeat of the spring-only search's K.
+    pub(crate) repeat: Repeat,
+    pub(crate) search: &'a Search,
+    pub(crate) thorough: bool,
+    /// The spring-only wall's margin (before the spread's).
+    pub(crate) margin: f64,
 }
 
 /// The largest resting K at the fixed damping `b` (`--damping B`), searched from the K the
 /// linear boundary predicts there, added to `frontier`: (B, K), or an error naming B when no K
 /// down to 10⁻³ of the spring-only one settles.
-#[allow(clippy::too_many_arguments)]
 fn fixed_damping(
     run: &Run<'_>,
     c: &mut Client,
     base: &ServoConfig,
     b: f64,
-    found: &Found,
-    search: &Search,
-    thorough: bool,
+    at: &Searched<'_>,
     notes: &mut Notes,
     frontier: &mut Vec<FrontierPoint>,
 ) -> Result<(f64, f64)> {
+    let (found, search) = (at.found, at.search);
     let start = predicted_k(run, found.k_pass, b).map_or(found.k_pass, |k| {
         (k * FRONTIER_START).clamp((found.k_pass * 1e-3).min(search.k_cap), search.k_cap)
     });
     let floor = found.k_pass * 1e-3;
-    let f = search_at(run, c, base, b, start, floor, search, thorough, notes)?;
-    let Some(f) = f else {
+    let target = AtB {
+        base,
+        b,
+        start,
+        floor,
+        search,
+        thorough: at.thorough,
+    };
+    let Some((f, repeat)) = search_at(run, c, &target, notes)? else {
         return Err(super::error::NoWallPassed(format!(
             "no stiffness down to {floor:.4e} settles at the fixed damping B = {b:.4e}"
         ))
@@ -255,6 +303,7 @@ fn fixed_damping(
         b,
         k_verified: Some(f.k_pass),
         damper: base.damper,
+        repeat: Some(repeat),
     });
     Ok((b, f.k_pass))
 }
@@ -290,13 +339,21 @@ fn search_frontier(
             k_predicted: k_pred,
             k_start: (k_pred * FRONTIER_START).max(floor),
         });
-        let start = (k_pred * FRONTIER_START).clamp(floor, search.k_cap);
-        let f = search_at(run, c, base, b, start, floor, search, at.thorough, notes)?;
-        let k = f.map(|f| f.k_pass).filter(|&k| k >= floor);
+        let target = AtB {
+            base,
+            b,
+            start: (k_pred * FRONTIER_START).clamp(floor, search.k_cap),
+            floor,
+            search,
+            thorough: at.thorough,
+        };
+        let f = search_at(run, c, &target, notes)?;
+        let k = f.as_ref().map(|f| f.0.k_pass).filter(|&k| k >= floor);
         frontier.push(FrontierPoint {
             b,
             k_verified: k,
             damper: base.damper,
+            repeat: f.map(|f| f.1),
         });
         if let Some(k) = k {
             return Ok((b, k));

@@ -75,6 +75,9 @@ pub struct Outcome {
     /// Margin applied to the set wall's largest resting K (the requested one, times
     /// [`crate::settings::MISMATCH_MARGIN`] on a mismatch; at most `crate::settings::DAMPED_MARGIN` with a damper).
     pub margin_used: f64,
+    /// How repeatable the set wall's frontier K was.
+    #[serde(default)]
+    pub repeatability: Option<Repeatability>,
     /// Whether the config was saved.
     pub saved: bool,
     /// The travel the experiments kept to (issue 46).
@@ -95,6 +98,32 @@ pub struct FrontierPoint {
     /// The damper's law at this B (`difference`, `dead-band-N`).
     #[serde(serialize_with = "law_name", deserialize_with = "law_from_name")]
     pub damper: stiffwall_proto::DamperLaw,
+    /// The search's K at B run again from a new start ([`crate::repeat`]); None where no K
+    /// was found at B.
+    #[serde(default)]
+    pub repeat: Option<crate::repeat::Repeat>,
+}
+
+/// How repeatable the set wall's frontier K was (issue 42): its repeat's spread and the margin
+/// that spread leaves.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Repeatability {
+    /// Damping of the set wall's frontier point, N·s/m (N·m·s/rad).
+    pub b: f64,
+    /// The search's largest resting K there (one run), N/m (N·m/rad).
+    pub k_searched: f64,
+    /// The largest K whose every run rested (None: no K within the repeat's steps).
+    pub k_repeated: Option<f64>,
+    /// The smallest K above it that failed (None: the search stopped at its cap resting).
+    pub k_failed: Option<f64>,
+    /// The frontier's bracket, k_failed / k_repeated − 1 ([`crate::repeat::Repeat::spread`]):
+    /// another tune of the device finds its frontier K within it.
+    pub spread: f64,
+    /// The margin applied to k_repeated.
+    pub margin: f64,
+    /// The spread that margin leaves room for ([`crate::repeat::spread_room`]): a larger
+    /// measured spread lowers the margin to 1/(1 + 2·spread).
+    pub spread_room: f64,
 }
 
 fn law_name<S: serde::Serializer>(

@@ -35,7 +35,7 @@
 use super::error::TuneError;
 use super::error::{Result, StepError};
 use super::excite::{breakaway, device_scale};
-use super::frontier::{b_cap, choose_wall};
+use super::frontier::{b_cap, choose_wall, Searched};
 use super::launch::Delivered;
 use super::model_check::{self, Evidence};
 use super::progress::{Progress, Reporter};
@@ -386,7 +386,7 @@ fn search_walls(
     };
     // Step 4a: the spring-only search (a model that does not fit makes every test thorough).
     let mut notes = Notes::default();
-    let found = spring_search(&run, c, ident, &search, !early.is_empty(), &mut notes)?;
+    let (found, repeat) = spring_search(&run, c, ident, &search, !early.is_empty(), &mut notes)?;
     let mut model_mismatch = model_check::findings(&ident.id, &ident.evidence, ident.units);
     // Only a search that found a failing K measured the limit (otherwise the force cap did).
     if found.k_fail.is_some() {
@@ -404,16 +404,14 @@ fn search_walls(
     let margin_used = margin_for(s, thorough, &notes, ident);
     // Step 4b: the (K, B) frontier and the verification set of the chosen wall.
     let base = ident.base;
-    let wall = choose_wall(
-        &run,
-        c,
-        &base,
-        &found,
-        &search,
+    let searched = Searched {
+        found: &found,
+        repeat,
+        search: &search,
         thorough,
-        margin_used,
-        &mut notes,
-    )?;
+        margin: margin_used,
+    };
+    let wall = choose_wall(&run, c, &base, &searched, &mut notes)?;
     for finding in launch_findings(&run, &notes, ident) {
         progress.report(Progress::Finding {
             text: finding.clone(),
@@ -589,14 +587,24 @@ fn spring_search(
     search: &Search,
     thorough: bool,
     notes: &mut Notes,
-) -> Result<super::search::Found> {
+) -> Result<(super::search::Found, super::repeat::Repeat)> {
     let start = ident
         .predicted
         .expected
         .min(search.k_cap)
         .max(ident.predicted.guaranteed.min(search.k_cap) * SEARCH_START_OF_GUARANTEED);
     let base = ident.base;
-    let found = largest_settling_k(start, search, |k| run.step(c, &base, k, thorough, notes))?;
+    let mut found = largest_settling_k(start, search, |k| run.step(c, &base, k, thorough, notes))?;
+    // The largest resting K counts only when it rests again from a new start (issue 42).
+    let repeat = super::repeat::repeated(found.k_pass, found.k_fail, search.rel_tol, |k| {
+        (run.progress)(Progress::Repeating { k, b: 0.0 });
+        run.step(c, &base, k, thorough, notes)
+    })?;
+    // No K rested twice within the repeat's steps: the last K tried, one step down (its
+    // wall is confirmed by the verification set before it is set).
+    found.k_pass = repeat
+        .k_repeated
+        .unwrap_or_else(|| repeat.k_failed.unwrap_or(found.k_pass) / (1.0 + search.rel_tol));
     if let Some((k, counts)) = &notes.best {
         let e = &mut ident.evidence;
         e.release_k = Some(*k);
@@ -604,7 +612,7 @@ fn spring_search(
             model_check::release_frequency_hz(counts, ident.p.period_s, FREQUENCY_CROSSINGS);
         e.model_hz = Some((k / ident.id.mass).sqrt() / std::f64::consts::TAU);
     }
-    Ok(found)
+    Ok((found, repeat))
 }
 
 /// The margin applied to the largest resting K: the user's, times [`MISMATCH_MARGIN`] when
@@ -665,7 +673,9 @@ fn outcome(
     } = ident;
     p.stiffness = wall.k_set;
     let rests = wall.rests();
+    let repeatability = repeatability(&wall);
     Outcome {
+        repeatability,
         rests,
         identified: IdentifiedReport {
             mass: [id.mass, id.mass_se],
@@ -699,6 +709,21 @@ fn outcome(
         workspace: None,
         device_left: None,
     }
+}
+
+/// The set wall's frontier point's repeat, with the margin the wall was set at.
+fn repeatability(wall: &super::frontier::Wall) -> Option<super::outcome::Repeatability> {
+    let point = wall.frontier.iter().rev().find(|p| p.b == wall.b_set)?;
+    let r = point.repeat?;
+    Some(super::outcome::Repeatability {
+        b: wall.b_set,
+        k_searched: r.k_searched,
+        k_repeated: r.k_repeated,
+        k_failed: r.k_failed,
+        spread: r.spread(),
+        margin: wall.margin,
+        spread_room: super::repeat::spread_room(wall.margin),
+    })
 }
 
 fn not_launched_finding(k: f64, mass: f64, t: f64, missed: Option<Delivered>) -> String {

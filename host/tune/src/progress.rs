@@ -79,6 +79,13 @@ pub enum Progress {
         /// Factor applied to K for the next try.
         backoff: f64,
     },
+    /// The search's largest resting K run again from a new start ([`crate::repeat`]).
+    Repeating {
+        /// Stiffness re-run.
+        k: f64,
+        /// Damping, N·s/m (N·m·s/rad).
+        b: f64,
+    },
     /// The damped search at one damping level of the predicted frontier.
     DampingSearch {
         /// Damping searched.
@@ -170,6 +177,10 @@ impl fmt::Display for Progress {
             } => write!(
                 f,
                 "verification at K={k:.4}: {test} {verdict}; backing off ×{backoff}"
+            ),
+            Self::Repeating { k, b } => write!(
+                f,
+                "repeating K={k:.4} B={b:.4e} from a new start (it counts only if it rests again)"
             ),
             Self::DampingSearch {
                 b,

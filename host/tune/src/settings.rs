@@ -68,7 +68,7 @@ pub enum Damping {
 }
 
 /// Damping levels of the predicted frontier, as β = B/(K₀·T) with K₀ the spring-only largest
-/// settling K: the brute-force frontiers of the repository's plants rise up to β ≈ 2–6
+/// settling K (the model's, where the two agree: `frontier::damping_scale_k`): the brute-force frontiers of the repository's plants rise up to β ≈ 2–6
 /// (3–8 × K*(0)) where the damper itself stays stable, and fall where it does not.
 pub const DAMPING_BETAS: [f64; 5] = [1.0, 2.0, 3.0, 4.0, 6.0];
 
@@ -79,6 +79,10 @@ pub const FRONTIER_TRIES: usize = 2;
 /// Relative gain in verified K that a damping must bring over the spring alone to be kept:
 /// less is within the bisection's resolution.
 pub const DAMPING_MIN_GAIN: f64 = 0.1;
+
+/// How near the spring-only search's K must be to the model's for the damping levels to be
+/// scaled by the model's (`frontier::damping_scale_k`), as a share of the model's.
+pub const DAMPING_SCALE_AGREEMENT: f64 = 0.25;
 
 /// The damped search starts at this fraction of the predicted K (the prediction is the exact
 /// linear boundary with Coulomb friction as describing-function damping, scaled by what the

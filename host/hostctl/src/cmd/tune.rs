@@ -488,4 +488,39 @@ fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
         })
         .collect();
     let _ = writeln!(s, "  frontier (largest resting K): {}", tried.join("; "));
+    if let Some(r) = &o.repeatability {
+        let _ = writeln!(s, "{}", repeatability_line(r));
+    }
+}
+
+/// The report's repeatability line (issue 42): where this run puts the set wall's frontier K
+/// (the largest K that rested in every run, also from a new start, and the smallest that
+/// failed), the spread between them that another tune of the device may show, and the room
+/// the margin leaves.
+fn repeatability_line(r: &stiffwall_tune::Repeatability) -> String {
+    let again = if r.k_repeated == Some(r.k_searched) {
+        "rested again"
+    } else {
+        "failed, and the search stepped down"
+    };
+    let bracket = match (r.k_repeated, r.k_failed) {
+        (Some(k), Some(f)) => format!("between {k:.4} (rested in every run) and {f:.4} (failed)"),
+        (Some(k), None) => format!("at {k:.4}, the search's cap, resting in every run"),
+        (None, _) => "nowhere: no K rested twice within the repeat's steps".to_string(),
+    };
+    format!(
+        "repeatability: at B = {:.4e} the search's K {:.4}, run again from a new start, {again}; \
+         the frontier lies {bracket}: a spread of {:.1} %, within which another tune finds it; \
+         the margin ×{:.3} leaves room for {:.1} %{}",
+        r.b,
+        r.k_searched,
+        100.0 * r.spread,
+        r.margin,
+        100.0 * r.spread_room,
+        if r.spread > r.spread_room {
+            " (lowered for the spread measured)"
+        } else {
+            ""
+        }
+    )
 }
