@@ -1,9 +1,9 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
 //! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
-//!   module cycles, no_std checks for the Cortex-M target, firmware cross-builds with the size
-//!   report, host tests, the fuzz campaign (10⁷ frames), the 10 s link flood, the tune tables
-//!   against a fresh run, the every-plant supervisor, the real-browser test of `hostctl ui`,
+//!   module cycles, size limits, no_std checks for the Cortex-M target, firmware cross-builds
+//!   with the size report, host tests, the fuzz campaign (10⁷ frames), the 10 s link flood,
+//!   the tune tables against a fresh run, the every-plant supervisor, the real-browser test of `hostctl ui`,
 //!   QEMU scenarios, the emulated Nucleo board's tests and mutation checks, the instruction
 //!   budgets (mean and worst tick) and the Slurm cluster test.
 //!   Every step that runs `#[ignore]`d tests fails when fewer ran than it has.
@@ -32,6 +32,8 @@
 //! - `arch [--print]`: docs/ARCHITECTURE.md's crate diagram, crate table (layer, folder,
 //!   dependencies, modules) and folder order against the code; every arrow runs down (also in
 //!   `ci`; `--print` prints the sections as built).
+//! - `sizes`: no production file over 700 lines before its tests, no production function over
+//!   80 lines, no `#[allow(clippy::too_many_arguments)]` (also in `ci`).
 //! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
 //!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
@@ -49,6 +51,7 @@ mod fuzz;
 mod module_cycles;
 mod process;
 mod qemu;
+mod sizes;
 mod toolchain;
 mod tune_table;
 mod ui;
@@ -126,6 +129,8 @@ fn ci() -> Result<()> {
     module_cycles::module_cycles(&[])?;
     step("docs/ARCHITECTURE.md's crate diagram, layers and module lists against the code");
     arch::arch(&[])?;
+    step("no production file over 700 lines before its tests, no function over 80 lines, no too_many_arguments allow");
+    sizes::sizes(&[])?;
     if cross == toolchain::Cross::Rustup {
         step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {
@@ -200,6 +205,7 @@ fn main() -> Result<()> {
         Some("atlas") => atlas::atlas(&args[1..]),
         Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
         Some("arch") => arch::arch(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print]"),
+        Some("sizes") => sizes::sizes(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print], sizes"),
     }
 }
