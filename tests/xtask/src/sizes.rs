@@ -61,6 +61,7 @@ pub fn sizes(_args: &[String]) -> Result<()> {
             .iter()
             .any(|(file, item, _)| *file == f.file && *item == f.item)
     });
+    findings.sort_by(|a, b| a.file.cmp(&b.file).then(a.line.cmp(&b.line)));
     for f in &findings {
         println!("{}:{}: {}", f.file, f.line, f.message);
     }
