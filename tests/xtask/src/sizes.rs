@@ -2,8 +2,8 @@
 //! a reader can hold at once, and no function hides a long argument list behind an allow.
 //!
 //! It fails, naming file, line and length, on
-//! - a file over [`MAX_FILE_LINES`] lines before its tests (the lines before its first
-//!   `#[cfg(test)]` item, or the whole file when it has none);
+//! - a file over [`MAX_FILE_LINES`] lines before its tests (the lines before the first of the
+//!   `#[cfg(test)]` items that end it, or the whole file when it ends with none);
 //! - a function over [`MAX_FN_LINES`] lines, from its `fn` line to its closing brace: free
 //!   functions, methods of impl blocks, default methods of traits and functions nested in other
 //!   functions alike;
@@ -171,12 +171,17 @@ pub fn check_source(file: &str, src: &str) -> Result<Vec<Finding>> {
     Ok(visitor.findings)
 }
 
-/// The file-length finding, if any: lines before the first top-level `#[cfg(test)]` item.
+/// The file-length finding, if any: lines before the first top-level `#[cfg(test)]` item of
+/// the run of them that ends the file (a `#[cfg(test)] mod name;` declared among production
+/// items does not end the count).
 fn file_length(visitor: &mut Limits, ast: &syn::File, src: &str) {
-    let first_test = ast
+    let production_end = ast
         .items
         .iter()
-        .find(|item| is_test_only(item_attrs(item)))
+        .rposition(|item| !is_test_only(item_attrs(item)))
+        .map_or(0, |i| i + 1);
+    let first_test = ast.items[production_end..]
+        .first()
         .map(|item| line(item.span()));
     let (lines, where_) = match first_test {
         Some(l) => (l - 1, "before its tests"),
@@ -394,6 +399,10 @@ mod tests {
         assert_eq!(found, [("file".to_string(), 1)]);
         let msg = &check_source("x.rs", &format!("{body}// one more\n")).unwrap()[0].message;
         assert!(msg.contains("701 lines in all"), "{msg}");
+        // A test module declared at the top does not end the count; the trailing one does.
+        let top = format!("#[cfg(test)]\nmod fixture;\n{body}{tests}");
+        let msg = &check_source("x.rs", &top).unwrap()[0].message;
+        assert!(msg.contains("702 lines before its tests"), "{msg}");
     }
 
     #[test]
