@@ -5,7 +5,9 @@
 //! 1. solver × step size / tolerance → wall time per simulated period, error of the state at
 //!    sample instants against the exact solver, energy-balance residual (26);
 //! 2. exact-solver time per period for each effect set (all, each removed, none) and for each
-//!    disabled effect against the same effect enabled with a neutral parameter;
+//!    disabled effect against the same effect enabled with a neutral parameter
+//!    (`effect_costs`), and the cost of the effects only the reference integrator models
+//!    (`reference_effects`);
 //! 3. the paper's base scene throughput on one core and the Fig. 6 set on the paper's grid on
 //!    all cores through `sim::map::run_with` (the code path of `hostctl map`), with and without
 //!    cycle detection, ns per period by class (decaying, growing, persistent);
@@ -14,6 +16,10 @@
 //! Units: dimensionless scenes (Table I); times in ns per simulated period.
 //! Usage: `cargo run --release -p stiffwall-sim --example bench_table -- [--out FILE] [--quick]`.
 
+#[path = "bench_table/effect_costs.rs"]
+mod effect_costs;
+#[path = "bench_table/reference_effects.rs"]
+mod reference_effects;
 #[path = "bench_table/rich_rows.rs"]
 mod rich_rows;
 
@@ -374,138 +380,17 @@ where
     Ok(())
 }
 
-/// Effect sets that need the reference integrator (amplifier filter, hand, no ZOH).
-fn reference_effects(md: &mut String, min_s: f64) {
-    use stiffwall_sim::reference::{AmpFilter, Hand};
-    // Freedom 6 of Table II at K = 2400 N/m, T = 1 ms, held by the operator of Table II.
-    let p = Params {
-        mu: 104.2,
-        beta: 0.004,
-        sigma: 1.25,
-        tau_d: 1.0,
-    };
-    let hand = Some(Hand {
-        mu: 62.5,
-        beta: 2.0,
-        kappa: 0.25,
-    });
-    let amp = Some(AmpFilter {
-        omega: 2.0 * std::f64::consts::PI * 3.0,
-        zeta: 0.7,
-    });
-    let all = RefModel {
-        params: p,
-        effects: Effects::ALL,
-        zoh: true,
-        hand,
-        amp,
-        history: History::HoldInitial,
-    };
-    let e = Effects::ALL;
-    let sets: Vec<(&str, RefModel)> = vec![
-        (
-            "all (ZOH, quantization, Coulomb, viscous, delay, 3 kHz amplifier filter, hand)",
-            all,
-        ),
-        (
-            "without quantization",
-            RefModel {
-                effects: Effects {
-                    quantization: false,
-                    ..e
-                },
-                ..all
-            },
-        ),
-        (
-            "without Coulomb",
-            RefModel {
-                effects: Effects {
-                    coulomb: false,
-                    ..e
-                },
-                ..all
-            },
-        ),
-        (
-            "without viscous",
-            RefModel {
-                effects: Effects {
-                    viscous: false,
-                    ..e
-                },
-                ..all
-            },
-        ),
-        (
-            "without delay",
-            RefModel {
-                effects: Effects { delay: false, ..e },
-                ..all
-            },
-        ),
-        ("without amplifier filter", RefModel { amp: None, ..all }),
-        ("without hand", RefModel { hand: None, ..all }),
-        (
-            "without ZOH (continuous spring, no delay)",
-            RefModel {
-                zoh: false,
-                effects: Effects { delay: false, ..e },
-                ..all
-            },
-        ),
-        (
-            "none (continuous linear spring, no friction)",
-            RefModel {
-                zoh: false,
-                effects: Effects::NONE,
-                amp: None,
-                hand: None,
-                ..all
-            },
-        ),
-    ];
-    writeln!(
-        md,
-        "## Effects that need a reference integrator\n\n\
-         Dormand-Prince 5(4) at tolerance 1e-8, {HORIZON} periods from xidot0 = 5: Freedom 6 of Table II \
-         (mu 104.2, beta 0.004, sigma 1.25) at tau_D = 1 held by the operator of Table II (added mass \
-         62.5, damping 2, stiffness 0.25 in Table I units) through a 3 kHz amplifier (omega_A T = 18.8, \
-         damping 0.7). The reference model checks its effect flags at run time (one predictable branch \
-         each); its cost is dominated by step count, which every effect changes.\n\n\
-         | effect set | ns/period | steps/period | events/period |\n|---|---:|---:|---:|"
-    )
-    .unwrap();
-    let init = Motion { x: 0.0, v: 5.0 };
-    let m = Method::Dopri {
-        rtol: 1e-8,
-        atol: 1e-8,
-    };
-    for (name, model) in sets {
-        let mut probe = RefSim::new(model, m, init).expect("valid");
-        for _ in 0..HORIZON {
-            probe.step_period();
-        }
-        let st = probe.stats();
-        let ns = time_per_period(HORIZON, min_s, || {
-            let mut s = RefSim::new(model, m, init).expect("valid");
-            for _ in 0..HORIZON {
-                s.step_period();
-            }
-            std::hint::black_box(s.state());
-        });
-        writeln!(
-            md,
-            "| {name} | {ns:.0} | {:.1} | {:.2} |",
-            st.steps as f64 / HORIZON as f64,
-            st.events as f64 / HORIZON as f64
-        )
-        .unwrap();
-    }
-    writeln!(md).unwrap();
+/// Command-line options.
+struct Args {
+    /// The report (`--out FILE`).
+    out: String,
+    /// The Pareto plot (`--figure FILE`).
+    figure: String,
+    /// Shorter timing batches (`--quick`).
+    quick: bool,
 }
 
-fn main() {
+fn parse_args() -> Args {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut out = "docs/BENCHMARKS-sim.md".to_string();
     let mut figure = "docs/figures/pareto-sim.png".to_string();
@@ -526,8 +411,11 @@ fn main() {
         }
         i += 1;
     }
-    let min_s = if quick { 0.05 } else { 0.3 };
-    let mut md = String::new();
+    Args { out, figure, quick }
+}
+
+/// The report's title and the machine it ran on.
+fn preamble(md: &mut String) {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
@@ -552,8 +440,11 @@ fn main() {
          command.\n"
     )
     .unwrap();
+}
 
-    // 1. Headline numbers.
+/// Section 1: the base scene's throughput and the Fig. 6 set on the paper's grid.
+fn headline(md: &mut String, min_s: f64) {
+    let threads = rayon::current_num_threads();
     let base_ns = effect_time(
         Params::BASE,
         Effects::ALL,
@@ -580,6 +471,11 @@ fn main() {
         fast.seconds, fast.cycle_points, fast.exact_points, brute.seconds
     )
     .unwrap();
+    class_table(md, &fast, &brute);
+}
+
+/// Section 1's table of the Fig. 6 set by class, with and without cycle detection.
+fn class_table(md: &mut String, fast: &Fig6, brute: &Fig6) {
     writeln!(
         md,
         "Fig. 6 set by class (same runs, best of 2 each): ns of worker-thread wall time per period of \
@@ -608,8 +504,10 @@ fn main() {
         .unwrap();
     }
     writeln!(md).unwrap();
+}
 
-    // 2. Accuracy vs time.
+/// Section 2: accuracy against time of every solver on every scene, and the Pareto plot.
+fn accuracy(md: &mut String, min_s: f64, figure: &str) {
     let rows = accuracy_table(min_s);
     writeln!(md, "## Accuracy against time\n").unwrap();
     writeln!(
@@ -640,121 +538,22 @@ fn main() {
         }
         writeln!(md).unwrap();
     }
-    if let Err(e) = pareto(&rows, &figure) {
+    if let Err(e) = pareto(&rows, figure) {
         eprintln!("pareto plot failed: {e}");
     } else {
         writeln!(md, "Pareto front (error against time): `{figure}`.\n").unwrap();
     }
+}
 
-    // 3. Effect sets.
-    writeln!(md, "## Cost of each effect (exact solver)\n").unwrap();
-    let p = Params {
-        mu: 100.0,
-        beta: 0.1,
-        sigma: 1.0,
-        tau_d: 1.25,
-    };
-    let init = Motion { x: 0.0, v: 5.0 };
-    writeln!(
-        md,
-        "Base scene with tau_D = 1.25 (mu 100, beta 0.1, sigma 1, xidot0 5), runs of up to 5e4 periods restarted \
-         whenever the trajectory diverges or comes to rest, so every timed period is real work. Removing \
-         an effect changes the trajectory (more or fewer zero crossings), so the second table compares \
-         each compiled-out effect with the same effect compiled in but made neutral (sigma = 0, \
-         beta = 0, tau_D = 0): identical trajectories, so the difference is the cost of the disabled \
-         code path. A compiled-out effect is a `const bool` generic parameter, so its code is not in \
-         the monomorphised loop at all; differences of either sign up to ~20 % are run-to-run noise \
-         (code alignment, the shared machine), not a systematic cost.\n"
-    )
-    .unwrap();
-    writeln!(md, "| effect set | ns/period |\n|---|---:|").unwrap();
-    let n = 2_000_000;
-    let all = Effects::ALL;
-    let sets: Vec<(&str, Effects)> = vec![
-        ("all (quantization, Coulomb, viscous, delay)", all),
-        (
-            "all without quantization",
-            Effects {
-                quantization: false,
-                ..all
-            },
-        ),
-        (
-            "all without Coulomb",
-            Effects {
-                coulomb: false,
-                ..all
-            },
-        ),
-        (
-            "all without viscous",
-            Effects {
-                viscous: false,
-                ..all
-            },
-        ),
-        (
-            "all without delay",
-            Effects {
-                delay: false,
-                ..all
-            },
-        ),
-        (
-            "all + one-sided wall",
-            Effects {
-                one_sided: true,
-                ..all
-            },
-        ),
-        ("none (sampled linear spring only)", Effects::NONE),
-    ];
-    for (name, e) in &sets {
-        let ns = effect_time(p, *e, init, n, min_s);
-        writeln!(md, "| {name} | {ns:.2} |").unwrap();
-    }
-    writeln!(
-        md,
-        "\n| disabled effect | compiled out, ns/period | compiled in, neutral parameter, ns/period |\n|---|---:|---:|"
-    )
-    .unwrap();
-    let pairs: Vec<(&str, Params, Effects)> = vec![
-        (
-            "Coulomb (sigma = 0)",
-            Params { sigma: 0.0, ..p },
-            Effects {
-                coulomb: false,
-                ..all
-            },
-        ),
-        (
-            "viscous (beta = 0)",
-            Params { beta: 0.0, ..p },
-            Effects {
-                viscous: false,
-                ..all
-            },
-        ),
-        (
-            "delay (tau_D = 0)",
-            Params { tau_d: 0.0, ..p },
-            Effects {
-                delay: false,
-                ..all
-            },
-        ),
-    ];
-    for (name, pn, e) in &pairs {
-        // Alternate the two builds and keep the best of 5 each (the machine is shared).
-        let (mut off, mut on) = (f64::INFINITY, f64::INFINITY);
-        for _ in 0..5 {
-            off = off.min(effect_time(*pn, *e, init, n, min_s / 2.0));
-            on = on.min(effect_time(*pn, all, init, n, min_s / 2.0));
-        }
-        writeln!(md, "| {name} | {off:.2} | {on:.2} |").unwrap();
-    }
-    writeln!(md).unwrap();
-    reference_effects(&mut md, min_s);
+fn main() {
+    let Args { out, figure, quick } = parse_args();
+    let min_s = if quick { 0.05 } else { 0.3 };
+    let mut md = String::new();
+    preamble(&mut md);
+    headline(&mut md, min_s);
+    accuracy(&mut md, min_s, &figure);
+    effect_costs::effect_costs(&mut md, min_s);
+    reference_effects::reference_effects(&mut md, min_s);
     rich_rows::rich_rows(&mut md, min_s);
     std::fs::write(&out, &md).expect("write report");
     print!("{md}");

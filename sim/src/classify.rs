@@ -186,157 +186,30 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
     let mu = sim.params().mu;
     let s0 = sim.state();
     let h0 = storage(mu, s0.x, s0.v);
-    let scale = if h0 > 1.0 { h0 } else { 1.0 };
-    let mut acc = Acc {
-        mu,
-        limit: th.divergence_ratio * scale,
-        tol: th.mono_tol * scale,
-        tail_start: periods - (periods as f64 * th.tail_fraction) as u64,
-        prev: h0,
-        h_max: h0,
-        mono: true,
-        amp: 0.0,
-        spd: 0.0,
-    };
-    let tail_start = acc.tail_start;
+    let mut acc = Acc::new(mu, h0, periods, th);
+    let mut search = Search::new(sim, th.cycle_detection);
     let mut h = 0;
     let mut class = None;
-    // Brent: `saved` is the state at sample `h - lam`; compared with every later sample up to
-    // `power` samples on, then replaced by the current one with `power` doubled.
-    let mut saved = if th.cycle_detection {
-        Some(sim.clone())
-    } else {
-        None
-    };
-    let mut power: u64 = 1;
-    let mut lam: u64 = 0;
-    // (L, c): the state at every sample k >= c equals the state at k + L.
-    let mut cycle: Option<(u64, u64)> = None;
-    let mut ended = None;
-    // A cycle up to the position's bits being recorded for replay: the solver at its first
-    // sample, and the phases so far.
-    let mut recording: Option<S> = None;
-    let mut phases = [Phase::default(); MAX_REPLAY];
-    let mut recorded = 0;
-    let mut tr = Increments::default();
     while h < periods {
-        if let Some((l, c)) = cycle {
-            // Skip q whole cycles (samples h+1 ..= h+q·L): each repeats a sample already
-            // classified; only the tail maxima need care (see the module header).
-            let q = if h + 1 < tail_start {
-                (tail_start - 1 - h) / l
-            } else if h + 1 >= tail_start.max(c + 1) + l {
-                // The tail has covered L consecutive samples of the cycle: all its phases.
-                (periods - h) / l
-            } else {
-                0
-            };
-            if q > 0 {
-                h += q * l;
-                ended = Some(Cycle {
-                    period: l,
-                    exact: true,
-                });
-                if h >= periods {
+        if search.skip_cycles(&mut h, periods, acc.tail_start) {
+            break;
+        }
+        search.step(sim);
+        h += 1;
+        class = settled(sim, &mut acc, h);
+        if class.is_some() {
+            break;
+        }
+        if search.recording.is_some() {
+            match search.after_recording(sim, &mut acc, &mut h, periods) {
+                Flow::Next => continue,
+                Flow::Stop(c) => {
+                    class = c;
                     break;
                 }
             }
         }
-        if recording.is_some() {
-            let count = sim.count_at(sim.state().x).to_bits();
-            sim.step_period_traced(&mut tr);
-            phases[recorded] = Phase {
-                count,
-                dx: tr,
-                v_end: sim.state().v,
-            };
-            recorded += 1;
-        } else {
-            sim.step_period();
-        }
-        h += 1;
-        let s = sim.state();
-        if acc.sample(h, s.x, s.v) || sim.diverged() {
-            class = Some(Class::Growing);
-            break;
-        }
-        if sim.at_rest() {
-            class = Some(if acc.mono {
-                Class::MonotoneDecay
-            } else {
-                Class::NonMonotoneDecay
-            });
-            break;
-        }
-        if let Some(first) = recording.as_ref() {
-            if (recorded as u64) < lam {
-                continue;
-            }
-            // One period of the candidate recorded: replayable if it returned to the same state
-            // up to the position's bits and never rested (the rest test compares positions).
-            let ph = &phases[..recorded];
-            let ok = sim.same_but_position(first)
-                && !ph
-                    .iter()
-                    .zip(core::iter::once(first.state().v).chain(ph.iter().map(|p| p.v_end)))
-                    .any(|(p, v0)| v0 == 0.0 && p.v_end == 0.0);
-            recording = None;
-            recorded = 0;
-            if ok {
-                let base = sim.clone();
-                match replay(&base, ph, &mut acc, &mut h, periods) {
-                    Replay::Horizon => {
-                        ended = Some(Cycle {
-                            period: lam,
-                            exact: false,
-                        });
-                        break;
-                    }
-                    Replay::Growing => {
-                        class = Some(Class::Growing);
-                        break;
-                    }
-                    Replay::Left(resumed) => {
-                        *sim = resumed;
-                        ended = Some(Cycle {
-                            period: lam,
-                            exact: false,
-                        });
-                    }
-                    Replay::Exact(resumed) => {
-                        *sim = resumed;
-                        cycle = Some((lam, h - lam));
-                        ended = Some(Cycle {
-                            period: lam,
-                            exact: false,
-                        });
-                        continue;
-                    }
-                }
-            }
-            // Not replayable (or left): start the search afresh from here.
-            saved = Some(sim.clone());
-            power = 1;
-            lam = 0;
-            continue;
-        }
-        if cycle.is_none() {
-            if let Some(t) = saved.as_mut() {
-                lam += 1;
-                if sim.same_state(t) {
-                    cycle = Some((lam, h - lam));
-                    saved = None;
-                } else if lam as usize <= MAX_REPLAY && sim.same_but_position(t) {
-                    // Same state but for the position's last bits: record one period exactly
-                    // (with the increments) and replay it.
-                    recording = Some(sim.clone());
-                } else if lam == power {
-                    t.clone_from(sim);
-                    power *= 2;
-                    lam = 0;
-                }
-            }
-        }
+        search.look_for_cycle(sim, h);
     }
     let class = class.unwrap_or(if acc.prev > h0 * (1.0 + th.growth_tol) {
         Class::Growing
@@ -351,7 +224,211 @@ pub fn classify<S: ExactSim>(sim: &mut S, periods: u64, th: &Thresholds) -> Outc
         h_max: acc.h_max,
         tail_amplitude: acc.amp,
         tail_speed: acc.spd,
-        cycle: ended,
+        cycle: search.ended,
+    }
+}
+
+impl Acc {
+    /// The bookkeeping before the first sample: H_T(0) = `h0`, limits scaled by max(h0, 1).
+    fn new(mu: f64, h0: f64, periods: u64, th: &Thresholds) -> Self {
+        let scale = if h0 > 1.0 { h0 } else { 1.0 };
+        Self {
+            mu,
+            limit: th.divergence_ratio * scale,
+            tol: th.mono_tol * scale,
+            tail_start: periods - (periods as f64 * th.tail_fraction) as u64,
+            prev: h0,
+            h_max: h0,
+            mono: true,
+            amp: 0.0,
+            spd: 0.0,
+        }
+    }
+}
+
+/// The class sample `h` (just simulated) settles, if any: growing (H_T over the limit or NaN,
+/// or a diverged state) or decaying (at rest).
+#[inline(always)]
+fn settled<S: ExactSim>(sim: &S, acc: &mut Acc, h: u64) -> Option<Class> {
+    let s = sim.state();
+    if acc.sample(h, s.x, s.v) || sim.diverged() {
+        return Some(Class::Growing);
+    }
+    if sim.at_rest() {
+        return Some(if acc.mono {
+            Class::MonotoneDecay
+        } else {
+            Class::NonMonotoneDecay
+        });
+    }
+    None
+}
+
+/// What the main loop does after a recording step.
+enum Flow {
+    /// On to the next sample.
+    Next,
+    /// The run ends here, with this class (`None`: by the rules at the end of the horizon).
+    Stop(Option<Class>),
+}
+
+/// Cycle detection's state across samples (see the module header).
+struct Search<S> {
+    /// Brent: the state at sample `h - lam`; compared with every later sample up to `power`
+    /// samples on, then replaced by the current one with `power` doubled.
+    saved: Option<S>,
+    power: u64,
+    lam: u64,
+    /// (L, c): the state at every sample k >= c equals the state at k + L.
+    cycle: Option<(u64, u64)>,
+    /// The cycle that ended the run early, for [`Outcome::cycle`].
+    ended: Option<Cycle>,
+    /// A cycle up to the position's bits being recorded for replay: the solver at its first
+    /// sample, and the phases so far.
+    recording: Option<S>,
+    phases: [Phase; MAX_REPLAY],
+    recorded: usize,
+    tr: Increments,
+}
+
+impl<S: ExactSim> Search<S> {
+    fn new(sim: &S, cycle_detection: bool) -> Self {
+        Self {
+            saved: if cycle_detection {
+                Some(sim.clone())
+            } else {
+                None
+            },
+            power: 1,
+            lam: 0,
+            cycle: None,
+            ended: None,
+            recording: None,
+            phases: [Phase::default(); MAX_REPLAY],
+            recorded: 0,
+            tr: Increments::default(),
+        }
+    }
+
+    /// Once a cycle is known, skips q whole cycles (samples h+1 ..= h+q·L): each repeats a
+    /// sample already classified; only the tail maxima need care (see the module header).
+    /// True when that reaches the horizon.
+    #[inline(always)]
+    fn skip_cycles(&mut self, h: &mut u64, periods: u64, tail_start: u64) -> bool {
+        let Some((l, c)) = self.cycle else {
+            return false;
+        };
+        let q = if *h + 1 < tail_start {
+            (tail_start - 1 - *h) / l
+        } else if *h + 1 >= tail_start.max(c + 1) + l {
+            // The tail has covered L consecutive samples of the cycle: all its phases.
+            (periods - *h) / l
+        } else {
+            0
+        };
+        if q > 0 {
+            *h += q * l;
+            self.ended = Some(Cycle {
+                period: l,
+                exact: true,
+            });
+            if *h >= periods {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Simulates one period, recording it when a cycle is being recorded.
+    #[inline(always)]
+    fn step(&mut self, sim: &mut S) {
+        if self.recording.is_some() {
+            let count = sim.count_at(sim.state().x).to_bits();
+            sim.step_period_traced(&mut self.tr);
+            self.phases[self.recorded] = Phase {
+                count,
+                dx: self.tr,
+                v_end: sim.state().v,
+            };
+            self.recorded += 1;
+        } else {
+            sim.step_period();
+        }
+    }
+
+    /// After a recorded period: once one period of the candidate is recorded, replays it if it
+    /// is replayable, else (or once the replay left the cycle) starts the search afresh.
+    fn after_recording(&mut self, sim: &mut S, acc: &mut Acc, h: &mut u64, periods: u64) -> Flow {
+        let Some(first) = self.recording.as_ref() else {
+            return Flow::Next;
+        };
+        if (self.recorded as u64) < self.lam {
+            return Flow::Next;
+        }
+        // One period of the candidate recorded: replayable if it returned to the same state
+        // up to the position's bits and never rested (the rest test compares positions).
+        let ph = &self.phases[..self.recorded];
+        let ok = sim.same_but_position(first)
+            && !ph
+                .iter()
+                .zip(core::iter::once(first.state().v).chain(ph.iter().map(|p| p.v_end)))
+                .any(|(p, v0)| v0 == 0.0 && p.v_end == 0.0);
+        self.recording = None;
+        self.recorded = 0;
+        if ok {
+            let lam = self.lam;
+            let base = sim.clone();
+            let replayed = Cycle {
+                period: lam,
+                exact: false,
+            };
+            match replay(&base, ph, acc, h, periods) {
+                Replay::Horizon => {
+                    self.ended = Some(replayed);
+                    return Flow::Stop(None);
+                }
+                Replay::Growing => return Flow::Stop(Some(Class::Growing)),
+                Replay::Left(resumed) => {
+                    *sim = resumed;
+                    self.ended = Some(replayed);
+                }
+                Replay::Exact(resumed) => {
+                    *sim = resumed;
+                    self.cycle = Some((lam, *h - lam));
+                    self.ended = Some(replayed);
+                    return Flow::Next;
+                }
+            }
+        }
+        // Not replayable (or left): start the search afresh from here.
+        self.saved = Some(sim.clone());
+        self.power = 1;
+        self.lam = 0;
+        Flow::Next
+    }
+
+    /// Brent's step at sample `h`: a bit-for-bit repeat is a cycle to skip, a repeat up to the
+    /// position's bits starts a recording, else the saved state moves on at powers of two.
+    #[inline(always)]
+    fn look_for_cycle(&mut self, sim: &S, h: u64) {
+        if self.cycle.is_some() {
+            return;
+        }
+        if let Some(t) = self.saved.as_mut() {
+            self.lam += 1;
+            if sim.same_state(t) {
+                self.cycle = Some((self.lam, h - self.lam));
+                self.saved = None;
+            } else if self.lam as usize <= MAX_REPLAY && sim.same_but_position(t) {
+                // Same state but for the position's last bits: record one period exactly
+                // (with the increments) and replay it.
+                self.recording = Some(sim.clone());
+            } else if self.lam == self.power {
+                t.clone_from(sim);
+                self.power *= 2;
+                self.lam = 0;
+            }
+        }
     }
 }
 

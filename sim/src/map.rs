@@ -248,38 +248,25 @@ pub fn simulate_point_with(
     periods: u64,
     history: History,
 ) -> Outcome {
-    simulate_point_th(
-        mu,
-        beta,
-        sigma,
-        tau_d,
-        xidot0,
-        periods,
-        history,
-        &Thresholds::default(),
-    )
-}
-
-/// [`simulate_point_with`] with explicit classification thresholds and options (e.g.
-/// [`Thresholds::cycle_detection`] off).
-#[allow(clippy::too_many_arguments)]
-#[must_use]
-pub fn simulate_point_th(
-    mu: f64,
-    beta: f64,
-    sigma: f64,
-    tau_d: f64,
-    xidot0: f64,
-    periods: u64,
-    history: History,
-    th: &Thresholds,
-) -> Outcome {
     let p = Params {
         mu,
         beta,
         sigma,
         tau_d,
     };
+    simulate_point_th(p, xidot0, periods, history, &Thresholds::default())
+}
+
+/// [`simulate_point_with`] with explicit classification thresholds and options (e.g.
+/// [`Thresholds::cycle_detection`] off); the model's (μ, β, σ, τ_D) in `p`.
+#[must_use]
+pub fn simulate_point_th(
+    p: Params,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    th: &Thresholds,
+) -> Outcome {
     simulate_point_damped_th(p, xidot0, periods, history, 0.0, th)
 }
 

@@ -9,7 +9,7 @@
 use proptest::prelude::*;
 use stiffwall_sim::classify::{Outcome, Thresholds};
 use stiffwall_sim::map::{run_with, simulate_point_th, Axis, MapSpec, RunOptions};
-use stiffwall_sim::History;
+use stiffwall_sim::{History, Params};
 
 fn panel(tau_d: f64, xidot0: f64, beta: Axis, sigma: Axis) -> MapSpec {
     MapSpec {
@@ -119,9 +119,10 @@ proptest! {
         let history = if zero_history { History::Zero } else { History::HoldInitial };
         let on = Thresholds::default();
         let off = Thresholds { cycle_detection: false, ..Thresholds::default() };
-        let a = simulate_point_th(100.0, beta, sigma, tau_d, xidot0, periods, history, &on);
+        let p = Params { mu: 100.0, beta, sigma, tau_d };
+        let a = simulate_point_th(p, xidot0, periods, history, &on);
         prop_assume!(a.cycle.is_some());
-        let b = simulate_point_th(100.0, beta, sigma, tau_d, xidot0, periods, history, &off);
+        let b = simulate_point_th(p, xidot0, periods, history, &off);
         prop_assert!(b.cycle.is_none());
         prop_assert!(same(&a, &b), "with {a:?}\nwithout {b:?}");
     }
@@ -150,16 +151,13 @@ fn limit_cycles_end_by_detection_at_every_horizon() {
     for (beta, sigma, tau_d, horizons) in cases {
         for &periods in horizons {
             let run = |th: &Thresholds| {
-                simulate_point_th(
-                    100.0,
+                let p = Params {
+                    mu: 100.0,
                     beta,
                     sigma,
                     tau_d,
-                    5.0,
-                    periods,
-                    History::HoldInitial,
-                    th,
-                )
+                };
+                simulate_point_th(p, 5.0, periods, History::HoldInitial, th)
             };
             let (a, b) = (run(&Thresholds::default()), run(&off));
             assert!(

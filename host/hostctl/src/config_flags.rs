@@ -265,6 +265,15 @@ impl Overrides {
     /// The first field out of range, named with its range.
     pub fn apply(&self, base: &ServoConfig) -> Result<ServoConfig, FlagError> {
         let mut c = *base;
+        self.apply_wall(&mut c)?;
+        self.apply_limits(&mut c)?;
+        self.apply_supervisor(&mut c)?;
+        self.apply_travel(&mut c)?;
+        Ok(c)
+    }
+
+    /// The wall's law and timing: stiffness, damping, rate, delay, coarsening, mode, position.
+    fn apply_wall(&self, c: &mut ServoConfig) -> Result<(), FlagError> {
         if let Some(v) = self.stiffness {
             c.stiffness = real("stiffness", v, false)?;
         }
@@ -299,6 +308,11 @@ impl Overrides {
         if let Some(v) = self.wall_position {
             c.wall_position = v;
         }
+        Ok(())
+    }
+
+    /// The output limits and the energy monitor.
+    fn apply_limits(&self, c: &mut ServoConfig) -> Result<(), FlagError> {
         if let Some(v) = self.force_limit {
             c.force_limit = real("force-limit", v, true)?;
         }
@@ -314,6 +328,11 @@ impl Overrides {
         if let Some(v) = self.energy_growth_cycles {
             c.energy_growth_cycles = int("energy-growth-cycles", v, 1, 64)?;
         }
+        Ok(())
+    }
+
+    /// The supervisor: encoder jumps, heartbeat, safe mode and its damping, the damper.
+    fn apply_supervisor(&self, c: &mut ServoConfig) -> Result<(), FlagError> {
         if let Some(v) = self.encoder_jump {
             c.encoder_jump_counts = int("encoder-jump", v, 1, i64::from(u32::MAX))?;
         }
@@ -334,6 +353,11 @@ impl Overrides {
             c.damper = parse_damper(&d.to_string())
                 .map_err(|reason| FlagError::Damper { value: d, reason })?;
         }
+        Ok(())
+    }
+
+    /// The travel window, checked as a whole when either end is given.
+    fn apply_travel(&self, c: &mut ServoConfig) -> Result<(), FlagError> {
         if let Some(v) = self.travel_min {
             c.travel_min = v.counts();
         }
@@ -343,7 +367,7 @@ impl Overrides {
         if self.travel_min.is_some() || self.travel_max.is_some() {
             travel(c.travel_min, c.travel_max)?;
         }
-        Ok(c)
+        Ok(())
     }
 
     /// Validates on the host, then reads, changes and writes the device's config. Returns the

@@ -1,9 +1,9 @@
 //! `cargo xtask`: orchestration that plain cargo can't do.
 //!
 //! - `ci`: everything CI runs (the README's test command): fmt, clippy, unused dependencies,
-//!   module cycles, no_std checks for the Cortex-M target, firmware cross-builds with the size
-//!   report, host tests, the fuzz campaign (10⁷ frames), the 10 s link flood, the tune tables
-//!   against a fresh run, the every-plant supervisor, the real-browser test of `hostctl ui`,
+//!   module cycles, size limits, no_std checks for the Cortex-M target, firmware cross-builds
+//!   with the size report, host tests, the fuzz campaign (10⁷ frames), the 10 s link flood,
+//!   the tune tables against a fresh run, the every-plant supervisor, the real-browser test of `hostctl ui`,
 //!   QEMU scenarios, the emulated Nucleo board's tests and mutation checks, the instruction
 //!   budgets (mean and worst tick) and the Slurm cluster test.
 //!   Every step that runs `#[ignore]`d tests fails when fewer ran than it has.
@@ -32,6 +32,8 @@
 //! - `arch [--print]`: docs/ARCHITECTURE.md's crate diagram, crate table (layer, folder,
 //!   dependencies, modules) and folder order against the code; every arrow runs down (also in
 //!   `ci`; `--print` prints the sections as built).
+//! - `sizes`: no production file over 700 lines before its tests, no production function over
+//!   80 lines, no `#[allow(clippy::too_many_arguments)]` (also in `ci`).
 //! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
 //!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
@@ -49,6 +51,7 @@ mod fuzz;
 mod module_cycles;
 mod process;
 mod qemu;
+mod sizes;
 mod toolchain;
 mod tune_table;
 mod ui;
@@ -89,6 +92,8 @@ const LIBRARY_EXAMPLES: [(&str, &str); 3] = [
     ("stiffwall-client", "record"),
 ];
 
+/// Everything CI runs, in order: the static checks, then builds and tests, then the long
+/// campaigns, then the emulated targets and the cluster.
 fn ci() -> Result<()> {
     let started = std::time::Instant::now();
     let step = |name: &str| {
@@ -98,6 +103,17 @@ fn ci() -> Result<()> {
         )
     };
     let cross = toolchain::ensure_cross()?;
+    ci_static_checks(&step)?;
+    ci_builds_and_tests(&step, cross)?;
+    ci_campaigns(&step)?;
+    ci_emulated_targets(&step)?;
+    step("done");
+    Ok(())
+}
+
+/// `ci`'s checks that read the code without running it: format, clippy (with and without the
+/// live view), unused dependencies, module cycles, the architecture page and size limits.
+fn ci_static_checks(step: &dyn Fn(&str)) -> Result<()> {
     step("format");
     run(cargo().args(["fmt", "--all", "--check"]))?;
     step("clippy");
@@ -126,6 +142,14 @@ fn ci() -> Result<()> {
     module_cycles::module_cycles(&[])?;
     step("docs/ARCHITECTURE.md's crate diagram, layers and module lists against the code");
     arch::arch(&[])?;
+    step("no production file over 700 lines before its tests, no function over 80 lines, no too_many_arguments allow");
+    sizes::sizes(&[])?;
+    Ok(())
+}
+
+/// `ci`'s builds and tests: the no_std crates, the firmware images, the host tests and the
+/// library examples.
+fn ci_builds_and_tests(step: &dyn Fn(&str), cross: toolchain::Cross) -> Result<()> {
     if cross == toolchain::Cross::Rustup {
         step("no_std crates for the Cortex-M target");
         for (krate, extra) in NO_STD_CRATES {
@@ -144,6 +168,12 @@ fn ci() -> Result<()> {
     for (krate, example) in LIBRARY_EXAMPLES {
         run(cargo().args(["run", "-p", krate, "--example", example]))?;
     }
+    Ok(())
+}
+
+/// `ci`'s long runs: the fuzz campaign, the link flood, the tune tables and the supervisor on
+/// every plant.
+fn ci_campaigns(step: &dyn Fn(&str)) -> Result<()> {
     step("the fuzz campaign of docs/RELIABILITY.md: 1e7 frames, 1e6 chunks, 1e5 power cuts, 1e6 pty frames (seed 1)");
     fuzz::fuzz(&["--frames".to_string(), "10000000".to_string()])?;
     step("the 10 s flood of bad frames, real time and fast (the issue's acceptance run; debug build of the step above)");
@@ -165,6 +195,12 @@ fn ci() -> Result<()> {
     run_ignored("stiffwall-tests", "tune_plants", &["random_launch"], 1)?;
     step("the supervisor on every plant: 1.5 K*(0), and 1.5 K*(B) at the B and law tune sets (docs/TUNE.md's supervisor column)");
     run_ignored("stiffwall-tests", "supervisor_plants", &[], 2)?;
+    Ok(())
+}
+
+/// `ci`'s runs on other machines: the real browser, QEMU, the board emulator, the instruction
+/// budget and the Slurm cluster.
+fn ci_emulated_targets(step: &dyn Fn(&str)) -> Result<()> {
     step("hostctl ui in a real browser (chromium + chromedriver)");
     ui::browser_test(None)?;
     step("QEMU scenarios");
@@ -175,7 +211,6 @@ fn ci() -> Result<()> {
     bench_firmware::bench_firmware(&["--no-write".to_string()])?;
     step("a Fig. 6 panel as a Slurm job array on a throw-away cluster (Debian's slurm-wlm and munge; root), with pre-emption");
     cluster::cluster_test(&[])?;
-    step("done");
     Ok(())
 }
 
@@ -200,6 +235,7 @@ fn main() -> Result<()> {
         Some("atlas") => atlas::atlas(&args[1..]),
         Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
         Some("arch") => arch::arch(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print]"),
+        Some("sizes") => sizes::sizes(&args[1..]),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print], sizes"),
     }
 }

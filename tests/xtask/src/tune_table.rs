@@ -11,7 +11,11 @@
 //! writes nothing. Whatever the options, a row that fails what the docs claim is an error.
 use anyhow::{bail, Result};
 
+mod render;
+mod row;
 mod table;
+mod tune_run;
+mod verdict;
 
 /// Checks the options and runs the table program.
 pub fn tune_table(args: &[String]) -> Result<()> {
