@@ -58,7 +58,6 @@ const fn linear(m: f64, b: f64, c: f64, delta_um: f64, t_ms: f64, k: f64) -> Phy
     }
 }
 
-#[allow(clippy::too_many_arguments)]
 const fn printed(
     mu: f64,
     mu_d: u8,

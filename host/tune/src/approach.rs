@@ -104,20 +104,21 @@ pub(super) fn clamp_i32(n: i64) -> i32 {
 /// returns the lower of the two counts, from the wall.
 ///
 /// # Errors
-/// The device failing, or not settled within 20 s.
+/// The device failing, or not settled within [`REST_WAIT_S`](super::rest::REST_WAIT_S).
 fn settled_within_one(c: &mut Client) -> Result<i32> {
     let rate = c.info.servo_rate_hz.max(1);
     let decimation = u16::try_from((rate / 500).max(1)).unwrap_or(u16::MAX);
     c.stream_start(decimation)?;
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let wait_s = super::rest::REST_WAIT_S;
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(wait_s);
     let mut recent = std::collections::VecDeque::with_capacity(51);
     let result = loop {
         if std::time::Instant::now() > deadline {
-            break Err(super::error::StepError::Failed(
-                "the device did not settle within one count within 20 s".into(),
-            ));
+            break Err(super::error::StepError::Failed(format!(
+                "the device did not settle within one count within {wait_s:.0} s"
+            )));
         }
-        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+        if let Some(b) = c.next_batch(super::rest::BATCH_WAIT)? {
             for x in &b.samples {
                 recent.push_back(x.count);
                 if recent.len() > 50 {

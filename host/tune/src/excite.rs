@@ -94,14 +94,20 @@ fn settle(c: &mut Client, spring: &ServoConfig) -> Result<()> {
     rest_position(c).map(drop)
 }
 
-/// One chirp excitation of `amplitude` codes against the centring spring of `cfg` and `room`,
-/// and its identification.
 /// The centring spring of one chirp: the room each side (None: the wall off) and the device's
 /// mass when known (see [`centred`]).
 #[derive(Debug, Clone, Copy)]
 struct Centring {
     room: Option<i64>,
     mass: Option<f64>,
+}
+
+/// The chirp every level plays: its length, its top frequency (Hz) and its centring spring.
+#[derive(Debug, Clone, Copy)]
+struct Chirp {
+    ticks: u32,
+    f1: f32,
+    centring: Centring,
 }
 
 /// What one chirp gave: the fit, where the device ended (counts from the wall position) and
@@ -123,20 +129,19 @@ const MIN_CHIRP_TICKS: f64 = 1500.0;
 /// Most the full chirp's amplitude grows over the probe's for [`MIN_CHIRP_SPAN_COUNTS`].
 const MAX_CHIRP_BOOST: f64 = 4.0;
 
+/// One chirp excitation of `amplitude` codes against `chirp`'s centring spring about where the
+/// device rests (the wall of `cfg` moved there), and its identification.
 fn excite_and_identify(
     c: &mut Client,
     cfg: &ServoConfig,
-    Centring { room, mass }: Centring,
+    chirp: Chirp,
     amplitude: i32,
-    ticks: u32,
-    f1: f32,
     progress: &Reporter<'_>,
 ) -> Result<Excited> {
-    let (res, t) = device_scale(c)?;
     progress.report(Progress::Chirp {
         amplitude_codes: amplitude,
-        f1_hz: f1,
-        ticks,
+        f1_hz: chirp.f1,
+        ticks: chirp.ticks,
     });
     // From rest with the wall off, so that the record does not depend on how long the host took
     // since the previous excitation (determinism: `--fast` and real time see the same counts);
@@ -147,7 +152,7 @@ fn excite_and_identify(
         damping: 0.0,
         ..*cfg
     })?;
-    super::verify::clear_faults(c)?;
+    super::rest::clear_faults(c)?;
     let rest = rest_position(c)?;
     // The spring's origin where the device rests, so that it holds still until the chirp
     // starts however long the host takes (its force there, K·Δ/2, is below friction); the
@@ -158,16 +163,15 @@ fn excite_and_identify(
             .saturating_add(rest << cfg.coarsen_shift.min(16)),
         ..*cfg
     };
+    let Centring { room, mass } = chirp.centring;
     let spring = centred(c, &at_rest, amplitude, room, mass);
     c.set_config(&spring)?;
-    let rec = c.excite(
-        ExciteProfile::Chirp {
-            amplitude,
-            f0_hz: 0.5,
-            f1_hz: f1,
-        },
-        ticks,
-    )?;
+    let profile = ExciteProfile::Chirp {
+        amplitude,
+        f0_hz: 0.5,
+        f1_hz: chirp.f1,
+    };
+    let rec = c.excite(profile, chirp.ticks)?;
     settle(c, &spring)?;
     if rec.gaps.missing > 0 {
         bail!(
@@ -178,7 +182,12 @@ fn excite_and_identify(
     // The counts in the frame of `cfg`'s wall (the record's are from the spring's origin at
     // the rest): a spring-like force the fit finds (a hand) has its offset there, where the
     // breakaway ramps' model places its preload.
-    let origin = i64::from(rest) << cfg.coarsen_shift.min(16);
+    fit_chirp(c, &rec, i64::from(rest) << cfg.coarsen_shift.min(16))
+}
+
+/// The fit of a chirp's record, its counts moved by `origin` into the frame of the tests' wall.
+fn fit_chirp(c: &mut Client, rec: &stiffwall_client::Record, origin: i64) -> Result<Excited> {
+    let (res, t) = device_scale(c)?;
     let samples: Vec<ident::Sample> = rec
         .samples
         .iter()
@@ -193,21 +202,17 @@ fn excite_and_identify(
         resolution: res,
         ..ident::Settings::default()
     };
-    let id = match ident::identify(&samples, &settings) {
-        Ok(id) => id,
-        Err(e) => {
-            // Say why when the supervisor stopped the excitation (e.g. an encoder jump: a
-            // fine encoder moves many counts per tick); `identify` then tries gentler levels.
-            let latched = c.faults().map_or(0, |f| f.latched);
-            if latched != 0 {
-                return Err(StepError::Context {
-                    context: e.to_string(),
-                    inner: Box::new(StepError::ExcitationTripped { latched }),
-                });
-            }
-            return Err(e);
+    let id = ident::identify(&samples, &settings).map_err(|e| {
+        // Say why when the supervisor stopped the excitation (e.g. an encoder jump: a fine
+        // encoder moves many counts per tick); `identify` then tries gentler levels.
+        match c.faults().map_or(0, |f| f.latched) {
+            0 => e,
+            latched => StepError::Context {
+                context: e.to_string(),
+                inner: Box::new(StepError::ExcitationTripped { latched }),
+            },
         }
-    };
+    })?;
     if !(id.mass > 0.0 && id.coulomb >= 0.0 && id.equations >= 20) {
         bail!(
             "implausible fit: m = {:.3e}, c = {:.3e} from {} windows",
@@ -247,13 +252,15 @@ pub(crate) fn identify(
     // At least [`MIN_CHIRP_TICKS`]: against the centring spring a device sticks near each
     // turn, and a slow servo's 3 s (600 ticks at 200 Hz) left 16 sliding windows, too few for
     // a fit (maxon-re35-slow-servo then fell back to the chirp with the wall off).
-    let ticks = (s.excite_seconds * rate)
-        .round()
-        .clamp(MIN_CHIRP_TICKS, 1e6) as u32;
-    let f1 = (rate / 250.0).min(4.0) as f32;
+    let chirp = Chirp {
+        ticks: (s.excite_seconds * rate)
+            .round()
+            .clamp(MIN_CHIRP_TICKS, 1e6) as u32,
+        f1: (rate / 250.0).min(4.0) as f32,
+        centring: Centring { room, mass: None },
+    };
     let fpc = f64::from(c.info.force_per_code);
-    let max_code = c.info.max_code.max(1);
-    let limit_code = ((f64::from(cfg.force_limit) / fpc) as i32).clamp(1, max_code);
+    let limit_code = ((f64::from(cfg.force_limit) / fpc) as i32).clamp(1, c.info.max_code.max(1));
     let mut last_err: Option<StepError> = None;
     let mut levels = vec![0.05, 0.1, 0.2, 0.4];
     let mut i = 0;
@@ -265,49 +272,13 @@ pub(crate) fn identify(
         // A probe finds the level; the full chirp then gives the fit. Both are full length:
         // against the centring spring the device sticks near each turn, and half the windows
         // of a slow servo's chirp are too few for a fit.
-        match excite_and_identify(
-            c,
-            cfg,
-            Centring { room, mass: None },
-            amplitude,
-            ticks,
-            f1,
-            progress,
-        ) {
-            Ok(Excited {
-                id: probe,
-                end,
-                span_counts,
-            }) => {
-                let boost = (MIN_CHIRP_SPAN_COUNTS as f64 / span_counts.max(1) as f64)
-                    .clamp(1.0, MAX_CHIRP_BOOST);
-                let floor = (f64::from(amplitude) * boost) as i32;
-                let mut wanted = ((5.0 * probe.coulomb / fpc) as i32)
-                    .max(floor)
-                    .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
-                if wanted <= amplitude * 5 / 4 {
-                    wanted = amplitude;
-                }
-                check_cancel(c)?;
-                if let Ok(Excited {
-                    id: full,
-                    end: end2,
-                    ..
-                }) = excite_and_identify(
-                    c,
-                    cfg,
-                    Centring {
-                        room,
-                        mass: Some(probe.mass),
-                    },
-                    wanted,
-                    ticks,
-                    f1,
-                    progress,
-                ) {
-                    return Ok((full, wanted, end2));
-                }
-                return Ok((probe, amplitude, end));
+        match excite_and_identify(c, cfg, chirp, amplitude, progress) {
+            Ok(probe) => {
+                let level = Level {
+                    amplitude,
+                    limit_code,
+                };
+                return full_chirp(c, cfg, chirp, probe, level, progress);
             }
             Err(e) => {
                 // The supervisor stopped the first level: the device may be driven too fast
@@ -323,25 +294,75 @@ pub(crate) fn identify(
         }
     }
     let e = last_err.unwrap_or_else(|| StepError::Failed("no excitation".into()));
-    let tripped = e.tripped();
-    if let Some(latched) = tripped {
-        let jump = latched & stiffwall_proto::fault::ENCODER_JUMP != 0;
-        return Err(e).context(format!(
-            "identification failed at every excitation level from 0.08 % to 40 % of the \
-             force limit: the supervisor latched faults {}{} during the chirp",
-            super::left::fault_names(latched).join(", "),
-            if jump {
-                format!(
-                    " (encoder jump: more than {} counts in one tick; a fine encoder needs a \
-                     higher limit, `hostctl config set --encoder-jump N`)",
-                    cfg.encoder_jump_counts
-                )
-            } else {
-                String::new()
-            }
-        ));
+    failed_at_every_level(e, cfg)
+}
+
+/// A probe's level: its amplitude and the force limit, output codes.
+#[derive(Debug, Clone, Copy)]
+struct Level {
+    amplitude: i32,
+    limit_code: i32,
+}
+
+/// The full chirp after the probe at `level` moved the device: at about 5·c (at least enough
+/// to move it over [`MIN_CHIRP_SPAN_COUNTS`], at most 60 % of the limit; the probe's own level
+/// when that is within a quarter of it), its fit; the probe's when the full chirp fails.
+fn full_chirp(
+    c: &mut Client,
+    cfg: &ServoConfig,
+    chirp: Chirp,
+    probe: Excited,
+    level: Level,
+    progress: &Reporter<'_>,
+) -> Result<(Identified, i32, i32)> {
+    let Level {
+        amplitude,
+        limit_code,
+    } = level;
+    let fpc = f64::from(c.info.force_per_code);
+    let boost = (MIN_CHIRP_SPAN_COUNTS as f64 / probe.span_counts.max(1) as f64)
+        .clamp(1.0, MAX_CHIRP_BOOST);
+    let floor = (f64::from(amplitude) * boost) as i32;
+    let mut wanted = ((5.0 * probe.id.coulomb / fpc) as i32)
+        .max(floor)
+        .clamp(amplitude, (f64::from(limit_code) * 0.6) as i32);
+    if wanted <= amplitude * 5 / 4 {
+        wanted = amplitude;
     }
-    Err(e).context("identification failed at every excitation level")
+    check_cancel(c)?;
+    let full = Chirp {
+        centring: Centring {
+            mass: Some(probe.id.mass),
+            ..chirp.centring
+        },
+        ..chirp
+    };
+    Ok(match excite_and_identify(c, cfg, full, wanted, progress) {
+        Ok(Excited { id, end, .. }) => (id, wanted, end),
+        Err(_) => (probe.id, amplitude, probe.end),
+    })
+}
+
+/// The error of an identification that failed at every level, naming the faults the
+/// supervisor latched (and what to do about an encoder jump).
+fn failed_at_every_level<T>(e: StepError, cfg: &ServoConfig) -> Result<T> {
+    let Some(latched) = e.tripped() else {
+        return Err(e).context("identification failed at every excitation level");
+    };
+    let advice = if latched & stiffwall_proto::fault::ENCODER_JUMP != 0 {
+        format!(
+            " (encoder jump: more than {} counts in one tick; a fine encoder needs a higher \
+             limit, `hostctl config set --encoder-jump N`)",
+            cfg.encoder_jump_counts
+        )
+    } else {
+        String::new()
+    };
+    Err(e).context(format!(
+        "identification failed at every excitation level from 0.08 % to 40 % of the force \
+         limit: the supervisor latched faults {}{advice} during the chirp",
+        super::left::fault_names(latched).join(", "),
+    ))
 }
 
 /// Breakaway evidence: a slow force ramp from rest (wall off, config `base` with K = 0) in each

@@ -10,9 +10,13 @@ use super::progress::Progress;
 use super::release::Verdict;
 use super::repeat::{margin_for_spread, repeated, Repeat};
 use super::search::{largest_settling_k, Found, Search};
-use super::settings::*;
+use super::settings::{
+    Damping, CONFIRM_BACKOFF, CONFIRM_TRIES, DAMPED_MARGIN, DAMPING_BETAS, DAMPING_MIN_GAIN,
+    DAMPING_SCALE_AGREEMENT, FRONTIER_REL_TOL, FRONTIER_START, FRONTIER_STEP, FRONTIER_TRIES,
+};
 use super::steps::{df_equivalent, Notes, Run};
-use super::verify::{Test, TestResult};
+use super::test_set::Test;
+use super::verify::TestResult;
 use stiffwall_client::Client;
 use stiffwall_core::criteria;
 use stiffwall_proto::{DamperLaw, ServoConfig};

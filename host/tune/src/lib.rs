@@ -45,6 +45,7 @@ mod error;
 mod excite;
 mod frontier;
 mod ident;
+mod identification;
 mod judged;
 mod launch;
 mod left;
@@ -53,23 +54,26 @@ mod outcome;
 mod procedure;
 mod progress;
 mod reach;
+mod reaim;
 mod release;
 pub mod repeat;
 mod rest;
 mod search;
 mod settings;
 mod steps;
+mod test_set;
 mod travel;
 mod verdict;
 mod verify;
 mod workspace;
 
 pub use error::{NoWallPassed, SettingsError, StepError, TuneError};
+pub use identification::predict;
 pub use launch::Delivered;
 pub use left::{DeviceLeft, LEFT_TOLERANCE_COUNTS};
 pub use model_check::Evidence;
 pub use outcome::{FrontierPoint, IdentifiedReport, Outcome, Predicted, Repeatability};
-pub use procedure::{predict, tune};
+pub use procedure::tune;
 pub use progress::Progress;
 pub use release::{classify, released_counts, Verdict};
 pub use search::{Found, Trial};
@@ -78,8 +82,8 @@ pub use settings::{
     MISMATCH_MARGIN,
 };
 pub use steps::{deflection_for, df_equivalent};
+pub use test_set::{impact, Test, WallSides};
 pub use travel::{TravelSource, Workspace, DEFAULT_WINDOW_LINEAR_M, DEFAULT_WINDOW_ROTARY_RAD};
 pub use verify::{
-    clear_faults, impact, rest_position, run_test, ChatterReport, Judging, Test, TestResult,
-    TestRun, WallSides,
+    clear_faults, rest_position, run_test, ChatterReport, Judging, TestResult, TestRun,
 };

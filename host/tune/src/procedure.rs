@@ -33,53 +33,20 @@
 //! arrive, so `--fast` and real time give the same K on the virtual device.
 
 use super::error::TuneError;
-use super::error::{Result, StepError};
-use super::excite::{breakaway, device_scale};
+use super::error::{Result, SettingsError, StepError};
+use super::excite::device_scale;
 use super::frontier::{b_cap, choose_wall, Searched};
+use super::identification::{force_regime_k, identify_and_predict, Identification};
 use super::launch::Delivered;
-use super::model_check::{self, Evidence};
+use super::model_check;
+use super::outcome::{IdentifiedReport, Outcome};
 use super::progress::{Progress, Reporter};
 use super::search::{largest_settling_k, Search};
+use super::settings::{Criterion, Damping, Settings, FRICTION_MISMATCH_MARGIN, MISMATCH_MARGIN};
 use super::steps::{Notes, Run};
-use super::travel::TravelSource;
-use super::verify::rest_position;
-use super::workspace::{
-    enter_workspace, finish, home_of, velocity_within, Place, BREAKAWAY_MARGIN,
-    MOVE_MAX_FORCE_SHARE,
-};
+use super::workspace::{finish, home_of, Place};
 use stiffwall_client::{Cancel, Client};
-use stiffwall_core::criteria;
-use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
-
-use super::excite::identify;
-pub use super::outcome::{IdentifiedReport, Outcome, Predicted};
-pub use super::settings::*;
-pub use super::steps::df_equivalent;
-
-/// Step 2: predictions for the identified device.
-pub fn predict(p: &PhysicalParams, v: f64) -> Result<Predicted> {
-    use stiffwall_core::limits;
-    let passive = limits::k_max_passive(p)?;
-    let guaranteed = if p.delay_s > 0.0 {
-        limits::k_max_delayed_harmonic(p, v)?
-    } else {
-        limits::k_max_at_velocity(p, v)?
-    };
-    let equivalent = df_equivalent(p, v);
-    let expected = criteria::k_max_gil_avello_rubio(&equivalent)?;
-    // (74) with ξ̇ = vT/Δ: c/(KΔ) = (π/4)ξ̇(τ_L − b/(KT))  ⇒  K = (c/Δ + (π/4)ξ̇ b/T)/((π/4)ξ̇ τ_L).
-    let xidot = v * p.period_s / p.resolution;
-    let tau_l = 0.5 + p.delay_s / p.period_s;
-    let q = std::f64::consts::FRAC_PI_4 * xidot;
-    let expected_paper_74 = (p.coulomb / p.resolution + q * p.viscous / p.period_s) / (q * tau_l);
-    Ok(Predicted {
-        passive,
-        guaranteed,
-        expected,
-        expected_paper_74,
-    })
-}
 
 /// Runs the whole procedure on `c`: identify, predict, verify and (unless
 /// [`Settings::dry_run`]) set and save the wall. `progress` receives one event per step as it
@@ -140,32 +107,6 @@ const SEARCH_START_OF_GUARANTEED: f64 = 0.5;
 /// oscillation before friction and quantization distort it).
 const FREQUENCY_CROSSINGS: usize = 12;
 
-/// What identification (step 1) and prediction (step 2) give the rest of the procedure.
-#[derive(Clone)]
-struct Identification {
-    id: super::ident::Identified,
-    /// Chirp amplitude that moved the device, DAC codes.
-    amplitude: i32,
-    /// The tests' config: the wall off, no damping, the energy monitor on, the wall where
-    /// the chirp left the device.
-    base: ServoConfig,
-    evidence: Evidence,
-    /// The identified model (K = 1 until the wall is chosen).
-    p: PhysicalParams,
-    /// Maximum velocity v, m/s (rad/s).
-    v: f64,
-    predicted: Predicted,
-    /// Force and stiffness units, for findings.
-    units: (&'static str, &'static str),
-    /// Room each side of the tests' wall, raw counts.
-    room: i64,
-    /// The push of the moves that walk a drifting device back, N (N·m).
-    move_force_n: f64,
-    /// The default window (no travel stated), raw counts: the release and impact tests carry
-    /// it as the firmware's travel window (a stated travel is in `base` already).
-    window: Option<(i32, i32)>,
-}
-
 fn tune_inner(
     c: &mut Client,
     s: &Settings,
@@ -175,20 +116,7 @@ fn tune_inner(
 ) -> Result<Outcome> {
     let mut ident = identify_and_predict(c, s, original, progress, place)?;
     let ceiling = quiet_ceiling(&ident);
-    // The band the user's own wall holds the device in (the final check) counts on the
-    // breakaway measured, the smaller direction's; the quiet ceiling's credit is a bound.
-    let breakaway = ident
-        .evidence
-        .breakaway_measured
-        .iter()
-        .flatten()
-        .map(|f| f.abs())
-        .fold(f64::INFINITY, f64::min);
-    place.static_friction = Some(if breakaway.is_finite() {
-        breakaway.max(ident.p.coulomb)
-    } else {
-        ceiling * ident.p.resolution / 2.0
-    });
+    place.static_friction = Some(static_friction_band(&ident, ceiling));
     // The quiet search runs on a copy: where no wall rests, the search for the least chatter
     // starts again from what identification found.
     let mut tried = ident.clone();
@@ -226,6 +154,39 @@ fn tune_inner(
         model_mismatch.push(why.clone());
     }
     // Step 5 (in `finish`, after the way back): set, check and save.
+    prepare_finish(place, &wall, original)?;
+    let saved = false;
+    let quiet = Quiet {
+        ceiling,
+        no_rest,
+        criterion: s.criterion,
+    };
+    Ok(outcome(ident, found, wall, model_mismatch, saved, quiet))
+}
+
+/// The band the user's own wall holds the device in (the final check) counts on the breakaway
+/// measured, the smaller direction's (at least c); without one, the quiet ceiling's credit.
+fn static_friction_band(ident: &Identification, ceiling: f64) -> f64 {
+    let breakaway = ident
+        .evidence
+        .breakaway_measured
+        .iter()
+        .flatten()
+        .map(|f| f.abs())
+        .fold(f64::INFINITY, f64::min);
+    if breakaway.is_finite() {
+        breakaway.max(ident.p.coulomb)
+    } else {
+        ceiling * ident.p.resolution / 2.0
+    }
+}
+
+/// What `finish` needs for step 5: the way back's walk and the config to set.
+fn prepare_finish(
+    place: &mut Place,
+    wall: &super::frontier::Wall,
+    original: &ServoConfig,
+) -> Result<()> {
     // The way back walks with a sixteenth of the wall found (as the search's own walks do):
     // far below the stiffness verified, so a step of the walk, a deflection of up to its push
     // F/(KΔ), cannot ring it (at the wall's own K, behind a delay, it can: a light rotor with
@@ -252,13 +213,7 @@ fn tune_inner(
         damper: wall.damper,
         ..*original
     });
-    let saved = false;
-    let quiet = Quiet {
-        ceiling,
-        no_rest,
-        criterion: s.criterion,
-    };
-    Ok(outcome(ident, found, wall, model_mismatch, saved, quiet))
+    Ok(())
 }
 
 /// The settings of the search for the wall with the least chatter, where no wall rests: chatter
@@ -419,163 +374,6 @@ fn search_walls(
         model_mismatch.push(finding);
     }
     Ok((found, wall, model_mismatch))
-}
-
-/// Steps 1–2: the wall off, faults cleared, the chirp, the breakaway ramps, the model and its
-/// predicted limits at v.
-fn identify_and_predict(
-    c: &mut Client,
-    s: &Settings,
-    original: &ServoConfig,
-    progress: &Reporter<'_>,
-    place: &mut Place,
-) -> Result<Identification> {
-    let (res, t) = device_scale(c)?;
-    // Experiments run with the wall off between them, without extra damping and with the
-    // energy monitor on, whatever the user's config; the servo rate, delay and coarsening stay
-    // as configured.
-    let base = ServoConfig {
-        damping: 0.0,
-        damper: s.damper.unwrap_or_default(),
-        energy_monitor: true,
-        stiffness: 0.0,
-        ..*original
-    };
-    // The wall off first: a fault the user's wall keeps raising (an energy limit tripped by a
-    // K the device cannot hold) would otherwise latch again as soon as it is cleared.
-    c.set_config(&base)?;
-    super::verify::clear_faults(c)?;
-    let (base, room) = enter_workspace(c, s, original, base, progress, place)?;
-    let (id, amplitude, _) = match identify(c, &base, s, progress, Some(room)) {
-        Ok(found) => found,
-        // Travel unknown: the device may turn or slide freely, so the chirp with the wall off
-        // (which identifies every plant of the repository) runs with the default window as the
-        // firmware's guard; a known travel is never left to that guard.
-        Err(e) if matches!(place.ws, Some(w) if w.source == TravelSource::DefaultWindow) => {
-            progress.report(Progress::Travel {
-                text: format!(
-                    "identification against the centring spring failed ({e}); the chirp runs \
-                     with the wall off, the default window as the supervisor's travel limit"
-                ),
-            });
-            super::travel::move_to(c, &base, i64::from(base.wall_position), home_of(place)?)?;
-            let open = ServoConfig {
-                travel_min: None,
-                travel_max: None,
-                ..base
-            };
-            c.set_config(&open)?;
-            let found = identify(c, &open, s, progress, None)?;
-            super::travel::move_to(c, &base, i64::from(base.wall_position), home_of(place)?)?;
-            c.set_config(&base)?;
-            found
-        }
-        Err(e) => return Err(e),
-    };
-    c.set_config(&base)?;
-    let rest = rest_position(c)?;
-    // The chirp leaves the device wherever it stopped: the tests put the wall there (the
-    // user's wall position is kept in the config that is finally set).
-    let base = ServoConfig {
-        wall_position: base.wall_position.saturating_add(rest),
-        ..base
-    };
-    let mut evidence = Evidence {
-        residual_rel: id.residual_rel,
-        ..Evidence::default()
-    };
-    breakaway(c, &base, &id, rest, &mut evidence, progress, room)?;
-    // The moves from now on know the mass (it bounds the glide's damper) and push harder
-    // than the breakaway measured (a push below static friction never moves the device).
-    if let Some(home) = place.home.as_mut() {
-        let breakaway = evidence
-            .breakaway_measured
-            .iter()
-            .flatten()
-            .fold(0.0f64, |a, f| a.max(f.abs()));
-        home.mass = Some(id.mass);
-        home.friction = Some(super::approach::MoveFriction {
-            coulomb_n: id.coulomb.max(0.0),
-            viscous: id.viscous.max(0.0),
-        });
-        home.force_n = home
-            .force_n
-            .max(BREAKAWAY_MARGIN * breakaway)
-            .min(MOVE_MAX_FORCE_SHARE * f64::from(original.force_limit));
-    }
-    // The tests start from the middle of the room, wherever the excitations left the device.
-    let centre = i64::from(base.wall_position) - (i64::from(rest) << base.coarsen_shift.min(16));
-    let at = super::travel::move_into(c, &base, centre, home_of(place)?, room)?;
-    let base = ServoConfig {
-        wall_position: i32::try_from(at).unwrap_or(base.wall_position),
-        ..base
-    };
-    c.set_config(&ServoConfig {
-        stiffness: 0.0,
-        damping: 0.0,
-        ..base
-    })?;
-    let delta = res * f64::from(1u32 << base.coarsen_shift);
-    let rotational = c.info.counts_per_rev > 0;
-    let p = PhysicalParams {
-        mass: id.mass,
-        viscous: id.viscous.max(0.0),
-        coulomb: id.coulomb.max(0.0),
-        resolution: delta,
-        period_s: t,
-        stiffness: 1.0,
-        delay_s: f64::from(base.extra_delay_ticks) * t,
-        rotational,
-    };
-    let asked = s.max_velocity.unwrap_or(DEFAULT_XIDOT * delta / t);
-    let mut predicted = predict(&p, asked)?;
-    let ws = place
-        .ws
-        .ok_or_else(|| StepError::Failed("no workspace".into()))?;
-    let room_raw = ws.room_at(i64::from(base.wall_position));
-    let room = room_raw >> base.coarsen_shift.min(16);
-    let v = velocity_within(&p, asked, &predicted, room, rotational, progress)?;
-    if v < asked {
-        predicted = predict(&p, v)?;
-    }
-    progress.report(Progress::Identified {
-        mass: id.mass,
-        viscous: id.viscous,
-        coulomb: id.coulomb,
-        k_guaranteed: predicted.guaranteed,
-        k_expected: predicted.expected,
-    });
-    let units = if rotational {
-        ("N·m", "N·m/rad")
-    } else {
-        ("N", "N/m")
-    };
-    Ok(Identification {
-        id,
-        amplitude,
-        base,
-        evidence,
-        p,
-        v,
-        predicted,
-        units,
-        room: room_raw,
-        move_force_n: home_of(place)?.force_n,
-        window: (ws.source == TravelSource::DefaultWindow).then(|| {
-            let clamp =
-                |n: i64| i32::try_from(n).unwrap_or(if n < 0 { i32::MIN } else { i32::MAX });
-            (clamp(ws.ends[0]), clamp(ws.ends[1]))
-        }),
-    })
-}
-
-/// Force regime: above this K the wall's peak force at v, K·Δ·(d + ½) with d = v√(m/K)/Δ,
-/// i.e. about v√(mK), exceeds the force limit and the firmware saturates it. A full-energy
-/// release then no longer stores the impact's energy, so above it each search step also runs
-/// what saturates first in use: an impact at v from each side.
-fn force_regime_k(ident: &Identification) -> f64 {
-    let f_lim = f64::from(ident.base.force_limit);
-    (f_lim / (ident.v * ident.id.mass.sqrt())).powi(2)
 }
 
 /// Step 4a: the largest resting K at B = 0, from the prediction (the expected limit, not below

@@ -151,6 +151,24 @@ impl fmt::Display for Progress {
                 "identified m={mass:.3e} b={viscous:.3e} c={coulomb:.3e}; K guaranteed \
                  {k_guaranteed:.4} expected {k_expected:.4}"
             ),
+            Self::Finding { text } => write!(f, "model mismatch: {text}"),
+            Self::Travel { text } => write!(f, "workspace: {text}"),
+            Self::Returning { target } => {
+                write!(
+                    f,
+                    "returning the device to count {target}, where it started"
+                )
+            }
+            Self::Left(left) => write!(f, "{left}"),
+            search => search.fmt_search(f),
+        }
+    }
+}
+
+impl Progress {
+    /// The search and verification events (steps 4a–4b).
+    fn fmt_search(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
             Self::ReleaseStep {
                 k,
                 b,
@@ -167,7 +185,7 @@ impl fmt::Display for Progress {
             } => write!(
                 f,
                 "verifying K={k:.4} B={b:.4}: releases from ±{deflection_ticks} ticks and \
-                 below, impacts"
+                     below, impacts"
             ),
             Self::VerifyFailed {
                 k,
@@ -197,17 +215,9 @@ impl fmt::Display for Progress {
             Self::ImpactsCapped { k_from, k_to } => write!(
                 f,
                 "impacts at v failed at every K from {k_from:.4} down to {k_to:.4}; verifying \
-                 without them (releases at full energy from both sides, slower impacts)"
+                     without them (releases at full energy from both sides, slower impacts)"
             ),
-            Self::Finding { text } => write!(f, "model mismatch: {text}"),
-            Self::Travel { text } => write!(f, "workspace: {text}"),
-            Self::Returning { target } => {
-                write!(
-                    f,
-                    "returning the device to count {target}, where it started"
-                )
-            }
-            Self::Left(left) => write!(f, "{left}"),
+            _ => Ok(()),
         }
     }
 }

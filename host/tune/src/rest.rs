@@ -10,6 +10,15 @@ use stiffwall_client::Client;
 /// Host time the device gets to come to rest, s ([`rest_position`]).
 pub const REST_WAIT_S: f64 = 20.0;
 
+/// Host time a telemetry batch is waited for before the waits look at their deadline again.
+pub const BATCH_WAIT: std::time::Duration = std::time::Duration::from_millis(200);
+
+/// Host time the servo gets to take a fault clear ([`clear_faults`]).
+pub const CLEAR_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Host time between two tries of [`clear_faults`].
+pub const CLEAR_RETRY: std::time::Duration = std::time::Duration::from_millis(5);
+
 /// Waits until the device (wall off) has stopped; returns its count from the wall position.
 ///
 /// # Errors
@@ -35,7 +44,7 @@ pub fn rest_position_within(c: &mut Client, seconds: f64) -> Result<i32> {
                 "the device did not come to rest within {seconds:.0} s"
             )));
         }
-        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+        if let Some(b) = c.next_batch(BATCH_WAIT)? {
             for x in &b.samples {
                 if x.count == last {
                     same += 1;
@@ -55,7 +64,7 @@ pub fn rest_position_within(c: &mut Client, seconds: f64) -> Result<i32> {
 /// Clears the latched faults and waits until the servo has taken the command (the device
 /// answers `GetFaults` from state the servo updates on its next tick).
 pub fn clear_faults(c: &mut Client) -> Result<()> {
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(2);
+    let deadline = std::time::Instant::now() + CLEAR_WAIT;
     loop {
         c.clear_faults()?;
         let f = c.faults()?;
@@ -69,6 +78,6 @@ pub fn clear_faults(c: &mut Client) -> Result<()> {
                 f.first_tick
             );
         }
-        std::thread::sleep(std::time::Duration::from_millis(5));
+        std::thread::sleep(CLEAR_RETRY);
     }
 }

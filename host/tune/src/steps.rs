@@ -8,8 +8,14 @@ use super::error::Result;
 use super::launch::Delivered;
 use super::progress::Progress;
 use super::release::Verdict;
-use super::settings::*;
-use super::verify::{min_settle_run, run_test, test_set, Judging, Test, TestResult, TestRun};
+use super::settings::{
+    Settings, CONFIRM_BACKOFF, CONFIRM_TRIES, DAMPED_TEST_MIN_TICKS, TEST_NATURAL_PERIODS,
+    TEST_TICKS,
+};
+use super::test_set::{
+    impact, min_settle_run, test_set, Test, WallSides, BOTH_SIDES_IMPACT_SHARES,
+};
+use super::verify::{run_test, Judging, TestResult, TestRun};
 use stiffwall_client::Client;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
@@ -208,7 +214,7 @@ impl Run<'_> {
     /// The impacts of a search step at `k` (above `k_force`, or with a damper): the first that
     /// fails, else [`Verdict::Settles`]. One side below `k_force` (the confirmation runs both);
     /// a damped wall through the bidirectional wall also at the verification's lower speeds
-    /// ([`super::verify::BOTH_SIDES_IMPACT_SHARES`]): its failing bands are narrow, and one at
+    /// ([`BOTH_SIDES_IMPACT_SHARES`]): its failing bands are narrow, and one at
     /// 0.8 v alone put maxon-re35-amp-3khz's frontier 1.27 × the truth's K*(B).
     fn step_impacts(
         &self,
@@ -224,7 +230,7 @@ impl Run<'_> {
             &[1.0, -1.0]
         };
         let shares: &[f64] = if base.damping > 0.0 && !self.one_sided_wall {
-            &super::verify::BOTH_SIDES_IMPACT_SHARES
+            &BOTH_SIDES_IMPACT_SHARES
         } else {
             &[1.0]
         };
@@ -243,11 +249,11 @@ impl Run<'_> {
             }
             let v_ticks = dir * self.v * self.period_s() / self.p.resolution;
             let sides = if self.one_sided_wall {
-                super::verify::WallSides::OneSided
+                WallSides::OneSided
             } else {
-                super::verify::WallSides::Both
+                WallSides::Both
             };
-            let test = super::verify::impact(v_ticks, self.natural_ticks(k), sides);
+            let test = impact(v_ticks, self.natural_ticks(k), sides);
             let why = if k > self.k_force {
                 "force saturates"
             } else {

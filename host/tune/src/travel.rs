@@ -482,7 +482,7 @@ fn watch_glide(c: &mut Client, walk: &Walk, push: &ServoConfig, seconds: f64) ->
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
     let (mut best, mut last, mut same) = (0i64, None::<i32>, 0usize);
     'watch: while std::time::Instant::now() <= deadline {
-        let Some(batch) = c.next_batch(std::time::Duration::from_millis(200))? else {
+        let Some(batch) = c.next_batch(super::rest::BATCH_WAIT)? else {
             continue;
         };
         for x in &batch.samples {
@@ -531,7 +531,7 @@ pub fn watch_rest(c: &mut Client, cfg: &ServoConfig, seconds: f64) -> Result<(bo
         if std::time::Instant::now() > deadline {
             break false;
         }
-        if let Some(b) = c.next_batch(std::time::Duration::from_millis(200))? {
+        if let Some(b) = c.next_batch(super::rest::BATCH_WAIT)? {
             for x in &b.samples {
                 if last == Some(x.count) {
                     same += 1;
