@@ -46,11 +46,17 @@ mod damper_monitor_tests;
 #[cfg(test)]
 mod excite_tests;
 #[cfg(test)]
+mod experiment_tests;
+#[cfg(test)]
+mod fault_tests;
+#[cfg(test)]
 mod fixture;
 #[cfg(test)]
-mod tests;
+mod spring_tests;
 #[cfg(test)]
 mod travel_tests;
+#[cfg(test)]
+mod wall_law_tests;
 
 // The monitor's bits are the protocol's fault bits, so the servo latches them unchanged.
 const _: () =
