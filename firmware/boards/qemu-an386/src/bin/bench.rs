@@ -24,10 +24,12 @@ use core::hint::black_box;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
+use stiffwall_firmware::channels::DecidedEnd;
 use stiffwall_firmware::{
-    Channels, Encoder, ForceOutput, Fx32, Fx64, Numeric, Servo, ServoCmd, F32,
+    BoardInfo, Channels, Encoder, ForceOutput, Fx32, Fx64, HostPort, Numeric, Servo, ServoCmd,
+    ServoEvent, F32,
 };
-use stiffwall_proto::{DamperLaw, ServoConfig};
+use stiffwall_proto::{DamperLaw, SafeMode, ServoConfig};
 
 const BATCHES: u32 = 40;
 const PER_BATCH: u32 = 200;
@@ -156,12 +158,33 @@ fn full<N: Numeric>(
     servo.tick(now, enc, out)
 }
 
+/// Every stage of back-end `N`: the undamped stages, the full tick with the damper, then the
+/// worst-tick run.
 fn stages<N: Numeric>(baseline: u64) {
     let board = stiffwall_board_qemu_an386::plant::board_info();
     let cfg = config();
+    let io = undamped_stages::<N>(board, &cfg, baseline);
+    // The same full tick with the virtual damper on (B > 0, the default law: a dead band of
+    // one count): the sweep moves two counts per tick, beyond the dead band, so the two-sided
+    // wall computes the damper term on every tick.
+    let damped = ServoConfig {
+        damping: DAMPING_N_S_PER_M,
+        ..cfg
+    };
+    if damped.damper != (DamperLaw::DeadBand { counts: 1 }) {
+        hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
+    }
+    let table2 = black_box(sweep_table(2));
+    damped_stage::<N>(board, &damped, &table2, io);
+    worst::<N>(board, &damped, &table2);
+}
+
+/// The stand-ins alone, then the spring, spring+delay, supervised and full ticks (B = 0) on
+/// the sweep of one count per tick. Returns the stand-ins' count, subtracted from every stage.
+fn undamped_stages<N: Numeric>(board: BoardInfo, cfg: &ServoConfig, baseline: u64) -> u64 {
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
-    let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
+    let mut servo: Servo<'_, N> = Servo::new(board, cfg, servo_port);
     let table = black_box(sweep_table(1));
     let (mut enc, mut out) = (
         Sweep {
@@ -202,13 +225,7 @@ fn stages<N: Numeric>(baseline: u64) {
         || {},
     );
     report("spring+delay+supervisor", N::NAME, c, baseline);
-    if host
-        .commands
-        .enqueue(ServoCmd::Stream { decimation: 1 })
-        .is_err()
-    {
-        hprintln!("BENCH-ERROR command queue full");
-    }
+    start_stream(&mut host);
     let c = measure(
         |t| {
             black_box(full(&mut servo, t, &mut enc, &mut out));
@@ -216,31 +233,35 @@ fn stages<N: Numeric>(baseline: u64) {
         || while host.telemetry.dequeue().is_some() {},
     );
     report("full(+telemetry)", N::NAME, c, baseline);
-    if servo.faults() != 0 {
-        hprintln!(
-            "BENCH-ERROR faults {:#x} latched during {}",
-            servo.faults(),
-            N::NAME
-        );
-    }
-    // The same full tick with the virtual damper on (B > 0, the default law: a dead band of
-    // one count): the sweep moves two counts per tick, beyond the dead band, so the two-sided
-    // wall computes the damper term on every tick.
-    let damped = ServoConfig {
-        damping: DAMPING_N_S_PER_M,
-        ..cfg
-    };
-    if damped.damper != (DamperLaw::DeadBand { counts: 1 }) {
-        hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
-    }
-    let table2 = black_box(sweep_table(2));
-    let mut enc = Sweep {
-        table: &table2,
-        i: 0,
-    };
+    check_no_faults(&servo, "");
+    io
+}
+
+/// The full tick with the damper (`damped`) on the sweep `table` of two counts per tick;
+/// `io`: the stand-ins' count.
+fn damped_stage<N: Numeric>(
+    board: BoardInfo,
+    damped: &ServoConfig,
+    table: &[u32; SWEEP_LEN],
+    io: u64,
+) {
+    let (mut enc, mut out) = (Sweep { table, i: 0 }, Sink);
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
-    let mut servo: Servo<'_, N> = Servo::new(board, &damped, servo_port);
+    let mut servo: Servo<'_, N> = Servo::new(board, damped, servo_port);
+    start_stream(&mut host);
+    let c = measure(
+        |t| {
+            black_box(full(&mut servo, t, &mut enc, &mut out));
+        },
+        || while host.telemetry.dequeue().is_some() {},
+    );
+    report("full+damper", N::NAME, c, io);
+    check_no_faults(&servo, " with the damper");
+}
+
+/// Queues telemetry at every tick (the full tick's push).
+fn start_stream(host: &mut HostPort<'_>) {
     if host
         .commands
         .enqueue(ServoCmd::Stream { decimation: 1 })
@@ -248,21 +269,19 @@ fn stages<N: Numeric>(baseline: u64) {
     {
         hprintln!("BENCH-ERROR command queue full");
     }
-    let c = measure(
-        |t| {
-            black_box(full(&mut servo, t, &mut enc, &mut out));
-        },
-        || while host.telemetry.dequeue().is_some() {},
-    );
-    report("full+damper", N::NAME, c, baseline);
+}
+
+/// A measured stage must latch no fault (the sweep stays within every limit); `what` ends the
+/// error line.
+fn check_no_faults<N: Numeric>(servo: &Servo<'_, N>, what: &str) {
     if servo.faults() != 0 {
         hprintln!(
-            "BENCH-ERROR faults {:#x} latched during {} with the damper",
+            "BENCH-ERROR faults {:#x} latched during {}{}",
             servo.faults(),
-            N::NAME
+            N::NAME,
+            what
         );
     }
-    worst::<N>(board, &damped, &table2);
 }
 
 /// The worst tick's encoder: the sweep shifted by `offset` counts (a jump), or held still at
@@ -344,16 +363,66 @@ const AT_CLEAR: u32 = 13_000;
 /// runs a prepared release and a prepared impact test (each with its own config and a decided
 /// end), latches a fault and clears it; every tick timed alone (`window`), the per-tick
 /// stand-ins (the call, `io_script`) subtracted. Prints one `BENCH-TICK` line per phase.
-fn worst<N: Numeric>(
-    board: stiffwall_firmware::BoardInfo,
-    damped: &ServoConfig,
-    table: &[u32; SWEEP_LEN],
-) {
-    use stiffwall_firmware::channels::DecidedEnd;
-    use stiffwall_firmware::ServoEvent;
-    use stiffwall_proto::SafeMode;
-    // The supervisor on every path: a jump limit the sweep stays under, safe-mode damping after
-    // a fault, the heartbeat watchdog armed (it runs during tests; the run is shorter than it).
+fn worst<N: Numeric>(board: BoardInfo, damped: &ServoConfig, table: &[u32; SWEEP_LEN]) {
+    let (cfg, changed, end) = worst_configs(damped);
+    let mut channels = Channels::new();
+    let (servo_port, mut host) = channels.split();
+    let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
+    let mut enc = Script {
+        table,
+        i: 0,
+        offset: 0,
+        still: None,
+    };
+    let mut out = Sink;
+    let io = io_window(&mut enc, &mut out);
+    start_stream(&mut host);
+    let mut run = WorstRun::default();
+    for t in 0..WORST_TICKS {
+        // Unmeasured: the main loop's side (queue a command, move the device).
+        let cmd = worst_command(t, &mut enc, changed, end);
+        if t == AT_JUMP {
+            enc.offset = 5000;
+        }
+        let queued = cmd.is_some();
+        if let Some(c) = cmd {
+            if host.commands.enqueue(c).is_err() {
+                hprintln!("BENCH-ERROR command queue full");
+            }
+        }
+        let (faults_before, running_before) = (servo.faults(), servo.experiment_running());
+        let ns = window(|| {
+            black_box(full_script(&mut servo, t, &mut enc, &mut out));
+        });
+        while host.telemetry.dequeue().is_some() {}
+        let mut ended = false;
+        while let Some(ServoEvent::ExperimentDone { .. }) = host.events.dequeue() {
+            ended = true;
+            run.tests_done += 1;
+            // Back to the sweep once a test is over.
+            enc.still = None;
+        }
+        let phase = match (queued, t) {
+            (_, 0) => FIRST,
+            (true, AT_CONFIG) => CONFIG,
+            (true, AT_RELEASE | AT_IMPACT) => PREPARED_START,
+            (true, AT_CLEAR) => CLEAR,
+            _ if ended => TEST_END,
+            _ if faults_before == 0 && servo.faults() != 0 => FAULT,
+            _ if faults_before != 0 => FAULTED,
+            _ if running_before => EXPERIMENT,
+            _ => WALL,
+        };
+        run.record(phase, ns.saturating_sub(io), t);
+    }
+    run.report::<N>(servo.faults());
+}
+
+/// The worst-tick run's configs, from the damped sweep's: the active one (the supervisor on
+/// every path: a jump limit the sweep stays under, safe-mode damping after a fault, the
+/// heartbeat watchdog armed: it runs during tests; the run is shorter than it), the changed
+/// one (K × 1.5, B × 0.5), and the prepared tests' decided end (their own config, K × 0.8).
+fn worst_configs(damped: &ServoConfig) -> (ServoConfig, ServoConfig, DecidedEnd) {
     let cfg = ServoConfig {
         encoder_jump_counts: 1000,
         safe_mode: SafeMode::Damping,
@@ -377,119 +446,98 @@ fn worst<N: Numeric>(
         run: test_cfg,
         park: changed,
     };
-    let mut channels = Channels::new();
-    let (servo_port, mut host) = channels.split();
-    let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
-    let mut enc = Script {
-        table,
-        i: 0,
-        offset: 0,
-        still: None,
-    };
-    let mut out = Sink;
-    // The per-tick window around the stand-ins alone: the least of many (its true cost is fixed;
-    // the least reading subtracts least, so a phase's figure errs high, never low).
+    (cfg, changed, end)
+}
+
+/// The per-tick window around the stand-ins alone: the least of many (its true cost is fixed;
+/// the least reading subtracts least, so a phase's figure errs high, never low).
+fn io_window(enc: &mut Script<'_>, out: &mut Sink) -> u64 {
     let mut io = u64::MAX;
     for _ in 0..256 {
         io = io.min(window(|| {
-            black_box(io_script(&mut enc, &mut out));
+            black_box(io_script(enc, out));
         }));
     }
-    if host
-        .commands
-        .enqueue(ServoCmd::Stream { decimation: 1 })
-        .is_err()
-    {
-        hprintln!("BENCH-ERROR command queue full");
+    io
+}
+
+/// The command the main loop queues at tick `t` of the worst-tick run (holding the encoder
+/// still for a test's hold), if any.
+fn worst_command(
+    t: u32,
+    enc: &mut Script<'_>,
+    changed: ServoConfig,
+    end: DecidedEnd,
+) -> Option<ServoCmd> {
+    match t {
+        AT_CONFIG => Some(ServoCmd::Config(changed)),
+        AT_RELEASE => {
+            // A device at rest 20 counts into the wall: the hold settles, the release runs
+            // until the decided end (still for `min_run` ticks).
+            enc.still = Some(20);
+            Some(ServoCmd::Release {
+                deflection: 20,
+                ticks: 2000,
+                end: Some(end),
+            })
+        }
+        AT_IMPACT => {
+            // At rest 30 counts out: the hold settles, the launch moves its target toward
+            // the wall; the device stays, so the launch's time limit releases it.
+            enc.still = Some((-30i32) as u32 & 0xffff);
+            Some(ServoCmd::Impact {
+                start: -30,
+                velocity_milli: 2000,
+                ticks: 2000,
+                end: Some(end),
+            })
+        }
+        AT_CLEAR => Some(ServoCmd::ClearFaults),
+        _ => None,
     }
-    let mut worst = [(0u64, 0u32); WORST_PHASES.len()];
-    let mut seen = [0u32; WORST_PHASES.len()];
-    let mut tests_done = 0;
-    for t in 0..WORST_TICKS {
-        // Unmeasured: the main loop's side (queue a command, move the device).
-        let cmd = match t {
-            AT_CONFIG => Some(ServoCmd::Config(changed)),
-            AT_RELEASE => {
-                // A device at rest 20 counts into the wall: the hold settles, the release runs
-                // until the decided end (still for `min_run` ticks).
-                enc.still = Some(20);
-                Some(ServoCmd::Release {
-                    deflection: 20,
-                    ticks: 2000,
-                    end: Some(end),
-                })
-            }
-            AT_IMPACT => {
-                // At rest 30 counts out: the hold settles, the launch moves its target toward
-                // the wall; the device stays, so the launch's time limit releases it.
-                enc.still = Some((-30i32) as u32 & 0xffff);
-                Some(ServoCmd::Impact {
-                    start: -30,
-                    velocity_milli: 2000,
-                    ticks: 2000,
-                    end: Some(end),
-                })
-            }
-            AT_CLEAR => Some(ServoCmd::ClearFaults),
-            _ => None,
-        };
-        if t == AT_JUMP {
-            enc.offset = 5000;
-        }
-        let queued = cmd.is_some();
-        if let Some(c) = cmd {
-            if host.commands.enqueue(c).is_err() {
-                hprintln!("BENCH-ERROR command queue full");
-            }
-        }
-        let (faults_before, running_before) = (servo.faults(), servo.experiment_running());
-        let ns = window(|| {
-            black_box(full_script(&mut servo, t, &mut enc, &mut out));
-        });
-        while host.telemetry.dequeue().is_some() {}
-        let mut ended = false;
-        while let Some(ServoEvent::ExperimentDone { .. }) = host.events.dequeue() {
-            ended = true;
-            tests_done += 1;
-            // Back to the sweep once a test is over.
-            enc.still = None;
-        }
-        let phase = match (queued, t) {
-            (_, 0) => FIRST,
-            (true, AT_CONFIG) => CONFIG,
-            (true, AT_RELEASE | AT_IMPACT) => PREPARED_START,
-            (true, AT_CLEAR) => CLEAR,
-            _ if ended => TEST_END,
-            _ if faults_before == 0 && servo.faults() != 0 => FAULT,
-            _ if faults_before != 0 => FAULTED,
-            _ if running_before => EXPERIMENT,
-            _ => WALL,
-        };
-        seen[phase] += 1;
-        let ns = ns.saturating_sub(io);
-        if ns > worst[phase].0 {
-            worst[phase] = (ns, t);
+}
+
+/// The worst-tick run's tally: per phase the longest tick (virtual ns, its tick) and the
+/// phase's ticks; the tests that ended.
+#[derive(Default)]
+struct WorstRun {
+    worst: [(u64, u32); WORST_PHASES.len()],
+    seen: [u32; WORST_PHASES.len()],
+    tests_done: u32,
+}
+
+impl WorstRun {
+    /// Tick `t` of `phase` took `ns` virtual ns (the stand-ins subtracted).
+    fn record(&mut self, phase: usize, ns: u64, t: u32) {
+        self.seen[phase] += 1;
+        if ns > self.worst[phase].0 {
+            self.worst[phase] = (ns, t);
         }
     }
-    if tests_done != 2 || servo.faults() != 0 || seen.contains(&0) {
-        hprintln!(
-            "BENCH-ERROR worst-tick run of {}: {} tests ended (2 expected), faults {:#x} at the end, ticks per phase {:?}",
-            N::NAME,
-            tests_done,
-            servo.faults(),
-            seen
-        );
-    }
-    // `BENCH-TICK <phase> <numeric> <ns of its longest tick> <that tick> <ticks in the phase>`.
-    for (i, name) in WORST_PHASES.iter().enumerate() {
-        hprintln!(
-            "BENCH-TICK {} {} {} {} {}",
-            name,
-            N::NAME,
-            worst[i].0,
-            worst[i].1,
-            seen[i]
-        );
+
+    /// Checks the run (two tests ended, no fault left, every phase seen; `faults`: the servo's
+    /// at the end) and prints one `BENCH-TICK` line per phase.
+    fn report<N: Numeric>(&self, faults: u32) {
+        if self.tests_done != 2 || faults != 0 || self.seen.contains(&0) {
+            hprintln!(
+                "BENCH-ERROR worst-tick run of {}: {} tests ended (2 expected), faults {:#x} at the end, ticks per phase {:?}",
+                N::NAME,
+                self.tests_done,
+                faults,
+                self.seen
+            );
+        }
+        // `BENCH-TICK <phase> <numeric> <ns of its longest tick> <that tick> <ticks in the phase>`.
+        for (i, name) in WORST_PHASES.iter().enumerate() {
+            hprintln!(
+                "BENCH-TICK {} {} {} {} {}",
+                name,
+                N::NAME,
+                self.worst[i].0,
+                self.worst[i].1,
+                self.seen[i]
+            );
+        }
     }
 }
 
