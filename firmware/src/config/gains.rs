@@ -8,7 +8,7 @@
 use super::limits::{
     MAX_COARSEN_SHIFT, MAX_DEADBAND_COUNTS, MAX_DELAY_TICKS, MAX_LIMIT_CODES, VEL_WINDOW,
 };
-use super::BoardInfo;
+use super::board::BoardInfo;
 use crate::numeric::{AbsBound, Numeric, RangeBound, Shift, DAMPER_V_MAX};
 use stiffwall_proto::{DamperLaw, ServoConfig, WallMode};
 

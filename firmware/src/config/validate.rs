@@ -11,7 +11,7 @@ use super::limits::{
     MIN_DELAY_TICKS, MIN_ENERGY_J, MIN_GROWTH_CYCLES, MIN_HEARTBEAT_MS, MIN_JUMP_COUNTS,
     MIN_STIFFNESS, MIN_VELOCITY,
 };
-use super::BoardInfo;
+use super::board::BoardInfo;
 use stiffwall_proto::{ConfigField, DamperLaw, ServoConfig};
 
 /// A refused configuration: the field and its allowed range.
