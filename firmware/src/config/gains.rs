@@ -5,10 +5,10 @@
 //! [`super::validate`]; out-of-range values saturate, never wrap or panic. Derived in `f64`
 //! once per config change, never in a tick without one.
 
+use super::board::BoardInfo;
 use super::limits::{
     MAX_COARSEN_SHIFT, MAX_DEADBAND_COUNTS, MAX_DELAY_TICKS, MAX_LIMIT_CODES, VEL_WINDOW,
 };
-use super::board::BoardInfo;
 use crate::numeric::{AbsBound, Numeric, RangeBound, Shift, DAMPER_V_MAX};
 use stiffwall_proto::{DamperLaw, ServoConfig, WallMode};
 

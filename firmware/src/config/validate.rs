@@ -5,13 +5,13 @@
 //! Invariant: a refused config reports the first offending field (in the order below) with its
 //! allowed inclusive `[min, max]`; nothing else is changed.
 
+use super::board::BoardInfo;
 use super::limits::{
     MAX_COARSEN_SHIFT, MAX_DEADBAND_COUNTS, MAX_DELAY_TICKS, MAX_ENERGY_J, MAX_GROWTH_CYCLES,
     MAX_HEARTBEAT_MS, MAX_JUMP_COUNTS, MIN_COARSEN_SHIFT, MIN_DAMPING, MIN_DEADBAND_COUNTS,
     MIN_DELAY_TICKS, MIN_ENERGY_J, MIN_GROWTH_CYCLES, MIN_HEARTBEAT_MS, MIN_JUMP_COUNTS,
     MIN_STIFFNESS, MIN_VELOCITY,
 };
-use super::board::BoardInfo;
 use stiffwall_proto::{ConfigField, DamperLaw, ServoConfig};
 
 /// A refused configuration: the field and its allowed range.

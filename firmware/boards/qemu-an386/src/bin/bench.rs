@@ -158,33 +158,12 @@ fn full<N: Numeric>(
     servo.tick(now, enc, out)
 }
 
-/// Every stage of back-end `N`: the undamped stages, the full tick with the damper, then the
-/// worst-tick run.
 fn stages<N: Numeric>(baseline: u64) {
     let board = stiffwall_board_qemu_an386::plant::board_info();
     let cfg = config();
-    let io = undamped_stages::<N>(board, &cfg, baseline);
-    // The same full tick with the virtual damper on (B > 0, the default law: a dead band of
-    // one count): the sweep moves two counts per tick, beyond the dead band, so the two-sided
-    // wall computes the damper term on every tick.
-    let damped = ServoConfig {
-        damping: DAMPING_N_S_PER_M,
-        ..cfg
-    };
-    if damped.damper != (DamperLaw::DeadBand { counts: 1 }) {
-        hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
-    }
-    let table2 = black_box(sweep_table(2));
-    damped_stage::<N>(board, &damped, &table2, io);
-    worst::<N>(board, &damped, &table2);
-}
-
-/// The stand-ins alone, then the spring, spring+delay, supervised and full ticks (B = 0) on
-/// the sweep of one count per tick. Returns the stand-ins' count, subtracted from every stage.
-fn undamped_stages<N: Numeric>(board: BoardInfo, cfg: &ServoConfig, baseline: u64) -> u64 {
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
-    let mut servo: Servo<'_, N> = Servo::new(board, cfg, servo_port);
+    let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
     let table = black_box(sweep_table(1));
     let (mut enc, mut out) = (
         Sweep {
@@ -234,21 +213,15 @@ fn undamped_stages<N: Numeric>(board: BoardInfo, cfg: &ServoConfig, baseline: u6
     );
     report("full(+telemetry)", N::NAME, c, baseline);
     check_no_faults(&servo, "");
-    io
-}
-
-/// The full tick with the damper (`damped`) on the sweep `table` of two counts per tick;
-/// `io`: the stand-ins' count.
-fn damped_stage<N: Numeric>(
-    board: BoardInfo,
-    damped: &ServoConfig,
-    table: &[u32; SWEEP_LEN],
-    io: u64,
-) {
-    let (mut enc, mut out) = (Sweep { table, i: 0 }, Sink);
+    let damped = damped_config(&cfg);
+    let table2 = black_box(sweep_table(2));
+    let mut enc = Sweep {
+        table: &table2,
+        i: 0,
+    };
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
-    let mut servo: Servo<'_, N> = Servo::new(board, damped, servo_port);
+    let mut servo: Servo<'_, N> = Servo::new(board, &damped, servo_port);
     start_stream(&mut host);
     let c = measure(
         |t| {
@@ -256,8 +229,23 @@ fn damped_stage<N: Numeric>(
         },
         || while host.telemetry.dequeue().is_some() {},
     );
-    report("full+damper", N::NAME, c, io);
+    report("full+damper", N::NAME, c, baseline);
     check_no_faults(&servo, " with the damper");
+    worst::<N>(board, &damped, &table2);
+}
+
+/// The same config with the virtual damper on (B > 0, the default law: a dead band of one
+/// count): the sweep moves two counts per tick, beyond the dead band, so the two-sided wall
+/// computes the damper term on every tick.
+fn damped_config(cfg: &ServoConfig) -> ServoConfig {
+    let damped = ServoConfig {
+        damping: DAMPING_N_S_PER_M,
+        ..*cfg
+    };
+    if damped.damper != (DamperLaw::DeadBand { counts: 1 }) {
+        hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
+    }
+    damped
 }
 
 /// Queues telemetry at every tick (the full tick's push).
@@ -363,6 +351,9 @@ const AT_CLEAR: u32 = 13_000;
 /// runs a prepared release and a prepared impact test (each with its own config and a decided
 /// end), latches a fault and clears it; every tick timed alone (`window`), the per-tick
 /// stand-ins (the call, `io_script`) subtracted. Prints one `BENCH-TICK` line per phase.
+/// (Its configs, commands and report are functions of their own since the run was written out
+/// in one: the timed window around the call then holds 5 more of this bench's instructions
+/// for I32F32, 3 to 5 for the others; the servo's code is the same.)
 fn worst<N: Numeric>(board: BoardInfo, damped: &ServoConfig, table: &[u32; SWEEP_LEN]) {
     let (cfg, changed, end) = worst_configs(damped);
     let mut channels = Channels::new();
@@ -375,9 +366,18 @@ fn worst<N: Numeric>(board: BoardInfo, damped: &ServoConfig, table: &[u32; SWEEP
         still: None,
     };
     let mut out = Sink;
-    let io = io_window(&mut enc, &mut out);
+    // The per-tick window around the stand-ins alone: the least of many (its true cost is fixed;
+    // the least reading subtracts least, so a phase's figure errs high, never low).
+    let mut io = u64::MAX;
+    for _ in 0..256 {
+        io = io.min(window(|| {
+            black_box(io_script(&mut enc, &mut out));
+        }));
+    }
     start_stream(&mut host);
-    let mut run = WorstRun::default();
+    let mut worst = [(0u64, 0u32); WORST_PHASES.len()];
+    let mut seen = [0u32; WORST_PHASES.len()];
+    let mut tests_done = 0;
     for t in 0..WORST_TICKS {
         // Unmeasured: the main loop's side (queue a command, move the device).
         let cmd = worst_command(t, &mut enc, changed, end);
@@ -398,7 +398,7 @@ fn worst<N: Numeric>(board: BoardInfo, damped: &ServoConfig, table: &[u32; SWEEP
         let mut ended = false;
         while let Some(ServoEvent::ExperimentDone { .. }) = host.events.dequeue() {
             ended = true;
-            run.tests_done += 1;
+            tests_done += 1;
             // Back to the sweep once a test is over.
             enc.still = None;
         }
@@ -413,9 +413,13 @@ fn worst<N: Numeric>(board: BoardInfo, damped: &ServoConfig, table: &[u32; SWEEP
             _ if running_before => EXPERIMENT,
             _ => WALL,
         };
-        run.record(phase, ns.saturating_sub(io), t);
+        seen[phase] += 1;
+        let ns = ns.saturating_sub(io);
+        if ns > worst[phase].0 {
+            worst[phase] = (ns, t);
+        }
     }
-    run.report::<N>(servo.faults());
+    report_worst::<N>(&worst, &seen, tests_done, servo.faults());
 }
 
 /// The worst-tick run's configs, from the damped sweep's: the active one (the supervisor on
@@ -447,18 +451,6 @@ fn worst_configs(damped: &ServoConfig) -> (ServoConfig, ServoConfig, DecidedEnd)
         park: changed,
     };
     (cfg, changed, end)
-}
-
-/// The per-tick window around the stand-ins alone: the least of many (its true cost is fixed;
-/// the least reading subtracts least, so a phase's figure errs high, never low).
-fn io_window(enc: &mut Script<'_>, out: &mut Sink) -> u64 {
-    let mut io = u64::MAX;
-    for _ in 0..256 {
-        io = io.min(window(|| {
-            black_box(io_script(enc, out));
-        }));
-    }
-    io
 }
 
 /// The command the main loop queues at tick `t` of the worst-tick run (holding the encoder
@@ -497,47 +489,34 @@ fn worst_command(
     }
 }
 
-/// The worst-tick run's tally: per phase the longest tick (virtual ns, its tick) and the
-/// phase's ticks; the tests that ended.
-#[derive(Default)]
-struct WorstRun {
-    worst: [(u64, u32); WORST_PHASES.len()],
-    seen: [u32; WORST_PHASES.len()],
+/// Checks the worst-tick run (two tests ended, no fault left at the end (`faults`), every
+/// phase seen) and prints one `BENCH-TICK` line per phase: its longest tick (virtual ns, the
+/// tick) and its ticks.
+fn report_worst<N: Numeric>(
+    worst: &[(u64, u32); WORST_PHASES.len()],
+    seen: &[u32; WORST_PHASES.len()],
     tests_done: u32,
-}
-
-impl WorstRun {
-    /// Tick `t` of `phase` took `ns` virtual ns (the stand-ins subtracted).
-    fn record(&mut self, phase: usize, ns: u64, t: u32) {
-        self.seen[phase] += 1;
-        if ns > self.worst[phase].0 {
-            self.worst[phase] = (ns, t);
-        }
+    faults: u32,
+) {
+    if tests_done != 2 || faults != 0 || seen.contains(&0) {
+        hprintln!(
+            "BENCH-ERROR worst-tick run of {}: {} tests ended (2 expected), faults {:#x} at the end, ticks per phase {:?}",
+            N::NAME,
+            tests_done,
+            faults,
+            seen
+        );
     }
-
-    /// Checks the run (two tests ended, no fault left, every phase seen; `faults`: the servo's
-    /// at the end) and prints one `BENCH-TICK` line per phase.
-    fn report<N: Numeric>(&self, faults: u32) {
-        if self.tests_done != 2 || faults != 0 || self.seen.contains(&0) {
-            hprintln!(
-                "BENCH-ERROR worst-tick run of {}: {} tests ended (2 expected), faults {:#x} at the end, ticks per phase {:?}",
-                N::NAME,
-                self.tests_done,
-                faults,
-                self.seen
-            );
-        }
-        // `BENCH-TICK <phase> <numeric> <ns of its longest tick> <that tick> <ticks in the phase>`.
-        for (i, name) in WORST_PHASES.iter().enumerate() {
-            hprintln!(
-                "BENCH-TICK {} {} {} {} {}",
-                name,
-                N::NAME,
-                self.worst[i].0,
-                self.worst[i].1,
-                self.seen[i]
-            );
-        }
+    // `BENCH-TICK <phase> <numeric> <ns of its longest tick> <that tick> <ticks in the phase>`.
+    for (i, name) in WORST_PHASES.iter().enumerate() {
+        hprintln!(
+            "BENCH-TICK {} {} {} {} {}",
+            name,
+            N::NAME,
+            worst[i].0,
+            worst[i].1,
+            seen[i]
+        );
     }
 }
 
