@@ -103,17 +103,16 @@ impl<S: ConfigStorage> Device<'_, S> {
             next_seq,
         }) = self.pending_event
         {
-            if seq_reached(self.next_seq, next_seq)
-                && self.batch.samples.is_empty()
-                && self.reply_room()
-            {
+            // Every sample of the experiment has been collected.
+            let collected = seq_reached(self.next_seq, next_seq);
+            if collected && self.batch.samples.is_empty() && self.reply_room() {
                 let _ = self.replies.push_back(DeviceMsg::ExperimentDone {
                     kind,
                     completed,
                     faults,
                 });
                 self.pending_event = None;
-            } else if seq_reached(self.next_seq, next_seq) {
+            } else if collected {
                 self.batch_cut = true;
             }
         }
