@@ -28,10 +28,10 @@
 //! forces, advance and end) and `commands` (the one command taken per tick).
 
 use crate::channels::{DecidedEnd, ServoCmd, ServoEvent, ServoPort, TelemetryItem};
-use crate::config::{BoardInfo, Gains, Shift, VEL_WINDOW};
+use crate::config::{BoardInfo, Gains, VEL_WINDOW};
 use crate::experiment::{EndWatch, Excitation, Experiment, Hold, Launch, Mode};
 use crate::hal::{Encoder, ForceOutput};
-use crate::numeric::{Fx64, Numeric};
+use crate::numeric::{Fx64, Numeric, Shift};
 use core::sync::atomic::Ordering;
 use stiffwall_core::monitor::{self, energy_e8_u32, EnergyMonitor};
 use stiffwall_proto::{fault, flags, ExperimentKind, Sample, ServoConfig, MAX_TABLE};

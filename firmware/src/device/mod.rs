@@ -73,16 +73,17 @@ struct RejectedRun {
     count: u32,
 }
 
-/// The next test as `PrepareTest` prepared it.
+/// The next test as `PrepareTest` prepared it (the servo's [`crate::channels::DecidedEnd`]
+/// once the test starts, with the active config to park).
 #[derive(Debug, Clone, Copy)]
 struct EndRule {
-    /// The config the test runs with.
+    /// The test's config, applied on the tick it starts.
     config: ServoConfig,
-    /// Shortest run at rest that ends the test, ticks.
+    /// Shortest settled run, ticks (0: no settled end).
     min_run: u32,
-    /// At rest means within one count (else: not moving).
+    /// A toggle between neighbouring counts counts as settled.
     one_count: bool,
-    /// Decay base, ticks.
+    /// Base length of the decay checkpoints, ticks (0: none).
     decay_base: u32,
 }
 
