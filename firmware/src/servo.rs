@@ -18,7 +18,7 @@
 //! Invariants: `tick*` never allocates, blocks or panics (no indexing that can fail: the ring
 //! buffers are indexed with a power-of-two mask); it does at most one command per tick and
 //! bounded work. Time is only the `now` argument. It is the single producer of the telemetry
-//! and event queues and the single consumer of the command queue ([`Channels`]).
+//! and event queues and the single consumer of the command queue ([`Channels`](crate::Channels)).
 //!
 //! Layout: the channels are [`crate::channels`], the experiments (hold/release, excitation
 //! generators) [`crate::experiment`], the energy monitor `stiffwall_core::monitor` (the
