@@ -12,8 +12,13 @@
 //!   saturated to `i32` first. Cheaper on a 32-bit core; coarser gain.
 //! - [`F32`]: `f32` gain and product (single-precision FPU on the M4F); `m` beyond 2^24 loses
 //!   precision. For the instruction-count comparison.
+//!
+//! Beside them the servo's integer helpers: [`Shift`] (a shift amount 0..=31 the compiler
+//! knows the range of), [`AbsBound`] (`|x| > t`) and [`RangeBound`] (x outside [lo, hi]),
+//! each one unsigned compare in the tick, exact for every `i32`.
 
 use fixed::types::{I16F16, I32F32};
+use stiffwall_proto::ServoConfig;
 
 /// Velocity clamp of the damping terms, effective counts per tick: the damper's code is
 /// `−g·clamp(dn, ±DAMPER_V_MAX)`, which keeps gain × velocity below 2^30 codes (g ≤ 2^16).
@@ -236,9 +241,177 @@ impl Numeric for F32 {
     }
 }
 
+/// A shift amount 0..=31. Its type tells the compiler the range, so shifting by it needs no
+/// `& 31` mask (`wrapping_shl`/`wrapping_shr` by a plain `u32` do).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u8)]
+#[allow(missing_docs)]
+pub enum Shift {
+    #[default]
+    S0,
+    S1,
+    S2,
+    S3,
+    S4,
+    S5,
+    S6,
+    S7,
+    S8,
+    S9,
+    S10,
+    S11,
+    S12,
+    S13,
+    S14,
+    S15,
+    S16,
+    S17,
+    S18,
+    S19,
+    S20,
+    S21,
+    S22,
+    S23,
+    S24,
+    S25,
+    S26,
+    S27,
+    S28,
+    S29,
+    S30,
+    S31,
+}
+
+impl Shift {
+    const ALL: [Shift; 32] = [
+        Shift::S0,
+        Shift::S1,
+        Shift::S2,
+        Shift::S3,
+        Shift::S4,
+        Shift::S5,
+        Shift::S6,
+        Shift::S7,
+        Shift::S8,
+        Shift::S9,
+        Shift::S10,
+        Shift::S11,
+        Shift::S12,
+        Shift::S13,
+        Shift::S14,
+        Shift::S15,
+        Shift::S16,
+        Shift::S17,
+        Shift::S18,
+        Shift::S19,
+        Shift::S20,
+        Shift::S21,
+        Shift::S22,
+        Shift::S23,
+        Shift::S24,
+        Shift::S25,
+        Shift::S26,
+        Shift::S27,
+        Shift::S28,
+        Shift::S29,
+        Shift::S30,
+        Shift::S31,
+    ];
+
+    /// The shift `s`, saturated to 31.
+    #[must_use]
+    pub fn new(s: u32) -> Self {
+        *Self::ALL.get(s.min(31) as usize).unwrap_or(&Shift::S31)
+    }
+
+    /// The amount.
+    #[inline]
+    #[must_use]
+    pub fn get(self) -> u32 {
+        self as u32
+    }
+}
+
+/// The test `|x| > t` for every `i32` x as one unsigned compare,
+/// `(x as u32).wrapping_add(bias) > span`: for t < 2^31, bias = t and span = 2t (x + t lands in
+/// 0..=2t exactly when −t ≤ x ≤ t, and wraps above 2t when x < −t); for t ≥ 2^31 no |x|
+/// exceeds t, and span = `u32::MAX` is never exceeded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AbsBound {
+    bias: u32,
+    span: u32,
+}
+
+impl AbsBound {
+    /// The bound for threshold `t`.
+    #[must_use]
+    pub const fn new(t: u32) -> Self {
+        if t < 1 << 31 {
+            Self {
+                bias: t,
+                span: 2 * t,
+            }
+        } else {
+            Self {
+                bias: 0,
+                span: u32::MAX,
+            }
+        }
+    }
+
+    /// `|x| > t`.
+    #[inline(always)]
+    #[must_use]
+    pub fn exceeded(self, x: i32) -> bool {
+        (x as u32).wrapping_add(self.bias) > self.span
+    }
+}
+
+/// The test "x outside [lo, hi]" for every `i32` x as one unsigned compare,
+/// `(x as u32).wrapping_sub(lo as u32) > span` with span = hi − lo (as `u32`): x − lo, taken
+/// modulo 2^32, lies in 0..=span exactly when lo ≤ x ≤ hi, and wraps above span when x < lo.
+/// The full `i32` range (lo = `i32::MIN`, span = `u32::MAX`) is never left: a window that is
+/// off costs the same one compare.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RangeBound {
+    lo: i32,
+    span: u32,
+}
+
+impl RangeBound {
+    /// The window [`lo`, `hi`] (lo ≤ hi; a reversed pair gives the empty-but-for-`lo` window
+    /// [lo, lo], never a wrapped one).
+    #[must_use]
+    pub const fn new(lo: i32, hi: i32) -> Self {
+        let hi = if hi < lo { lo } else { hi };
+        Self {
+            lo,
+            span: (hi as u32).wrapping_sub(lo as u32),
+        }
+    }
+
+    /// The travel window of a config: `travel_min` (`i32::MIN` when `None`) to `travel_max`
+    /// (`i32::MAX` when `None`).
+    #[must_use]
+    pub fn travel(cfg: &ServoConfig) -> Self {
+        Self::new(
+            cfg.travel_min.unwrap_or(i32::MIN),
+            cfg.travel_max.unwrap_or(i32::MAX),
+        )
+    }
+
+    /// `x` < lo or `x` > hi.
+    #[inline(always)]
+    #[must_use]
+    pub fn outside(self, x: i32) -> bool {
+        (x as u32).wrapping_sub(self.lo as u32) > self.span
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     #[test]
     fn rounding_and_saturation() {
@@ -301,6 +474,95 @@ mod tests {
                 check_damper::<Fx64>(b);
                 check_damper::<Fx32>(b);
                 check_damper::<F32>(b);
+            }
+        }
+    }
+
+    fn check_abs_bound(x: i32, t: u32) -> Result<(), TestCaseError> {
+        prop_assert_eq!(
+            AbsBound::new(t).exceeded(x),
+            x.unsigned_abs() > t,
+            "x = {}, t = {}",
+            x,
+            t
+        );
+        Ok(())
+    }
+
+    #[test]
+    fn abs_bound_at_the_edges() {
+        let edges = [
+            0u32,
+            1,
+            2,
+            (1 << 30) - 1,
+            1 << 30,
+            (1 << 31) - 1,
+            1 << 31,
+            u32::MAX,
+        ];
+        for &t in &edges {
+            for x in [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX - 1, i32::MAX] {
+                check_abs_bound(x, t).unwrap();
+            }
+            for dx in [-1i64, 0, 1] {
+                for x in [i64::from(t) + dx, -i64::from(t) + dx] {
+                    if let Ok(x) = i32::try_from(x) {
+                        check_abs_bound(x, t).unwrap();
+                    }
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn abs_bound_is_the_abs_test(x in any::<i32>(), t in any::<u32>(), small in 0u32..1000, near in -1000i32..1000) {
+            for t in [t, small] {
+                for x in [x, near] {
+                    check_abs_bound(x, t)?;
+                }
+            }
+        }
+    }
+
+    fn check_range_bound(x: i32, lo: i32, hi: i32) -> Result<(), TestCaseError> {
+        let (lo, hi) = (lo.min(hi), lo.max(hi));
+        prop_assert_eq!(
+            RangeBound::new(lo, hi).outside(x),
+            x < lo || x > hi,
+            "x = {}, [{}, {}]",
+            x,
+            lo,
+            hi
+        );
+        Ok(())
+    }
+
+    #[test]
+    fn range_bound_at_the_edges() {
+        let edges = [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX - 1, i32::MAX];
+        for &lo in &edges {
+            for &hi in &edges {
+                for &x in &edges {
+                    check_range_bound(x, lo, hi).unwrap();
+                }
+            }
+        }
+        // The full range is never left.
+        assert!(edges
+            .iter()
+            .all(|&x| !RangeBound::new(i32::MIN, i32::MAX).outside(x)));
+        // A reversed pair is [lo, lo], never a wrapped window.
+        assert!(!RangeBound::new(5, 4).outside(5) && RangeBound::new(5, 4).outside(4));
+    }
+
+    proptest! {
+        #[test]
+        fn range_bound_is_the_interval_test(x in any::<i32>(), lo in any::<i32>(), hi in any::<i32>(), near in -1000i32..1000, small in -1000i32..1000) {
+            for x in [x, near, lo, hi, lo.wrapping_sub(1), hi.wrapping_add(1)] {
+                check_range_bound(x, lo, hi)?;
+                check_range_bound(x, small, small.saturating_add(near.abs()))?;
             }
         }
     }

@@ -18,7 +18,7 @@
 //! Invariants: `tick*` never allocates, blocks or panics (no indexing that can fail: the ring
 //! buffers are indexed with a power-of-two mask); it does at most one command per tick and
 //! bounded work. Time is only the `now` argument. It is the single producer of the telemetry
-//! and event queues and the single consumer of the command queue ([`Channels`]).
+//! and event queues and the single consumer of the command queue ([`Channels`](crate::Channels)).
 //!
 //! Layout: the channels are [`crate::channels`], the experiments (hold/release, excitation
 //! generators) [`crate::experiment`], the energy monitor `stiffwall_core::monitor` (the
@@ -28,10 +28,10 @@
 //! forces, advance and end) and `commands` (the one command taken per tick).
 
 use crate::channels::{DecidedEnd, ServoCmd, ServoEvent, ServoPort, TelemetryItem};
-use crate::config::{BoardInfo, Gains, Shift, VEL_WINDOW};
+use crate::config::{BoardInfo, Gains, VEL_WINDOW};
 use crate::experiment::{EndWatch, Excitation, Experiment, Hold, Launch, Mode};
 use crate::hal::{Encoder, ForceOutput};
-use crate::numeric::{Fx64, Numeric};
+use crate::numeric::{Fx64, Numeric, Shift};
 use core::sync::atomic::Ordering;
 use stiffwall_core::monitor::{self, energy_e8_u32, EnergyMonitor};
 use stiffwall_proto::{fault, flags, ExperimentKind, Sample, ServoConfig, MAX_TABLE};
@@ -46,11 +46,17 @@ mod damper_monitor_tests;
 #[cfg(test)]
 mod excite_tests;
 #[cfg(test)]
+mod experiment_tests;
+#[cfg(test)]
+mod fault_tests;
+#[cfg(test)]
 mod fixture;
 #[cfg(test)]
-mod tests;
+mod spring_tests;
 #[cfg(test)]
 mod travel_tests;
+#[cfg(test)]
+mod wall_law_tests;
 
 // The monitor's bits are the protocol's fault bits, so the servo latches them unchanged.
 const _: () =
@@ -289,48 +295,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
         let free = n < self.g.contact_n;
 
         // Supervisor.
-        let mut new_faults = 0u32;
-        if self.g.jump_bound.exceeded(d) {
-            new_faults |= fault::ENCODER_JUMP;
-        }
-        let vi = (now & VEL_MASK) as usize;
-        let old = core::mem::replace(&mut self.vel_hist[vi], self.pos);
-        if self.g.vel_bound.exceeded(self.pos.saturating_sub(old)) {
-            new_faults |= fault::OVER_VELOCITY;
-        }
-        let mut fl = 0u16;
-        let monitoring = self.g.energy_monitor && (WALL || self.mode != Mode::Other);
-        if monitoring {
-            if free {
-                // Outside a one-sided wall the spring stores nothing: free motion (the user
-                // moving the device around) must not count; start afresh on the next contact.
-                self.monitor.reset();
-            } else {
-                // `update`, its two parts written out (the limit test then compiles to one
-                // conditional or).
-                if monitor::odd_abs(n) > self.g.energy_limit_m {
-                    new_faults |= fault::ENERGY_LIMIT;
-                }
-                let (f, turn) = self.monitor.track(n, self.g.growth_trip);
-                new_faults |= f;
-                if turn {
-                    fl |= flags::TURN;
-                    // A prepared test (`PrepareTest`) is judged by the host from its counts
-                    // over the test's length, as the stability criterion judges a trial: a
-                    // transient that rings for more than the buzz window and then decays is
-                    // not a buzz there (rotary-belt-60hz at 0.93 K*(B): 8 of 40 releases after
-                    // the hold tripped the detector, all 40 settle with it off). The test's
-                    // own end rule bounds a persistent buzz; growth and the energy limit
-                    // still trip.
-                    if WALL || self.end.is_none() {
-                        new_faults |= self.monitor.buzz_turn(now, self.g.buzz_window_ticks);
-                    }
-                }
-            }
-        }
-        if !WALL && self.g.heartbeat_ticks > 0 {
-            new_faults |= self.heartbeat(now);
-        }
+        let (new_faults, mut fl) = self.tick_checks::<WALL>(now, d, n, free);
         // The count's backward difference (for the dampers), taken here, where the force
         // needs it, so it is not held through the supervisor.
         let dn = n.saturating_sub(self.prev_n);

@@ -2,15 +2,18 @@
 //! the safe damper, the delay line bypassed), the first reading that primes the loop, and the
 //! latching of new fault bits (published to the main loop, ending any experiment). The tick's
 //! own tests (encoder jump, the travel window on the raw count, over-velocity, the energy
-//! monitor) run in `Servo::step`, which hands the bits they raise to this path.
+//! monitor, the heartbeat) are `Servo::tick_checks`, inlined into `Servo::step`, which hands the
+//! bits they raise to this path.
 //!
 //! Units: ticks (`now`), fault bits of `stiffwall_proto::fault`. Invariants: a latched fault
 //! stays until cleared by a command; no allocation, blocking or panic.
 
-use super::{Servo, UNPRIMED};
+use super::{Servo, UNPRIMED, VEL_MASK};
 use crate::config::VEL_WINDOW;
+use crate::experiment::Mode;
 use crate::numeric::Numeric;
 use core::sync::atomic::Ordering;
+use stiffwall_core::monitor;
 use stiffwall_proto::{fault, flags};
 
 impl<N: Numeric> Servo<'_, N> {
@@ -29,6 +32,64 @@ impl<N: Numeric> Servo<'_, N> {
         } else {
             0
         }
+    }
+
+    /// The tick's own tests, before the force: encoder jump (`d`, the raw delta), over-velocity
+    /// (the raw count against the one `VEL_WINDOW` ticks ago), the energy monitor at effective
+    /// count `n` (reset while `free`, outside a one-sided wall) and, during experiments, the
+    /// heartbeat. Returns the new fault bits and the flags they set (`TURN`). Inlined into
+    /// [`Self::step`], where it was written out (same code).
+    #[inline(always)]
+    pub(super) fn tick_checks<const WALL: bool>(
+        &mut self,
+        now: u32,
+        d: i32,
+        n: i32,
+        free: bool,
+    ) -> (u32, u16) {
+        let mut new_faults = 0u32;
+        if self.g.jump_bound.exceeded(d) {
+            new_faults |= fault::ENCODER_JUMP;
+        }
+        let vi = (now & VEL_MASK) as usize;
+        let old = core::mem::replace(&mut self.vel_hist[vi], self.pos);
+        if self.g.vel_bound.exceeded(self.pos.saturating_sub(old)) {
+            new_faults |= fault::OVER_VELOCITY;
+        }
+        let mut fl = 0u16;
+        let monitoring = self.g.energy_monitor && (WALL || self.mode != Mode::Other);
+        if monitoring {
+            if free {
+                // Outside a one-sided wall the spring stores nothing: free motion (the user
+                // moving the device around) must not count; start afresh on the next contact.
+                self.monitor.reset();
+            } else {
+                // `update`, its two parts written out (the limit test then compiles to one
+                // conditional or).
+                if monitor::odd_abs(n) > self.g.energy_limit_m {
+                    new_faults |= fault::ENERGY_LIMIT;
+                }
+                let (f, turn) = self.monitor.track(n, self.g.growth_trip);
+                new_faults |= f;
+                if turn {
+                    fl |= flags::TURN;
+                    // A prepared test (`PrepareTest`) is judged by the host from its counts
+                    // over the test's length, as the stability criterion judges a trial: a
+                    // transient that rings for more than the buzz window and then decays is
+                    // not a buzz there (rotary-belt-60hz at 0.93 K*(B): 8 of 40 releases after
+                    // the hold tripped the detector, all 40 settle with it off). The test's
+                    // own end rule bounds a persistent buzz; growth and the energy limit
+                    // still trip.
+                    if WALL || self.end.is_none() {
+                        new_faults |= self.monitor.buzz_turn(now, self.g.buzz_window_ticks);
+                    }
+                }
+            }
+        }
+        if !WALL && self.g.heartbeat_ticks > 0 {
+            new_faults |= self.heartbeat(now);
+        }
+        (new_faults, fl)
     }
 
     /// The tick's force when `halt` or `new_faults` is set: the first reading (seeded, then as

@@ -19,20 +19,21 @@ mod watchdog;
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use stm32f4xx_hal::{
+    gpio::{Output, PushPull, PA5},
     interrupt,
     pac::{self, Interrupt, NVIC},
     prelude::*,
-    rcc::Config,
+    rcc::{Config, Rcc},
 };
 
 use encoder::QuadEncoder;
 use flash_store::FlashSlots;
 use force::ForceOut;
 use handoff::Handoff;
-use serial::SerialIsr;
+use serial::{SerialIsr, SerialPort};
 use servo_timer::ServoTimer;
 use static_cell::StaticCell;
-use stiffwall_firmware::{Channels, ConfigStore, Device, Servo};
+use stiffwall_firmware::{Channels, ConfigStore, Device, Servo, Shared};
 
 /// Frequency of the ST-LINK MCO clock fed into OSC_IN.
 const HSE_HZ: u32 = 8_000_000;
@@ -46,6 +47,9 @@ const PRIO_USART2: u8 = 0x00;
 #[cfg(feature = "mutant-nvic-priority")]
 const PRIO_USART2: u8 = 0x20;
 const PRIO_SERVO: u8 = 0x10;
+
+/// LD2, the green user LED.
+type Led = PA5<Output<PushPull>>;
 
 /// What the servo interrupt owns.
 struct ServoIsr {
@@ -66,20 +70,11 @@ fn main() -> ! {
     let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         halt()
     };
-
-    let mut rcc = dp.RCC.freeze(
-        Config::hse(HSE_HZ.Hz())
-            .bypass_hse_oscillator()
-            .sysclk(SYSCLK_HZ.Hz())
-            .hclk(SYSCLK_HZ.Hz())
-            .pclk1(45.MHz())
-            .pclk2(90.MHz()),
-    );
-
+    let mut rcc = clocks(dp.RCC);
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
     // LD2 (green user LED): blinks at 1 Hz while the servo ticks (thread mode toggles it).
-    let mut led = gpioa.pa5.into_push_pull_output();
+    let led = gpioa.pa5.into_push_pull_output();
 
     // Force output first, so the amplifier sees "disabled, zero force" as early as possible.
     let enable = gpiob.pb10.into_push_pull_output();
@@ -95,34 +90,15 @@ fn main() -> ! {
         pa9: gpioa.pa9,
     };
     let force = ForceOut::new(parts, enable, &mut rcc);
-
     let encoder = QuadEncoder::new(dp.TIM2, gpioa.pa0, gpioa.pa1, &mut rcc);
-
-    let Some((mut port, serial_isr)) = serial::new(dp.USART2, gpioa.pa2, gpioa.pa3, &mut rcc)
-    else {
+    let Some((port, serial_isr)) = serial::new(dp.USART2, gpioa.pa2, gpioa.pa3, &mut rcc) else {
         halt()
     };
 
-    // The firmware core: the device loads the newest valid stored config (else the defaults);
-    // the servo starts from that config.
-    let channels: &'static mut Channels = CHANNELS.init_with(Channels::new);
-    let (servo_port, host_port) = channels.split();
-    // The latched fault bits, read by thread mode for the optional log.
-    #[cfg(feature = "defmt")]
-    let shared = host_port.shared;
-    let board = rig::board_info();
-    let mut device = Device::new(
-        board,
-        ConfigStore::new(FlashSlots::new(dp.FLASH)),
-        host_port,
-        rig::defaults(),
-    );
-    let servo = Servo::new(board, device.config(), servo_port);
-
+    let (device, servo, fault_log) = firmware_core(dp.FLASH);
     let Some(timer) = ServoTimer::new(dp.TIM7, device.servo_rate_hz(), &mut rcc) else {
         halt()
     };
-
     SERIAL.put(serial_isr);
     SERVO.put(ServoIsr {
         timer,
@@ -130,26 +106,74 @@ fn main() -> ! {
         force,
         servo,
     });
+    start_interrupts(&mut cp.NVIC);
+    log_boot(&device);
+
+    let dog = watchdog::Watchdog::start(dp.IWDG, &dp.DBGMCU, servo_timer::ticks());
+    run(device, port, led, dog, fault_log)
+}
+
+/// The clock tree: HSE 8 MHz bypass → SYSCLK = HCLK = 180 MHz, APB1 45 MHz, APB2 90 MHz.
+fn clocks(rcc: pac::RCC) -> Rcc {
+    rcc.freeze(
+        Config::hse(HSE_HZ.Hz())
+            .bypass_hse_oscillator()
+            .sysclk(SYSCLK_HZ.Hz())
+            .hclk(SYSCLK_HZ.Hz())
+            .pclk1(45.MHz())
+            .pclk2(90.MHz()),
+    )
+}
+
+/// The firmware core: the device loads the newest valid stored config (else the defaults);
+/// the servo starts from that config. Also the fault log, which reads the latched fault bits.
+fn firmware_core(flash: pac::FLASH) -> (Device<'static, FlashSlots>, Servo<'static>, FaultLog) {
+    let channels: &'static mut Channels = CHANNELS.init_with(Channels::new);
+    let (servo_port, host_port) = channels.split();
+    let fault_log = FaultLog::new(host_port.shared);
+    let board = rig::board_info();
+    let device = Device::new(
+        board,
+        ConfigStore::new(FlashSlots::new(flash)),
+        host_port,
+        rig::defaults(),
+    );
+    let servo = Servo::new(board, device.config(), servo_port);
+    (device, servo, fault_log)
+}
+
+/// Sets the interrupt priorities (serial above the servo tick) and unmasks both.
+fn start_interrupts(nvic: &mut NVIC) {
     // SAFETY: no priority-based critical sections exist in this program (shared state is
     // handed off or atomic), so changing priorities and unmasking can't break a lock.
     unsafe {
-        cp.NVIC.set_priority(Interrupt::USART2, PRIO_USART2);
-        cp.NVIC.set_priority(Interrupt::TIM7, PRIO_SERVO);
+        nvic.set_priority(Interrupt::USART2, PRIO_USART2);
+        nvic.set_priority(Interrupt::TIM7, PRIO_SERVO);
         NVIC::unmask(Interrupt::USART2);
         NVIC::unmask(Interrupt::TIM7);
     }
+}
 
+/// The boot line of the optional log: board, force output, servo rate, stiffness.
+fn log_boot(device: &Device<'static, FlashSlots>) {
     log::info!(
         "stiffwall boot on {=str} ({=str} output): servo {=u32} Hz, stiffness {=f32} N/m",
-        board.name,
+        device.board().name,
         if cfg!(feature = "pwm") { "PWM" } else { "DAC" },
         device.servo_rate_hz(),
         device.config().stiffness
     );
-    #[cfg(feature = "defmt")]
-    let mut logged_faults = 0u32;
+}
 
-    let mut dog = watchdog::Watchdog::start(dp.IWDG, &dp.DBGMCU, servo_timer::ticks());
+/// Thread mode, forever: the protocol, servo-rate changes, the fault log, the watchdog, the
+/// LED, and sleep until the next interrupt.
+fn run(
+    mut device: Device<'static, FlashSlots>,
+    mut port: SerialPort,
+    mut led: Led,
+    mut dog: watchdog::Watchdog,
+    mut fault_log: FaultLog,
+) -> ! {
     loop {
         device.poll(servo_timer::ticks(), &mut port);
         port.kick();
@@ -157,20 +181,7 @@ fn main() -> ! {
             servo_timer::request_rate(hz);
         }
         let now = servo_timer::ticks();
-        #[cfg(feature = "defmt")]
-        {
-            use core::sync::atomic::Ordering::Relaxed;
-            let faults = shared.faults.load(Relaxed);
-            if faults != logged_faults {
-                let first = shared.first_fault_tick.load(Relaxed);
-                log::warning!(
-                    "servo faults {=u32:#x} (first at tick {=u32})",
-                    faults,
-                    first
-                );
-                logged_faults = faults;
-            }
-        }
+        fault_log.poll();
         dog.feed_if_ticking(now);
         // Half a second of ticks per LED phase.
         led.set_state(((now / (device.servo_rate_hz() / 2).max(1)) & 1 == 1).into());
@@ -182,6 +193,46 @@ fn main() -> ! {
                 cortex_m::asm::wfi();
             }
         });
+    }
+}
+
+/// The servo's latched faults, logged from thread mode when they change (with `defmt`; without
+/// it this holds and does nothing).
+struct FaultLog {
+    #[cfg(feature = "defmt")]
+    shared: &'static Shared,
+    #[cfg(feature = "defmt")]
+    logged: u32,
+}
+
+impl FaultLog {
+    fn new(shared: &'static Shared) -> Self {
+        #[cfg(not(feature = "defmt"))]
+        let _ = shared;
+        Self {
+            #[cfg(feature = "defmt")]
+            shared,
+            #[cfg(feature = "defmt")]
+            logged: 0,
+        }
+    }
+
+    /// Logs the fault bits and the first fault's tick when the bits changed since last time.
+    fn poll(&mut self) {
+        #[cfg(feature = "defmt")]
+        {
+            use core::sync::atomic::Ordering::Relaxed;
+            let faults = self.shared.faults.load(Relaxed);
+            if faults != self.logged {
+                let first = self.shared.first_fault_tick.load(Relaxed);
+                log::warning!(
+                    "servo faults {=u32:#x} (first at tick {=u32})",
+                    faults,
+                    first
+                );
+                self.logged = faults;
+            }
+        }
     }
 }
 

@@ -24,10 +24,12 @@ use core::hint::black_box;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
+use stiffwall_firmware::channels::DecidedEnd;
 use stiffwall_firmware::{
-    Channels, Encoder, ForceOutput, Fx32, Fx64, Numeric, Servo, ServoCmd, F32,
+    BoardInfo, Channels, Encoder, ForceOutput, Fx32, Fx64, HostPort, Numeric, Servo, ServoCmd,
+    ServoEvent, F32,
 };
-use stiffwall_proto::{DamperLaw, ServoConfig};
+use stiffwall_proto::{DamperLaw, SafeMode, ServoConfig};
 
 const BATCHES: u32 = 40;
 const PER_BATCH: u32 = 200;
@@ -202,13 +204,7 @@ fn stages<N: Numeric>(baseline: u64) {
         || {},
     );
     report("spring+delay+supervisor", N::NAME, c, baseline);
-    if host
-        .commands
-        .enqueue(ServoCmd::Stream { decimation: 1 })
-        .is_err()
-    {
-        hprintln!("BENCH-ERROR command queue full");
-    }
+    start_stream(&mut host);
     let c = measure(
         |t| {
             black_box(full(&mut servo, t, &mut enc, &mut out));
@@ -216,23 +212,8 @@ fn stages<N: Numeric>(baseline: u64) {
         || while host.telemetry.dequeue().is_some() {},
     );
     report("full(+telemetry)", N::NAME, c, baseline);
-    if servo.faults() != 0 {
-        hprintln!(
-            "BENCH-ERROR faults {:#x} latched during {}",
-            servo.faults(),
-            N::NAME
-        );
-    }
-    // The same full tick with the virtual damper on (B > 0, the default law: a dead band of
-    // one count): the sweep moves two counts per tick, beyond the dead band, so the two-sided
-    // wall computes the damper term on every tick.
-    let damped = ServoConfig {
-        damping: DAMPING_N_S_PER_M,
-        ..cfg
-    };
-    if damped.damper != (DamperLaw::DeadBand { counts: 1 }) {
-        hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
-    }
+    check_no_faults(&servo, "");
+    let damped = damped_config(&cfg);
     let table2 = black_box(sweep_table(2));
     let mut enc = Sweep {
         table: &table2,
@@ -241,13 +222,7 @@ fn stages<N: Numeric>(baseline: u64) {
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &damped, servo_port);
-    if host
-        .commands
-        .enqueue(ServoCmd::Stream { decimation: 1 })
-        .is_err()
-    {
-        hprintln!("BENCH-ERROR command queue full");
-    }
+    start_stream(&mut host);
     let c = measure(
         |t| {
             black_box(full(&mut servo, t, &mut enc, &mut out));
@@ -255,14 +230,46 @@ fn stages<N: Numeric>(baseline: u64) {
         || while host.telemetry.dequeue().is_some() {},
     );
     report("full+damper", N::NAME, c, baseline);
+    check_no_faults(&servo, " with the damper");
+    worst::<N>(board, &damped, &table2);
+}
+
+/// The same config with the virtual damper on (B > 0, the default law: a dead band of one
+/// count): the sweep moves two counts per tick, beyond the dead band, so the two-sided wall
+/// computes the damper term on every tick.
+fn damped_config(cfg: &ServoConfig) -> ServoConfig {
+    let damped = ServoConfig {
+        damping: DAMPING_N_S_PER_M,
+        ..*cfg
+    };
+    if damped.damper != (DamperLaw::DeadBand { counts: 1 }) {
+        hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
+    }
+    damped
+}
+
+/// Queues telemetry at every tick (the full tick's push).
+fn start_stream(host: &mut HostPort<'_>) {
+    if host
+        .commands
+        .enqueue(ServoCmd::Stream { decimation: 1 })
+        .is_err()
+    {
+        hprintln!("BENCH-ERROR command queue full");
+    }
+}
+
+/// A measured stage must latch no fault (the sweep stays within every limit); `what` ends the
+/// error line.
+fn check_no_faults<N: Numeric>(servo: &Servo<'_, N>, what: &str) {
     if servo.faults() != 0 {
         hprintln!(
-            "BENCH-ERROR faults {:#x} latched during {} with the damper",
+            "BENCH-ERROR faults {:#x} latched during {}{}",
             servo.faults(),
-            N::NAME
+            N::NAME,
+            what
         );
     }
-    worst::<N>(board, &damped, &table2);
 }
 
 /// The worst tick's encoder: the sweep shifted by `offset` counts (a jump), or held still at
@@ -344,39 +351,11 @@ const AT_CLEAR: u32 = 13_000;
 /// runs a prepared release and a prepared impact test (each with its own config and a decided
 /// end), latches a fault and clears it; every tick timed alone (`window`), the per-tick
 /// stand-ins (the call, `io_script`) subtracted. Prints one `BENCH-TICK` line per phase.
-fn worst<N: Numeric>(
-    board: stiffwall_firmware::BoardInfo,
-    damped: &ServoConfig,
-    table: &[u32; SWEEP_LEN],
-) {
-    use stiffwall_firmware::channels::DecidedEnd;
-    use stiffwall_firmware::ServoEvent;
-    use stiffwall_proto::SafeMode;
-    // The supervisor on every path: a jump limit the sweep stays under, safe-mode damping after
-    // a fault, the heartbeat watchdog armed (it runs during tests; the run is shorter than it).
-    let cfg = ServoConfig {
-        encoder_jump_counts: 1000,
-        safe_mode: SafeMode::Damping,
-        safe_damping: DAMPING_N_S_PER_M,
-        heartbeat_timeout_ms: 60_000,
-        ..*damped
-    };
-    let changed = ServoConfig {
-        stiffness: 1.5 * cfg.stiffness,
-        damping: 0.5 * cfg.damping,
-        ..cfg
-    };
-    let test_cfg = ServoConfig {
-        stiffness: 0.8 * cfg.stiffness,
-        ..changed
-    };
-    let end = DecidedEnd {
-        min_run: 100,
-        one_count: true,
-        decay_base: 200,
-        run: test_cfg,
-        park: changed,
-    };
+/// (Its configs, commands and report are functions of their own since the run was written out
+/// in one: the timed window around the call then holds 5 more of this bench's instructions
+/// for I32F32, 3 to 5 for the others; the servo's code is the same.)
+fn worst<N: Numeric>(board: BoardInfo, damped: &ServoConfig, table: &[u32; SWEEP_LEN]) {
+    let (cfg, changed, end) = worst_configs(damped);
     let mut channels = Channels::new();
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
@@ -395,44 +374,13 @@ fn worst<N: Numeric>(
             black_box(io_script(&mut enc, &mut out));
         }));
     }
-    if host
-        .commands
-        .enqueue(ServoCmd::Stream { decimation: 1 })
-        .is_err()
-    {
-        hprintln!("BENCH-ERROR command queue full");
-    }
+    start_stream(&mut host);
     let mut worst = [(0u64, 0u32); WORST_PHASES.len()];
     let mut seen = [0u32; WORST_PHASES.len()];
     let mut tests_done = 0;
     for t in 0..WORST_TICKS {
         // Unmeasured: the main loop's side (queue a command, move the device).
-        let cmd = match t {
-            AT_CONFIG => Some(ServoCmd::Config(changed)),
-            AT_RELEASE => {
-                // A device at rest 20 counts into the wall: the hold settles, the release runs
-                // until the decided end (still for `min_run` ticks).
-                enc.still = Some(20);
-                Some(ServoCmd::Release {
-                    deflection: 20,
-                    ticks: 2000,
-                    end: Some(end),
-                })
-            }
-            AT_IMPACT => {
-                // At rest 30 counts out: the hold settles, the launch moves its target toward
-                // the wall; the device stays, so the launch's time limit releases it.
-                enc.still = Some((-30i32) as u32 & 0xffff);
-                Some(ServoCmd::Impact {
-                    start: -30,
-                    velocity_milli: 2000,
-                    ticks: 2000,
-                    end: Some(end),
-                })
-            }
-            AT_CLEAR => Some(ServoCmd::ClearFaults),
-            _ => None,
-        };
+        let cmd = worst_command(t, &mut enc, changed, end);
         if t == AT_JUMP {
             enc.offset = 5000;
         }
@@ -471,12 +419,91 @@ fn worst<N: Numeric>(
             worst[phase] = (ns, t);
         }
     }
-    if tests_done != 2 || servo.faults() != 0 || seen.contains(&0) {
+    report_worst::<N>(&worst, &seen, tests_done, servo.faults());
+}
+
+/// The worst-tick run's configs, from the damped sweep's: the active one (the supervisor on
+/// every path: a jump limit the sweep stays under, safe-mode damping after a fault, the
+/// heartbeat watchdog armed: it runs during tests; the run is shorter than it), the changed
+/// one (K × 1.5, B × 0.5), and the prepared tests' decided end (their own config, K × 0.8).
+fn worst_configs(damped: &ServoConfig) -> (ServoConfig, ServoConfig, DecidedEnd) {
+    let cfg = ServoConfig {
+        encoder_jump_counts: 1000,
+        safe_mode: SafeMode::Damping,
+        safe_damping: DAMPING_N_S_PER_M,
+        heartbeat_timeout_ms: 60_000,
+        ..*damped
+    };
+    let changed = ServoConfig {
+        stiffness: 1.5 * cfg.stiffness,
+        damping: 0.5 * cfg.damping,
+        ..cfg
+    };
+    let test_cfg = ServoConfig {
+        stiffness: 0.8 * cfg.stiffness,
+        ..changed
+    };
+    let end = DecidedEnd {
+        min_run: 100,
+        one_count: true,
+        decay_base: 200,
+        run: test_cfg,
+        park: changed,
+    };
+    (cfg, changed, end)
+}
+
+/// The command the main loop queues at tick `t` of the worst-tick run (holding the encoder
+/// still for a test's hold), if any.
+fn worst_command(
+    t: u32,
+    enc: &mut Script<'_>,
+    changed: ServoConfig,
+    end: DecidedEnd,
+) -> Option<ServoCmd> {
+    match t {
+        AT_CONFIG => Some(ServoCmd::Config(changed)),
+        AT_RELEASE => {
+            // A device at rest 20 counts into the wall: the hold settles, the release runs
+            // until the decided end (still for `min_run` ticks).
+            enc.still = Some(20);
+            Some(ServoCmd::Release {
+                deflection: 20,
+                ticks: 2000,
+                end: Some(end),
+            })
+        }
+        AT_IMPACT => {
+            // At rest 30 counts out: the hold settles, the launch moves its target toward
+            // the wall; the device stays, so the launch's time limit releases it.
+            enc.still = Some((-30i32) as u32 & 0xffff);
+            Some(ServoCmd::Impact {
+                start: -30,
+                velocity_milli: 2000,
+                ticks: 2000,
+                end: Some(end),
+            })
+        }
+        AT_CLEAR => Some(ServoCmd::ClearFaults),
+        _ => None,
+    }
+}
+
+/// Checks the worst-tick run (two tests ended, no fault left at the end (`faults`), every
+/// phase seen) and prints one `BENCH-TICK` line per phase: its longest tick (virtual ns, the
+/// tick) and its ticks.
+fn report_worst<N: Numeric>(
+    worst: &[(u64, u32); WORST_PHASES.len()],
+    seen: &[u32; WORST_PHASES.len()],
+    tests_done: u32,
+    faults: u32,
+) {
+    if tests_done != 2 || faults != 0 || seen.contains(&0) {
         hprintln!(
             "BENCH-ERROR worst-tick run of {}: {} tests ended (2 expected), faults {:#x} at the end, ticks per phase {:?}",
             N::NAME,
             tests_done,
-            servo.faults(),
+            faults,
             seen
         );
     }
