@@ -8,46 +8,23 @@
 use crate::cancel::Cancel;
 use crate::error::{ClientError, Result};
 use crate::transport::Transport;
-use std::collections::VecDeque;
-use std::io::{ErrorKind, Read, Write};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use stiffwall_proto::{
-    encode, DeviceInfo, DeviceMsg, FaultReport, FrameDecoder, HostMsg, Sample, ServoConfig,
-    TelemetryBatch, MAX_FRAME, PROTOCOL_VERSION,
+    DeviceInfo, DeviceMsg, FaultReport, HostMsg, Sample, ServoConfig, TelemetryBatch,
+    PROTOCOL_VERSION,
 };
 
 mod experiment;
+mod link;
 
-use crate::describe::describe_error;
-use crate::describe::is_framing_reply;
+pub use link::{GapStats, Link, ANSWER_TIMEOUT, BACKLOG_WAIT_MAX, QUEUE_FULL_RETRY};
 
-/// How long a request waits for its answer.
-pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(1500);
-/// How long a request waits at most while the device keeps answering bad frames queued ahead
-/// of it (a flood or a noisy line): each such error reply restarts [`ANSWER_TIMEOUT`], up to
-/// this long after the request was sent.
-pub const BACKLOG_WAIT_MAX: Duration = Duration::from_secs(10);
-/// How long a request refused with a full servo queue is repeated.
-pub const QUEUE_FULL_RETRY: Duration = Duration::from_secs(2);
 /// Heartbeat period during experiments (the firmware's default timeout is 500 ms).
 pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(100);
 
 /// Keeps whatever serves the port (virtual device thread, QEMU process) alive with the client.
 pub trait Backend: std::fmt::Debug + Send {}
 impl<T: std::fmt::Debug + Send> Backend for T {}
-
-/// Telemetry bookkeeping.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct GapStats {
-    /// Samples received.
-    pub received: u64,
-    /// Samples missing in sequence numbers.
-    pub missing: u64,
-    /// Of those, samples the device reports it dropped (queue overflow).
-    pub dropped_on_device: u64,
-    /// Frames that failed to decode (CRC, COBS, …), i.e. lost on the link.
-    pub bad_frames: u64,
-}
 
 /// Judges the samples of a running experiment so far: true ends it early (see
 /// [`Client::release_until`]).
@@ -66,16 +43,11 @@ pub struct Record {
     pub gaps: GapStats,
 }
 
-/// A connected device.
+/// A connected device: made only by a handshake that the device answered with its
+/// [`DeviceInfo`] ([`Client::connect`]).
 #[derive(Debug)]
 pub struct Client {
-    port: Box<dyn Transport>,
-    decoder: FrameDecoder,
-    pending: VecDeque<DeviceMsg>,
-    next_seq: Option<u32>,
-    last_dropped: u32,
-    /// Telemetry bookkeeping since connecting.
-    pub gaps: GapStats,
+    link: Link,
     /// The device's handshake answer.
     pub info: DeviceInfo,
     /// Checked while an experiment runs (see [`Client::set_cancel`]).
@@ -90,65 +62,14 @@ impl Client {
         port: impl Transport + 'static,
         backend: Option<Box<dyn Backend>>,
     ) -> Result<Self> {
-        let mut c = Self {
-            port: Box::new(port),
-            decoder: FrameDecoder::new(),
-            pending: VecDeque::new(),
-            next_seq: None,
-            last_dropped: 0,
-            gaps: GapStats::default(),
-            info: placeholder_info(),
+        let mut link = Link::new(Box::new(port));
+        let info = handshake(&mut link)?;
+        Ok(Self {
+            link,
+            info,
             cancel: Cancel::default(),
             _backend: backend,
-        };
-        // A board may still be printing its boot banner or be mid-frame: a 0x00 ends whatever
-        // it holds, and the handshake is retried before giving up.
-        let _ = c.port.write_all(&[0]);
-        let mut last_err = None;
-        for _ in 0..3 {
-            c.send(&HostMsg::Hello {
-                protocol_version: PROTOCOL_VERSION,
-            })?;
-            match c.wait(ANSWER_TIMEOUT, "Hello", |m| match m {
-                DeviceMsg::HelloReply(_) => true,
-                DeviceMsg::Error { code, .. } => !code.is_framing(),
-                _ => false,
-            }) {
-                Ok(DeviceMsg::HelloReply(info)) => {
-                    if info.protocol_version != PROTOCOL_VERSION {
-                        return Err(ClientError::VersionMismatch {
-                            device: info.protocol_version,
-                            host: PROTOCOL_VERSION,
-                        });
-                    }
-                    c.info = info;
-                    // Framing errors seen so far answer bytes from before the link was in
-                    // sync (a Hello that reached a board still booting, whose UART overran,
-                    // or a banner): they are about no request of the caller's, so they are not
-                    // handed on as if they had come later.
-                    c.pending.retain(
-                        |m| !matches!(m, DeviceMsg::Error { code, .. } if code.is_framing()),
-                    );
-                    return Ok(c);
-                }
-                Ok(DeviceMsg::Error { code, detail }) => {
-                    return Err(ClientError::Refused {
-                        request: "handshake".into(),
-                        code,
-                        detail,
-                    })
-                }
-                Ok(_) => unreachable!("filtered by the predicate"),
-                Err(e) => last_err = Some(e),
-            }
-        }
-        Err(ClientError::NoHandshake(Box::new(last_err.unwrap_or(
-            ClientError::Timeout {
-                request: Some("Hello".into()),
-                waited: ANSWER_TIMEOUT,
-                bad_frames: None,
-            },
-        ))))
+        })
     }
 
     /// Makes `cancel` the token this client's experiments check (returning the previous one):
@@ -167,260 +88,36 @@ impl Client {
         &self.cancel
     }
 
+    /// Telemetry bookkeeping since connecting.
+    #[must_use]
+    pub fn gaps(&self) -> GapStats {
+        self.link.gaps()
+    }
+
     /// Sends one message.
     pub fn send(&mut self, msg: &HostMsg) -> Result<()> {
-        let mut buf = [0u8; MAX_FRAME];
-        let frame = encode(msg, &mut buf)
-            .map_err(|e| ClientError::Framing(format!("encoding {msg:?}: {e}")))?;
-        self.write_bytes(frame)
+        self.link.send(msg)
     }
 
     /// Writes raw bytes (tests of malformed input).
     pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
-        self.write_bytes(bytes)
-    }
-
-    /// Writes all bytes, waiting while the port is full (a device may read its UART one byte at
-    /// a time); fails when the port errors or makes no progress for [`ANSWER_TIMEOUT`].
-    ///
-    /// While it waits, what the device sends is read and queued: framing-error replies show it
-    /// is reading input from elsewhere on the line (a flood that fills the link), and each
-    /// restarts the stall timeout, up to [`BACKLOG_WAIT_MAX`] in all.
-    fn write_bytes(&mut self, mut bytes: &[u8]) -> Result<()> {
-        let start = Instant::now();
-        let mut stalled_since = start;
-        let mut device_reading = false;
-        while !bytes.is_empty() {
-            match self.port.write(bytes) {
-                Ok(0) => {}
-                Ok(n) => {
-                    bytes = &bytes[n..];
-                    stalled_since = Instant::now();
-                    continue;
-                }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                    ) => {}
-                Err(e) => return Err(ClientError::io("writing", e)),
-            }
-            if self.port.bytes_to_read().unwrap_or(0) > 0 {
-                let queued = self.pending.len();
-                self.read_once()?;
-                let answered_garbage = self
-                    .pending
-                    .iter()
-                    .skip(queued)
-                    .any(|m| matches!(m, DeviceMsg::Error { code, .. } if code.is_framing()));
-                if answered_garbage && start.elapsed() < BACKLOG_WAIT_MAX {
-                    device_reading = true;
-                    stalled_since = Instant::now();
-                }
-            }
-            if stalled_since.elapsed() > ANSWER_TIMEOUT {
-                return Err(ClientError::WriteStalled {
-                    waited: if device_reading {
-                        start.elapsed()
-                    } else {
-                        ANSWER_TIMEOUT
-                    },
-                    link_full: device_reading,
-                });
-            }
-        }
-        self.port.flush().ok();
-        Ok(())
+        self.link.send_raw(bytes)
     }
 
     /// Reads what is available and returns the next message, waiting up to `timeout`.
     pub fn recv(&mut self, timeout: Duration) -> Result<Option<DeviceMsg>> {
-        if let Some(m) = self.pending.pop_front() {
-            return Ok(Some(m));
-        }
-        let deadline = Instant::now() + timeout;
-        loop {
-            self.read_once()?;
-            if let Some(m) = self.pending.pop_front() {
-                return Ok(Some(m));
-            }
-            if Instant::now() >= deadline {
-                return Ok(None);
-            }
-        }
+        self.link.recv(timeout)
     }
 
-    /// One read from the port (waiting up to its read timeout); the messages it completes are
-    /// queued, telemetry accounted, undecodable frames counted.
-    fn read_once(&mut self) -> Result<()> {
-        let mut buf = [0u8; 4096];
-        let n = match self.port.read(&mut buf) {
-            Ok(0) => {
-                return Err(ClientError::io(
-                    "reading",
-                    std::io::Error::from(ErrorKind::UnexpectedEof),
-                ))
-            }
-            Ok(n) => n,
-            Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => 0,
-            Err(e) if e.kind() == ErrorKind::Interrupted => 0,
-            Err(e) => return Err(ClientError::io("reading", e)),
-        };
-        for &b in &buf[..n] {
-            match self.decoder.feed::<DeviceMsg>(b) {
-                Some(Ok(m)) => {
-                    if let DeviceMsg::Telemetry(batch) = &m {
-                        self.account(batch);
-                    }
-                    self.pending.push_back(m);
-                }
-                Some(Err(_)) => self.gaps.bad_frames += 1,
-                None => {}
-            }
-        }
-        Ok(())
-    }
-
-    fn account(&mut self, batch: &TelemetryBatch) {
-        if let Some(expect) = self.next_seq {
-            let gap = batch.seq.wrapping_sub(expect);
-            if gap != 0 && gap < u32::MAX / 2 {
-                self.gaps.missing += u64::from(gap);
-                let dev = batch.dropped.wrapping_sub(self.last_dropped);
-                self.gaps.dropped_on_device += u64::from(dev.min(gap));
-            }
-        }
-        self.last_dropped = batch.dropped;
-        self.gaps.received += batch.samples.len() as u64;
-        self.next_seq = Some(batch.seq.wrapping_add(batch.samples.len() as u32));
-    }
-
-    /// Waits for a message matching `want`; other messages (telemetry) are kept for later.
-    fn wait(
-        &mut self,
-        timeout: Duration,
-        request: &str,
-        want: impl Fn(&DeviceMsg) -> bool,
-    ) -> Result<DeviceMsg> {
-        self.wait_extending(timeout, timeout, want, |_| false)
-            .map_err(|e| match e {
-                ClientError::Timeout {
-                    request: None,
-                    waited,
-                    bad_frames,
-                } => ClientError::Timeout {
-                    request: Some(request.to_string()),
-                    waited,
-                    bad_frames,
-                },
-                e => e,
-            })
-    }
-
-    /// [`Self::wait`], where a message for which `progress` holds restarts the `timeout`, up to
-    /// `cap` after the start: the device is visibly working through input queued ahead of the
-    /// request.
-    fn wait_extending(
-        &mut self,
-        timeout: Duration,
-        cap: Duration,
-        want: impl Fn(&DeviceMsg) -> bool,
-        progress: impl Fn(&DeviceMsg) -> bool,
-    ) -> Result<DeviceMsg> {
-        let start = Instant::now();
-        let end = start + cap.max(timeout);
-        let mut deadline = start + timeout;
-        let mut kept = VecDeque::new();
-        let expired = |waited: Duration| ClientError::Timeout {
-            request: None,
-            waited,
-            bad_frames: None,
-        };
-        let result = loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.recv(left)? {
-                Some(m) if want(&m) => break Ok(m),
-                // On time even while other messages keep arriving.
-                Some(m) => {
-                    if progress(&m) {
-                        deadline = (Instant::now() + timeout).min(end).max(deadline);
-                    }
-                    kept.push_back(m);
-                    if Instant::now() >= deadline {
-                        break Err(expired(start.elapsed()));
-                    }
-                }
-                None => break Err(expired(start.elapsed())),
-            }
-        };
-        kept.extend(self.pending.drain(..));
-        self.pending = kept;
-        result
-    }
-
-    /// Sends a request and waits for its answer; a device `Error` becomes an error.
-    ///
-    /// Framing errors (CRC, COBS, oversize, unknown tag, malformed body) do not answer a
-    /// request this client encoded: they answer bad frames from elsewhere on the link (a
-    /// noisy line, another writer), so the wait goes on. They also show the device working
-    /// through input queued ahead of the request, so each restarts the answer timeout, for at
-    /// most [`BACKLOG_WAIT_MAX`]; if no answer comes, the timeout names the last one seen.
-    ///
-    /// A full servo command queue (`QueueFull`: the servo takes one command per tick) is
-    /// transient ([`stiffwall_proto::ErrorCode::is_transient`]): the request is repeated, for at most
-    /// [`QUEUE_FULL_RETRY`].
+    /// Sends a request and waits for its answer ([`Link::request`]); a device `Error` becomes
+    /// an error.
     pub fn request(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
-        let deadline = Instant::now() + QUEUE_FULL_RETRY;
-        loop {
-            let m = self.request_once(msg)?;
-            let full = matches!(&m, DeviceMsg::Error { code, .. } if code.is_transient());
-            if !full || Instant::now() > deadline {
-                if let DeviceMsg::Error { code, detail } = m {
-                    return Err(ClientError::Refused {
-                        request: msg.name().to_string(),
-                        code,
-                        detail,
-                    });
-                }
-                return Ok(m);
-            }
-            std::thread::sleep(Duration::from_millis(2));
-        }
+        self.link.request(msg)
     }
 
-    fn request_once(&mut self, msg: &HostMsg) -> Result<DeviceMsg> {
-        self.send(msg)?;
-        let ack = msg.ack_kind();
-        let last_framing = std::cell::Cell::new(None);
-        let m = self
-            .wait_extending(
-                ANSWER_TIMEOUT,
-                BACKLOG_WAIT_MAX,
-                |m| match m {
-                    DeviceMsg::Error { code, detail } if code.is_framing() => {
-                        last_framing.set(Some(describe_error(*code, detail)));
-                        false
-                    }
-                    DeviceMsg::Error { .. } => true,
-                    DeviceMsg::Ack(r) => Some(*r) == ack,
-                    DeviceMsg::Config(_) => {
-                        matches!(msg, HostMsg::GetConfig | HostMsg::LoadDefaults)
-                    }
-                    DeviceMsg::Faults(_) => matches!(msg, HostMsg::GetFaults),
-                    DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
-                    _ => false,
-                },
-                is_framing_reply,
-            )
-            .map_err(|e| match e {
-                ClientError::Timeout { waited, .. } => ClientError::Timeout {
-                    request: Some(msg.name().to_string()),
-                    waited,
-                    bad_frames: last_framing.take(),
-                },
-                e => e,
-            })?;
-        Ok(m)
+    /// Next telemetry batch, or None after `timeout` (on time whatever else arrives).
+    pub fn next_batch(&mut self, timeout: Duration) -> Result<Option<TelemetryBatch>> {
+        self.link.next_batch(timeout)
     }
 
     /// Reads the active configuration.
@@ -502,32 +199,65 @@ impl Client {
 
     /// Starts telemetry at one sample per `decimation` ticks.
     pub fn stream_start(&mut self, decimation: u16) -> Result<()> {
-        self.next_seq = None;
+        self.link.restart_sequence();
         self.request(&HostMsg::StreamStart { decimation }).map(drop)
     }
 
     /// Stops telemetry and discards batches still queued.
     pub fn stream_stop(&mut self) -> Result<()> {
         self.request(&HostMsg::StreamStop)?;
-        self.pending
-            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        self.link.drop_telemetry();
         Ok(())
     }
+}
 
-    /// Next telemetry batch, or None after `timeout` (on time whatever else arrives).
-    pub fn next_batch(&mut self, timeout: Duration) -> Result<Option<TelemetryBatch>> {
-        let deadline = Instant::now() + timeout;
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.recv(left)? {
-                Some(DeviceMsg::Telemetry(b)) => return Ok(Some(b)),
-                // Other messages (errors of a flood of bad frames, stray replies) never hold
-                // the caller past its deadline: its watchdogs and heartbeats must run.
-                Some(_) if Instant::now() < deadline => {}
-                Some(_) | None => return Ok(None),
+/// The handshake on a fresh link: a `Hello` (after a 0x00 that ends whatever a board still
+/// booting holds), retried up to three times, answered with the device's info at this host's
+/// protocol version.
+fn handshake(link: &mut Link) -> Result<DeviceInfo> {
+    link.write_sync_byte();
+    let mut last_err = None;
+    for _ in 0..3 {
+        link.send(&HostMsg::Hello {
+            protocol_version: PROTOCOL_VERSION,
+        })?;
+        match link.wait(ANSWER_TIMEOUT, "Hello", |m| match m {
+            DeviceMsg::HelloReply(_) => true,
+            DeviceMsg::Error { code, .. } => !code.is_framing(),
+            _ => false,
+        }) {
+            Ok(DeviceMsg::HelloReply(info)) => {
+                if info.protocol_version != PROTOCOL_VERSION {
+                    return Err(ClientError::VersionMismatch {
+                        device: info.protocol_version,
+                        host: PROTOCOL_VERSION,
+                    });
+                }
+                // Framing errors seen so far answer bytes from before the link was in sync (a
+                // Hello that reached a board still booting, whose UART overran, or a banner):
+                // they are about no request of the caller's, so they are not handed on as if
+                // they had come later.
+                link.drop_framing_errors();
+                return Ok(info);
             }
+            Ok(DeviceMsg::Error { code, detail }) => {
+                return Err(ClientError::Refused {
+                    request: "handshake".into(),
+                    code,
+                    detail,
+                })
+            }
+            Ok(_) => unreachable!("filtered by the predicate"),
+            Err(e) => last_err = Some(e),
         }
     }
+    Err(ClientError::NoHandshake(Box::new(last_err.unwrap_or(
+        ClientError::Timeout {
+            request: Some("Hello".into()),
+            waited: ANSWER_TIMEOUT,
+            bad_frames: None,
+        },
+    ))))
 }
 
 fn unexpected(request: &str, answer: &DeviceMsg) -> ClientError {
@@ -537,35 +267,39 @@ fn unexpected(request: &str, answer: &DeviceMsg) -> ClientError {
     }
 }
 
-fn placeholder_info() -> DeviceInfo {
-    DeviceInfo {
-        protocol_version: 0,
-        firmware_name: heapless::String::new(),
-        firmware_version: heapless::String::new(),
-        board: heapless::String::new(),
-        servo_rate_hz: 1000,
-        counts_per_rev: 0,
-        resolution: 0.0,
-        encoder_bits: 32,
-        force_per_code: 0.0,
-        max_code: 0,
-        limits: stiffwall_proto::Limits {
-            min_rate_hz: 0,
-            max_rate_hz: 0,
-            max_stiffness: 0.0,
-            max_force: 0.0,
-            max_delay_ticks: 0,
-            max_coarsen_shift: 0,
-            telemetry_batch: 0,
-            max_table: 0,
-        },
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::transport::pty_pair;
+    use std::time::Instant;
+    use std::io::{Read, Write};
+    use stiffwall_proto::{encode, FrameDecoder, MAX_FRAME};
+
+    /// A device's info for the scripted devices' handshake answers.
+    fn placeholder_info() -> DeviceInfo {
+        DeviceInfo {
+            protocol_version: 0,
+            firmware_name: heapless::String::new(),
+            firmware_version: heapless::String::new(),
+            board: heapless::String::new(),
+            servo_rate_hz: 1000,
+            counts_per_rev: 0,
+            resolution: 0.0,
+            encoder_bits: 32,
+            force_per_code: 0.0,
+            max_code: 0,
+            limits: stiffwall_proto::Limits {
+                min_rate_hz: 0,
+                max_rate_hz: 0,
+                max_stiffness: 0.0,
+                max_force: 0.0,
+                max_delay_ticks: 0,
+                max_coarsen_shift: 0,
+                telemetry_batch: 0,
+                max_table: 0,
+            },
+        }
+    }
     use stiffwall_proto::ErrorDetail;
     use stiffwall_proto::{ErrorCode, Request};
 

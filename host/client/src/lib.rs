@@ -68,7 +68,7 @@ pub use board_emu::{
 };
 pub use cancel::{ctrl_c, Cancel};
 pub use client::{
-    Backend, Client, EnoughFn, GapStats, Record, ANSWER_TIMEOUT, BACKLOG_WAIT_MAX,
+    Backend, Client, EnoughFn, GapStats, Link, Record, ANSWER_TIMEOUT, BACKLOG_WAIT_MAX,
     HEARTBEAT_PERIOD, QUEUE_FULL_RETRY,
 };
 pub use connect::{connect, ConnectSpec, VirtualPlant, DEFAULT_VIRTUAL_DEVICE};

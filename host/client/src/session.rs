@@ -164,7 +164,7 @@ pub fn pump(
     let cfg = client.get_config().map_err(failed)?;
     let rate = f64::from(cfg.servo_rate_hz.max(1));
     let silence = Duration::from_secs_f64((3.0 * f64::from(plan.decimation) / rate).max(2.0));
-    let bad0 = client.gaps.bad_frames;
+    let bad0 = client.gaps().bad_frames;
     let experiment = start(client, plan)?;
     let mut st = Stats::default();
     let mut next: Option<u32> = None;
@@ -179,7 +179,7 @@ pub fn pump(
             Err(end) => break end,
         };
         last_data = Instant::now();
-        st.bad_frames = client.gaps.bad_frames - bad0;
+        st.bad_frames = client.gaps().bad_frames - bad0;
         let first = *st.first_seq.get_or_insert(batch.seq);
         let (missing, dev) = match next {
             Some(expect) => match count_gap(&mut st, plan, expect, first, &batch, last_dropped) {

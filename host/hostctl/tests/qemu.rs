@@ -298,7 +298,7 @@ fn malformed_burst_gets_error_replies_while_the_servo_keeps_its_rate() {
         ticks.len() >= 300
     )
     .unwrap();
-    writeln!(t, "telemetry gaps {}", c.gaps.missing).unwrap();
+    writeln!(t, "telemetry gaps {}", c.gaps().missing).unwrap();
     assert!(errors.contains_key(&format!("{:?}", ErrorCode::Crc)), "{t}");
     finish(q, c);
     check("malformed_burst", &t);

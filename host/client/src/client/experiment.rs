@@ -91,8 +91,7 @@ impl Client {
                 Err(e) => return e,
             }
         }
-        self.pending
-            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        self.link.drop_telemetry();
         ClientError::Cancelled
     }
 
@@ -107,13 +106,12 @@ impl Client {
         ticks: u32,
         mut enough: Option<&mut EnoughFn<'_>>,
     ) -> Result<Record> {
-        self.pending
-            .retain(|m| !matches!(m, DeviceMsg::Telemetry(_)));
+        self.link.drop_telemetry();
         if self.cancel.is_cancelled() {
             return Err(ClientError::Cancelled);
         }
-        let before = self.gaps;
-        self.next_seq = None;
+        let before = self.gaps();
+        self.link.restart_sequence();
         self.request(msg)?;
         let rate = f64::from(self.info.servo_rate_hz.max(1));
         // Generous: the virtual device may run slower than real time on a loaded machine.
@@ -145,7 +143,7 @@ impl Client {
                     while let Some(b) = self.next_batch(Duration::from_millis(50))? {
                         samples.extend_from_slice(&b.samples);
                     }
-                    let mut gaps = self.gaps;
+                    let mut gaps = self.gaps();
                     gaps.received -= before.received;
                     gaps.missing -= before.missing;
                     gaps.dropped_on_device -= before.dropped_on_device;

@@ -182,7 +182,7 @@ impl Dev {
     /// One telemetry batch: recorder, release test, page frame.
     fn batch(&mut self, seq: u32, dropped: u32, samples: &[Sample]) -> Result<()> {
         if let Some(r) = &mut self.rec {
-            if let Err(e) = record_batch(r, seq, dropped, samples, self.client.gaps.bad_frames) {
+            if let Err(e) = record_batch(r, seq, dropped, samples, self.client.gaps().bad_frames) {
                 let r = self.rec.take().expect("recorder");
                 let path = r.path.clone();
                 let _ = finish_recording(
@@ -246,7 +246,7 @@ impl Dev {
 
     fn status(&mut self) {
         let now = Instant::now();
-        let g = self.client.gaps;
+        let g = self.client.gaps();
         let dt = now.duration_since(self.rate.0).as_secs_f64();
         if dt >= 0.5 {
             self.rate = (now, g.received, (g.received - self.rate.1) as f64 / dt);
@@ -385,9 +385,11 @@ impl Dev {
                 .find(|(k, _)| *k == "plane")
                 .map(|(_, v)| v.clone())
         });
-        Ok(json!({"config": cfg, "faults": f, "gaps": self.client.gaps,
+        Ok(
+            json!({"config": cfg, "faults": f, "gaps": self.client.gaps(),
                   "release_running": self.release.is_some(), "recording": self.rec.is_some(),
-                  "plane": plane}))
+                  "plane": plane}),
+        )
     }
 
     /// Clears the latched faults; when they latch again at once (their cause persists: a K the
