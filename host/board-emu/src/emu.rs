@@ -437,14 +437,7 @@ impl<'a> Machine<'a> {
         } else {
             0xFFFF_FFF1
         };
-        let vtor = self
-            .uc
-            .get_data()
-            .p
-            .scb
-            .get(&0xE000_ED08)
-            .copied()
-            .unwrap_or(0);
+        let vtor = self.uc.get_data().p.vtor();
         let vtor = if vtor == 0 { FLASH_BASE } else { vtor };
         let mut vec = [0u8; 4];
         self.uc

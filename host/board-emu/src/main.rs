@@ -18,6 +18,7 @@ mod image;
 mod periph;
 mod plant;
 mod pty;
+mod trace;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;

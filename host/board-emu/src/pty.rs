@@ -59,7 +59,7 @@ pub fn serve(
     let mut last_host = t0;
     let mut stall_at_last_host = m.periph().stalled_total;
     let mut buf = [0u8; 1024];
-    let trace = std::env::var_os("STIFFWALL_EMU_TRACE").is_some();
+    let trace = crate::trace::enabled();
     let mut last_trace = Instant::now();
     let mut flash_ops = (m.periph().erases, m.periph().programs);
     let mut servo_timer = (m.periph().tim7.r[10], m.periph().tim7.r[11]);

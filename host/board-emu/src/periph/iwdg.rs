@@ -1,0 +1,114 @@
+//! The independent watchdog (IWDG), clocked by the LSI (32 kHz): once started it resets the
+//! board unless the image reloads it within (RLR + 1) × 4·2^PR LSI periods.
+//!
+//! Models: KR (the keys `KEY_START`, `KEY_RELOAD` and `KEY_ACCESS`; any other value locks PR
+//! and RLR again), PR and RLR (need `KEY_ACCESS` first; a new value counts from the next
+//! reload, as on the chip), SR (reads 0: updates are instant). Refuses: PR or RLR written
+//! without the access key, a write to SR. Units: time in 1/720 MHz units (one LSI period is
+//! 22 500). Invariant: the deadline is the last reload plus the period latched at that reload;
+//! `Periph::advance` turns a deadline passed into `ResetCause::Watchdog`.
+
+use super::{Periph, UNITS_PER_S};
+use crate::trace;
+
+/// IWDG base address.
+pub const BASE: u32 = 0x4000_3000;
+/// Last word address (SR).
+pub const LAST: u32 = 0x4000_300F;
+
+/// IWDG_KR address.
+const KR: u32 = BASE;
+/// IWDG_PR address.
+const PR: u32 = BASE + 0x04;
+/// IWDG_RLR address.
+const RLR: u32 = BASE + 0x08;
+/// IWDG_PR register index.
+const PR_I: usize = 1;
+/// IWDG_RLR register index.
+const RLR_I: usize = 2;
+
+/// KR key: starts the watchdog (and reloads it).
+pub const KEY_START: u32 = 0xCCCC;
+/// KR key: reloads the counter (a feed).
+pub const KEY_RELOAD: u32 = 0xAAAA;
+/// KR key: unlocks PR and RLR for writing.
+pub const KEY_ACCESS: u32 = 0x5555;
+
+/// LSI frequency, Hz.
+const LSI_HZ: u64 = 32_000;
+/// RLR's reload field.
+const RLR_MASK: u32 = 0xFFF;
+
+/// The watchdog at reset: stopped, PR 0, RLR 0xFFF, locked.
+pub(super) fn reset(p: &mut Periph) {
+    p.iwdg = [0, 0, 0xFFF, 0];
+    p.iwdg_on = false;
+    p.iwdg_unlocked = false;
+}
+
+/// A word read of an IWDG register (the latched value).
+pub(super) fn read(p: &mut Periph, a: u32) -> u32 {
+    p.iwdg[((a - BASE) / 4) as usize]
+}
+
+/// A word write of an IWDG register.
+pub(super) fn write(p: &mut Periph, a: u32, v: u32, raw: u64) {
+    match a {
+        KR => write_key(p, v),
+        PR | RLR => write_guarded(p, a, v),
+        _ => p.unmodelled(a, Some(raw)),
+    }
+}
+
+/// IWDG_KR: start, reload, unlock, or (any other value) lock.
+fn write_key(p: &mut Periph, v: u32) {
+    match v & 0xFFFF {
+        KEY_START => {
+            p.iwdg_on = true;
+            reload(p);
+        }
+        KEY_RELOAD => {
+            reload(p);
+            p.iwdg_feeds += 1;
+            p.iwdg_unlocked = false;
+        }
+        KEY_ACCESS => p.iwdg_unlocked = true,
+        _ => p.iwdg_unlocked = false,
+    }
+}
+
+/// The counter restarts now with the period of the current PR and RLR.
+fn reload(p: &mut Periph) {
+    p.iwdg_reload_at = p.now;
+    p.iwdg_period = (u64::from(p.iwdg[RLR_I] & RLR_MASK) + 1) * p.iwdg_step();
+}
+
+/// IWDG_PR or IWDG_RLR: written after `KEY_ACCESS`.
+fn write_guarded(p: &mut Periph, a: u32, v: u32) {
+    let name = if a == PR { "PR" } else { "RLR" };
+    if !p.iwdg_unlocked {
+        p.fail(format!(
+            "IWDG_{name}: written without the {KEY_ACCESS:#x} access key first (the write is \
+             ignored by the chip)"
+        ));
+    }
+    p.iwdg[((a - BASE) / 4) as usize] = v;
+    if trace::enabled() {
+        eprintln!(
+            "iwdg: {name} = {v} at {:.6} s",
+            p.now as f64 / UNITS_PER_S as f64
+        );
+    }
+}
+
+impl Periph {
+    /// The LSI period times the IWDG prescaler, units.
+    fn iwdg_step(&self) -> u64 {
+        (UNITS_PER_S / LSI_HZ) * (4u64 << self.iwdg[PR_I].min(6))
+    }
+
+    /// When the watchdog runs out, if it runs.
+    pub fn iwdg_deadline(&self) -> Option<u64> {
+        self.iwdg_on.then(|| self.iwdg_reload_at + self.iwdg_period)
+    }
+}
