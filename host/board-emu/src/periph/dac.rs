@@ -64,3 +64,27 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32) {
     }
     p.output_changed(before);
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn data_holding_registers_move_to_dor1_by_alignment_and_a_trigger_is_refused() {
+        let mut p = Periph::new(Coupling::new(None));
+        for (off, v, code) in [
+            (0x08, 0x1ABC, 0xABC),
+            (0x0C, 0xABC0, 0xABC),
+            (0x10, 0x1AB, 0xAB0),
+            (0x20, 0x0FFF_0123, 0x123),
+        ] {
+            p.write(0x4000_7400 + off, 4, v);
+            assert_eq!(p.read(0x4000_742C, 4), code, "offset {off:#x}");
+        }
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+        p.write(0x4000_7400, 4, 1 | (1 << 2));
+        let why = p.stop.take().expect("TEN1 stops the run");
+        assert!(why.contains("DAC_CR.TEN1"), "{why}");
+    }
+}

@@ -39,3 +39,21 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32, raw: u64) {
         p.dbgmcu[((a - CR) / 4) as usize] = v;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn idcode_is_the_f446s_and_the_freeze_bits_latch() {
+        let mut p = Periph::new(Coupling::new(None));
+        assert_eq!(p.read(0xE004_2000, 4), 0x1000_6421);
+        p.write(0xE004_2008, 4, 1 << 12);
+        assert_eq!(p.read(0xE004_2008, 4), 1 << 12);
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+        p.write(0xE004_2000, 4, 0);
+        let why = p.stop.take().expect("IDCODE is read-only");
+        assert!(why.contains("DBGMCU+0x000"), "{why}");
+    }
+}

@@ -2,7 +2,7 @@
 //! sectors 6–7 (0x0804_0000..0x0808_0000, 2 × 128 KiB), the image's settings across resets.
 //!
 //! Models: ACR (latency and the cache enables; the cache-reset bits read 0), the KEYR unlock
-//! sequence (`KEY1` then `KEY2`), SR (rc_w1 flags EOP, OPERR, WRPERR, PGAERR, PGPERR, PGSERR),
+//! sequence (`KEY1` then `KEY2`), SR (rc_w1 flags EOP, OPERR, WRPERR, PGAERR, PGPERR, PGSERR, RDERR),
 //! CR (LOCK, PG, PSIZE, SER/SNB with STRT), and the store with NOR semantics: erase sets 0xFF
 //! and stalls the core `ERASE_S`, programming only clears bits, needs PG on an unlocked
 //! controller, an access of PSIZE and an aligned address, and stalls the core `PROGRAM_S` per

@@ -98,3 +98,30 @@ impl Periph {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn the_dac_output_needs_pa4_analog_and_en1_and_the_enable_pin_an_output() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4002_3830, 4, 0b11); // GPIOA, GPIOB clocks
+        p.write(0x4000_7408, 4, 2048); // DHR12R1
+        assert_eq!(p.force_output().dac_code, None, "DAC off, PA4 input");
+        p.write(0x4000_7400, 4, 1); // EN1
+        assert_eq!(p.force_output().dac_code, None, "PA4 still an input");
+        p.write(0x4002_0000, 4, 0xA800_0000 | (3 << 8)); // PA4 analog
+        assert_eq!(p.force_output().dac_code, Some(2048));
+        p.write(0x4002_0418, 4, 1 << 10); // PB10 high, but an input
+        assert!(!p.force_output().enabled);
+        p.write(0x4002_0400, 4, 0x0000_0280 | (1 << 20)); // PB10 output
+        assert!(p.force_output().enabled);
+        assert_eq!(
+            p.plant.state,
+            Some(p.force_output()),
+            "the plant sees each change"
+        );
+    }
+}

@@ -6,7 +6,7 @@
 //! write to a port whose RCC_AHB1ENR clock is off is ignored, as on the chip. Refuses: any
 //! offset from 0x28 on. Invariant: every write that can change the force output (the enable
 //! pin PB10, DIR on PA9, PA4/PA8's modes) goes through `output_changed`, so the plant sees the
-//! new output at the time of the write. Reset values are the SWD pins' (PA13/PA14, PB3/PB4).
+//! new output at the time of the write. Reset values are the debug pins' (PA13–PA15, PB3, PB4).
 
 use super::{rcc, Periph};
 
@@ -124,4 +124,30 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32) {
         _ => g[off] = v,
     }
     p.output_changed(before);
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn bsrr_sets_and_clears_odr_idr_reads_outputs_and_pull_ups_and_a_clockless_port_ignores_writes()
+    {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4002_0014, 4, 0xFFFF); // ODR with GPIOA's clock off: ignored
+        assert_eq!(p.read(0x4002_0014, 4), 0);
+        p.write(0x4002_3830, 4, 1); // RCC_AHB1ENR.GPIOAEN
+        p.write(0x4002_0000, 4, 0xA800_0000 | 1); // PA0 output, the SWD pins as at reset
+        p.write(0x4002_0018, 4, 1 | (1 << 17)); // BSRR: set PA0, reset PA1
+        assert_eq!(p.read(0x4002_0014, 4), 1);
+        assert_eq!(p.read(0x4002_0018, 4), 0, "BSRR reads 0");
+        // IDR: PA0 drives high; PA13 and PA15 have pull-ups at reset, PA14 a pull-down.
+        assert_eq!(p.read(0x4002_0010, 4), 1 | (1 << 13) | (1 << 15));
+        p.write(0x4002_0018, 4, 1 << 16);
+        assert_eq!(p.read(0x4002_0010, 4), (1 << 13) | (1 << 15));
+        let _ = p.read(0x4002_0028, 4);
+        let why = p.stop.take().expect("past AFRH");
+        assert!(why.contains("GPIO+0x028 (0x40020028)"), "{why}");
+    }
 }

@@ -112,3 +112,39 @@ impl Periph {
         self.iwdg_on.then(|| self.iwdg_reload_at + self.iwdg_period)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{KEY_ACCESS, KEY_RELOAD, KEY_START};
+    use crate::periph::{Periph, ResetCause, UNITS_PER_S};
+    use crate::plant::Coupling;
+
+    #[test]
+    fn the_watchdog_needs_the_access_key_and_runs_out_without_a_reload() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4000_3008, 4, 100);
+        let why = p.stop.take().expect("RLR without the access key");
+        assert!(
+            why.contains("IWDG_RLR: written without the 0x5555 access key"),
+            "{why}"
+        );
+        p.write(0x4000_3000, 4, u64::from(KEY_ACCESS));
+        p.write(0x4000_3004, 4, 0); // PR: LSI / 4
+        p.write(0x4000_3008, 4, 99); // RLR: 100 steps
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+        assert_eq!(p.iwdg_deadline(), None, "not started");
+        p.write(0x4000_3000, 4, u64::from(KEY_START));
+        let period = 100 * 4 * (UNITS_PER_S / 32_000);
+        assert_eq!(p.iwdg_deadline(), Some(period));
+        p.now = period / 2;
+        p.write(0x4000_3000, 4, u64::from(KEY_RELOAD));
+        assert_eq!(p.iwdg_deadline(), Some(period / 2 + period));
+        assert_eq!(p.iwdg_feeds, 1);
+        p.now = period / 2 + period;
+        p.advance();
+        assert_eq!(p.reset, Some(ResetCause::Watchdog));
+        p.write(0x4000_300C, 4, 0);
+        let why = p.stop.take().expect("SR is read-only");
+        assert!(why.contains("IWDG+0x00c"), "{why}");
+    }
+}

@@ -11,7 +11,7 @@
 //! Units: time in "units" of 1/720 MHz (`UNITS_PER_S`), which divides evenly into every clock of
 //! the 180 MHz tree (HSI 16 MHz = 45 units, SYSCLK 180 MHz = 4, APB1 timers 90 MHz = 8, LSI
 //! 32 kHz = 22 500). Invariants: a register the model does not know stops the run with its name
-//! and address (`Board::stop`), never silently ignored; status bits follow the bits that request
+//! and address (`Periph::stop`), never silently ignored; status bits follow the bits that request
 //! them (RCC ready bits, PWR over-drive, SWS = SW); flash sectors 6–7 obey NOR semantics (erase
 //! sets 0xFF, programming only clears bits, a write needs FLASH_CR.PG and an unlocked controller);
 //! interrupt lines are levels computed from flag & enable bits, plus NVIC software pends.

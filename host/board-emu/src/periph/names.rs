@@ -74,3 +74,15 @@ pub fn reg_name(addr: u32) -> String {
         None => format!("unmapped register {addr:#010x}"),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::reg_name;
+
+    #[test]
+    fn known_registers_by_name_others_by_block_and_offset() {
+        assert_eq!(reg_name(0x4002_3884), "RCC_PLLI2SCFGR (0x40023884)");
+        assert_eq!(reg_name(0x4000_0404), "TIM3+0x004 (0x40000404)");
+        assert_eq!(reg_name(0x5000_0000), "unmapped register 0x50000000");
+    }
+}

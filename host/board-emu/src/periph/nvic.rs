@@ -141,3 +141,34 @@ fn set_bits(arr: &mut [bool; IRQS], a: u32, v: u32, to: bool) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{IRQ_TIM7, IRQ_USART2};
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn enables_pends_and_priority_bytes() {
+        let mut p = Periph::new(Coupling::new(None));
+        let usart_bit = 1u64 << (IRQ_USART2 % 32);
+        p.write(0xE000_E104, 4, usart_bit); // ISER1
+        assert!(p.nvic_en[IRQ_USART2]);
+        assert_eq!(p.read(0xE000_E184, 4), usart_bit, "ICER1 reads the enables");
+        p.write(0xE000_E184, 4, usart_bit);
+        assert!(!p.nvic_en[IRQ_USART2]);
+        let tim7_bit = 1u64 << (IRQ_TIM7 % 32);
+        p.write(0xE000_E204, 4, tim7_bit); // ISPR1
+        assert!(p.irq_pending(IRQ_TIM7));
+        assert_eq!(p.read(0xE000_E284, 4), tim7_bit, "ICPR1 reads the pends");
+        p.write(0xE000_E284, 4, tim7_bit);
+        assert!(!p.irq_pending(IRQ_TIM7));
+        p.write(0xE000_E400 + IRQ_TIM7 as u32, 1, 0x5A); // a byte: the upper 4 bits stay
+        assert_eq!(p.nvic_prio[IRQ_TIM7], 0x50);
+        p.write(0xE000_E41C, 4, 0x1122_3344); // IPR7: IRQs 28-31
+        assert_eq!(p.read(0xE000_E41C, 4), 0x1020_3040);
+        let _ = p.read(0xE000_E300, 4); // IABR0
+        let why = p.stop.take().expect("active bits are not modelled");
+        assert!(why.contains("SCS+0x300"), "{why}");
+    }
+}

@@ -103,3 +103,29 @@ impl Periph {
         self.scb.get(&VTOR).copied().unwrap_or(0)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::{Periph, ResetCause};
+    use crate::plant::Coupling;
+
+    #[test]
+    fn aircr_needs_its_key_and_sysresetreq_resets_the_board() {
+        let mut p = Periph::new(Coupling::new(None));
+        assert_eq!(p.read(0xE000_ED0C, 4), 0xFA05_0000);
+        assert_eq!(p.read(0xE000_EF34, 4), 0xC000_0000, "FPCCR: ASPEN, LSPEN");
+        p.write(0xE000_ED0C, 4, 0x0000_0300);
+        let why = p.stop.take().expect("AIRCR without VECTKEY");
+        assert!(why.contains("without VECTKEY"), "{why}");
+        p.write(0xE000_ED0C, 4, 0x05FA_0300);
+        assert_eq!(p.read(0xE000_ED0C, 4), 0xFA05_0300, "PRIGROUP latched");
+        p.write(0xE000_ED08, 4, 0x0800_4000);
+        assert_eq!(p.vtor(), 0x0800_4000);
+        assert_eq!(p.reset, None);
+        p.write(0xE000_ED0C, 4, 0x05FA_0004);
+        assert_eq!(p.reset, Some(ResetCause::Software));
+        p.write(0xE000_ED04, 4, 1 << 28); // ICSR.PENDSVSET
+        let why = p.stop.take().expect("ICSR writes are not modelled");
+        assert!(why.contains("SCB_ICSR"), "{why}");
+    }
+}

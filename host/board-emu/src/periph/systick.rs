@@ -47,3 +47,21 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32, raw: u64) {
         _ => p.systick[((a - BASE) / 4) as usize] = v,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn systick_latches_and_starting_it_stops_the_run() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0xE000_E014, 4, 1234);
+        assert_eq!(p.read(0xE000_E014, 4), 1234);
+        assert_eq!(p.read(0xE000_E01C, 4), 0x4000_0000 | 22_499);
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+        p.write(0xE000_E010, 4, 1);
+        let why = p.stop.take().expect("ENABLE stops the run");
+        assert!(why.contains("SYST_CSR.ENABLE"), "{why}");
+    }
+}

@@ -273,3 +273,59 @@ impl Periph {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::{Periph, UNITS_PER_S};
+    use crate::plant::Coupling;
+
+    #[test]
+    fn transmit_holds_one_byte_and_refuses_to_lose_a_second() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4000_440C, 4, (1 << 13) | (1 << 3)); // UE, TE
+        p.stop = None; // the reset clock gives no valid baud rate: not the point here
+        p.write(0x4000_4404, 4, u64::from(b'a'));
+        let sr = p.read(0x4000_4400, 4);
+        assert_eq!(
+            sr & ((1 << 6) | (1 << 7)),
+            1 << 7,
+            "TXE set, TC clear while shifting"
+        );
+        p.write(0x4000_4404, 4, u64::from(b'b'));
+        assert_eq!(p.read(0x4000_4400, 4) & (1 << 7), 0, "TXE clear: b waits");
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+        p.write(0x4000_4404, 4, u64::from(b'c'));
+        let why = p.stop.take().expect("overwriting the holding register");
+        assert!(why.contains("a byte would be lost"), "{why}");
+        // Three byte times at the reset BRR (PCLK1 / 16 = 1 Mbaud, 10 µs a byte).
+        p.now += 3 * UNITS_PER_S / 100_000;
+        p.advance();
+        assert_eq!(p.usart.tx_out.iter().copied().collect::<Vec<_>>(), b"ac");
+        assert_eq!(p.usart.sent, 2);
+        let sr = p.read(0x4000_4400, 4);
+        assert_eq!(
+            sr & ((1 << 6) | (1 << 7)),
+            (1 << 6) | (1 << 7),
+            "TXE and TC"
+        );
+    }
+
+    #[test]
+    fn a_byte_not_read_in_time_is_an_overrun() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4000_440C, 4, (1 << 13) | (1 << 2)); // UE, RE
+        p.stop = None;
+        p.usart.rx_fifo.extend(b"xy");
+        p.advance();
+        assert_eq!(p.read(0x4000_4400, 4) & (1 << 5), 1 << 5, "RXNE");
+        p.now += UNITS_PER_S / 1000;
+        p.advance();
+        assert_eq!(p.usart.overruns, 1);
+        assert_eq!(p.read(0x4000_4404, 4), u64::from(b'x'));
+        assert_eq!(
+            p.read(0x4000_4400, 4) & ((1 << 5) | (1 << 3)),
+            0,
+            "a DR read clears RXNE and ORE"
+        );
+    }
+}

@@ -183,3 +183,29 @@ impl Timer {
         self.r[SR] & self.r[DIER] & LINE_FLAGS != 0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn update_events_come_every_psc_plus_one_times_arr_plus_one_clocks() {
+        let mut t = Timer::default();
+        t.reset(0xFFFF);
+        t.write(PSC, 8, 0, 8); // 9 clocks a step
+        t.write(ARR, 99, 0, 8); // ARPE off: at once
+        t.write(EGR, 1, 0, 8); // UG: PSC loads, UIF sets
+        assert_eq!(t.r[SR] & 1, 1, "UG sets UIF (URS = 0)");
+        t.write(SR, 0, 0, 8);
+        t.write(CR1, 1, 0, 8);
+        let period = 9 * 100 * 8;
+        assert_eq!(t.next_update(8), Some(period));
+        t.advance(3 * period + 1, 8);
+        assert_eq!(t.updates, 3);
+        assert_eq!((t.first_update, t.last_update), (Some(period), 3 * period));
+        assert_eq!(t.count(3 * period + 5 * 9 * 8, 8), 5);
+        assert!(!t.line(), "UIE off");
+        t.write(DIER, 1, 3 * period + 1, 8);
+        assert!(t.line());
+    }
+}

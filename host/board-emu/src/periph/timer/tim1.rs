@@ -35,3 +35,39 @@ pub(in crate::periph) fn write(p: &mut Periph, a: u32, v: u32) {
     p.tim1.write(i, v, p.now, u);
     p.output_changed(before);
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn the_pwm_duty_is_ccr1_over_arr_plus_one_and_cc1p_inverts_it() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4002_3830, 4, 0b11); // GPIOA, GPIOB clocks
+        p.write(0x4002_0000, 4, 0xA800_0000 | (2 << 16) | (1 << 18)); // PA8 AF, PA9 output
+        p.write(0x4002_0024, 4, 1); // AFRH: PA8 AF1
+        p.write(0x4002_0400, 4, 0x0000_0280 | (1 << 20)); // PB10 output
+        p.write(0x4002_0418, 4, 1 << 10); // PB10 high: enabled
+        p.write(0x4001_002C, 4, 999); // ARR
+        p.write(0x4001_0034, 4, 250); // CCR1
+        p.write(0x4001_0018, 4, 6 << 4); // CCMR1.OC1M: PWM mode 1
+        p.write(0x4001_0020, 4, 1); // CCER.CC1E
+        p.write(0x4001_0044, 4, 1 << 15); // BDTR.MOE
+        assert_eq!(p.force_output().duty, None, "TIM1 not running");
+        p.write(0x4001_0000, 4, 1); // CEN
+        let f = p.force_output();
+        assert_eq!((f.enabled, f.duty, f.dac_code), (true, Some(0.25), None));
+        assert!(!f.dir_high);
+        p.write(0x4002_0018, 4, 1 << 9); // DIR (PA9) high
+        assert!(p.force_output().dir_high);
+        p.write(0x4001_0020, 4, 0b11); // CC1P: active low
+        assert_eq!(p.force_output().duty, Some(0.75));
+        assert_eq!(
+            p.plant.state,
+            Some(p.force_output()),
+            "the plant sees each change"
+        );
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+    }
+}

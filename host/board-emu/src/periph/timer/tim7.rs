@@ -39,3 +39,23 @@ pub(in crate::periph) fn write(p: &mut Periph, a: u32, v: u32) {
     let u = p.apb1_timer_units();
     p.tim7.write(i, v, p.now, u);
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::periph::Periph;
+    use crate::plant::Coupling;
+
+    #[test]
+    fn cnt_reads_the_count_at_the_time_of_the_read() {
+        let mut p = Periph::new(Coupling::new(None));
+        p.write(0x4000_1428, 4, 15); // PSC: 16 clocks a step
+        p.write(0x4000_142C, 4, 999); // ARR
+        p.write(0x4000_1414, 4, 1); // EGR.UG
+        p.write(0x4000_1400, 4, 1); // CEN
+        let step = 16 * p.apb1_timer_units();
+        p.now = 10 * step;
+        assert_eq!(p.read(0x4000_1424, 4), 10);
+        assert_eq!(p.tim7.next_update(p.apb1_timer_units()), Some(1000 * step));
+        assert!(p.stop.is_none(), "{:?}", p.stop);
+    }
+}
