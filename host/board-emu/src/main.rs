@@ -321,7 +321,7 @@ pub fn report(m: &mut emu::Machine<'_>) {
     );
     eprintln!(
         "USART2: {} bytes sent, {} overruns; IWDG: {} feeds; flash: {} erases, {} words programmed",
-        p.usart.sent, p.usart.overruns, p.iwdg_feeds, p.erases, p.programs
+        p.usart.sent, p.usart.overruns, p.iwdg.feeds, p.erases, p.programs
     );
     for ((taken, below), n) in &preemptions {
         eprintln!(

@@ -39,16 +39,52 @@ const LSI_HZ: u64 = 32_000;
 /// RLR's reload field.
 const RLR_MASK: u32 = 0xFFF;
 
-/// The watchdog at reset: stopped, PR 0, RLR 0xFFF, locked.
-pub(super) fn reset(p: &mut Periph) {
-    p.iwdg = [0, 0, 0xFFF, 0];
-    p.iwdg_on = false;
-    p.iwdg_unlocked = false;
+/// The independent watchdog's state.
+#[derive(Debug, Clone, Default)]
+pub struct Iwdg {
+    /// KR, PR, RLR, SR.
+    pub r: [u32; 4],
+    /// Whether the watchdog runs.
+    pub on: bool,
+    /// Time of the last reload, units.
+    reload_at: u64,
+    /// Time from the last reload to the reset: RLR and PR as they were at that reload (a new
+    /// RLR or PR only counts from the next reload, as on the chip), units.
+    period: u64,
+    /// Whether PR and RLR are writable (`KEY_ACCESS` seen, no other key since).
+    unlocked: bool,
+    /// Feeds so far.
+    pub feeds: u64,
+}
+
+impl Iwdg {
+    /// The watchdog at reset: stopped, PR 0, RLR 0xFFF, locked (the feed count survives).
+    pub(super) fn reset(&mut self) {
+        self.r = [0, 0, 0xFFF, 0];
+        self.on = false;
+        self.unlocked = false;
+    }
+
+    /// The LSI period times the prescaler, units.
+    fn step(&self) -> u64 {
+        (UNITS_PER_S / LSI_HZ) * (4u64 << self.r[PR_I].min(6))
+    }
+
+    /// The counter restarts at `now` with the period of the current PR and RLR.
+    fn reload(&mut self, now: u64) {
+        self.reload_at = now;
+        self.period = (u64::from(self.r[RLR_I] & RLR_MASK) + 1) * self.step();
+    }
+
+    /// When the watchdog runs out, if it runs.
+    pub fn deadline(&self) -> Option<u64> {
+        self.on.then(|| self.reload_at + self.period)
+    }
 }
 
 /// A word read of an IWDG register (the latched value).
 pub(super) fn read(p: &mut Periph, a: u32) -> u32 {
-    p.iwdg[((a - BASE) / 4) as usize]
+    p.iwdg.r[((a - BASE) / 4) as usize]
 }
 
 /// A word write of an IWDG register.
@@ -62,37 +98,33 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32, raw: u64) {
 
 /// IWDG_KR: start, reload, unlock, or (any other value) lock.
 fn write_key(p: &mut Periph, v: u32) {
+    let now = p.now;
+    let w = &mut p.iwdg;
     match v & 0xFFFF {
         KEY_START => {
-            p.iwdg_on = true;
-            reload(p);
+            w.on = true;
+            w.reload(now);
         }
         KEY_RELOAD => {
-            reload(p);
-            p.iwdg_feeds += 1;
-            p.iwdg_unlocked = false;
+            w.reload(now);
+            w.feeds += 1;
+            w.unlocked = false;
         }
-        KEY_ACCESS => p.iwdg_unlocked = true,
-        _ => p.iwdg_unlocked = false,
+        KEY_ACCESS => w.unlocked = true,
+        _ => w.unlocked = false,
     }
-}
-
-/// The counter restarts now with the period of the current PR and RLR.
-fn reload(p: &mut Periph) {
-    p.iwdg_reload_at = p.now;
-    p.iwdg_period = (u64::from(p.iwdg[RLR_I] & RLR_MASK) + 1) * p.iwdg_step();
 }
 
 /// IWDG_PR or IWDG_RLR: written after `KEY_ACCESS`.
 fn write_guarded(p: &mut Periph, a: u32, v: u32) {
     let name = if a == PR { "PR" } else { "RLR" };
-    if !p.iwdg_unlocked {
+    if !p.iwdg.unlocked {
         p.fail(format!(
             "IWDG_{name}: written without the {KEY_ACCESS:#x} access key first (the write is \
              ignored by the chip)"
         ));
     }
-    p.iwdg[((a - BASE) / 4) as usize] = v;
+    p.iwdg.r[((a - BASE) / 4) as usize] = v;
     if trace::enabled() {
         eprintln!(
             "iwdg: {name} = {v} at {:.6} s",
@@ -102,14 +134,9 @@ fn write_guarded(p: &mut Periph, a: u32, v: u32) {
 }
 
 impl Periph {
-    /// The LSI period times the IWDG prescaler, units.
-    fn iwdg_step(&self) -> u64 {
-        (UNITS_PER_S / LSI_HZ) * (4u64 << self.iwdg[PR_I].min(6))
-    }
-
     /// When the watchdog runs out, if it runs.
     pub fn iwdg_deadline(&self) -> Option<u64> {
-        self.iwdg_on.then(|| self.iwdg_reload_at + self.iwdg_period)
+        self.iwdg.deadline()
     }
 }
 
@@ -139,7 +166,7 @@ mod tests {
         p.now = period / 2;
         p.write(0x4000_3000, 4, u64::from(KEY_RELOAD));
         assert_eq!(p.iwdg_deadline(), Some(period / 2 + period));
-        assert_eq!(p.iwdg_feeds, 1);
+        assert_eq!(p.iwdg.feeds, 1);
         p.now = period / 2 + period;
         p.advance();
         assert_eq!(p.reset, Some(ResetCause::Watchdog));

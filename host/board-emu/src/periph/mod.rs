@@ -32,6 +32,7 @@ mod usart;
 
 use crate::plant::Coupling;
 pub use crate::plant::{ForceState, UNITS_PER_S};
+pub use iwdg::Iwdg;
 pub use names::reg_name;
 pub use nvic::{IRQS, IRQ_TIM2, IRQ_TIM7, IRQ_USART2};
 pub use timer::Timer;
@@ -72,17 +73,8 @@ pub struct Periph {
     pub dac: [u32; 14],
     /// USART2.
     pub usart: Usart,
-    /// IWDG: KR, PR, RLR, SR; running; time of the last reload.
-    pub iwdg: [u32; 4],
-    /// Whether the IWDG runs.
-    pub iwdg_on: bool,
-    iwdg_reload_at: u64,
-    /// Time from the last reload to the reset: RLR and PR as they were at that reload (a new
-    /// RLR or PR only counts from the next reload, as on the chip).
-    iwdg_period: u64,
-    iwdg_unlocked: bool,
-    /// Feeds so far.
-    pub iwdg_feeds: u64,
+    /// The independent watchdog.
+    pub iwdg: Iwdg,
     /// DBGMCU CR, APB1_FZ, APB2_FZ.
     pub dbgmcu: [u32; 3],
     /// NVIC: enabled, soft-pending, active, priority.
@@ -143,12 +135,7 @@ impl Periph {
             enc_base_cnt: 0,
             dac: [0; 14],
             usart: Usart::default(),
-            iwdg: [0; 4],
-            iwdg_on: false,
-            iwdg_reload_at: 0,
-            iwdg_period: 0,
-            iwdg_unlocked: false,
-            iwdg_feeds: 0,
+            iwdg: Iwdg::default(),
             dbgmcu: [0; 3],
             nvic_en: [false; IRQS],
             nvic_pend: [false; IRQS],
@@ -178,7 +165,7 @@ impl Periph {
         timer::reset(self);
         dac::reset(self);
         self.usart.reset();
-        iwdg::reset(self);
+        self.iwdg.reset();
         dbgmcu::reset(self);
         nvic::reset(self);
         scb::reset(self);
