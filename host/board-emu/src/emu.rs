@@ -142,10 +142,10 @@ fn bit_band(off: u64) -> (u32, u32) {
     (byte & !3, bit)
 }
 
-impl<'a> Machine<'a> {
-    /// Builds the board around `image` and `p`, at the reset vector.
-    pub fn new(image: Image, p: Periph) -> Result<Self> {
-        let state = State {
+impl State {
+    /// The hooks' state at power-on, around the peripherals `p`, for `image`.
+    fn new(p: Periph, image: &Image) -> Self {
+        Self {
             p,
             insns: 0,
             deadline: 0,
@@ -154,132 +154,175 @@ impl<'a> Machine<'a> {
             fault: None,
             attention: false,
             sleep_insns: image.sleep_insns.clone(),
-        };
-        let mut uc = Unicorn::new_with_data(Arch::ARM, Mode::THUMB | Mode::MCLASS, state)
-            .map_err(uc_err("opening the Cortex-M engine"))?;
-        uc.ctl_set_cpu_model(ArmCpuModel::CORTEX_M4 as i32)
-            .map_err(uc_err("selecting the Cortex-M4"))?;
-        let image_len = u64::from(IMAGE_END - FLASH_BASE);
-        uc.mem_map(u64::from(FLASH_BASE), image_len, Prot::READ | Prot::EXEC)
-            .map_err(uc_err("mapping the flash"))?;
-        uc.mem_write(u64::from(FLASH_BASE), &image.flash)
-            .map_err(uc_err("loading the image"))?;
-        uc.mem_map(u64::from(RAM_BASE), u64::from(RAM_LEN), Prot::ALL)
-            .map_err(uc_err("mapping the SRAM"))?;
-        // Flash sectors 6–7: the config store, NOR semantics.
-        uc.mmio_map(
-            u64::from(IMAGE_END),
-            0x4_0000,
-            Some(|uc: &mut Unicorn<'_, State>, off: u64, size: usize| {
-                uc.get_data().p.store_read(off as u32, size)
-            }),
-            Some(
-                |uc: &mut Unicorn<'_, State>, off: u64, size: usize, v: u64| {
-                    let p = &mut uc.get_data_mut().p;
-                    p.store_write(off as u32, size, v);
-                    p.now += std::mem::take(&mut p.stall);
-                    attention(uc);
-                },
-            ),
-        )
-        .map_err(uc_err("mapping the config store"))?;
-        for (base, len) in [(0x4000_0000u64, 0x8_0000u64), (0xE000_0000, 0x10_0000)] {
-            uc.mmio_map(
-                base,
-                len,
-                Some(move |uc: &mut Unicorn<'_, State>, off: u64, size: usize| {
-                    let s = uc.get_data_mut();
-                    let v = s.p.read((base + off) as u32, size);
-                    if s.p.stop.is_some() || s.p.reset.is_some() {
-                        s.attention = true;
-                    }
-                    v
-                }),
-                Some(
-                    move |uc: &mut Unicorn<'_, State>, off: u64, size: usize, v: u64| {
-                        let p = &mut uc.get_data_mut().p;
-                        p.write((base + off) as u32, size, v);
-                        p.now += std::mem::take(&mut p.stall);
-                        // An interrupt may have become pending (NVIC pend/enable, a flag set).
-                        attention(uc);
-                    },
-                ),
-            )
-            .map_err(uc_err("mapping the peripherals"))?;
         }
-        // The peripheral bit-band alias (RM0390 §2.3.2): one word per bit of 0x4000_0000..
+    }
+}
+
+/// Opens unicorn's Cortex-M4 (Thumb, M-class) around `state`.
+fn open_core<'a>(state: State) -> Result<Unicorn<'a, State>> {
+    let mut uc = Unicorn::new_with_data(Arch::ARM, Mode::THUMB | Mode::MCLASS, state)
+        .map_err(uc_err("opening the Cortex-M engine"))?;
+    uc.ctl_set_cpu_model(ArmCpuModel::CORTEX_M4 as i32)
+        .map_err(uc_err("selecting the Cortex-M4"))?;
+    Ok(uc)
+}
+
+/// Maps the image flash (sectors 0–5, read and execute) with `image` in it, and the SRAM.
+fn map_memory(uc: &mut Unicorn<'_, State>, image: &Image) -> Result<()> {
+    let image_len = u64::from(IMAGE_END - FLASH_BASE);
+    uc.mem_map(u64::from(FLASH_BASE), image_len, Prot::READ | Prot::EXEC)
+        .map_err(uc_err("mapping the flash"))?;
+    uc.mem_write(u64::from(FLASH_BASE), &image.flash)
+        .map_err(uc_err("loading the image"))?;
+    uc.mem_map(u64::from(RAM_BASE), u64::from(RAM_LEN), Prot::ALL)
+        .map_err(uc_err("mapping the SRAM"))
+}
+
+/// Maps flash sectors 6–7: the config store, NOR semantics (`Periph::store_write`).
+fn map_config_store(uc: &mut Unicorn<'_, State>) -> Result<()> {
+    uc.mmio_map(
+        u64::from(IMAGE_END),
+        0x4_0000,
+        Some(|uc: &mut Unicorn<'_, State>, off: u64, size: usize| {
+            uc.get_data().p.store_read(off as u32, size)
+        }),
+        Some(
+            |uc: &mut Unicorn<'_, State>, off: u64, size: usize, v: u64| {
+                let p = &mut uc.get_data_mut().p;
+                p.store_write(off as u32, size, v);
+                p.now += std::mem::take(&mut p.stall);
+                attention(uc);
+            },
+        ),
+    )
+    .map_err(uc_err("mapping the config store"))
+}
+
+/// Maps the peripheral space (0x4000_0000..0x4008_0000) and the system space
+/// (0xE000_0000..0xE010_0000) onto `Periph::read` and `Periph::write`.
+fn map_peripherals(uc: &mut Unicorn<'_, State>) -> Result<()> {
+    for (base, len) in [(0x4000_0000u64, 0x8_0000u64), (0xE000_0000, 0x10_0000)] {
         uc.mmio_map(
-            0x4200_0000,
-            0x200_0000,
-            Some(|uc: &mut Unicorn<'_, State>, off: u64, _size: usize| {
-                let (addr, bit) = bit_band(off);
+            base,
+            len,
+            Some(move |uc: &mut Unicorn<'_, State>, off: u64, size: usize| {
                 let s = uc.get_data_mut();
-                let v = s.p.read(addr, 4);
-                if s.p.stop.is_some() {
+                let v = s.p.read((base + off) as u32, size);
+                if s.p.stop.is_some() || s.p.reset.is_some() {
                     s.attention = true;
                 }
-                (v >> bit) & 1
+                v
             }),
             Some(
-                |uc: &mut Unicorn<'_, State>, off: u64, _size: usize, v: u64| {
-                    let (addr, bit) = bit_band(off);
+                move |uc: &mut Unicorn<'_, State>, off: u64, size: usize, v: u64| {
                     let p = &mut uc.get_data_mut().p;
-                    let old = p.read(addr, 4);
-                    let new = (old & !(1 << bit)) | ((v & 1) << bit);
-                    p.write(addr, 4, new);
+                    p.write((base + off) as u32, size, v);
+                    p.now += std::mem::take(&mut p.stall);
+                    // An interrupt may have become pending (NVIC pend/enable, a flag set).
                     attention(uc);
                 },
             ),
         )
-        .map_err(uc_err("mapping the bit-band alias"))?;
-        // Every instruction: count it, charge its cycle, stop at the deadline or before WFI.
-        uc.add_code_hook(
-            1,
-            0,
-            |uc: &mut Unicorn<'_, State>, addr: u64, _size: u32| {
-                let s = uc.get_data_mut();
-                if s.sleep_insns.binary_search(&(addr as u32)).is_ok() {
-                    s.sleep_at = Some(addr as u32);
-                    let _ = uc.emu_stop();
-                    return;
-                }
-                if s.attention {
-                    s.attention = false;
-                    let _ = uc.emu_stop();
-                    return;
-                }
-                s.insns += 1;
-                s.p.now += s.p.cpu_units;
-                if s.p.now >= s.deadline {
-                    let _ = uc.emu_stop();
-                }
+        .map_err(uc_err("mapping the peripherals"))?;
+    }
+    Ok(())
+}
+
+/// Maps the peripheral bit-band alias (RM0390 §2.3.2): one word per bit of 0x4000_0000..
+fn map_bit_band(uc: &mut Unicorn<'_, State>) -> Result<()> {
+    uc.mmio_map(
+        0x4200_0000,
+        0x200_0000,
+        Some(|uc: &mut Unicorn<'_, State>, off: u64, _size: usize| {
+            let (addr, bit) = bit_band(off);
+            let s = uc.get_data_mut();
+            let v = s.p.read(addr, 4);
+            if s.p.stop.is_some() {
+                s.attention = true;
+            }
+            (v >> bit) & 1
+        }),
+        Some(
+            |uc: &mut Unicorn<'_, State>, off: u64, _size: usize, v: u64| {
+                let (addr, bit) = bit_band(off);
+                let p = &mut uc.get_data_mut().p;
+                let old = p.read(addr, 4);
+                let new = (old & !(1 << bit)) | ((v & 1) << bit);
+                p.write(addr, 4, new);
+                attention(uc);
             },
-        )
-        .map_err(uc_err("adding the code hook"))?;
-        uc.add_mem_hook(
-            HookType::MEM_UNMAPPED | HookType::MEM_PROT,
-            1,
-            0,
-            |uc: &mut Unicorn<'_, State>, kind: MemType, addr: u64, _size: usize, v: i64| {
-                let s = uc.get_data_mut();
-                let a = addr as u32;
-                match kind {
-                    MemType::FETCH_UNMAPPED if a >= 0xFFFF_FF00 => s.exc_return = Some(a),
-                    MemType::WRITE_PROT if (FLASH_BASE..IMAGE_END).contains(&a) => {
-                        s.fault = Some(format!(
-                            "write of {v:#x} to the image flash at {a:#010x} (only sectors 6-7 \
-                             are written)"
-                        ));
-                    }
-                    MemType::WRITE_UNMAPPED => {
-                        s.fault = Some(format!("write of {v:#x} to {}", reg_name(a)));
-                    }
-                    _ => s.fault = Some(format!("{kind:?} at {}", reg_name(a))),
+        ),
+    )
+    .map_err(uc_err("mapping the bit-band alias"))
+}
+
+/// Every instruction: count it, charge its cycle, stop at the deadline or before WFI.
+fn add_code_hook(uc: &mut Unicorn<'_, State>) -> Result<()> {
+    uc.add_code_hook(
+        1,
+        0,
+        |uc: &mut Unicorn<'_, State>, addr: u64, _size: u32| {
+            let s = uc.get_data_mut();
+            if s.sleep_insns.binary_search(&(addr as u32)).is_ok() {
+                s.sleep_at = Some(addr as u32);
+                let _ = uc.emu_stop();
+                return;
+            }
+            if s.attention {
+                s.attention = false;
+                let _ = uc.emu_stop();
+                return;
+            }
+            s.insns += 1;
+            s.p.now += s.p.cpu_units;
+            if s.p.now >= s.deadline {
+                let _ = uc.emu_stop();
+            }
+        },
+    )
+    .map_err(uc_err("adding the code hook"))?;
+    Ok(())
+}
+
+/// Unmapped and protected accesses: an exception return (a fetch from 0xFFFFFFxx) or a fault.
+fn add_fault_hook(uc: &mut Unicorn<'_, State>) -> Result<()> {
+    uc.add_mem_hook(
+        HookType::MEM_UNMAPPED | HookType::MEM_PROT,
+        1,
+        0,
+        |uc: &mut Unicorn<'_, State>, kind: MemType, addr: u64, _size: usize, v: i64| {
+            let s = uc.get_data_mut();
+            let a = addr as u32;
+            match kind {
+                MemType::FETCH_UNMAPPED if a >= 0xFFFF_FF00 => s.exc_return = Some(a),
+                MemType::WRITE_PROT if (FLASH_BASE..IMAGE_END).contains(&a) => {
+                    s.fault = Some(format!(
+                        "write of {v:#x} to the image flash at {a:#010x} (only sectors 6-7 \
+                         are written)"
+                    ));
                 }
-                false
-            },
-        )
-        .map_err(uc_err("adding the fault hook"))?;
+                MemType::WRITE_UNMAPPED => {
+                    s.fault = Some(format!("write of {v:#x} to {}", reg_name(a)));
+                }
+                _ => s.fault = Some(format!("{kind:?} at {}", reg_name(a))),
+            }
+            false
+        },
+    )
+    .map_err(uc_err("adding the fault hook"))?;
+    Ok(())
+}
+
+impl<'a> Machine<'a> {
+    /// Builds the board around `image` and `p`, at the reset vector.
+    pub fn new(image: Image, p: Periph) -> Result<Self> {
+        let mut uc = open_core(State::new(p, &image))?;
+        map_memory(&mut uc, &image)?;
+        map_config_store(&mut uc)?;
+        map_peripherals(&mut uc)?;
+        map_bit_band(&mut uc)?;
+        add_code_hook(&mut uc)?;
+        add_fault_hook(&mut uc)?;
         let mut m = Self {
             uc,
             image,
@@ -437,14 +480,7 @@ impl<'a> Machine<'a> {
         } else {
             0xFFFF_FFF1
         };
-        let vtor = self
-            .uc
-            .get_data()
-            .p
-            .scb
-            .get(&0xE000_ED08)
-            .copied()
-            .unwrap_or(0);
+        let vtor = self.uc.get_data().p.vtor();
         let vtor = if vtor == 0 { FLASH_BASE } else { vtor };
         let mut vec = [0u8; 4];
         self.uc
@@ -534,13 +570,7 @@ impl<'a> Machine<'a> {
     /// unmodelled register, broke a hardware rule, or faulted.
     pub fn run_until(&mut self, t_end: u64) -> Result<()> {
         loop {
-            if let Some(why) = self.uc.get_data_mut().p.stop.take() {
-                let pc = self.reg(RegisterARM::PC)?;
-                bail!("{why} (pc {pc:#010x})");
-            }
-            self.periph().advance();
-            if let Some(cause) = self.uc.get_data_mut().p.reset.take() {
-                self.board_reset(cause)?;
+            if self.stop_or_reset()? {
                 continue;
             }
             let now = self.now();
@@ -556,69 +586,94 @@ impl<'a> Machine<'a> {
                 return Ok(());
             }
             let next = self.uc.get_data().p.next_event().unwrap_or(u64::MAX);
-            let mut deadline = next.min(t_end).max(now + 1);
+            let deadline = next.min(t_end).max(now + 1);
             if self.sleeping {
-                // WFI wakes on any pending interrupt above the handler's priority, even masked.
-                let wakes = pending.is_some_and(|(_, pr)| {
-                    u16::from(pr)
-                        < self
-                            .active
-                            .iter()
-                            .map(|a| u16::from(a.1))
-                            .min()
-                            .unwrap_or(256)
-                });
-                if wakes {
-                    self.sleeping = false;
-                } else {
-                    self.asleep += deadline - now;
-                    let p = self.periph();
-                    p.now = deadline;
-                    p.plant.advance_to(deadline);
-                }
-                continue;
-            }
-            if self.active.is_empty() && self.hang_main_at.is_some_and(|h| now >= h) {
+                self.sleep(pending, now, deadline);
+            } else if self.active.is_empty() && self.hang_main_at.is_some_and(|h| now >= h) {
                 // A hung main loop: thread mode spins in place until the next event.
-                let p = self.periph();
-                p.now = deadline;
-                p.plant.advance_to(deadline);
-                continue;
-            }
-            if pending.is_some() {
+                self.idle_to(deadline);
+            } else if pending.is_some() {
                 // Masked (PRIMASK/BASEPRI): look again soon.
                 let u = self.uc.get_data().p.cpu_units;
-                deadline = deadline.min(now + 32 * u);
-            }
-            self.uc.get_data_mut().deadline = deadline;
-            let pc = self.reg(RegisterARM::PC)?;
-            let result = self.uc.emu_start(u64::from(pc | 1), u64::MAX, 0, 0);
-            let s = self.uc.get_data_mut();
-            if let Some(at) = s.sleep_at.take() {
-                self.set(RegisterARM::PC, at + 2)?;
-                self.sleeping = true;
-                continue;
-            }
-            let exc_return = s.exc_return.take();
-            let fault = s.fault.take();
-            if let Some(at) = exc_return {
-                self.exception_return(at)?;
-                continue;
-            }
-            // The M-profile system region (0xE000_0000 and up) is execute-never: a branch to
-            // EXC_RETURN raises a prefetch abort in unicorn rather than an unmapped fetch.
-            let pc = self.reg(RegisterARM::PC)?;
-            if result.is_err() && pc >= 0xFFFF_FF00 {
-                self.exception_return(pc)?;
-                continue;
-            }
-            if let Some(f) = fault {
-                bail!("the firmware faulted: {f} (pc {pc:#010x})");
-            }
-            if let Err(e) = result {
-                let pc = self.reg(RegisterARM::PC)?;
-                bail!("the core stopped: {e:?} at pc {pc:#010x}");
+                self.execute(deadline.min(now + 32 * u))?;
+            } else {
+                self.execute(deadline)?;
             }
         }
+    }
+
+    /// Stops the run on a broken rule (`Periph::stop`), brings the peripherals up to now and
+    /// performs a reset they ask for. `Ok(true)`: the board was reset.
+    fn stop_or_reset(&mut self) -> Result<bool> {
+        if let Some(why) = self.uc.get_data_mut().p.stop.take() {
+            let pc = self.reg(RegisterARM::PC)?;
+            bail!("{why} (pc {pc:#010x})");
+        }
+        self.periph().advance();
+        if let Some(cause) = self.uc.get_data_mut().p.reset.take() {
+            self.board_reset(cause)?;
+            return Ok(true);
+        }
+        Ok(false)
+    }
+
+    /// Asleep in WFI: wakes on any pending interrupt above the handler's priority, even a
+    /// masked one; else time jumps to `deadline`.
+    fn sleep(&mut self, pending: Option<(usize, u8)>, now: u64, deadline: u64) {
+        let wakes = pending.is_some_and(|(_, pr)| {
+            u16::from(pr)
+                < self
+                    .active
+                    .iter()
+                    .map(|a| u16::from(a.1))
+                    .min()
+                    .unwrap_or(256)
+        });
+        if wakes {
+            self.sleeping = false;
+        } else {
+            self.asleep += deadline - now;
+            self.idle_to(deadline);
+        }
+    }
+
+    /// Time jumps to `deadline` with the core idle; the plant follows.
+    fn idle_to(&mut self, deadline: u64) {
+        let p = self.periph();
+        p.now = deadline;
+        p.plant.advance_to(deadline);
+    }
+
+    /// Runs the core from the PC until `deadline` (or an earlier stop by a hook), then handles
+    /// why it stopped: a sleep instruction, an exception return, a fault.
+    fn execute(&mut self, deadline: u64) -> Result<()> {
+        self.uc.get_data_mut().deadline = deadline;
+        let pc = self.reg(RegisterARM::PC)?;
+        let result = self.uc.emu_start(u64::from(pc | 1), u64::MAX, 0, 0);
+        let s = self.uc.get_data_mut();
+        if let Some(at) = s.sleep_at.take() {
+            self.set(RegisterARM::PC, at + 2)?;
+            self.sleeping = true;
+            return Ok(());
+        }
+        let exc_return = s.exc_return.take();
+        let fault = s.fault.take();
+        if let Some(at) = exc_return {
+            return self.exception_return(at);
+        }
+        // The M-profile system region (0xE000_0000 and up) is execute-never: a branch to
+        // EXC_RETURN raises a prefetch abort in unicorn rather than an unmapped fetch.
+        let pc = self.reg(RegisterARM::PC)?;
+        if result.is_err() && pc >= 0xFFFF_FF00 {
+            return self.exception_return(pc);
+        }
+        if let Some(f) = fault {
+            bail!("the firmware faulted: {f} (pc {pc:#010x})");
+        }
+        if let Err(e) = result {
+            let pc = self.reg(RegisterARM::PC)?;
+            bail!("the core stopped: {e:?} at pc {pc:#010x}");
+        }
+        Ok(())
     }
 }

@@ -156,6 +156,25 @@ pub fn parse(bytes: &[u8]) -> Result<Image> {
         .collect::<String>();
     let file =
         object::File::parse(bytes).context("not a readable ELF file (truncated or corrupt)")?;
+    check_architecture(&file)?;
+    let flash = load_flash(bytes, &file)?;
+    let (initial_sp, reset) = vector_table(&flash)?;
+    let output = output_variant(&flash)?;
+    let rig = rig_record(&flash)?;
+    let sleep_insns = sleep_instructions(&file);
+    Ok(Image {
+        flash,
+        initial_sp,
+        reset,
+        output,
+        rig,
+        sha256,
+        sleep_insns,
+    })
+}
+
+/// The ELF must be 32-bit little-endian ARM.
+fn check_architecture(file: &object::File<'_>) -> Result<()> {
     if file.architecture() != object::Architecture::Arm || file.is_64() || !file.is_little_endian()
     {
         bail!(
@@ -164,6 +183,12 @@ pub fn parse(bytes: &[u8]) -> Result<Image> {
             if file.is_64() { 64 } else { 32 }
         );
     }
+    Ok(())
+}
+
+/// The image flash (sectors 0–5, erased bytes 0xFF) with every loadable segment at its load
+/// address; a segment outside it is refused.
+fn load_flash(bytes: &[u8], file: &object::File<'_>) -> Result<Vec<u8>> {
     let mut flash = vec![0xFF_u8; (IMAGE_END - FLASH_BASE) as usize];
     let mut loaded = 0usize;
     for seg in file.segments() {
@@ -190,6 +215,12 @@ pub fn parse(bytes: &[u8]) -> Result<Image> {
     if loaded < 8 {
         bail!("the ELF loads nothing into flash (no vector table)");
     }
+    Ok(flash)
+}
+
+/// The vector table's (initial SP, reset vector), checked: the SP in SRAM, the reset vector a
+/// Thumb address in the image flash.
+fn vector_table(flash: &[u8]) -> Result<(u32, u32)> {
     let word = |i: usize| u32::from_le_bytes(flash[4 * i..4 * i + 4].try_into().expect("4 bytes"));
     let initial_sp = word(0);
     let reset = word(1);
@@ -206,20 +237,28 @@ pub fn parse(bytes: &[u8]) -> Result<Image> {
              {FLASH_BASE:#010x}..{IMAGE_END:#010x}"
         );
     }
-    let output = if contains(&flash, b"nucleo-f446re-pwm") {
-        Output::Pwm
-    } else if contains(&flash, b"nucleo-f446re-dac") {
-        Output::Dac
+    Ok((initial_sp, reset))
+}
+
+/// The nucleo-f446re output variant the image names in its flash.
+fn output_variant(flash: &[u8]) -> Result<Output> {
+    if contains(flash, b"nucleo-f446re-pwm") {
+        Ok(Output::Pwm)
+    } else if contains(flash, b"nucleo-f446re-dac") {
+        Ok(Output::Dac)
     } else {
         bail!(
             "the image names no nucleo-f446re board (neither \"nucleo-f446re-dac\" nor \
              \"nucleo-f446re-pwm\" is in its flash): built for another board"
         );
-    };
-    let rig = rig_record(&flash)?;
+    }
+}
+
+/// Addresses of every `WFI` (0xBF30) and `WFE` (0xBF20) halfword in executable sections.
+fn sleep_instructions(file: &object::File<'_>) -> Vec<u32> {
+    use object::ObjectSection;
     let mut sleep_insns = Vec::new();
     for section in file.sections() {
-        use object::ObjectSection;
         if section.kind() != object::SectionKind::Text {
             continue;
         }
@@ -232,15 +271,7 @@ pub fn parse(bytes: &[u8]) -> Result<Image> {
             }
         }
     }
-    Ok(Image {
-        flash,
-        initial_sp,
-        reset,
-        output,
-        rig,
-        sha256,
-        sleep_insns,
-    })
+    sleep_insns
 }
 
 fn contains(hay: &[u8], needle: &[u8]) -> bool {

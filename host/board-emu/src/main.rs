@@ -18,6 +18,7 @@ mod image;
 mod periph;
 mod plant;
 mod pty;
+mod trace;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
@@ -126,6 +127,23 @@ fn main() {
 
 fn run() -> Result<()> {
     let args = Args::parse();
+    let img = load_image(&args)?;
+    let plant = build_plant(&args, &img.rig)?;
+    let mut p = Periph::new(plant::Coupling::new(Some(plant)).with_rig(img.rig));
+    load_store(&args, &mut p)?;
+    let mut m = emu::Machine::new(img, p)?;
+    let result = if args.pty {
+        serve_pty(&args, &mut m)
+    } else {
+        let end = seconds_end(&args)?;
+        run_seconds(&args, &mut m, end)
+    };
+    save_store(&args, &mut m)?;
+    result
+}
+
+/// Loads the ELF and refuses it unless it has the SHA-256 and the output asked for.
+fn load_image(args: &Args) -> Result<image::Image> {
     let img = image::load(&args.elf)?;
     if let Some(want) = &args.sha256 {
         if !want.eq_ignore_ascii_case(&img.sha256) {
@@ -155,8 +173,12 @@ fn run() -> Result<()> {
         img.rig.describe(),
         img.sha256
     );
-    let plant = build_plant(&args, &img.rig)?;
-    let mut p = Periph::new(plant::Coupling::new(Some(plant)).with_rig(img.rig));
+    Ok(img)
+}
+
+/// With --store: the config store from that file, if it exists (it must be exactly the
+/// store's size).
+fn load_store(args: &Args, p: &mut Periph) -> Result<()> {
     if let Some(path) = &args.store {
         if let Ok(bytes) = std::fs::read(path) {
             if bytes.len() != p.store.len() {
@@ -170,43 +192,49 @@ fn run() -> Result<()> {
             p.store = bytes;
         }
     }
-    let mut m = emu::Machine::new(img, p)?;
-    if args.pty {
-        // The host holds our stdin: when it goes away (even killed), stdin closes and the run
-        // ends with a report.
-        std::thread::spawn(|| {
-            let mut sink = Vec::new();
-            let _ = std::io::Read::read_to_end(&mut std::io::stdin(), &mut sink);
-            pty::STOP.store(true, std::sync::atomic::Ordering::Relaxed);
-        });
-    }
-    let result = if args.pty {
-        let r = pty::serve(
-            &mut m,
-            args.fast,
-            args.hang_main_after,
-            args.store.as_deref(),
-        );
-        report(&mut m);
-        r
-    } else {
-        let secs = args.seconds.unwrap_or(1.0);
-        if !(secs > 0.0 && secs <= 3600.0) {
-            bail!("--seconds {secs}: allowed 0 < S <= 3600");
-        }
-        let end = (secs * UNITS_PER_S as f64) as u64;
-        if let Some(h) = args.hang_main_after {
-            m.hang_main_at = Some((h * UNITS_PER_S as f64) as u64);
-        }
-        let r = m.run_until(end);
-        report(&mut m);
-        r.and_then(|()| check_servo_rate(&mut m, args.expect_servo_hz))
-    };
+    Ok(())
+}
+
+/// With --store: the config store back to that file.
+fn save_store(args: &Args, m: &mut emu::Machine<'_>) -> Result<()> {
     if let Some(path) = &args.store {
         std::fs::write(path, &m.periph().store)
             .with_context(|| format!("saving the config store to {}", path.display()))?;
     }
-    result
+    Ok(())
+}
+
+/// --pty: serves USART2 until the host is gone, then reports.
+fn serve_pty(args: &Args, m: &mut emu::Machine<'_>) -> Result<()> {
+    // The host holds our stdin: when it goes away (even killed), stdin closes and the run
+    // ends with a report.
+    std::thread::spawn(|| {
+        let mut sink = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut std::io::stdin(), &mut sink);
+        pty::STOP.store(true, std::sync::atomic::Ordering::Relaxed);
+    });
+    let r = pty::serve(m, args.fast, args.hang_main_after, args.store.as_deref());
+    report(m);
+    r
+}
+
+/// The end of a --seconds run (1 s by default), units; refused outside 0 < S <= 3600.
+fn seconds_end(args: &Args) -> Result<u64> {
+    let secs = args.seconds.unwrap_or(1.0);
+    if !(secs > 0.0 && secs <= 3600.0) {
+        bail!("--seconds {secs}: allowed 0 < S <= 3600");
+    }
+    Ok((secs * UNITS_PER_S as f64) as u64)
+}
+
+/// Runs without a host until `end`, reports, and checks the servo rate if asked to.
+fn run_seconds(args: &Args, m: &mut emu::Machine<'_>, end: u64) -> Result<()> {
+    if let Some(h) = args.hang_main_after {
+        m.hang_main_at = Some((h * UNITS_PER_S as f64) as u64);
+    }
+    let r = m.run_until(end);
+    report(m);
+    r.and_then(|()| check_servo_rate(m, args.expect_servo_hz))
 }
 
 /// The TIM7 update rate over the run, Hz.
@@ -293,7 +321,7 @@ pub fn report(m: &mut emu::Machine<'_>) {
     );
     eprintln!(
         "USART2: {} bytes sent, {} overruns; IWDG: {} feeds; flash: {} erases, {} words programmed",
-        p.usart.sent, p.usart.overruns, p.iwdg_feeds, p.erases, p.programs
+        p.usart.sent, p.usart.overruns, p.iwdg.feeds, p.erases, p.programs
     );
     for ((taken, below), n) in &preemptions {
         eprintln!(
