@@ -271,8 +271,8 @@ fn unexpected(request: &str, answer: &DeviceMsg) -> ClientError {
 mod tests {
     use super::*;
     use crate::transport::pty_pair;
-    use std::time::Instant;
     use std::io::{Read, Write};
+    use std::time::Instant;
     use stiffwall_proto::{encode, FrameDecoder, MAX_FRAME};
 
     /// A device's info for the scripted devices' handshake answers.

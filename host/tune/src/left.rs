@@ -21,6 +21,10 @@ pub struct DeviceLeft {
     pub ok: bool,
     /// Why it failed, when it did.
     pub problem: Option<String>,
+    /// Why a device resting farther than [`LEFT_TOLERANCE_COUNTS`] from its start passed (the
+    /// band static friction leaves the way back's stiffest spring), when it did.
+    #[serde(default)]
+    pub note: Option<String>,
 }
 
 /// The final check's tolerance on the position, counts.
@@ -42,6 +46,9 @@ impl core::fmt::Display for DeviceLeft {
         )?;
         if let Some(p) = &self.problem {
             write!(f, ": {p}")?;
+        }
+        if let Some(n) = &self.note {
+            write!(f, " ({n})")?;
         }
         Ok(())
     }

@@ -560,6 +560,7 @@ pub fn check_left(
     start: i64,
     cfg: &ServoConfig,
     static_friction_n: Option<f64>,
+    settle: Option<&GentleMove>,
     problem_before: Option<String>,
 ) -> DeviceLeft {
     let watched = watch_rest(c, cfg, 20.0);
@@ -581,7 +582,15 @@ pub fn check_left(
         }
         _ => 0,
     };
-    let near = (count - start).abs() <= LEFT_TOLERANCE_COUNTS.max(band);
+    let approach = approach_band(settle, static_friction_n, f64::from(c.info.resolution));
+    let off = (count - start).abs();
+    let near = off <= LEFT_TOLERANCE_COUNTS.max(band).max(approach);
+    let note = (near && off > LEFT_TOLERANCE_COUNTS.max(band)).then(|| {
+        format!(
+            "within the {approach} counts that static friction leaves the way back's stiffest \
+             spring: any nudge of it moves the device farther"
+        )
+    });
     let problem = if let Err(e) = &watched {
         Some(format!("the device did not answer: {e}"))
     } else if let Err(e) = &faults {
@@ -607,7 +616,33 @@ pub fn check_left(
         faults: fault_names(latched),
         ok: problem.is_none(),
         problem,
+        note,
     }
+}
+
+/// The least move a nudge of the way back's stiffest spring (`settle`: its `k_settle`, else its
+/// K, and the identified Coulomb friction c) can make against static friction F_s
+/// (`static_friction_n`), raw counts of `res` (m, rad): breaking away needs an offset F_s/(KΔ), and
+/// the device then slides to the kinetic equilibrium c/(KΔ) and on past it by as much (an
+/// undamped swing), 2·(F_s − c)/(KΔ). 0 without static friction above c (no device of the
+/// model's).
+fn approach_band(settle: Option<&GentleMove>, static_friction_n: Option<f64>, res: f64) -> i64 {
+    let (Some(how), Some(fs)) = (settle, static_friction_n) else {
+        return 0;
+    };
+    let Some(friction) = how.friction else {
+        return 0;
+    };
+    let k = if how.k_settle > 0.0 {
+        how.k_settle
+    } else {
+        how.k
+    };
+    let excess = fs - friction.coulomb_n;
+    if !(k > 0.0 && res > 0.0 && excess > 0.0) {
+        return 0;
+    }
+    (2.0 * excess / (k * res)).ceil() as i64
 }
 
 /// Where tests drift (each puts its wall where the last left the device): when the device

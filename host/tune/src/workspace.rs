@@ -68,8 +68,10 @@ pub(super) fn finish(
         });
     }
     let came_back = problem.is_none();
-    let left = start
-        .map(|st| super::travel::check_left(c, st, &final_cfg, place.static_friction, problem));
+    let left = start.map(|st| {
+        let settle = place.home.as_ref();
+        super::travel::check_left(c, st, &final_cfg, place.static_friction, settle, problem)
+    });
     if let Some(l) = &left {
         progress.report(Progress::Left(l.clone()));
     }
