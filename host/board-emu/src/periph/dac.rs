@@ -7,7 +7,7 @@
 //! from 0x38 on. Units: DAC codes (12 bits, 0..=4095). Invariant: every write goes through
 //! `output_changed`, so the plant sees the new code at the time of the write.
 
-use super::Periph;
+use super::state::Periph;
 
 /// DAC base address.
 pub const BASE: u32 = 0x4000_7400;
@@ -67,7 +67,7 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32) {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

@@ -4,7 +4,7 @@
 //! APB2_FZ (latched; the emulator has no debugger, so they change nothing). Refuses: a write to
 //! IDCODE. Units: none. Invariant: writes never change timing.
 
-use super::Periph;
+use super::state::Periph;
 
 /// DBGMCU_IDCODE address (the block's base).
 pub const BASE: u32 = 0xE004_2000;
@@ -42,7 +42,7 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32, raw: u64) {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

@@ -10,7 +10,8 @@
 //! erase, erasing any sector but 6 and 7, programming without PG. Units: stall time in
 //! 1/720 MHz units; store offsets in bytes from the start of sector 6.
 
-use super::{Periph, UNITS_PER_S};
+use super::state::Periph;
+use crate::plant::UNITS_PER_S;
 use crate::trace;
 
 /// FLASH interface base address.

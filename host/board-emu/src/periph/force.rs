@@ -9,9 +9,11 @@
 //! into N·m or N. Invariant: the plant is brought up to now under the old force before a new
 //! one applies (zero-order hold).
 
+use super::dac;
 use super::gpio::{self, AFRH, MODER, MODE_AF, MODE_ANALOG, MODE_OUTPUT, ODR, PA, PB};
+use super::state::Periph;
 use super::timer::{ARR, BDTR, CCER, CCMR1, CCR1};
-use super::{dac, ForceState, Periph};
+use crate::plant::ForceState;
 use crate::trace;
 
 /// PB10: the amplifier / bridge enable.
@@ -101,7 +103,7 @@ impl Periph {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

@@ -8,7 +8,8 @@
 //! pin PB10, DIR on PA9, PA4/PA8's modes) goes through `output_changed`, so the plant sees the
 //! new output at the time of the write. Reset values are the debug pins' (PA13–PA15, PB3, PB4).
 
-use super::{rcc, Periph};
+use super::rcc;
+use super::state::Periph;
 
 /// GPIOA base address.
 pub const BASE: u32 = 0x4002_0000;
@@ -128,7 +129,7 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32) {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

@@ -8,7 +8,8 @@
 //! 22 500). Invariant: the deadline is the last reload plus the period latched at that reload;
 //! `Periph::advance` turns a deadline passed into `ResetCause::Watchdog`.
 
-use super::{Periph, UNITS_PER_S};
+use super::state::{Iwdg, Periph};
+use crate::plant::UNITS_PER_S;
 use crate::trace;
 
 /// IWDG base address.
@@ -38,24 +39,6 @@ pub const KEY_ACCESS: u32 = 0x5555;
 const LSI_HZ: u64 = 32_000;
 /// RLR's reload field.
 const RLR_MASK: u32 = 0xFFF;
-
-/// The independent watchdog's state.
-#[derive(Debug, Clone, Default)]
-pub struct Iwdg {
-    /// KR, PR, RLR, SR.
-    pub r: [u32; 4],
-    /// Whether the watchdog runs.
-    pub on: bool,
-    /// Time of the last reload, units.
-    reload_at: u64,
-    /// Time from the last reload to the reset: RLR and PR as they were at that reload (a new
-    /// RLR or PR only counts from the next reload, as on the chip), units.
-    period: u64,
-    /// Whether PR and RLR are writable (`KEY_ACCESS` seen, no other key since).
-    unlocked: bool,
-    /// Feeds so far.
-    pub feeds: u64,
-}
 
 impl Iwdg {
     /// The watchdog at reset: stopped, PR 0, RLR 0xFFF, locked (the feed count survives).
@@ -143,8 +126,9 @@ impl Periph {
 #[cfg(test)]
 mod tests {
     use super::{KEY_ACCESS, KEY_RELOAD, KEY_START};
-    use crate::periph::{Periph, ResetCause, UNITS_PER_S};
+    use crate::periph::state::{Periph, ResetCause};
     use crate::plant::Coupling;
+    use crate::plant::UNITS_PER_S;
 
     #[test]
     fn the_watchdog_needs_the_access_key_and_runs_out_without_a_reload() {

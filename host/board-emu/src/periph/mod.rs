@@ -4,8 +4,9 @@
 //! (GPIOA–H), `timer` (the shared up-counter, TIM2 encoder, TIM7 servo tick, TIM1 PWM), `dac`
 //! (DAC1), `usart` (USART2), `iwdg`, `dbgmcu` and the Cortex-M4 system space (`nvic`, `scb` with
 //! the FPU control registers, `systick`); `force` derives the force output from the pins, and
-//! `names` names registers for messages. This module is the bus: it owns the register files,
-//! dispatches each word access by base address, merges sub-word writes and runs the
+//! `names` names registers for messages; `state` holds the register files and every model's
+//! state as plain data (a leaf, so no peripheral module imports this one). This module is the
+//! bus: it dispatches each word access by base address, merges sub-word writes and runs the
 //! time-driven models.
 //!
 //! Units: time in "units" of 1/720 MHz (`UNITS_PER_S`), which divides evenly into every clock of
@@ -26,88 +27,16 @@ mod names;
 mod nvic;
 mod rcc;
 mod scb;
+mod state;
 mod systick;
 mod timer;
 mod usart;
 
 use crate::plant::Coupling;
-pub use crate::plant::{ForceState, UNITS_PER_S};
-pub use iwdg::Iwdg;
+pub use crate::plant::UNITS_PER_S;
 pub use names::reg_name;
-pub use nvic::{IRQS, IRQ_TIM2, IRQ_TIM7, IRQ_USART2};
-pub use timer::Timer;
-pub use usart::Usart;
-
-/// Why the emulated board reset.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ResetCause {
-    /// The independent watchdog ran out.
-    Watchdog,
-    /// SCB AIRCR.SYSRESETREQ.
-    Software,
-}
-
-/// The register-level board.
-#[derive(Debug)]
-pub struct Periph {
-    /// Latched register files of the simple peripherals, by (base, offset).
-    pub rcc: [u32; 0x40],
-    /// PWR CR, CSR.
-    pub pwr: [u32; 2],
-    /// FLASH ACR, KEYR, OPTKEYR, SR, CR, OPTCR.
-    pub flash: [u32; 6],
-    /// Flash unlock sequence state (0: locked, 1: KEY1 seen).
-    flash_key: u8,
-    /// GPIOA..H: MODER, OTYPER, OSPEEDR, PUPDR, IDR, ODR, BSRR, LCKR, AFRL, AFRH.
-    pub gpio: [[u32; 10]; 8],
-    /// TIM2 (encoder), TIM7 (servo), TIM1 (PWM).
-    pub tim2: Timer,
-    /// TIM7.
-    pub tim7: Timer,
-    /// TIM1.
-    pub tim1: Timer,
-    /// TIM2 count bookkeeping: plant count at the last CNT write / start.
-    enc_base_plant: i64,
-    enc_base_cnt: u64,
-    /// DAC registers by offset / 4 (CR .. SR).
-    pub dac: [u32; 14],
-    /// USART2.
-    pub usart: Usart,
-    /// The independent watchdog.
-    pub iwdg: Iwdg,
-    /// DBGMCU CR, APB1_FZ, APB2_FZ.
-    pub dbgmcu: [u32; 3],
-    /// NVIC: enabled, soft-pending, active, priority.
-    pub nvic_en: [bool; IRQS],
-    /// Software-pended interrupts.
-    pub nvic_pend: [bool; IRQS],
-    /// Priority bytes.
-    pub nvic_prio: [u8; IRQS],
-    /// SCB: VTOR, AIRCR, SCR, CCR, SHPR1..3, SHCSR, CPACR, FPCCR, FPDSCR, DEMCR.
-    pub scb: std::collections::BTreeMap<u32, u32>,
-    /// SysTick CSR, RVR, CVR.
-    pub systick: [u32; 3],
-    /// Config store sectors 6 and 7.
-    pub store: Vec<u8>,
-    /// Why the run must stop (an unmodelled register, a bad setting).
-    pub stop: Option<String>,
-    /// A reset the board must perform.
-    pub reset: Option<ResetCause>,
-    /// Extra time the CPU is stalled (flash erase/program), to add to the clock.
-    pub stall: u64,
-    /// All stall time so far, units (fast pacing does not hold it against the host).
-    pub stalled_total: u64,
-    /// Time now.
-    pub now: u64,
-    /// Time units per CPU cycle.
-    pub cpu_units: u64,
-    /// The plant behind the encoder and the force output.
-    pub plant: Coupling,
-    /// Flash operations performed (erases, words programmed).
-    pub erases: u64,
-    /// Words programmed.
-    pub programs: u64,
-}
+pub use nvic::{IRQ_TIM2, IRQ_TIM7, IRQ_USART2};
+pub use state::{Iwdg, Periph, ResetCause, Timer, Usart, IRQS};
 
 /// Merges a `size`-byte write of `v` at `addr` into the word `old`.
 fn merge(old: u32, addr: u32, size: usize, v: u64) -> u32 {

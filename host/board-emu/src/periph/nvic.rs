@@ -8,7 +8,7 @@
 //! number − 16); priorities 0–255, lower is more urgent. Invariant: a line is pending while
 //! its peripheral's flag & enable level is high or it is pended by software.
 
-use super::Periph;
+use super::state::{Periph, IRQS};
 
 /// Interrupt numbers (RM0390 Table 38).
 pub const IRQ_TIM2: usize = 28;
@@ -18,9 +18,6 @@ pub const IRQ_USART2: usize = 38;
 pub const IRQ_TIM7: usize = 55;
 /// TIM1 interrupts (break/TIM9, update/TIM10, trigger and commutation/TIM11, capture compare).
 const IRQ_TIM1: std::ops::RangeInclusive<usize> = 24..=27;
-/// Number of external interrupts on the STM32F446.
-pub const IRQS: usize = 97;
-
 /// First NVIC register (ISER0).
 pub const BASE: u32 = 0xE000_E100;
 /// Last modelled word address (IPR23).
@@ -145,7 +142,7 @@ fn set_bits(arr: &mut [bool; IRQS], a: u32, v: u32, to: bool) {
 #[cfg(test)]
 mod tests {
     use super::{IRQ_TIM7, IRQ_USART2};
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

@@ -9,7 +9,9 @@
 //! than RM0390 Table 5 asks for at the new HCLK. Units: clocks in Hz; time in 1/720 MHz units.
 //! Invariant: the CPU's cycle time (`Periph::cpu_units`) follows HCLK whenever CFGR changes.
 
-use super::{flash, Periph, UNITS_PER_S};
+use super::flash;
+use super::state::Periph;
+use crate::plant::UNITS_PER_S;
 
 /// RCC base address.
 pub const BASE: u32 = 0x4002_3800;

@@ -9,7 +9,7 @@
 //! debug registers but DEMCR, …). Units: none. Invariant: FPCCR reads 0xC000_0000 after reset
 //! (ASPEN, LSPEN set), though the harness does no lazy stacking (see `emu`).
 
-use super::{Periph, ResetCause};
+use super::state::{Periph, ResetCause};
 
 /// SCB_CPUID address (the block's first word).
 pub const BASE: u32 = 0xE000_ED00;
@@ -106,7 +106,7 @@ impl Periph {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::{Periph, ResetCause};
+    use crate::periph::state::{Periph, ResetCause};
     use crate::plant::Coupling;
 
     #[test]

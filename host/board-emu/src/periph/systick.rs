@@ -5,7 +5,7 @@
 //! TENMS = 22 499). Refuses: CSR.ENABLE, a write to CALIB. Units: none
 //! (the counter never counts). Invariant: SysTick never raises its exception.
 
-use super::Periph;
+use super::state::Periph;
 
 /// SYST_CSR address (the block's base).
 pub const BASE: u32 = 0xE000_E010;
@@ -50,7 +50,7 @@ pub(super) fn write(p: &mut Periph, a: u32, v: u32, raw: u64) {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

@@ -10,8 +10,7 @@
 //! byte = 10 bit times at the configured rate. Invariants: no received byte is lost but by an
 //! overrun (counted); the interrupt line is the level of the enabled flags.
 
-use super::Periph;
-use std::collections::VecDeque;
+use super::state::{Periph, Usart};
 
 /// USART2 base address.
 pub const BASE: u32 = 0x4000_4400;
@@ -57,29 +56,6 @@ const CR1_TXEIE: u32 = 1 << 7;
 const CR1_UE: u32 = 1 << 13;
 /// CR1.OVER8.
 const CR1_OVER8: u32 = 1 << 15;
-
-/// USART2 model.
-#[derive(Debug, Clone, Default)]
-pub struct Usart {
-    /// SR, DR, BRR, CR1, CR2, CR3, GTPR.
-    pub r: [u32; 7],
-    /// Received byte in DR.
-    rx_dr: u8,
-    /// Bytes from the host, not yet shifted in.
-    pub rx_fifo: VecDeque<u8>,
-    /// Earliest time of the next received byte.
-    rx_next: u64,
-    /// Byte in the transmit holding register.
-    tx_hold: Option<u8>,
-    /// End of the byte in the shift register.
-    tx_busy_until: Option<u64>,
-    /// Bytes sent to the host, not yet written to the pty.
-    pub tx_out: VecDeque<u8>,
-    /// Bytes lost to overrun (the firmware did not read DR in time).
-    pub overruns: u64,
-    /// Bytes sent in total.
-    pub sent: u64,
-}
 
 impl Usart {
     /// The registers at reset; the bytes in flight to and from the host survive.
@@ -276,8 +252,9 @@ impl Periph {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::{Periph, UNITS_PER_S};
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
+    use crate::plant::UNITS_PER_S;
 
     #[test]
     fn transmit_holds_one_byte_and_refuses_to_lose_a_second() {

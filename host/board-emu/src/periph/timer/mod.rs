@@ -10,71 +10,14 @@
 //! is the timer's input clock period in those units. Invariant: the interrupt line is the level
 //! SR & DIER over UIF and CC1IF–CC4IF, TIF.
 
+mod regs;
 pub mod tim1;
 pub mod tim2;
 pub mod tim7;
 
-use super::Periph;
-
-/// TIMx_CR1 (register index, offset / 4).
-pub(super) const CR1: usize = 0;
-/// TIMx_SMCR.
-pub(super) const SMCR: usize = 2;
-/// TIMx_DIER.
-pub(super) const DIER: usize = 3;
-/// TIMx_SR.
-pub(super) const SR: usize = 4;
-/// TIMx_EGR.
-pub(super) const EGR: usize = 5;
-/// TIMx_CCMR1.
-pub(super) const CCMR1: usize = 6;
-/// TIMx_CCER.
-pub(super) const CCER: usize = 8;
-/// TIMx_CNT.
-pub(super) const CNT: usize = 9;
-/// TIMx_PSC.
-pub(super) const PSC: usize = 10;
-/// TIMx_ARR.
-pub(super) const ARR: usize = 11;
-/// TIMx_CCR1.
-pub(super) const CCR1: usize = 13;
-/// TIMx_BDTR (TIM1 only).
-pub(super) const BDTR: usize = 17;
-
-/// CR1.CEN.
-const CR1_CEN: u32 = 1;
-/// CR1.URS: only overflow sets UIF.
-const CR1_URS: u32 = 1 << 2;
-/// CR1.DIR: counting down.
-pub(super) const CR1_DIR: u32 = 1 << 4;
-/// CR1.ARPE: ARR is buffered.
-const CR1_ARPE: u32 = 1 << 7;
-/// SR.UIF and EGR.UG.
-const UPDATE: u32 = 1;
-/// SR / DIER bits that raise the interrupt line: UIF, CC1IF–CC4IF, TIF.
-const LINE_FLAGS: u32 = 0x5F;
-
-/// A basic or general-purpose up-counter as a time-based model (TIM7, and TIM2/TIM1 when they
-/// count the internal clock).
-#[derive(Debug, Clone, Default)]
-pub struct Timer {
-    /// Latched registers by offset / 4 (CR1, CR2, SMCR, DIER, SR, EGR, CCMR1, CCMR2, CCER, CNT,
-    /// PSC, ARR, RCR, CCR1..4, BDTR, DCR, DMAR, OR).
-    pub r: [u32; 21],
-    /// CNT at `t0`.
-    cnt0: u64,
-    /// Time of `cnt0`.
-    t0: u64,
-    /// Active (shadow) prescaler and reload.
-    psc: u32,
-    arr: u32,
-    /// Update events so far.
-    pub updates: u64,
-    /// Time of the first and last update events.
-    pub first_update: Option<u64>,
-    /// Time of the last update event.
-    pub last_update: u64,
-}
+use super::state::{Periph, Timer};
+pub(crate) use regs::{ARR, BDTR, CCER, CCMR1, CCR1, CNT, CR1, EGR, PSC, SR};
+use regs::{CR1_ARPE, CR1_CEN, CR1_URS, DIER, LINE_FLAGS, UPDATE};
 
 /// The three timers at reset.
 pub(super) fn reset(p: &mut Periph) {

@@ -7,7 +7,7 @@
 //! 1/720 MHz units, the counter clock from `Periph::apb2_timer_units`. Invariant: every write
 //! goes through `output_changed`, so the plant sees a new duty at the time of the write.
 
-use super::Periph;
+use crate::periph::state::Periph;
 
 /// TIM1 base address.
 pub const BASE: u32 = 0x4001_0000;
@@ -17,18 +17,18 @@ pub const LAST: u32 = 0x4001_004F;
 const ARR_RESET: u32 = 0xFFFF;
 
 /// TIM1 at reset.
-pub(in crate::periph) fn reset(p: &mut Periph) {
+pub(crate) fn reset(p: &mut Periph) {
     p.tim1.reset(ARR_RESET);
 }
 
 /// A word read of a TIM1 register (the latched value).
-pub(in crate::periph) fn read(p: &mut Periph, a: u32) -> u32 {
+pub(crate) fn read(p: &mut Periph, a: u32) -> u32 {
     let i = ((a - BASE) / 4) as usize;
     p.tim1.r[i]
 }
 
 /// A word write of a TIM1 register; the force output follows.
-pub(in crate::periph) fn write(p: &mut Periph, a: u32, v: u32) {
+pub(crate) fn write(p: &mut Periph, a: u32, v: u32) {
     let before = p.force_output();
     let i = ((a - BASE) / 4) as usize;
     let u = p.apb2_timer_units();
@@ -38,7 +38,7 @@ pub(in crate::periph) fn write(p: &mut Periph, a: u32, v: u32) {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

@@ -10,7 +10,8 @@
 //! counts (the image's rig Δ per count, see `plant`). Invariant: CNT = base count + (plant
 //! count − plant count at the base), so the count is exact however long between reads.
 
-use super::{Periph, ARR, CCER, CCMR1, CNT, CR1, CR1_DIR, EGR, PSC, SMCR, SR};
+use super::regs::{ARR, CCER, CCMR1, CNT, CR1, CR1_DIR, EGR, PSC, SMCR, SR};
+use crate::periph::state::Periph;
 
 /// TIM2 base address.
 pub const BASE: u32 = 0x4000_0000;
@@ -20,14 +21,14 @@ pub const LAST: u32 = 0x4000_0053;
 const ARR_RESET: u32 = u32::MAX;
 
 /// TIM2 at reset: the count restarts from the plant's position now.
-pub(in crate::periph) fn reset(p: &mut Periph) {
+pub(crate) fn reset(p: &mut Periph) {
     p.tim2.reset(ARR_RESET);
     p.enc_base_plant = p.plant.count();
     p.enc_base_cnt = 0;
 }
 
 /// A word read of a TIM2 register; CNT is the encoder count now.
-pub(in crate::periph) fn read(p: &mut Periph, a: u32) -> u32 {
+pub(crate) fn read(p: &mut Periph, a: u32) -> u32 {
     let i = ((a - BASE) / 4) as usize;
     if i == CNT {
         count(p) as u32
@@ -37,7 +38,7 @@ pub(in crate::periph) fn read(p: &mut Periph, a: u32) -> u32 {
 }
 
 /// A word write of a TIM2 register.
-pub(in crate::periph) fn write(p: &mut Periph, a: u32, v: u32) {
+pub(crate) fn write(p: &mut Periph, a: u32, v: u32) {
     let i = ((a - BASE) / 4) as usize;
     match i {
         CNT => rebase(p, u64::from(v)),
@@ -110,7 +111,7 @@ fn rebase(p: &mut Periph, cnt: u64) {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]

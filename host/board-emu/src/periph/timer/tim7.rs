@@ -7,7 +7,8 @@
 //! units, the counter clock from `Periph::apb1_timer_units`. Invariant: update events are
 //! processed up to now before any access.
 
-use super::{Periph, CNT};
+use super::regs::CNT;
+use crate::periph::state::Periph;
 
 /// TIM7 base address.
 pub const BASE: u32 = 0x4000_1400;
@@ -17,12 +18,12 @@ pub const LAST: u32 = 0x4000_142F;
 const ARR_RESET: u32 = 0xFFFF;
 
 /// TIM7 at reset.
-pub(in crate::periph) fn reset(p: &mut Periph) {
+pub(crate) fn reset(p: &mut Periph) {
     p.tim7.reset(ARR_RESET);
 }
 
 /// A word read of a TIM7 register.
-pub(in crate::periph) fn read(p: &mut Periph, a: u32) -> u32 {
+pub(crate) fn read(p: &mut Periph, a: u32) -> u32 {
     let i = ((a - BASE) / 4) as usize;
     let u = p.apb1_timer_units();
     p.tim7.advance(p.now, u);
@@ -34,7 +35,7 @@ pub(in crate::periph) fn read(p: &mut Periph, a: u32) -> u32 {
 }
 
 /// A word write of a TIM7 register.
-pub(in crate::periph) fn write(p: &mut Periph, a: u32, v: u32) {
+pub(crate) fn write(p: &mut Periph, a: u32, v: u32) {
     let i = ((a - BASE) / 4) as usize;
     let u = p.apb1_timer_units();
     p.tim7.write(i, v, p.now, u);
@@ -42,7 +43,7 @@ pub(in crate::periph) fn write(p: &mut Periph, a: u32, v: u32) {
 
 #[cfg(test)]
 mod tests {
-    use crate::periph::Periph;
+    use crate::periph::state::Periph;
     use crate::plant::Coupling;
 
     #[test]
