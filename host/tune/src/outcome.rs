@@ -116,8 +116,8 @@ pub struct Repeatability {
     pub k_repeated: Option<f64>,
     /// The smallest K above it that failed (None: the search stopped at its cap resting).
     pub k_failed: Option<f64>,
-    /// The frontier's bracket, k_failed / k_repeated − 1 ([`crate::repeat::Repeat::spread`]):
-    /// another tune of the device finds its frontier K within it.
+    /// The frontier's bracket by this run's tests, k_failed / k_repeated − 1
+    /// ([`crate::repeat::Repeat::spread`]).
     pub spread: f64,
     /// The margin applied to k_repeated.
     pub margin: f64,

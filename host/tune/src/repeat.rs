@@ -10,10 +10,12 @@
 //! tolerance, each new K run once, at most [`REPEAT_STEPS`] times.
 //!
 //! The *spread* is the bracket this measurement leaves: the smallest K that failed (in the
-//! search or the repeat) over the largest that rested in every run, minus 1; another tune of the
-//! same device finds its frontier within it (0 when the search stopped at its cap, the quiet
-//! ceiling, resting). The margin it implies ([`margin_for_spread`]) keeps the wall set below
-//! the frontier by twice the spread at least.
+//! search or the repeat) over the largest that rested in every run, minus 1 (0 when the search
+//! stopped at its cap, the quiet ceiling, resting). It is what this run's tests saw: a narrow
+//! failing band that none of its starts fell in is not in it, and another tune of the same
+//! device can land elsewhere (the emulated maxon-re35 board: frontiers 4.28 to 5.19 at one B).
+//! The margin it implies ([`margin_for_spread`]) keeps the wall set below the frontier by
+//! twice the spread at least.
 //!
 //! Units: K in N/m (N·m/rad); spreads and margins are ratios. Nothing here talks to a device:
 //! the caller supplies the search step as a closure.
@@ -41,8 +43,8 @@ pub struct Repeat {
 
 impl Repeat {
     /// The frontier's spread: k_failed / k_repeated − 1, the bracket within which this
-    /// measurement puts the frontier and within which another tune may find it (0 at the
-    /// cap); when no K rested, k_searched over the last K tried.
+    /// measurement puts the frontier (0 at the cap); when no K rested, k_searched over the last
+    /// K tried.
     #[must_use]
     pub fn spread(&self) -> f64 {
         match (self.k_repeated, self.k_failed) {
