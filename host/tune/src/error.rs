@@ -99,8 +99,13 @@ pub enum StepError {
         /// The latched fault bits.
         latched: u32,
     },
-    /// The step could not complete (the message says why: a singular fit, lost telemetry, a
-    /// device that does not come to rest, …).
+    /// The device did not come to rest within `waited_s` seconds of host time.
+    #[error("the device did not come to rest within {waited_s:.0} s")]
+    NotAtRest {
+        /// The wait, s.
+        waited_s: f64,
+    },
+    /// The step could not complete (the message says why: a singular fit, lost telemetry, …).
     #[error("{0}")]
     Failed(String),
     /// `inner` happened while doing `context`.

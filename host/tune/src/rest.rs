@@ -40,9 +40,7 @@ pub fn rest_position_within(c: &mut Client, seconds: f64) -> Result<i32> {
     let (mut last, mut same) = (i32::MIN, 0u32);
     let result = loop {
         if std::time::Instant::now() > deadline {
-            break Err(StepError::Failed(format!(
-                "the device did not come to rest within {seconds:.0} s"
-            )));
+            break Err(StepError::NotAtRest { waited_s: seconds });
         }
         if let Some(b) = c.next_batch(BATCH_WAIT)? {
             for x in &b.samples {
