@@ -102,16 +102,7 @@ pub fn spread_room(margin: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn threshold(k_star: f64) -> impl FnMut(f64) -> Result<Verdict> {
-        move |k| {
-            Ok(if k <= k_star {
-                Verdict::Settles
-            } else {
-                Verdict::Growing
-            })
-        }
-    }
+    use crate::search::tests::threshold;
 
     #[test]
     fn a_repeat_that_rests_keeps_the_k_and_the_searchs_bracket() {

@@ -131,10 +131,11 @@ pub fn largest_settling_k(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn threshold(k_star: f64) -> impl FnMut(f64) -> Result<Verdict> {
+    /// A device whose verdict is a clean threshold at `k_star` (shared with `repeat`'s tests).
+    pub(crate) fn threshold(k_star: f64) -> impl FnMut(f64) -> Result<Verdict> {
         move |k| {
             Ok(if k <= k_star {
                 Verdict::Settles
