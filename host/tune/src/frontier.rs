@@ -32,6 +32,8 @@ pub(crate) struct Wall {
     pub(crate) k_spring_only: f64,
     pub(crate) verification: Vec<TestResult>,
     pub(crate) frontier: Vec<FrontierPoint>,
+    /// The small-swing screen, when it lowered the damped wall.
+    pub(crate) small_swing: Option<crate::small_swing::Screened>,
 }
 
 impl Wall {
@@ -197,9 +199,8 @@ pub(crate) fn choose_wall(
             .and_then(|p| p.repeat)
             .map_or(0.0, |r| r.spread());
         let margin = margin_for_spread(at.margin.min(DAMPED_MARGIN), spread);
-        if let Some((k_set, verification)) =
-            run.confirm(c, &cfg, best.1 * margin, at.thorough, notes)?
-        {
+        let screened = small_swing_screen(run, &cfg, best.1 * margin, best.0, k_spring);
+        if let Some((k_set, verification)) = run.confirm(c, &cfg, screened.k, at.thorough, notes)? {
             return Ok(Wall {
                 k_set,
                 b_set: best.0,
@@ -208,6 +209,7 @@ pub(crate) fn choose_wall(
                 k_spring_only: k_spring,
                 verification,
                 frontier,
+                small_swing: screened.swing.map(|_| screened),
             });
         }
         if let Damping::Fixed(b) = run.s.damping {
@@ -227,7 +229,26 @@ pub(crate) fn choose_wall(
         k_spring_only: k_set,
         verification,
         frontier,
+        small_swing: None,
     })
+}
+
+/// The damped wall `k_asked` at `b`, lowered by the small-swing screen on the identified model
+/// (`small_swing`) to below the first K that keeps a swing (not below the spring-only wall
+/// `k_spring`); reported when it lowers.
+fn small_swing_screen(
+    run: &Run<'_>,
+    cfg: &ServoConfig,
+    k_asked: f64,
+    b: f64,
+    k_spring: f64,
+) -> crate::small_swing::Screened {
+    let model = crate::small_swing::SwingModel::of(&run.p, cfg, run.one_sided_wall);
+    let screened = crate::small_swing::screen(&model, k_asked, b, k_spring);
+    if screened.swing.is_some() {
+        (run.progress)(Progress::SmallSwing(screened));
+    }
+    screened
 }
 
 /// The damped wall to confirm: its law and (B, largest resting K), or B = 0 when no damper

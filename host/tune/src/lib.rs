@@ -60,6 +60,7 @@ pub mod repeat;
 mod rest;
 mod search;
 mod settings;
+pub mod small_swing;
 mod steps;
 mod test_set;
 mod travel;

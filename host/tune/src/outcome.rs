@@ -75,6 +75,11 @@ pub struct Outcome {
     /// Margin applied to the set wall's largest resting K (the requested one, times
     /// [`crate::settings::MISMATCH_MARGIN`] on a mismatch; at most `crate::settings::DAMPED_MARGIN` with a damper).
     pub margin_used: f64,
+    /// The small-swing screen (`small_swing`), when it lowered the damped wall below the
+    /// margin's K: on the identified model that K keeps a swing of a few counts from a small,
+    /// slow start, which the damper's dead band leaves undamped.
+    #[serde(default)]
+    pub small_swing: Option<crate::small_swing::Screened>,
     /// How repeatable the set wall's frontier K was.
     #[serde(default)]
     pub repeatability: Option<Repeatability>,

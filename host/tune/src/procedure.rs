@@ -503,6 +503,7 @@ fn outcome(
         model_mismatch,
         model_evidence: evidence,
         margin_used: wall.margin,
+        small_swing: wall.small_swing,
         saved,
         workspace: None,
         device_left: None,

@@ -100,6 +100,9 @@ pub enum Progress {
         /// The damping that failed.
         b: f64,
     },
+    /// The small-swing screen lowered the damped wall (`small_swing`): on the identified model
+    /// the wall asked for keeps a swing of a few counts from a small, slow start.
+    SmallSwing(crate::small_swing::Screened),
     /// Impacts at v failed at every K tried: the set is verified without them.
     ImpactsCapped {
         /// First K tried.
@@ -212,6 +215,20 @@ impl Progress {
                 f,
                 "no K passed the verification set at B = {b:.4e}; setting the spring-only wall"
             ),
+            Self::SmallSwing(s) => match s.swing {
+                Some((k, start)) => write!(
+                    f,
+                    "small-swing screen: on the identified model K = {k:.4} keeps a swing from \
+                     {:+.3} counts at {:+.1} counts/tick (the damper's dead band leaves it \
+                     undamped); verifying K = {:.4} instead of {:.4}",
+                    start.x_counts, start.v_counts_per_tick, s.k, s.k_asked
+                ),
+                None => write!(
+                    f,
+                    "small-swing screen: K = {:.4} rests from every small start",
+                    s.k
+                ),
+            },
             Self::ImpactsCapped { k_from, k_to } => write!(
                 f,
                 "impacts at v failed at every K from {k_from:.4} down to {k_to:.4}; verifying \

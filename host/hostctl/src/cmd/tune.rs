@@ -377,10 +377,20 @@ fn render_limits(s: &mut String, o: &Outcome, u: Units) {
         o.search.k_pass,
         o.search.trials.len()
     );
+    let how = match o
+        .small_swing
+        .and_then(|sc| sc.swing.map(|(k, _)| (k, sc.k_asked)))
+    {
+        Some((k_swing, k_asked)) => format!(
+            "below K = {k_swing:.5}, where the model keeps a small swing; ×{:.2} the largest \
+             resting K at its B is {k_asked:.5}",
+            o.margin_used
+        ),
+        None => format!("×{:.2} the largest resting K at its B", o.margin_used),
+    };
     let _ = writeln!(
         s,
-        "  set (×{:.2} the largest resting K at its B) {:>12.5}, verified by {} tests: {}",
-        o.margin_used,
+        "  set ({how}) {:>12.5}, verified by {} tests: {}",
         o.k_set,
         o.verification.len(),
         o.verification
