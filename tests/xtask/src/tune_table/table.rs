@@ -92,7 +92,16 @@ K*(0) is the spring alone; the best K*(B) is the stiffest of the frontier (with 
 dead band 1 when it set no damper) over\n\
 B = β·K*(0)·T, β ∈ {{0, 0.5, 1, 2, 3, 4, 6}} (`kstar::FRONTIER_BETA`); K set / K*(0) is what the\n\
 damper buys. Units: N/m, kg, N·s/m, N for linear plants; N·m/rad, kg·m²,\n\
-N·m·s/rad, N·m for rotary ones (`counts_per_rev`).\n\n"
+N·m·s/rad, N·m for rotary ones (`counts_per_rev`).\n\n\
+What K* does not see: every trial starts at rest or at the wall surface, and a damped wall\n\
+whose damper has a dead band (`dead-band-1`, the default) is the spring alone while the count\n\
+changes by at most one per tick. Within a few counts of its origin it can then keep a swing\n\
+of about ±1.5 counts from a small, slow state that no trial reaches (the emulated maxon-re35\n\
+board's final check caught one at K = 4.15 N·m/rad, B = 5.45e-3, below K*(B) = 4.47; on the\n\
+rigid model such swings start at K = 3.4). Tune screens the damped wall for them on its\n\
+identified model (`stiffwall_tune::small_swing`: 480 states within three counts of the origin\n\
+at up to one count per tick) and sets it below the first K that keeps one, so on damped\n\
+plants K set / K*(B) is lower than the margin alone makes it.\n\n"
     )
 }
 
