@@ -253,6 +253,15 @@ pub enum TrialKind {
         /// Deflection, counts.
         counts: i64,
     },
+    /// Starts moving from a state near the wall's origin (not one of the criterion's trials:
+    /// tune's small-swing screen states, `stiffwall_tune::small_swing`, run at a set wall by
+    /// `cargo xtask tune-table`). The side is ignored: the position is signed.
+    Moving {
+        /// Position from the wall's origin, counts (signed, fractional).
+        position_counts: f64,
+        /// Velocity, m/s (rad/s), signed.
+        velocity_m_per_s: f64,
+    },
 }
 
 /// One trial: which side of the wall (+1: n ≥ 0), where the wall is, what happens.
@@ -272,7 +281,7 @@ impl Trial {
     pub fn start<P: SampledPlant>(&self, plant: &mut P, resolution_m: f64) {
         let (x0, v0) = self.initial_state(resolution_m);
         match self.kind {
-            TrialKind::Impact { .. } => plant.set_state(x0, v0),
+            TrialKind::Impact { .. } | TrialKind::Moving { .. } => plant.set_state(x0, v0),
             TrialKind::Release { .. } => plant.set_held(x0),
         }
     }
@@ -304,6 +313,10 @@ impl Trial {
                 (x, s * velocity_m_per_s)
             }
             TrialKind::Release { counts } => (wall_x + s * (counts as f64 + 0.5) * d, 0.0),
+            TrialKind::Moving {
+                position_counts,
+                velocity_m_per_s,
+            } => (wall_x + position_counts * d, velocity_m_per_s),
         }
     }
 }
@@ -399,6 +412,13 @@ pub fn run_trial<P: SampledPlant + Clone>(proto: &P, rig: &Rig, k: f64, trial: T
         TrialKind::Release { counts } => {
             (k / rig.moving_mass_kg).sqrt() * (counts as f64 + 1.0) * d
         }
+        // Its own speed, or what the spring at its count could give it passively.
+        TrialKind::Moving {
+            position_counts,
+            velocity_m_per_s,
+        } => velocity_m_per_s
+            .abs()
+            .max((k / rig.moving_mass_kg).sqrt() * (position_counts.abs() + 1.0) * d),
     };
     let mut touched = false;
     let ticks = rig.trial_ticks(k);

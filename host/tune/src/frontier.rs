@@ -243,7 +243,7 @@ fn small_swing_screen(
     b: f64,
     k_spring: f64,
 ) -> crate::small_swing::Screened {
-    let model = crate::small_swing::SwingModel::of(&run.p, cfg, run.one_sided_wall);
+    let model = crate::small_swing::SwingModel::of(&run.p, cfg, run.one_sided_wall, run.static_n);
     let screened = crate::small_swing::screen(&model, k_asked, b, k_spring);
     if screened.swing.is_some() {
         (run.progress)(Progress::SmallSwing(screened));

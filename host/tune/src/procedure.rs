@@ -247,13 +247,7 @@ fn least_chatter_settings(s: &Settings) -> Settings {
 const STATIC_FRICTION_CREDIT: f64 = 0.75;
 
 fn quiet_ceiling(ident: &Identification) -> f64 {
-    let e = &ident.evidence;
-    let excess = e
-        .breakaway_measured
-        .iter()
-        .zip(&e.breakaway_model)
-        .filter_map(|(m, model)| Some(m.as_ref()?.abs() - model.as_ref()?.abs()))
-        .fold(f64::INFINITY, f64::min);
+    let excess = static_excess(ident);
     let c = ident.p.coulomb;
     let static_n = if excess.is_finite() {
         c + STATIC_FRICTION_CREDIT * excess.max(0.0)
@@ -261,6 +255,18 @@ fn quiet_ceiling(ident: &Identification) -> f64 {
         c
     };
     stiffwall_core::rest::quiet_ceiling(c, static_n, ident.p.resolution)
+}
+
+/// The least, over the two directions, of what the breakaway ramps measured beyond the
+/// identified model's breakaway on the same ramp, N (N·m): static friction above c (∞ when
+/// no ramp measured it).
+fn static_excess(ident: &Identification) -> f64 {
+    let e = &ident.evidence;
+    e.breakaway_measured
+        .iter()
+        .zip(&e.breakaway_model)
+        .filter_map(|(m, model)| Some(m.as_ref()?.abs() - model.as_ref()?.abs()))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Why no wall rests on this device, in words (`failure`: the search's or verification's).
@@ -321,6 +327,9 @@ fn search_walls(
         room: ident.room,
         move_force_n: ident.move_force_n,
         window: ident.window,
+        static_n: Some(static_excess(ident))
+            .filter(|x| x.is_finite() && *x > 0.0)
+            .map(|x| ident.p.coulomb + x),
     };
     // Above the quiet ceiling no count can hold the wall's force KΔ/2 against friction: a test
     // that rests there rested on a bias (a hand or cable pulling to one side of the wall, a

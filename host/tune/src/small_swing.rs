@@ -16,8 +16,8 @@
 //! from none at or below 3.35.
 //!
 //! The screen runs the firmware's wall law on the identified rigid model (eq. (1) stepped
-//! exactly by `stiffwall_sim`, the force sampled and held, the config's extra delay and
-//! clamp) from every state of [`small_starts`] and judges each run by the project's rule of
+//! exactly by `stiffwall_sim`, with the static friction the breakaway ramps measured as a
+//! switch when it is above c, the force sampled and held, the config's extra delay and clamp) from every state of [`small_starts`] and judges each run by the project's rule of
 //! rest (`stiffwall_core::rest`). [`screen`] scans K upwards from well below the wall to set and
 //! keeps the K below the first that keeps a swing: the top of the quiet interval that contains
 //! the start, as the brute-force K* is found, so a narrow band of swinging K (the model has
@@ -28,7 +28,7 @@
 
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::{DamperLaw, ServoConfig};
-use stiffwall_sim::PhysicalPlant;
+use stiffwall_sim::rich::{PlantModel, RichPlant, Stiction};
 
 /// Counts whose cells the states start in, relative to the wall's origin (count 0 is the first
 /// count inside the wall): three either side.
@@ -85,13 +85,23 @@ pub struct SwingModel {
     pub one_sided: bool,
     /// The damper's law.
     pub damper: DamperLaw,
+    /// The static friction F_s the breakaway ramps measured, N (N·m), when above c: the model
+    /// sticks at rest until the force exceeds it (a switch, no Stribeck decay).
+    pub static_n: Option<f64>,
 }
 
 impl SwingModel {
-    /// The model of `p` rendering `cfg`'s wall (its coarsening, delay, clamp, law and side).
+    /// The model of `p` rendering `cfg`'s wall (its coarsening, delay, clamp, law and side),
+    /// with static friction `static_n` when measured.
     #[must_use]
-    pub fn of(p: &PhysicalParams, cfg: &ServoConfig, one_sided: bool) -> Self {
+    pub fn of(
+        p: &PhysicalParams,
+        cfg: &ServoConfig,
+        one_sided: bool,
+        static_n: Option<f64>,
+    ) -> Self {
         Self {
+            static_n: static_n.filter(|&fs| fs.is_finite() && fs > p.coulomb),
             p: *p,
             coarsen_shift: cfg.coarsen_shift.min(16),
             delay_ticks: cfg.extra_delay_ticks,
@@ -99,6 +109,17 @@ impl SwingModel {
             one_sided,
             damper: cfg.damper,
         }
+    }
+
+    /// The plant: the rigid body (m, b, c) at resolution `d`, sticking up to F_s when given
+    /// (stepped exactly either way).
+    fn plant(&self, d: f64) -> Option<RichPlant> {
+        let mut model = PlantModel::rigid(self.p.mass, self.p.viscous, self.p.coulomb, d).ok()?;
+        model.stiction = self.static_n.map(|static_n| Stiction {
+            static_n,
+            stribeck_m_per_s: 0.0,
+        });
+        RichPlant::new(&model).ok()
     }
 
     fn resolution(&self) -> f64 {
@@ -125,8 +146,7 @@ impl SwingModel {
     #[must_use]
     pub fn rests(&self, k: f64, b: f64, start: SmallStart) -> bool {
         let (d, t) = (self.resolution(), self.p.period_s);
-        let Ok(mut plant) = PhysicalPlant::new(self.p.mass, self.p.viscous, self.p.coulomb, d)
-        else {
+        let Some(mut plant) = self.plant(d) else {
             return false;
         };
         plant.set_state(start.x_counts * d, start.v_counts_per_tick * d / t);
@@ -232,6 +252,7 @@ mod tests {
             force_limit_n: 0.1,
             one_sided: false,
             damper: DamperLaw::DeadBand { counts: 1 },
+            static_n: None,
         }
     }
 
@@ -264,6 +285,17 @@ mod tests {
         assert!(m.first_swing(s.k, b).is_none());
         let (k_swing, start) = s.swing.expect("a swing was found");
         assert!(!m.rests(k_swing, b, start));
+    }
+
+    #[test]
+    fn static_friction_counts_only_above_c() {
+        let m = maxon();
+        let cfg = ServoConfig::default();
+        let at = |fs| SwingModel::of(&m.p, &cfg, false, fs).static_n;
+        assert_eq!(at(None), None);
+        assert_eq!(at(Some(1.0e-3)), None, "below c = 1.99e-3");
+        assert_eq!(at(Some(f64::NAN)), None);
+        assert_eq!(at(Some(3.0e-3)), Some(3.0e-3));
     }
 
     #[test]

@@ -66,6 +66,9 @@ pub(crate) struct Run<'a> {
     pub(crate) move_force_n: f64,
     /// The travel window the tests carry when none is configured ([`Judging::window`]).
     pub(crate) window: Option<(i32, i32)>,
+    /// The static friction F_s the breakaway ramps measured above c, N (N·m): the small-swing
+    /// screen's model sticks up to it.
+    pub(crate) static_n: Option<f64>,
 }
 
 /// What the searches found beside their result.

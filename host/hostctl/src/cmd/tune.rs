@@ -377,6 +377,16 @@ fn render_limits(s: &mut String, o: &Outcome, u: Units) {
         o.search.k_pass,
         o.search.trials.len()
     );
+    let _ = writeln!(
+        s,
+        "the wall set ({}{}):",
+        u.0,
+        if o.b_set > 0.0 {
+            ", spring + damper"
+        } else {
+            ", the spring alone"
+        }
+    );
     let how = match o
         .small_swing
         .and_then(|sc| sc.swing.map(|(k, _)| (k, sc.k_asked)))
@@ -386,7 +396,7 @@ fn render_limits(s: &mut String, o: &Outcome, u: Units) {
              resting K at its B is {k_asked:.5}",
             o.margin_used
         ),
-        None => format!("×{:.2} the largest resting K at its B", o.margin_used),
+        None => set_from_margin(o),
     };
     let _ = writeln!(
         s,
@@ -457,6 +467,26 @@ fn render_damped_point(s: &mut String, o: &Outcome, r: &analysis::Report, k_unit
     }
 }
 
+/// How the set K follows from the margin: ×margin the largest resting K at the set B, and the
+/// verification's back-off when the set K is below that.
+fn set_from_margin(o: &Outcome) -> String {
+    let largest = o
+        .frontier
+        .iter()
+        .rev()
+        .find(|p| p.b == o.b_set)
+        .and_then(|p| p.k_verified);
+    match largest {
+        Some(k) if o.k_set < 0.995 * o.margin_used * k => format!(
+            "×{:.2} the largest resting K at its B is {:.5}; the verification set failed there \
+             and backed off",
+            o.margin_used,
+            o.margin_used * k
+        ),
+        _ => format!("×{:.2} the largest resting K at its B", o.margin_used),
+    }
+}
+
 /// The spring-only wall and the spring + damper wall side by side, and the frontier tried.
 fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
     let t = o.params.period_s;
@@ -483,10 +513,12 @@ fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
             o.k_set / o.k_spring_only
         );
     } else {
-        let _ = writeln!(
-            s,
-            "  the spring-only wall is set (no damping verified stiffer)"
-        );
+        let why = if o.frontier.iter().any(|f| f.b > 0.0) {
+            "no damping verified stiffer"
+        } else {
+            "no damper tried: `--damping 0`, or none was predicted to buy stiffness"
+        };
+        let _ = writeln!(s, "  the spring-only wall is set ({why})");
     }
     let tried: Vec<String> = o
         .frontier

@@ -287,7 +287,7 @@ pub(super) fn median(v: &mut [f64]) -> Option<f64> {
 fn summary(rows: &[Row]) -> Option<String> {
     let mut gains = Vec::new();
     let mut ratios = Vec::new();
-    let (mut not_resting, mut unstable) = (0, 0);
+    let (mut not_resting, mut unstable, mut speckled, mut worst_small) = (0, 0, 0, 0usize);
     for r in rows {
         if let (Some(Ok(t)), Some(Ok(k))) = (&r.tune, &r.k_star_set) {
             gains.push(t.k_set / r.k_star.k_star);
@@ -296,6 +296,8 @@ fn summary(rows: &[Row]) -> Option<String> {
         if let Some(a) = &r.at_set {
             not_resting += usize::from(!a.all_rest());
             unstable += usize::from(!a.unstable.is_empty());
+            speckled += usize::from(!a.small_swings.is_empty());
+            worst_small = worst_small.max(a.small_swings.len());
         }
     }
     let n = gains.len();
@@ -305,6 +307,9 @@ fn summary(rows: &[Row]) -> Option<String> {
     Some(format!(
         "Over {n} tuned plants: median K set / K*(0) = {median:.2} (the damper's gain, quietly), \
          K set / K*(B set) from {min_ratio:.3} to {max_ratio:.3}; {not_resting} set walls do not \
-         come to rest in every run; {unstable} are unstable (buzz or growth) in some run."
+         come to rest in every run; {unstable} are unstable (buzz or growth) in some run; \
+         {speckled} keep a small swing from some small states (at most {worst_small} of a wall's \
+         small states; {:.0} % allowed).",
+        100.0 * super::row::SMALL_SWING_SHARE
     ))
 }
