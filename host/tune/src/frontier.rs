@@ -200,7 +200,13 @@ pub(crate) fn choose_wall(
             .map_or(0.0, |r| r.spread());
         let margin = margin_for_spread(at.margin.min(DAMPED_MARGIN), spread);
         let screened = small_swing_screen(run, &cfg, best.1 * margin, best.0, k_spring);
-        if let Some((k_set, verification)) = run.confirm(c, &cfg, screened.k, at.thorough, notes)? {
+        // A damper the screen brings down to the spring-only wall buys nothing: that wall is set.
+        let confirmed = if screened.k > k_spring {
+            run.confirm(c, &cfg, screened.k, at.thorough, notes)?
+        } else {
+            None
+        };
+        if let Some((k_set, verification)) = confirmed {
             return Ok(Wall {
                 k_set,
                 b_set: best.0,
@@ -212,9 +218,14 @@ pub(crate) fn choose_wall(
                 small_swing: screened.swing.map(|_| screened),
             });
         }
+        let why = if screened.k > k_spring {
+            "no stiffness passed the verification set"
+        } else {
+            "the small-swing screen leaves no stiffness above the spring-only wall's"
+        };
         if let Damping::Fixed(b) = run.s.damping {
             return Err(super::error::NoWallPassed(format!(
-                "no stiffness passed the verification set at the fixed damping B = {b:.4e}"
+                "{why} at the fixed damping B = {b:.4e}"
             ))
             .into());
         }
@@ -243,7 +254,10 @@ fn small_swing_screen(
     b: f64,
     k_spring: f64,
 ) -> crate::small_swing::Screened {
-    let model = crate::small_swing::SwingModel::of(&run.p, cfg, run.one_sided_wall, run.static_n);
+    let model = crate::small_swing::SwingModel {
+        accept_chatter: run.s.criterion == super::settings::Criterion::AcceptChatter,
+        ..crate::small_swing::SwingModel::of(&run.p, cfg, run.one_sided_wall, run.static_n)
+    };
     let screened = crate::small_swing::screen(&model, k_asked, b, k_spring);
     if screened.swing.is_some() {
         (run.progress)(Progress::SmallSwing(screened));

@@ -213,7 +213,8 @@ impl Progress {
             ),
             Self::DamperDropped { b } => write!(
                 f,
-                "no K passed the verification set at B = {b:.4e}; setting the spring-only wall"
+                "no K above the spring-only wall passed the small-swing screen and the \
+                 verification set at B = {b:.4e}; setting the spring-only wall"
             ),
             Self::SmallSwing(s) => match s.swing {
                 Some((k, start)) => write!(

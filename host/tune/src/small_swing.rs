@@ -88,6 +88,9 @@ pub struct SwingModel {
     /// The static friction F_s the breakaway ramps measured, N (N·m), when above c: the model
     /// sticks at rest until the force exceeds it (a switch, no Stribeck decay).
     pub static_n: Option<f64>,
+    /// The user accepts chatter (`Criterion::AcceptChatter`): a run that ends toggling within
+    /// one count passes; only a swing over more counts fails.
+    pub accept_chatter: bool,
 }
 
 impl SwingModel {
@@ -101,6 +104,7 @@ impl SwingModel {
         static_n: Option<f64>,
     ) -> Self {
         Self {
+            accept_chatter: false,
             static_n: static_n.filter(|&fs| fs.is_finite() && fs > p.coulomb),
             p: *p,
             coarsen_shift: cfg.coarsen_shift.min(16),
@@ -173,6 +177,12 @@ impl SwingModel {
             if same > delay + 2 {
                 counts.resize(ticks, n);
             }
+        }
+        if self.accept_chatter {
+            let window = &counts[stiffwall_core::rest::window_start(counts.len(), natural)..];
+            let lo = window.iter().min().copied().unwrap_or(0);
+            let hi = window.iter().max().copied().unwrap_or(0);
+            return hi - lo <= 1;
         }
         stiffwall_core::rest::comes_to_rest(&counts, natural)
     }
@@ -253,6 +263,7 @@ mod tests {
             one_sided: false,
             damper: DamperLaw::DeadBand { counts: 1 },
             static_n: None,
+            accept_chatter: false,
         }
     }
 
