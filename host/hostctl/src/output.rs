@@ -92,15 +92,38 @@ pub fn fault_names(bits: u32) -> String {
     }
 }
 
-/// Text rendering of a servo configuration, one `name value unit` row per field (the table of
-/// `hostctl config get` and of the live view's config panel).
+/// `x` to 6 significant digits without trailing zeros (an f32 field set as 0.1 reads back as
+/// 0.099999994 in full: "0.1").
 #[must_use]
-pub fn config_table(c: &ServoConfig) -> String {
+pub fn sig6(x: f32) -> String {
+    let v = f64::from(x);
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (5 - v.abs().log10().floor() as i32).clamp(0, 40) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// Text rendering of a servo configuration, one `name value unit` row per field (the table of
+/// `hostctl config get` and of the live view's config panel), in a rotary device's units
+/// (N·m/rad, N·m·s/rad, N·m, rad/s) or a linear one's (N/m, N·s/m, N, m/s).
+#[must_use]
+pub fn config_table(c: &ServoConfig, rotary: bool) -> String {
+    let (k, b, f, v) = if rotary {
+        ("N·m/rad", "N·m·s/rad", "N·m", "rad/s")
+    } else {
+        ("N/m", "N·s/m", "N", "m/s")
+    };
     let mut s = String::new();
     let travel_end = |end: Option<i32>| end.map_or_else(|| "off".into(), |n| format!("{n} counts"));
     let rows: [(&str, String); 19] = [
-        ("stiffness", format!("{} N/m (N·m/rad)", c.stiffness)),
-        ("damping", format!("{} N·s/m (N·m·s/rad)", c.damping)),
+        ("stiffness", format!("{} {k}", sig6(c.stiffness))),
+        ("damping", format!("{} {b}", sig6(c.damping))),
         ("damper", c.damper.to_string()),
         ("rate", format!("{} Hz", c.servo_rate_hz)),
         ("delay-ticks", c.extra_delay_ticks.to_string()),
@@ -113,11 +136,11 @@ pub fn config_table(c: &ServoConfig) -> String {
             },
         ),
         ("wall-position", format!("{} counts", c.wall_position)),
-        ("force-limit", format!("{} N (N·m)", c.force_limit)),
+        ("force-limit", format!("{} {f}", sig6(c.force_limit))),
         (
             "max-velocity",
             if c.max_velocity > 0.0 {
-                format!("{} m/s (rad/s)", c.max_velocity)
+                format!("{} {v}", sig6(c.max_velocity))
             } else {
                 "off".into()
             },
@@ -126,7 +149,7 @@ pub fn config_table(c: &ServoConfig) -> String {
             "energy-monitor",
             if c.energy_monitor { "on" } else { "off" }.into(),
         ),
-        ("energy-limit", format!("{} J", c.energy_limit)),
+        ("energy-limit", format!("{} J", sig6(c.energy_limit))),
         ("energy-growth-cycles", c.energy_growth_cycles.to_string()),
         (
             "encoder-jump",
@@ -147,10 +170,7 @@ pub fn config_table(c: &ServoConfig) -> String {
                 SafeMode::Damping => "damping".into(),
             },
         ),
-        (
-            "safe-damping",
-            format!("{} N·s/m (N·m·s/rad)", c.safe_damping),
-        ),
+        ("safe-damping", format!("{} {b}", sig6(c.safe_damping))),
         ("travel-min", travel_end(c.travel_min)),
         ("travel-max", travel_end(c.travel_max)),
     ];
@@ -164,6 +184,35 @@ pub fn config_table(c: &ServoConfig) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sig6_drops_the_f32_tail_and_keeps_six_digits() {
+        assert_eq!(sig6(0.099_999_994), "0.1");
+        assert_eq!(sig6(1.1), "1.1");
+        assert_eq!(sig6(12_345.678), "12345.7");
+        assert_eq!(sig6(5.4543e-3), "0.0054543");
+        assert_eq!(sig6(0.0), "0");
+        assert_eq!(sig6(-2.5), "-2.5");
+    }
+
+    #[test]
+    fn a_config_reads_in_the_devices_units_only() {
+        let c = ServoConfig {
+            force_limit: 0.099_999_994,
+            ..ServoConfig::default()
+        };
+        let rotary = config_table(&c, true);
+        assert!(
+            rotary.contains(" N·m/rad") && !rotary.contains(" N/m"),
+            "{rotary}"
+        );
+        assert!(rotary.contains("force-limit           0.1 N·m"), "{rotary}");
+        let linear = config_table(&c, false);
+        assert!(
+            linear.contains(" N/m") && !linear.contains("N·m"),
+            "{linear}"
+        );
+    }
 
     struct Closed(std::io::ErrorKind);
     impl std::io::Write for Closed {

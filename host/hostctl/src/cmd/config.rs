@@ -76,7 +76,7 @@ pub fn run(args: &Args) -> Result<()> {
         if let Some(w) = what {
             emit(&format!("# {w} on {}", args.connect.describe()))?;
         }
-        emit(&config_table(&cfg))?;
+        emit(&config_table(&cfg, c.info.counts_per_rev > 0))?;
     }
     Ok(())
 }

@@ -138,6 +138,7 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         figure::write(path, release_figure::SIZE_PX, &fig)?;
     }
     let done = ReleaseDone {
+        rotary: c.info.counts_per_rev > 0,
         stiffness: cfg.stiffness,
         start,
         counts: &counts,
@@ -176,6 +177,8 @@ fn release_model(a: &ReleaseArgs) -> Result<Option<(f64, f64, f64)>> {
 
 /// A finished release test, as reported.
 struct ReleaseDone<'a> {
+    /// A rotary device (N·m/rad, rad/s), else linear (N/m, m/s).
+    rotary: bool,
     /// The test's stiffness.
     stiffness: f32,
     /// Where the device was released, effective ticks.
@@ -225,9 +228,24 @@ impl ReleaseDone<'_> {
     fn text(&self, a: &ReleaseArgs) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "release test on the {}", a.connect.describe());
+        let (k_unit, v_unit) = if self.rotary {
+            ("N·m/rad", "rad/s")
+        } else {
+            ("N/m", "m/s")
+        };
+        // `start` is the first count recorded after the release, where the hold left the
+        // device: it need not be the count asked for.
+        let asked = if self.start == i64::from(a.deflection) {
+            String::new()
+        } else {
+            format!(
+                " (the first count recorded after the release; {} asked)",
+                a.deflection
+            )
+        };
         let _ = writeln!(
             s,
-            "  K = {} , released from {} ticks, {} ticks recorded",
+            "  K = {} {k_unit}, released from {} ticks{asked}, {} ticks recorded",
             self.stiffness,
             self.start,
             self.counts.len()
@@ -242,7 +260,8 @@ impl ReleaseDone<'_> {
         if let Some(r) = self.report {
             let _ = writeln!(
                 s,
-                "  (β, σ) = ({:.4}, {:.4}), μ = {:.3}; region {:?} for the equivalent velocity {:.4}",
+                "  (β, σ) = ({:.4}, {:.4}), μ = {:.3}; region {:?} for the equivalent velocity {:.4} \
+                 {v_unit}",
                 r.beta, r.sigma, r.mu, r.region, self.v_eq.unwrap_or(0.0)
             );
         }

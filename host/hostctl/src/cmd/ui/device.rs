@@ -160,7 +160,7 @@ impl Dev {
         self.shared.publish(
             "config",
             json!({"type": "config", "config": self.cfg,
-                   "text": crate::output::config_table(&self.cfg)}),
+                   "text": crate::output::config_table(&self.cfg, self.client.info.counts_per_rev > 0)}),
         );
         self.shared.publish(
             "plane",
