@@ -369,10 +369,7 @@ impl TrialRun {
         if self.ran_away || self.counts.is_empty() || self.exit.is_some() {
             return false;
         }
-        let w = self.window();
-        let lo = w.iter().min().copied().unwrap_or(0);
-        let hi = w.iter().max().copied().unwrap_or(0);
-        hi - lo <= 1
+        stiffwall_core::rest::window_within_one_count(self.window())
     }
 
     /// A run that does not rest but stays within one count: how fast it toggles and how much

@@ -63,6 +63,15 @@ pub fn window_rests(counts: &[i64]) -> bool {
     count_changes(counts) <= REST_MAX_CHANGES
 }
 
+/// True when the window `counts` stays within one count (at most two neighbouring counts): a
+/// run that does not rest but keeps to this chatters, one that does not swings over more.
+#[must_use]
+pub fn window_within_one_count(counts: &[i64]) -> bool {
+    let lo = counts.iter().copied().min().unwrap_or(0);
+    let hi = counts.iter().copied().max().unwrap_or(0);
+    hi - lo <= 1
+}
+
 /// True when the run `counts` comes to rest by the rule of the module header.
 #[must_use]
 pub fn comes_to_rest(counts: &[i64], natural_ticks: f64) -> bool {
@@ -135,6 +144,13 @@ impl Chatter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn within_one_count_takes_a_toggle_and_not_a_wider_swing() {
+        assert!(window_within_one_count(&[3, 4, 3, 4, 4]));
+        assert!(window_within_one_count(&[-1, -1]));
+        assert!(!window_within_one_count(&[-1, 0, 1, 0]));
+    }
 
     #[test]
     fn changes_are_counted_between_neighbours() {

@@ -180,9 +180,7 @@ impl SwingModel {
         }
         if self.accept_chatter {
             let window = &counts[stiffwall_core::rest::window_start(counts.len(), natural)..];
-            let lo = window.iter().min().copied().unwrap_or(0);
-            let hi = window.iter().max().copied().unwrap_or(0);
-            return hi - lo <= 1;
+            return stiffwall_core::rest::window_within_one_count(window);
         }
         stiffwall_core::rest::comes_to_rest(&counts, natural)
     }

@@ -190,9 +190,7 @@ pub fn classify_trajectory(counts: &[i64], wall: Wall, supervisor_tripped: bool)
     if outside {
         return Verdict::Departs;
     }
-    let lo = tail.iter().copied().min().unwrap_or(0);
-    let hi = tail.iter().copied().max().unwrap_or(0);
-    if hi - lo <= 1 {
+    if stiffwall_core::rest::window_within_one_count(tail) {
         Verdict::Chatter
     } else {
         Verdict::Persistent

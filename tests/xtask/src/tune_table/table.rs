@@ -455,7 +455,7 @@ const SMALL_SWING_STEP: f64 = 1.05;
 /// per tick within three counts of the origin, which the dead band leaves undamped) run on the
 /// plant at K from K*/1.05³ upwards in steps of ×1.05; the first K at which one does not come
 /// to rest is the failure, and K* the first K below it, by the same steps, that keeps none.
-/// None of the criterion's trials starts there (docs/TUNE.md, "What K* does not see").
+/// None of the criterion's trials starts there (docs/TUNE.md, "Small swings").
 fn with_small_swings(damped: &PlantCase, k: KStar) -> KStar {
     use rayon::prelude::*;
     let trials = super::row::small_state_trials(&damped.rig);
