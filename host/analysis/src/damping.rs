@@ -104,8 +104,8 @@ pub fn figure(d: &DampingReport, p: &PhysicalParams, device: Option<&str>) -> Fr
     let u = Units::of(p.rotational);
     Frontier {
         title: format!(
-            "{}: (K, B) frontier, exact sampled linear K_max(B)",
-            device.unwrap_or("device")
+            "{}: (K, B) frontier of the spring + damper wall, exact sampled linear K_max(B)",
+            device.unwrap_or("plant given by flags")
         ),
         units: u,
         boundary: d.frontier.iter().map(|f| (f.b, f.k_max)).collect(),
@@ -126,8 +126,8 @@ pub fn figure(d: &DampingReport, p: &PhysicalParams, device: Option<&str>) -> Fr
             b: d.b_set,
             k: p.stiffness,
             label: format!(
-                "operating point B = {:.4e}, K = {:.4e} ({})",
-                d.b_set, p.stiffness, d.region
+                "operating point B = {:.4e} {}, K = {:.4e} {} ({})",
+                d.b_set, u.b, p.stiffness, u.k, d.region
             ),
         }),
         quiet_ceiling: Some(d.quiet_ceiling),

@@ -4,8 +4,10 @@
 //! Units: dimensionless (β, σ, μ on the axes; fractions in [0, 1]). Invariant: drawn only from a
 //! complete, validated map and the atlas computed from it; lines are clipped to the plot.
 
+use crate::describe::{sig, Description};
 use crate::figure::{self, DrawResult, Figure, FigureError};
-use crate::map::draw_cells;
+use crate::layout::{self, Glyph};
+use crate::map::{class_entries, draw_cells, AXES};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -13,6 +15,11 @@ pub use stiffwall_analysis::atlas::panel_file;
 use stiffwall_analysis::atlas::{Atlas, Line, Slice};
 use stiffwall_analysis::map_file::{MapFile, Panel};
 use stiffwall_core::regions;
+
+/// Size of a panel figure, px.
+pub const PANEL_PX: (u32, u32) = (700, 760);
+/// Size of the summary figure, px.
+pub const SUMMARY_PX: (u32, u32) = (1300, 800);
 
 fn line_color(l: Line) -> RGBColor {
     match l {
@@ -41,22 +48,60 @@ pub fn plot_all(
             panel: p,
             fractions: Line::ALL.map(|l| ap.fraction(l)),
         };
-        figure::write(&path, (620, 560), &fig)?;
+        figure::write(&path, PANEL_PX, &fig)?;
         out.push(path);
     }
     let path = dir.join(format!("atlas-summary.{ext}"));
-    figure::write(&path, (1000, 760), &SummaryFigure { atlas: a })?;
+    figure::write(&path, SUMMARY_PX, &SummaryFigure { atlas: a })?;
     out.push(path);
     Ok(out)
 }
 
-struct PanelFigure<'a> {
-    map: &'a MapFile,
-    panel: &'a Panel,
-    fractions: [Option<f64>; 4],
+/// One atlas panel: the simulated classes with the analytic lines over them.
+#[derive(Debug, Clone, Copy)]
+pub struct PanelFigure<'a> {
+    /// The map.
+    pub map: &'a MapFile,
+    /// The panel drawn.
+    pub panel: &'a Panel,
+    /// The agreement of each line of [`Line::ALL`] with the simulated growth.
+    pub fractions: [Option<f64>; 4],
+}
+
+impl PanelFigure<'_> {
+    fn entries(&self) -> Vec<(Glyph, String)> {
+        let mut out = class_entries();
+        for (l, fr) in Line::ALL.iter().zip(self.fractions) {
+            let agree = fr.map_or_else(|| "n/a".to_owned(), |v| format!("{:.1} %", 100.0 * v));
+            out.push((
+                Glyph::Line(line_color(*l), 2),
+                format!(
+                    "{}: agrees with the simulated growth in {agree} of the cells",
+                    l.label()
+                ),
+            ));
+        }
+        out
+    }
 }
 
 impl Figure for PanelFigure<'_> {
+    fn describe(&self) -> Description {
+        let p = self.panel;
+        let mut d = Description::new(format!(
+            "atlas panel μ = {}, τ_D = {}, ξ̇₀ = {}: simulated class ({} periods) and the analytic stability lines",
+            sig(p.mu),
+            sig(p.tau_d),
+            sig(p.xidot0),
+            self.map.spec.periods
+        ));
+        d.axis(AXES[0]).axis(AXES[1]);
+        for (_, e) in self.entries() {
+            d.legend(e);
+        }
+        d
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -71,50 +116,6 @@ fn step(lo: f64, hi: f64, n: usize) -> f64 {
     } else {
         0.1
     }
-}
-
-/// The title, the agreement of each line (in its colour) and the cell legend of a panel.
-fn draw_panel_header<DB: DrawingBackend>(
-    top: &DrawingArea<DB, Shift>,
-    f: &PanelFigure,
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    let (s, p) = (&f.map.spec, f.panel);
-    let legend: Vec<String> = Line::ALL
-        .iter()
-        .zip(f.fractions)
-        .map(|(l, fr)| {
-            format!(
-                "{}: {}",
-                l.label(),
-                fr.map_or_else(|| "n/a".to_owned(), |v| format!("{:.1} %", 100.0 * v))
-            )
-        })
-        .collect();
-    top.draw(&Text::new(
-        format!(
-            "mu = {:.4}, tau_D = {}, xidot0 = {}, {} periods; agreement with the simulated growth:",
-            p.mu, p.tau_d, p.xidot0, s.periods
-        ),
-        (8, 6),
-        ("sans-serif", 14),
-    ))?;
-    for (i, (l, text)) in Line::ALL.iter().zip(&legend).enumerate() {
-        let (x, y) = (8 + (i as i32 % 2) * 300, 28 + (i as i32 / 2) * 20);
-        top.draw(&Text::new(
-            text.clone(),
-            (x, y),
-            ("sans-serif", 14).into_font().color(&line_color(*l)),
-        ))?;
-    }
-    top.draw(&Text::new(
-        "cells: dark growing, medium persistent, light/white decaying",
-        (8, 68),
-        ("sans-serif", 12),
-    ))?;
-    Ok(())
 }
 
 fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &PanelFigure) -> DrawResult
@@ -133,12 +134,21 @@ where
     let ds = step(s.sigma.lo, s.sigma.hi, s.sigma.n);
     let (bx0, bx1) = (s.beta.lo - db / 2.0, s.beta.hi + db / 2.0);
     let (sy0, sy1) = (s.sigma.lo - ds / 2.0, s.sigma.hi + ds / 2.0);
-    let (top, body) = root.split_vertically(86);
-    draw_panel_header(&top, f)?;
+    let d = f.describe();
+    let body = layout::titled(root, &d.title)?;
+    let keys: Vec<(Glyph, String)> = f
+        .entries()
+        .into_iter()
+        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
+        .collect::<DrawResult<_>>()?;
+    let (w, _) = body.dim_in_pixel();
+    let texts: Vec<String> = keys.iter().map(|k| k.1.clone()).collect();
+    let (top, body) = body.split_vertically(layout::legend_height(&body, &texts, w - 20));
+    layout::legend(&top.margin(0, 4, 10, 10), &keys)?;
     let mut chart = ChartBuilder::on(&body)
-        .margin(8)
-        .x_label_area_size(35)
-        .y_label_area_size(45)
+        .margin(10)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
         .build_cartesian_2d(bx0..bx1, sy0..sy1)?;
     draw_cells(&mut chart, &p.points, db, ds)?;
     let v = p.xidot0.abs();
@@ -173,43 +183,95 @@ where
     Ok(())
 }
 
-struct SummaryFigure<'a> {
-    atlas: &'a Atlas,
+/// The atlas summary: agreement of each line against μ, one curve per (τ_D, ξ̇₀).
+#[derive(Debug, Clone, Copy)]
+pub struct SummaryFigure<'a> {
+    /// The atlas.
+    pub atlas: &'a Atlas,
+}
+
+const SUMMARY_AXES: [&str; 2] = [
+    "μ = m/(KT²) (dimensionless inertia), log scale",
+    "cells where the line agrees [fraction]",
+];
+
+impl SummaryFigure<'_> {
+    /// One curve per (τ_D, ξ̇₀), in order of first appearance.
+    fn keys(&self) -> Vec<(f64, f64)> {
+        let mut keys: Vec<(f64, f64)> = Vec::new();
+        for p in &self.atlas.panels {
+            let k = (p.tau_d, p.xidot0);
+            if !keys
+                .iter()
+                .any(|q| q.0.to_bits() == k.0.to_bits() && q.1.to_bits() == k.1.to_bits())
+            {
+                keys.push(k);
+            }
+        }
+        keys
+    }
+
+    fn entries(&self) -> Vec<(Glyph, String)> {
+        self.keys()
+            .iter()
+            .enumerate()
+            .map(|(i, (tau, xi))| {
+                let c = Palette99::pick(i).to_rgba();
+                (
+                    Glyph::Line(RGBColor(c.0, c.1, c.2), 2),
+                    format!("τ_D = {}, ξ̇₀ = {}", sig(*tau), sig(*xi)),
+                )
+            })
+            .collect()
+    }
 }
 
 impl Figure for SummaryFigure<'_> {
+    fn describe(&self) -> Description {
+        let mut d = Description::new(format!(
+            "Atlas summary: agreement of each analytic line with the simulated growth ({} periods), one panel per line, one curve per slice",
+            self.atlas.periods
+        ));
+        d.axis(SUMMARY_AXES[0]).axis(SUMMARY_AXES[1]);
+        for (_, e) in self.entries() {
+            d.legend(e);
+        }
+        for l in Line::ALL {
+            d.value(format!("panel: {}", l.label()));
+        }
+        d
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
-        draw_summary(root, self.atlas)
+        draw_summary(root, self)
     }
 }
 
-fn draw_summary<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, a: &Atlas) -> DrawResult
+/// A tick label of the log μ axis: only 1, 2 and 5 times a power of ten are written (the
+/// others crowd each other out).
+fn log_tick(v: &f64) -> String {
+    let m = *v / 10f64.powf(v.log10().floor());
+    if [1.0, 2.0, 5.0, 10.0].iter().any(|k| (m - k).abs() < 1e-6) {
+        sig(*v)
+    } else {
+        String::new()
+    }
+}
+
+fn draw_summary<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &SummaryFigure) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let (top, body) = root.split_vertically(30);
-    top.titled(
-        &format!(
-            "Agreement of each analytic line with the simulated growth ({} periods), per slice",
-            a.periods
-        ),
-        ("sans-serif", 16),
-    )?;
-    // One curve per (tau_D, xidot0), in order of first appearance.
-    let mut keys: Vec<(f64, f64)> = Vec::new();
-    for p in &a.panels {
-        let k = (p.tau_d, p.xidot0);
-        if !keys
-            .iter()
-            .any(|q| q.0.to_bits() == k.0.to_bits() && q.1.to_bits() == k.1.to_bits())
-        {
-            keys.push(k);
-        }
-    }
+    let a = f.atlas;
+    let d = f.describe();
+    let body = layout::titled(root, &d.title)?;
+    let (w, _) = body.dim_in_pixel();
+    let (body, right) = body.split_horizontally(w.saturating_sub(300));
+    let keys = f.keys();
     let mu_lo = a.panels.iter().map(|p| p.mu).fold(f64::INFINITY, f64::min);
     let mu_hi = a.panels.iter().map(|p| p.mu).fold(0.0, f64::max);
     let (mu_lo, mu_hi) = if mu_hi > mu_lo {
@@ -219,15 +281,18 @@ where
     };
     for (line, area) in Line::ALL.iter().zip(body.split_evenly((2, 2)).iter()) {
         let mut chart = ChartBuilder::on(area)
-            .caption(line.label(), ("sans-serif", 15))
-            .margin(8)
-            .x_label_area_size(35)
-            .y_label_area_size(45)
+            .caption(line.label(), ("sans-serif", layout::LEGEND_PX + 1))
+            .margin(10)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
             .build_cartesian_2d((mu_lo..mu_hi).log_scale(), 0.0..1.02)?;
         chart
             .configure_mesh()
-            .x_desc("mu")
-            .y_desc("fraction correct")
+            .x_desc(SUMMARY_AXES[0])
+            .x_label_formatter(&log_tick)
+            .y_desc(SUMMARY_AXES[1])
+            .axis_desc_style(("sans-serif", layout::TICK_PX))
+            .label_style(("sans-serif", layout::TICK_PX))
             .draw()?;
         for (i, &(tau, xi)) in keys.iter().enumerate() {
             let color = Palette99::pick(i).to_rgba();
@@ -239,21 +304,14 @@ where
                 })
                 .filter_map(|p| p.fraction(*line).map(|f| (p.mu, f)))
                 .collect();
-            chart
-                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
-                .label(format!("tau_D = {tau}, xidot0 = {xi}"))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-                });
+            chart.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?;
             chart.draw_series(pts.iter().map(|&q| Circle::new(q, 3, color.filled())))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 11))
-            .draw()?;
     }
-    Ok(())
+    let entries: Vec<(Glyph, String)> = f
+        .entries()
+        .into_iter()
+        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
+        .collect::<DrawResult<_>>()?;
+    layout::legend(&right.margin(14, 0, 0, 8), &entries)
 }

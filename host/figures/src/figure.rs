@@ -5,8 +5,11 @@
 //! with an error naming the path and the allowed extensions. The file is presented (written)
 //! exactly once, after the whole figure is drawn. [`prepare`] checks the name and that the
 //! file can be written before a long run starts (an existing file is left unchanged, a file
-//! created by the check is removed).
+//! created by the check is removed). With the environment variable
+//! [`crate::describe::TEXT_ENV`] set (to anything), [`write`] also writes `<file>.txt`, the
+//! figure's [`Description`] as text (the gallery's font-independent record).
 
+use crate::describe::Description;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -55,8 +58,11 @@ pub type DrawError = Box<dyn std::error::Error + Send + Sync>;
 /// The result of a drawing function.
 pub type DrawResult<T = ()> = Result<T, DrawError>;
 
-/// Something that can draw itself on any plotters backend.
+/// Something that can draw itself on any plotters backend and say what it draws.
 pub trait Figure {
+    /// The figure's words: title, axis labels, legend entries and key values, as drawn.
+    fn describe(&self) -> Description;
+
     /// Draws the whole figure into `root` (which it fills); the writer presents it.
     ///
     /// # Errors
@@ -135,7 +141,19 @@ pub fn write<F: Figure + ?Sized>(
             figure,
         ),
     };
-    drawn.map_err(draw_err)
+    drawn.map_err(draw_err)?;
+    if std::env::var_os(crate::describe::TEXT_ENV).is_some() {
+        let mut name = path.as_os_str().to_owned();
+        name.push(".txt");
+        let text_path = PathBuf::from(name);
+        std::fs::write(&text_path, figure.describe().render()).map_err(|source| {
+            FigureError::Unwritable {
+                path: text_path,
+                source,
+            }
+        })?;
+    }
+    Ok(())
 }
 
 fn render<DB: DrawingBackend, F: Figure + ?Sized>(
@@ -150,12 +168,47 @@ where
     Ok(())
 }
 
+/// What is wrong with `figure` drawn at `size` px: the [`Description::problems`] and every
+/// title, axis label and legend entry of the description that the drawn SVG does not show.
+///
+/// # Errors
+/// A drawing error.
+pub fn audit<F: Figure>(
+    figure: &F,
+    size: (u32, u32),
+    rotational: Option<bool>,
+) -> DrawResult<Vec<String>> {
+    let d = figure.describe();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        figure.draw(&root)?;
+        root.present()?;
+    }
+    let text = crate::describe::svg_text(&svg);
+    let mut out = d.problems(rotational);
+    let drawn = d
+        .axes
+        .iter()
+        .chain(&d.legend)
+        .chain(std::iter::once(&d.title));
+    for want in drawn {
+        if !text.contains(want.as_str()) {
+            out.push(format!("not drawn: '{want}'"));
+        }
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     struct Square;
     impl Figure for Square {
+        fn describe(&self) -> Description {
+            Description::new("square")
+        }
         fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
         where
             DB::ErrorType: 'static,
@@ -168,6 +221,9 @@ mod tests {
 
     struct Broken;
     impl Figure for Broken {
+        fn describe(&self) -> Description {
+            Description::new("broken")
+        }
         fn draw<DB: DrawingBackend>(&self, _: &DrawingArea<DB, Shift>) -> DrawResult
         where
             DB::ErrorType: 'static,

@@ -11,7 +11,9 @@
 //! restated; a K_max that is not finite is not drawn, one outside the plotted K range is
 //! clamped to it. The frontier figure's file is named [`kb_path`] of the (β, σ) figure's.
 
+use crate::describe::{sig, Description};
 use crate::figure::{self, DrawResult, Figure, FigureError};
+use crate::layout::{self, Glyph};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -19,12 +21,23 @@ use std::path::Path;
 pub use stiffwall_analysis::frontier::*;
 
 /// Size of the frontier figure in pixels.
-pub const SIZE_PX: (u32, u32) = (900, 660);
+pub const SIZE_PX: (u32, u32) = (1100, 680);
+/// Width of the legend panel, px.
+const LEGEND_W: u32 = 380;
 
 /// A chart over the (B, K) plane.
 pub type KbChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// Draws the axes (no mesh) with the labels `B [unit]` and `K [unit]`.
+/// The axis labels of the (B, K) plane in `u`: B first.
+#[must_use]
+pub fn axis_labels(u: Units) -> [String; 2] {
+    [
+        format!("B, virtual damping of the wall [{}]", u.b),
+        format!("K, wall stiffness [{}]", u.k),
+    ]
+}
+
+/// Draws the axes (no mesh) with the labels of [`axis_labels`].
 ///
 /// # Errors
 /// A drawing error.
@@ -32,169 +45,191 @@ pub fn axes<DB: DrawingBackend>(chart: &mut KbChart<'_, DB>, u: Units) -> DrawRe
 where
     DB::ErrorType: 'static,
 {
+    let [x, y] = axis_labels(u);
     chart
         .configure_mesh()
         .disable_mesh()
-        .x_desc(format!("B [{}]", u.b))
-        .y_desc(format!("K [{}]", u.k))
+        .x_desc(x)
+        .y_desc(y)
+        .axis_desc_style(("sans-serif", layout::AXIS_PX))
+        .label_style(("sans-serif", layout::TICK_PX))
+        .y_label_formatter(&|k| sig(*k))
         .draw()?;
     Ok(())
 }
 
-/// Draws the boundary `pts` (B, K_max) in red, K clamped to `y0..=y1`; with a `label`, as a
-/// legend entry.
+/// The runs of the polyline `pts` inside `y0..=y1`, cut where it leaves the range (the
+/// crossing interpolated); points that are not finite end a run.
+#[must_use]
+pub fn clip(pts: &[(f64, f64)], (y0, y1): (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    let inside = |p: &(f64, f64)| p.1.is_finite() && (y0..=y1).contains(&p.1);
+    let cross = |a: (f64, f64), b: (f64, f64)| {
+        let y = if a.1.max(b.1) > y1 { y1 } else { y0 };
+        let t = (y - a.1) / (b.1 - a.1);
+        (a.0 + t * (b.0 - a.0), y)
+    };
+    let mut runs = Vec::new();
+    let mut cur: Vec<(f64, f64)> = Vec::new();
+    for (i, p) in pts.iter().enumerate() {
+        let prev = i.checked_sub(1).map(|j| pts[j]);
+        let finite_pair = |q: (f64, f64)| q.1.is_finite() && p.1.is_finite();
+        match prev {
+            Some(q) if inside(p) && !inside(&q) && finite_pair(q) => cur.push(cross(q, *p)),
+            Some(q) if !inside(p) && inside(&q) && finite_pair(q) => cur.push(cross(q, *p)),
+            _ => {}
+        }
+        if inside(p) {
+            cur.push(*p);
+        } else if !cur.is_empty() {
+            runs.push(std::mem::take(&mut cur));
+        }
+    }
+    runs.push(cur);
+    runs.retain(|r| r.len() >= 2);
+    runs
+}
+
+/// Draws the boundary `pts` (B, K_max) in red, only where K is inside `y0..=y1` (a curve
+/// leaving the range ends at the border, it never runs along it).
 ///
 /// # Errors
 /// A drawing error.
 pub fn draw_boundary<DB: DrawingBackend>(
     chart: &mut KbChart<'_, DB>,
     pts: &[(f64, f64)],
-    (y0, y1): (f64, f64),
-    label: Option<String>,
+    range: (f64, f64),
 ) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
-    let line: Vec<(f64, f64)> = pts
-        .iter()
-        .filter(|p| p.1.is_finite())
-        .map(|&(b, k)| (b, k.clamp(y0, y1)))
-        .collect();
-    let series = chart.draw_series(LineSeries::new(line, RED.stroke_width(2)))?;
-    if let Some(label) = label {
-        series
-            .label(label)
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
+    for run in clip(pts, range) {
+        chart.draw_series(LineSeries::new(run, RED.stroke_width(2)))?;
     }
     Ok(())
 }
 
+const BLUE_PT: RGBColor = RGBColor(40, 90, 200);
+const GREEN: RGBColor = RGBColor(20, 140, 60);
+const ORANGE: RGBColor = RGBColor(230, 130, 20);
+/// The colour of the quiet ceiling, shared with the (K, B) map.
+pub const PURPLE: RGBColor = RGBColor(130, 60, 170);
+
+/// The legend text of the quiet ceiling `k` in unit `u`.
+#[must_use]
+pub fn quiet_ceiling_label(k: f64, unit: &str) -> String {
+    format!(
+        "quiet ceiling 2·max(c, F_s)/Δ = {} {unit}: above it no wall comes to rest (it chatters up to K_max(B), grows above)",
+        sig(k)
+    )
+}
+
+fn quiet(f: &Frontier) -> Option<f64> {
+    f.quiet_ceiling.filter(|k| k.is_finite() && *k > 0.0)
+}
+
+/// The legend entries of `f` in drawing order, with their glyphs.
+fn entries(f: &Frontier) -> Vec<(Glyph, String)> {
+    let mut out = vec![(Glyph::Line(RED, 2), f.boundary_label.clone())];
+    if let Some(k) = quiet(f) {
+        out.push((Glyph::Dashed(PURPLE, 2), quiet_ceiling_label(k, f.units.k)));
+    }
+    if f.verified.iter().any(|v| v.1.is_some()) {
+        out.push((
+            Glyph::Dot(BLUE_PT),
+            "verified: the largest resting K at each B tried".to_owned(),
+        ));
+    }
+    if f.verified.iter().any(|v| v.1.is_none()) {
+        out.push((
+            Glyph::Cross(BLUE_PT),
+            "B tried, no K at or above the best so far (on the B axis)".to_owned(),
+        ));
+    }
+    if let Some(k) = f.spring_only {
+        out.push((
+            Glyph::Triangle(GREEN),
+            format!("spring-only wall K = {} {}", sig(k), f.units.k),
+        ));
+    }
+    if let Some(m) = &f.best {
+        out.push((Glyph::Cross(ORANGE), m.label.clone()));
+    }
+    if let Some(m) = &f.chosen {
+        out.push((Glyph::Ring(BLACK), m.label.clone()));
+    }
+    out
+}
+
 impl Figure for Frontier {
+    fn describe(&self) -> Description {
+        let mut d = Description::new(self.title.clone());
+        for a in axis_labels(self.units) {
+            d.axis(a);
+        }
+        for (_, e) in entries(self) {
+            d.legend(e);
+        }
+        d
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE)?;
+        let d = self.describe();
+        let body = layout::titled(root, &d.title)?;
+        let (w, _) = body.dim_in_pixel();
+        let (left, right) = body.split_horizontally(w.saturating_sub(LEGEND_W));
         let (x1, y1) = self.ranges();
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, ("sans-serif", 20))
+        let mut chart = ChartBuilder::on(&left)
             .margin(14)
             .x_label_area_size(50)
-            .y_label_area_size(80)
+            .y_label_area_size(85)
             .build_cartesian_2d(0.0..x1, 0.0..y1)?;
         axes(&mut chart, self.units)?;
-        let label = Some(self.boundary_label.clone());
-        draw_boundary(&mut chart, &self.boundary, (0.0, y1), label)?;
-        draw_quiet_ceiling(self, &mut chart, x1)?;
+        draw_boundary(&mut chart, &self.boundary, (0.0, y1))?;
+        if let Some(k) = quiet(self) {
+            let style = PURPLE.stroke_width(2);
+            chart.draw_series(DashedLineSeries::new(vec![(0.0, k), (x1, k)], 8, 5, style))?;
+        }
         draw_points(self, &mut chart)?;
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()?;
-        Ok(())
+        let keys: Vec<(Glyph, String)> = entries(self)
+            .into_iter()
+            .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
+            .collect::<DrawResult<_>>()?;
+        layout::legend(&right.margin(14, 0, 0, 8), &keys)
     }
-}
-
-/// The quiet ceiling as a dashed horizontal line over the whole B axis: below it a wall can
-/// come to rest; between it and K_max(B) it chatters; above K_max(B) it grows.
-fn draw_quiet_ceiling<DB: DrawingBackend>(
-    f: &Frontier,
-    chart: &mut KbChart<'_, DB>,
-    x1: f64,
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    let Some(k) = f.quiet_ceiling.filter(|k| k.is_finite() && *k > 0.0) else {
-        return Ok(());
-    };
-    let purple = RGBColor(130, 60, 170);
-    chart
-        .draw_series(DashedLineSeries::new(
-            vec![(0.0, k), (x1, k)],
-            8,
-            5,
-            purple.stroke_width(2),
-        ))?
-        .label(format!(
-            "quiet ceiling 2c/Δ = {k:.4e}: above it every wall chatters (up to K_max(B); above that it grows)"
-        ))
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], purple.stroke_width(2)));
-    Ok(())
 }
 
 fn draw_points<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
-    let blue = RGBColor(40, 90, 200);
-    let ok: Vec<(f64, f64)> = f
-        .verified
-        .iter()
-        .filter_map(|&(b, k)| k.map(|k| (b, k)))
-        .collect();
-    if !ok.is_empty() {
-        chart
-            .draw_series(ok.iter().map(|&p| Circle::new(p, 5, blue.filled())))?
-            .label("verified: largest resting K at each B tried")
-            .legend(move |(x, y)| Circle::new((x + 9, y), 5, blue.filled()));
-    }
-    let none: Vec<f64> = f
-        .verified
-        .iter()
-        .filter(|v| v.1.is_none())
-        .map(|v| v.0)
-        .collect();
-    if !none.is_empty() {
-        chart
-            .draw_series(
-                none.iter()
-                    .map(|&b| Cross::new((b, 0.0), 7, blue.stroke_width(2))),
-            )?
-            .label("B tried, no K at or above the best so far (on the B axis)")
-            .legend(move |(x, y)| Cross::new((x + 9, y), 5, blue.stroke_width(2)));
-    }
+    let ok = f.verified.iter().filter_map(|&(b, k)| k.map(|k| (b, k)));
+    chart.draw_series(ok.map(|p| Circle::new(p, 5, BLUE_PT.filled())))?;
+    let none = f.verified.iter().filter(|v| v.1.is_none());
+    chart.draw_series(none.map(|v| Cross::new((v.0, 0.0), 7, BLUE_PT.stroke_width(2))))?;
     if let Some(k) = f.spring_only {
-        let green = RGBColor(20, 140, 60);
-        chart
-            .draw_series(std::iter::once(TriangleMarker::new(
-                (0.0, k),
-                8,
-                green.filled(),
-            )))?
-            .label(format!("spring-only wall K = {k:.4e}"))
-            .legend(move |(x, y)| TriangleMarker::new((x + 9, y), 6, green.filled()));
+        chart.draw_series(std::iter::once(TriangleMarker::new(
+            (0.0, k),
+            8,
+            GREEN.filled(),
+        )))?;
     }
-    draw_marks(f, chart)
-}
-
-fn draw_marks<DB: DrawingBackend>(f: &Frontier, chart: &mut KbChart<'_, DB>) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
     if let Some(m) = &f.best {
-        let orange = RGBColor(230, 130, 20);
-        chart
-            .draw_series(std::iter::once(Cross::new(
-                (m.b, m.k),
-                8,
-                orange.stroke_width(3),
-            )))?
-            .label(m.label.clone())
-            .legend(move |(x, y)| Cross::new((x + 9, y), 6, orange.stroke_width(3)));
+        chart.draw_series(std::iter::once(Cross::new(
+            (m.b, m.k),
+            8,
+            ORANGE.stroke_width(3),
+        )))?;
     }
     if let Some(m) = &f.chosen {
-        chart
-            .draw_series(std::iter::once(
-                EmptyElement::at((m.b, m.k))
-                    + Circle::new((0, 0), 9, BLACK.stroke_width(3))
-                    + Circle::new((0, 0), 4, BLACK.filled()),
-            ))?
-            .label(m.label.clone())
-            .legend(|(x, y)| Circle::new((x + 9, y), 7, BLACK.stroke_width(3)));
+        chart.draw_series(std::iter::once(
+            EmptyElement::at((m.b, m.k))
+                + Circle::new((0, 0), 9, BLACK.stroke_width(3))
+                + Circle::new((0, 0), 4, BLACK.filled()),
+        ))?;
     }
     Ok(())
 }
@@ -243,19 +278,34 @@ mod tests {
         );
         f.quiet_ceiling = Some(250.0);
         write(&path, &f).unwrap();
-        let svg = std::fs::read_to_string(&path).unwrap();
+        let svg = crate::describe::svg_text(&std::fs::read_to_string(&path).unwrap());
         for needle in [
-            "B [N·s/m]",
-            "K [N/m]",
+            "B, virtual damping of the wall [N·s/m]",
+            "K, wall stiffness [N/m]",
             "boundary",
-            "verified: largest resting K",
-            "quiet ceiling 2c/Δ = 2.5000e2",
+            "verified: the largest resting K",
+            "quiet ceiling 2·max(c, F_s)/Δ = 250.0 N/m",
             "no K at or above the best so far (on the B axis)",
-            "spring-only wall K = 1.0000e2",
+            "spring-only wall K = 100.0 N/m",
             "set wall",
         ] {
             assert!(svg.contains(needle), "lacks {needle}");
         }
+        assert!(crate::figure::audit(&f, SIZE_PX, Some(false))
+            .unwrap()
+            .is_empty());
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_boundary_ends_at_the_top_border_instead_of_running_along_it() {
+        let runs = clip(
+            &[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0), (3.0, 1.0)],
+            (0.0, 4.0),
+        );
+        assert_eq!(runs.len(), 2, "{runs:?}");
+        assert_eq!(runs[0], vec![(0.0, 1.0), (1.0, 3.0), (1.5, 4.0)]);
+        assert_eq!(runs[1], vec![(2.25, 4.0), (3.0, 1.0)]);
+        assert!(clip(&[(0.0, f64::NAN), (1.0, 1.0)], (0.0, 4.0)).is_empty());
     }
 }

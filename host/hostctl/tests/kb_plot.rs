@@ -37,8 +37,10 @@ fn svg_with(path: &Path, needles: &[&str]) {
         svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
         "{path:?}"
     );
+    // The figure's words as drawn, wrapped lines joined back at their spaces.
+    let text = stiffwall_figures::describe::svg_text(&svg);
     for n in needles {
-        assert!(svg.contains(n), "{path:?} lacks {n:?}");
+        assert!(text.contains(n), "{path:?} lacks {n:?}");
     }
 }
 
@@ -74,11 +76,11 @@ fn analyze_damping_plot_writes_the_frontier_beside_the_plane() {
     svg_with(
         &kb,
         &[
-            "B [N·s/m]",
-            "K [N/m]",
+            "B, virtual damping of the wall [N·s/m]",
+            "K, wall stiffness [N/m]",
             "exact linear K_max(B)",
             "best B = ",
-            "operating point B = 2.0000e0",
+            "operating point B = 2.0000e0 N·s/m",
         ],
     );
     let png = dir.join("r.PNG");
@@ -94,7 +96,13 @@ fn analyze_damping_plot_writes_the_frontier_beside_the_plane() {
     png_of_figure_size(&dir.join("r-kb.PNG"));
     let rot_svg = dir.join("r.svg");
     ok(&[&rot[..], &[rot_svg.to_str().unwrap()]].concat());
-    svg_with(&dir.join("r-kb.svg"), &["B [N·m·s/rad]", "K [N·m/rad]"]);
+    svg_with(
+        &dir.join("r-kb.svg"),
+        &[
+            "B, virtual damping of the wall [N·m·s/rad]",
+            "K, wall stiffness [N·m/rad]",
+        ],
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -147,10 +155,10 @@ fn tune_plot_writes_the_frontier_with_verified_points_and_the_set_wall() {
     svg_with(
         &kb,
         &[
-            "B [N·m·s/rad]",
-            "K [N·m/rad]",
+            "B, virtual damping of the wall [N·m·s/rad]",
+            "K, wall stiffness [N·m/rad]",
             "predicted K_max(B)",
-            "verified: largest resting K",
+            "verified: the largest resting K",
             "spring-only wall K = ",
             "set wall K = ",
         ],
@@ -167,7 +175,11 @@ fn tune_plot_writes_the_frontier_with_verified_points_and_the_set_wall() {
     ]);
     svg_with(
         &dir.join("l-kb.svg"),
-        &["B [N·s/m]", "K [N/m]", "set wall K = "],
+        &[
+            "B, virtual damping of the wall [N·s/m]",
+            "K, wall stiffness [N/m]",
+            "set wall K = ",
+        ],
     );
     let png = dir.join("t.png");
     let v = ok(&[

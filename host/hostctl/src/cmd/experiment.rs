@@ -129,11 +129,20 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         _ => None,
     };
     if let Some(path) = &a.plot {
+        let trip = released
+            .iter()
+            .position(|s| s.flags & flags::SAFE_MODE != 0)
+            .or_else(|| (rec.faults != 0).then(|| counts.len().saturating_sub(1)));
+        let name = a.connect.describe();
         let fig = release_figure::Release {
             counts: &counts,
             rate,
             verdict: verdict.describe(),
-            report: report.as_ref(),
+            name: &name,
+            stiffness: f64::from(cfg.stiffness),
+            rotary: c.info.counts_per_rev > 0,
+            trip,
+            plane: report.as_ref().map(|r| release_plane(r, &name)),
         };
         figure::write(path, release_figure::SIZE_PX, &fig)?;
     }
@@ -153,6 +162,16 @@ fn release(a: &ReleaseArgs) -> Result<()> {
         emit(&done.text(a))?;
     }
     Ok(())
+}
+
+/// The (β, σ) plane beside a release: the device, the release's equivalent velocity.
+fn release_plane<'a>(r: &'a analysis::Report, name: &str) -> stiffwall_figures::plane::Plane<'a> {
+    stiffwall_figures::plane::Plane {
+        report: r,
+        name: name.to_owned(),
+        velocity_source: "the release's equivalent velocity, ½K(dΔ)² = ½mv²".to_owned(),
+        damper: None,
+    }
 }
 
 /// The plant model of `--model M B C`, else the virtual device's own plant (None on a real

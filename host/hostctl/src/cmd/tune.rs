@@ -163,10 +163,15 @@ pub fn run(a: &Args) -> Result<()> {
     let report = analysis::analyze(None, &o.params, Some(o.max_velocity), None)?;
     let mut kb = None;
     if let Some(path) = &a.plot {
-        analysis::plot::write(path, &report)?;
+        let name = a.connect.describe();
+        crate::figure::write(
+            path,
+            analysis::plot::SIZE_PX,
+            &plane_figure(&o, &report, &name),
+        )?;
         if wants_kb_figure(&o) {
             let kb_file = kb_plot::kb_path(path);
-            kb_plot::write(&kb_file, &kb_figure(&o))?;
+            kb_plot::write(&kb_file, &kb_figure(&o, &name))?;
             kb = Some(kb_file);
         }
     }
@@ -191,10 +196,26 @@ fn wants_kb_figure(o: &Outcome) -> bool {
     o.b_set > 0.0 || o.frontier.len() > 1
 }
 
+/// The (β, σ) figure of a tune: the spring alone at the set K, and with a damper set, the set
+/// wall apart from it (the regions are of the spring alone).
+fn plane_figure<'a>(o: &Outcome, r: &'a analysis::Report, name: &str) -> analysis::plot::Plane<'a> {
+    let damper = (o.b_set > 0.0).then(|| analysis::plot::Damper {
+        b: o.b_set,
+        beta_v: o.b_set / (o.params.stiffness * o.params.period_s),
+        k_max: stiffwall_core::criteria::k_max_exact_linear(&o.params, o.b_set).ok(),
+    });
+    analysis::plot::Plane {
+        report: r,
+        name: format!("tune, {name}"),
+        velocity_source: "--max-velocity".to_owned(),
+        damper,
+    }
+}
+
 /// The (K, B) frontier figure of a tune: the exact linear K_max(B) of the identified model with
 /// Coulomb as describing-function damping at the max velocity (as [`stiffwall_tune::predict`]),
 /// over 0 ..= 1.3 × the largest B tried; the verified points, the spring-only and the set wall.
-fn kb_figure(o: &Outcome) -> kb_plot::Frontier {
+fn kb_figure(o: &Outcome, name: &str) -> kb_plot::Frontier {
     let u = kb_plot::Units::of(o.params.rotational);
     let tried = o.frontier.iter().map(|f| f.b).fold(o.b_set, f64::max);
     let b_max = if tried > 0.0 {
@@ -203,13 +224,14 @@ fn kb_figure(o: &Outcome) -> kb_plot::Frontier {
         analysis::damping::FRONTIER_B_MAX_M_PER_T * o.params.mass / o.params.period_s
     };
     let eq = stiffwall_tune::df_equivalent(&o.params, o.max_velocity);
+    let sig = stiffwall_figures::describe::sig;
     kb_plot::Frontier {
-        title: "tune: (K, B) frontier of the identified model".to_string(),
+        title: format!("tune, {name}: (K, B) frontier of the identified model"),
         units: u,
         boundary: kb_plot::boundary(&eq, b_max),
         boundary_label: format!(
-            "predicted K_max(B): exact linear, b + 4c/(πv), v = {:.3e} {}",
-            o.max_velocity,
+            "predicted K_max(B): exact linear with b + 4c/(πv), v = {} {} (--max-velocity)",
+            sig(o.max_velocity),
             if o.params.rotational { "rad/s" } else { "m/s" }
         ),
         verified: o.frontier.iter().map(|f| (f.b, f.k_verified)).collect(),
@@ -219,10 +241,10 @@ fn kb_figure(o: &Outcome) -> kb_plot::Frontier {
             b: o.b_set,
             k: o.k_set,
             label: format!(
-                "set wall K = {:.4e} {}, B = {:.4e} {} ({}{})",
-                o.k_set,
+                "set wall K = {} {}, B = {} {} ({}{})",
+                sig(o.k_set),
                 u.k,
-                o.b_set,
+                sig(o.b_set),
                 u.b,
                 o.damper,
                 if o.rests { ", rests" } else { ", chatters" }
