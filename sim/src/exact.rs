@@ -26,7 +26,9 @@
 //! (ξ(h) without quantization): a backward difference of the counts, constant over each period,
 //! through the same delay line as the spring. The first sample uses n_(−1) = n_0 (no damper kick
 //! at start). On a one-sided wall the whole law (damper included) acts only in contact
-//! (n_h ≥ 0) and is 0 otherwise. The solver stays exact: only the held force changes. The
+//! (n_h ≥ 0) and is 0 otherwise. [`Exact::with_dead_band`] gives the firmware's `dead-band-N`
+//! law instead: the difference counts only when |n_h − n_(h−1)| > N (else the damper is 0).
+//! The solver stays exact: only the held force changes. The
 //! damper's work is part of the applied force's work, so it lands in E_g (29) and (26) still
 //! balances. With β_v = 0 the solver is bit-for-bit the undamped one (a branch, not `+ 0·x`).
 //!
@@ -173,10 +175,17 @@ pub struct Exact<
     beta_v: f64,
     /// Count n_(h−1) of the previous sample (ξ(h−1) without quantization).
     n_prev: f64,
+    /// Dead band of the damper's count difference, counts per period (0: the plain
+    /// difference; N: the firmware's `dead-band-N`, the difference is 0 while |dn| ≤ N).
+    dead_band: f64,
 }
 
 /// Largest accepted dimensionless virtual damping β_v.
 pub const MAX_BETA_V: f64 = 1000.0;
+
+/// Largest accepted damper dead band, counts per period (the firmware's
+/// `stiffwall_proto::MAX_DEADBAND_COUNTS`, `rich::MAX_DAMPER_DEAD_BAND`).
+pub const MAX_DEAD_BAND: u8 = 8;
 
 impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, const A: bool>
     Exact<Q, C, V, D, W, A>
@@ -233,6 +242,7 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             last_force: hist,
             beta_v: 0.0,
             n_prev: Self::count(init.x),
+            dead_band: 0.0,
         })
     }
 
@@ -248,6 +258,24 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             false,
             MAX_BETA_V,
             "finite and in [0, 1000] (dimensionless B/(K*T))",
+        )?;
+        Ok(self)
+    }
+
+    /// The damper's dead band: the count difference n_h − n_(h−1) is taken as 0 while its
+    /// magnitude is at most `counts` (the firmware's `dead-band-N` law; 0 is the plain
+    /// difference, the default).
+    ///
+    /// # Errors
+    /// [`ParamError`] naming `dead_band` unless `counts` is in [0, [`MAX_DEAD_BAND`]].
+    pub fn with_dead_band(mut self, counts: u8) -> Result<Self, ParamError> {
+        self.dead_band = check_range(
+            "dead_band",
+            f64::from(counts),
+            0.0,
+            false,
+            f64::from(MAX_DEAD_BAND),
+            "an integer in [0, 8] counts per period",
         )?;
         Ok(self)
     }
@@ -275,7 +303,10 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             return Self::spring(xi);
         }
         let n = Self::count(xi);
-        let f = if Q { -n - 0.5 } else { -n } - self.beta_v * (n - self.n_prev);
+        let dn = n - self.n_prev;
+        // With no dead band, |dn| <= 0 only for dn = 0: the plain difference, bit for bit.
+        let dn = if dn.abs() <= self.dead_band { 0.0 } else { dn };
+        let f = if Q { -n - 0.5 } else { -n } - self.beta_v * dn;
         if W && n < 0.0 {
             0.0
         } else {
@@ -433,6 +464,7 @@ impl<const Q: bool, const C: bool, const V: bool, const D: bool, const W: bool, 
             && self.last_force.to_bits() == o.last_force.to_bits()
             && self.n_prev.to_bits() == o.n_prev.to_bits()
             && self.beta_v.to_bits() == o.beta_v.to_bits()
+            && self.dead_band.to_bits() == o.dead_band.to_bits()
             && (!D || (1..=self.n + 1).all(|j| self.delayed(j).to_bits() == o.delayed(j).to_bits()))
     }
 }
@@ -611,6 +643,75 @@ mod tests {
             assert_eq!(e.name(), "beta_v", "{bad}");
         }
         assert_eq!(s.with_beta_v(1000.0).unwrap().beta_v(), 1000.0);
+    }
+
+    /// The dead band in the firmware's terms: while the count moves by at most N per period
+    /// the damper is off (the run is the spring alone's, bit for bit); a faster motion is
+    /// damped as by the plain difference (it decays where the spring alone grows); N = 0 is
+    /// the plain difference bit for bit; N above 8 is refused by name.
+    #[test]
+    fn dead_band_turns_the_damper_off_for_small_count_steps_only() {
+        let p = Params {
+            mu: 100.0,
+            beta: 0.0,
+            sigma: 0.2,
+            tau_d: 0.0,
+        };
+        let run = |v0: f64, beta_v: f64, n: u8| {
+            let init = Motion { x: 0.0, v: v0 };
+            let mut s = NoDelay::new(p, init, History::HoldInitial)
+                .unwrap()
+                .with_beta_v(beta_v)
+                .unwrap()
+                .with_dead_band(n)
+                .unwrap();
+            let mut path = Vec::new();
+            for _ in 0..3000 {
+                s.step_period();
+                path.push(s.state());
+            }
+            path
+        };
+        // From 0.3 counts/period the spring alone's speed (so |dn|) stays below 8.
+        let spring = run(0.3, 0.0, 0);
+        assert!(spring.iter().all(|m| m.v.abs() < 8.0));
+        assert_eq!(
+            run(0.3, 2.0, 8),
+            spring,
+            "dead band 8 at |dn| <= 8: the spring alone"
+        );
+        assert_ne!(run(0.3, 2.0, 0), spring, "the plain difference damps");
+        assert_eq!(run(3.0, 2.0, 0), {
+            let init = Motion { x: 0.0, v: 3.0 };
+            let mut s = NoDelay::new(p, init, History::HoldInitial)
+                .unwrap()
+                .with_beta_v(2.0)
+                .unwrap();
+            (0..3000)
+                .map(|_| {
+                    s.step_period();
+                    s.state()
+                })
+                .collect::<Vec<_>>()
+        });
+        let fast = |n: u8| {
+            let end = *run(20.0, 2.0, n).last().unwrap();
+            storage(p.mu, end.x, end.v)
+        };
+        let h0 = storage(p.mu, 0.0, 20.0);
+        let undamped = *run(20.0, 0.0, 0).last().unwrap();
+        assert!(
+            storage(p.mu, undamped.x, undamped.v) > 0.5 * h0,
+            "the spring alone holds on"
+        );
+        assert!(
+            fast(1) < 0.05 * h0,
+            "dead band 1 damps a fast motion: {}",
+            fast(1)
+        );
+        assert!(fast(0) < 0.05 * h0);
+        let s = NoDelay::new(p, Motion { x: 0.0, v: 1.0 }, History::HoldInitial).unwrap();
+        assert_eq!(s.with_dead_band(9).unwrap_err().name(), "dead_band");
     }
 
     /// Linear sampled spring, no Coulomb, no delay, β = 0: the ZOH spring acts as a negative

@@ -296,14 +296,48 @@ pub fn simulate_point_damped_th(
     beta_v: f64,
     th: &Thresholds,
 ) -> Outcome {
+    simulate_point_law_th(p, xidot0, periods, history, (beta_v, 0), th)
+}
+
+/// [`simulate_point_damped`] with the firmware's damper law: `damper` = (β_v, dead band N in
+/// counts per period), N = 0 the plain difference, N ≥ 1 `dead-band-N` (the difference is 0
+/// while |n_h − n_(h−1)| ≤ N; [`Exact::with_dead_band`](crate::exact::Exact::with_dead_band)).
+/// A dead band above [`crate::exact::MAX_DEAD_BAND`] gives the invalid outcome.
+#[must_use]
+pub fn simulate_point_law(
+    p: Params,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    damper: (f64, u8),
+) -> Outcome {
+    simulate_point_law_th(p, xidot0, periods, history, damper, &Thresholds::default())
+}
+
+/// [`simulate_point_law`] with explicit classification thresholds and options.
+#[must_use]
+pub fn simulate_point_law_th(
+    p: Params,
+    xidot0: f64,
+    periods: u64,
+    history: History,
+    (beta_v, dead_band): (f64, u8),
+    th: &Thresholds,
+) -> Outcome {
     let init = Motion { x: 0.0, v: xidot0 };
     if p.tau_d == 0.0 {
-        match NoDelay::new(p, init, history).and_then(|s| s.with_beta_v(beta_v)) {
+        match NoDelay::new(p, init, history)
+            .and_then(|s| s.with_beta_v(beta_v))
+            .and_then(|s| s.with_dead_band(dead_band))
+        {
             Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }
     } else {
-        match Full::new(p, init, history).and_then(|s| s.with_beta_v(beta_v)) {
+        match Full::new(p, init, history)
+            .and_then(|s| s.with_beta_v(beta_v))
+            .and_then(|s| s.with_dead_band(dead_band))
+        {
             Ok(mut s) => classify(&mut s, periods, th),
             Err(_) => invalid(),
         }

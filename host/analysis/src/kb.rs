@@ -5,8 +5,10 @@
 //! τ_D = T_D/T and β_v = B/(KT), then simulated by the same exact solver, horizon and classes
 //! as the (β, σ) map; a plant file's effects beyond the paper's rigid plant are listed in
 //! [`Plant::ignored`], not simulated. The predicted boundary is core's exact sampled linear
-//! K_max(B) (`criteria::k_max_exact_linear`). The result is deterministic and independent of
-//! the thread count.
+//! K_max(B) (`criteria::k_max_exact_linear`). The damper's law is the sweep's
+//! ([`KbSpec::damper`]): the plain difference or the firmware's `dead-band-N` (its default,
+//! `dead-band-1`), simulated exactly. The result is deterministic and independent of the thread
+//! count.
 //!
 //! Units: SI. K in N/m and B in N·s/m for a linear device, N·m/rad and N·m·s/rad for a
 //! rotational one ([`Units`]); ξ̇₀ in counts per period. Invariant: points are stored by index
@@ -46,9 +48,10 @@ pub const BOUNDARY_POINTS: usize = 101;
 pub const MODEL_NOTE: &str = "rigid plant m, b, c, resolution, T, T_D of the device mapped by \
 Table I to (mu, beta, sigma, tau_d, beta_v = B/(K*T)) and simulated by the exact solver of the \
 (beta, sigma) map (quantization, Coulomb, viscous, delay, two-sided wall; the damper is the \
-plain backward difference, the firmware's `difference` law); a plant file's \
-stiction, cogging, transmission, amplifier, hand and one-sided wall are not simulated; boundary: \
-exact sampled linear K_max(B) (no quantization, no Coulomb)";
+firmware's law named in spec.damper: `difference`, or `dead-band-N`, off while the count moves \
+by at most N per period); a plant file's stiction, cogging, transmission, amplifier, hand and \
+one-sided wall are not simulated; boundary: exact sampled linear K_max(B) (no quantization, no \
+Coulomb, the plain difference)";
 
 /// The (K, B) sweep.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -65,6 +68,22 @@ pub struct KbSpec {
     pub periods: u64,
     /// Delay-line history before τ = 0.
     pub history: History,
+    /// The damper's law (JSON: `"difference"` or `"dead-band-N"`).
+    #[serde(serialize_with = "as_text")]
+    pub damper: WallDamper,
+}
+
+fn as_text<S: serde::Serializer>(d: &WallDamper, s: S) -> Result<S::Ok, S::Error> {
+    s.collect_str(d)
+}
+
+/// The law's dead band in counts per period (0: the plain difference).
+#[must_use]
+pub fn dead_band(d: WallDamper) -> u8 {
+    match d {
+        WallDamper::Difference => 0,
+        WallDamper::DeadBand(n) => n,
+    }
 }
 
 /// One classified (K, B) point.
@@ -160,6 +179,10 @@ pub struct Plant {
     pub rotational: bool,
     /// Effects of the plant file that the map does not simulate.
     pub ignored: Vec<String>,
+    /// The plant file's damper law (`controller.damper`), if it names one: the map's default
+    /// (in the JSON as the sweep's `spec.damper`).
+    #[serde(skip)]
+    pub damper: Option<WallDamper>,
 }
 
 impl Plant {
@@ -207,12 +230,13 @@ impl Plant {
             period_s: ctl.period_s,
             delay_s: ctl.extra_delay_s,
             rotational: m.counts_per_rev.is_some(),
-            ignored: ignored_effects(&m, ctl.one_sided, ctl.damper),
+            ignored: ignored_effects(&m, ctl.one_sided),
+            damper: ctl.damper,
         })
     }
 }
 
-fn ignored_effects(m: &PlantModel, one_sided: bool, damper: Option<WallDamper>) -> Vec<String> {
+fn ignored_effects(m: &PlantModel, one_sided: bool) -> Vec<String> {
     let mut v = Vec::new();
     let mut add = |on: bool, name: &str| {
         if on {
@@ -237,11 +261,6 @@ fn ignored_effects(m: &PlantModel, one_sided: bool, damper: Option<WallDamper>) 
     );
     add(m.hand.is_some(), "hand");
     add(one_sided, "one-sided wall");
-    // The maps damp the plain difference of the paper's wall law.
-    add(
-        matches!(damper, Some(WallDamper::DeadBand(_))),
-        "damper dead band",
-    );
     v
 }
 
@@ -253,7 +272,8 @@ fn point(plant: &Plant, spec: &KbSpec, index: usize) -> KbPoint {
     let (d, beta_v) = plant
         .at(k, b)
         .unwrap_or((stiffwall_sim::Params::BASE, f64::NAN));
-    let o = smap::simulate_point_damped(d, spec.xidot0, spec.periods, spec.history, beta_v);
+    let law = (beta_v, dead_band(spec.damper));
+    let o = smap::simulate_point_law(d, spec.xidot0, spec.periods, spec.history, law);
     let phys = plant.physical(k);
     KbPoint {
         index,
@@ -335,7 +355,11 @@ fn class_char(c: Class, chatter: bool) -> char {
 pub fn render(m: &KbFile) -> String {
     let (s, u) = (&m.spec, m.units);
     let mut out = String::new();
-    let _ = writeln!(out, "(K, B) map of {}: {}", m.plant.source, MODEL_NOTE);
+    let _ = writeln!(
+        out,
+        "(K, B) map of {} with the damper law {}: {}",
+        m.plant.source, s.damper, MODEL_NOTE
+    );
     if !m.plant.ignored.is_empty() {
         let _ = writeln!(out, "not simulated: {}", m.plant.ignored.join(", "));
     }

@@ -143,7 +143,7 @@ impl Travel {
 
 /// Largest dead band of [`WallDamper::DeadBand`], counts per tick (the firmware's
 /// `stiffwall_proto::MAX_DEADBAND_COUNTS`).
-pub const MAX_DAMPER_DEAD_BAND: u8 = 8;
+pub const MAX_DAMPER_DEAD_BAND: u8 = crate::exact::MAX_DEAD_BAND;
 
 /// How the virtual device's wall damper turns the count difference dn = n_h − n_(h−1) into a
 /// velocity (`controller.damper`; the firmware's `DamperLaw`). Part of the boot configuration

@@ -9,9 +9,11 @@
 //! τ_D = T_D/T and β_v = B/(KT), then simulated by the same exact solver, horizon and classes
 //! as the (β, σ) map (quantization, Coulomb, viscous, delay, two-sided wall, ξ₀ = 0). That
 //! solver knows only the paper's rigid plant: a plant file's stiction, cogging, transmission,
-//! amplifier filter/dead band/saturation, hand, one-sided wall and a damper law with a dead
-//! band (`controller.damper`; B damps the plain difference here) are NOT simulated (they are
-//! listed under `plant.ignored` in the JSON and on standard error). The predicted boundary is
+//! amplifier filter/dead band/saturation, hand and one-sided wall are NOT simulated (they are
+//! listed under `plant.ignored` in the JSON and on standard error). The damper law is
+//! simulated exactly: `--damper`, else the plant file's `controller.damper`, else the
+//! firmware's default `dead-band-1` (JSON `spec.damper`), so the map classifies the wall the
+//! firmware renders. The predicted boundary is
 //! core's exact sampled linear K_max(B) (`criteria::k_max_exact_linear`: ZOH, backward
 //! difference, b, T_D; no quantization or Coulomb).
 //!
@@ -24,7 +26,7 @@
 //! τ_D ≤ 250 at every point; the result is deterministic and independent of thread count.
 
 use super::args::{history_of, Args};
-use super::kb_args::{resolve_plant, Plant};
+use super::kb_args::{damper_of, resolve_plant, Plant};
 use anyhow::{ensure, Context, Result};
 pub use stiffwall_analysis::kb::render;
 pub use stiffwall_analysis::kb::{
@@ -104,6 +106,7 @@ pub fn spec_of(a: &Args) -> Result<(Plant, KbSpec)> {
         velocity: a.xidot0[0] * plant.resolution / plant.period_s,
         periods: a.periods,
         history: history_of(a.history),
+        damper: damper_of(&a.kb, &plant),
     };
     for kk in [k.lo, k.hi] {
         plant

@@ -16,6 +16,8 @@ use anyhow::{anyhow, Context, Result};
 use std::path::{Path, PathBuf};
 pub use stiffwall_analysis::kb::Plant;
 use stiffwall_core::params::check_positive;
+use stiffwall_proto::DamperLaw;
+use stiffwall_sim::rich::WallDamper;
 
 /// Flags of the (K, B) map (`hostctl map --k-b`).
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -56,6 +58,29 @@ pub struct KbArgs {
     /// With --k-b and physical numbers: the device is rotational (rad, N·m).
     #[arg(long, requires = "k_b")]
     pub rotational: bool,
+    /// With --k-b: the damper law simulated, `difference` (v = dn) or `dead-band-N` (v = 0
+    /// while |dn| <= N counts per period, N in 1..=8); default: the plant file's
+    /// `controller.damper`, else the firmware's default (`dead-band-1`).
+    #[arg(
+        long,
+        requires = "k_b",
+        value_name = "difference|dead-band-N",
+        value_parser = crate::config_flags::parse_damper
+    )]
+    pub damper: Option<DamperLaw>,
+}
+
+/// The damper law of the map: `--damper`, else the plant file's, else the firmware's default.
+#[must_use]
+pub fn damper_of(a: &KbArgs, plant: &Plant) -> WallDamper {
+    match a.damper {
+        Some(DamperLaw::Difference) => WallDamper::Difference,
+        Some(DamperLaw::DeadBand { counts }) => WallDamper::DeadBand(counts),
+        None => plant.damper.unwrap_or(match DamperLaw::default() {
+            DamperLaw::Difference => WallDamper::Difference,
+            DamperLaw::DeadBand { counts } => WallDamper::DeadBand(counts),
+        }),
+    }
 }
 
 fn from_file(path: &Path) -> Result<Plant> {
@@ -100,6 +125,7 @@ fn from_flags(a: &KbArgs) -> Result<Plant> {
         delay_s: delay.or(preset.map(|p| p.delay_s)).unwrap_or(0.0),
         rotational: a.rotational || preset.is_some_and(|p| p.rotational),
         ignored: Vec::new(),
+        damper: None,
     })
 }
 
