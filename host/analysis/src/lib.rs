@@ -7,6 +7,8 @@
 //!   `list_devices`), its spring + damper part ([`damping`], its text `damping::render`) and
 //!   the data of its (K, B) frontier figure ([`frontier`]); the plant as given, a preset and
 //!   m, b, c ([`plant`]);
+//! - scenes: the one-screen summary of a simulated scene, verdict and energy audit
+//!   ([`scene_summary`]);
 //! - recordings: the replay engines ([`replay`]) and the energy-monitor replay
 //!   ([`monitor_report`], its text `monitor_report::render`); the checks of a release test
 //!   ([`release`]) and of a servo configuration change ([`config_check`]);
@@ -36,4 +38,5 @@ pub mod monitor_report;
 pub mod plant;
 pub mod release;
 pub mod replay;
+pub mod scene_summary;
 pub mod values;

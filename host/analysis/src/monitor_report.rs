@@ -72,6 +72,8 @@ pub struct MonitorReplay {
     pub trip: i32,
     /// Energy limit, units K·Δ_eff²/8.
     pub limit_e8: u64,
+    /// One unit of e8, K·Δ_eff²/8, in J (N·m/rad · rad² = J on a rotary device).
+    pub e8_j: f64,
     /// Ticks monitored.
     pub monitored: usize,
     /// Turning points seen.
@@ -113,6 +115,7 @@ pub fn monitor_recording(
         device_monitor_on: cfg.energy_monitor && g.energy_monitor,
         trip: g.growth_trip,
         limit_e8: g.energy_limit_e8,
+        e8_j: f64::from(cfg.stiffness) * de * de / 8.0,
         monitored: 0,
         turning_points: 0,
         max_e8: None,
@@ -231,19 +234,24 @@ pub fn render(r: &MonitorReplay) -> String {
     let mut s = String::new();
     let _ = write!(
         s,
-        "(c) energy monitor{} (trip score {}, limit e8 {}): {} ticks, {} turning points",
+        "(c) energy monitor{} (trips at a growth score of {}, energy limit {:.3e} J = e8 {} in units of K·Δ_eff²/8): {} ticks, {} turning points",
         if r.device_monitor_on {
             ""
         } else {
             " [off on the device: what would have latched]"
         },
         r.trip,
+        r.limit_e8 as f64 * r.e8_j,
         r.limit_e8,
         r.monitored,
         r.turning_points
     );
     if let Some((e8, tick)) = r.max_e8 {
-        let _ = write!(s, ", max energy e8 {e8} at tick {tick}");
+        let _ = write!(
+            s,
+            ", largest energy {:.3e} J (e8 {e8}) at tick {tick}",
+            e8 as f64 * r.e8_j
+        );
     }
     let _ = write!(
         s,
@@ -254,15 +262,15 @@ pub fn render(r: &MonitorReplay) -> String {
     for e in &r.events {
         let _ = write!(
             s,
-            "\n    tick {} (seq {}): {} at count {}, score {}, peak n {} e8 {} ({:.3e} J){}",
+            "\n    tick {} (seq {}): {} at count {}, score {}, peak at count {}: {:.3e} J (e8 {}){}",
             e.tick,
             e.seq,
             e.fault,
             e.count,
             e.score,
             e.peak_n,
-            e.peak_e8,
             e.peak_energy_j,
+            e.peak_e8,
             if e.device_latched_here {
                 "; the device latched a fault here"
             } else {

@@ -3,12 +3,15 @@
 //! Units: dimensionless (Table I) in the CSV: `period` (τ = h), `xi` (ticks), `xidot` (ticks per
 //! period), `phi_a` (K·Δ, force applied from that instant), `h_t` (H_T of eq. (35), K·Δ²), and
 //! the energy audit of the period ending at that instant: `e_d` (28), `e_g` (29), `residual` of
-//! the balance (26). Physical scenes are converted to these units when loaded.
+//! the balance (26). Physical scenes are converted to these units when loaded. Standard error
+//! gets the one-screen summary (`stiffwall_analysis::scene_summary`): the verdict by the rest
+//! rule and the energy audit, in K·Δ² (and J for a physical scene).
 
 use crate::figure;
 use anyhow::{Context, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use stiffwall_analysis::scene_summary::SceneSummary;
 use stiffwall_figures::trajectory;
 use stiffwall_sim::scene::{Row, Scene};
 
@@ -20,8 +23,7 @@ pub struct Args {
     /// CSV output file (default: standard output).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
-    /// Also draw ξ(τ), H_T(τ) and the energy audit (E_d, E_g, residual) to this figure file
-    /// (.svg or .png).
+    /// Also draw ξ(τ) and H_T(τ) to this figure file (.svg or .png).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Write every n-th sample only (the audit columns still cover the last period only).
@@ -70,7 +72,9 @@ pub fn run(args: &Args) -> Result<()> {
     let keep = args.plot.is_some();
     let mut io_err = None;
     let mut last: Option<(Row, bool)> = None;
+    let mut summary = SceneSummary::new(&scene);
     scene.simulate(&mut |r: &Row| {
+        summary.add(r);
         let written = r.period.is_multiple_of(args.every);
         last = Some((*r, written));
         if !written || io_err.is_some() {
@@ -95,13 +99,12 @@ pub fn run(args: &Args) -> Result<()> {
     }
     w.flush()?;
     if let Some(p) = &args.plot {
-        let name = args.scene.display().to_string();
-        let fig = trajectory::Trajectory {
-            rows: &rows,
-            name: &name,
-        };
-        figure::write(p, trajectory::SIZE_PX, &fig)?;
+        figure::write(p, trajectory::SIZE_PX, &trajectory::Trajectory(&rows))?;
     }
+    let joules = scene
+        .rich
+        .map(|r| r.controller.stiffness_n_per_m * r.model.resolution_m.powi(2));
+    eprint!("{}", summary.render(joules));
     if let Some((r, _)) = last {
         anyhow::ensure!(
             r.period >= scene.periods,
