@@ -34,6 +34,8 @@
 //!   `ci`; `--print` prints the sections as built).
 //! - `sizes`: no production file over 700 lines before its tests, no production function over
 //!   80 lines, no `#[allow(clippy::too_many_arguments)]` (also in `ci`).
+//! - `readme-figures`: README.md quotes the summary figures of docs/TUNE.md and
+//!   docs/TUNE-holdout.md and the number of plant files (also in `ci`).
 //! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
 //!   μ × τ_D, then `hostctl map atlas`).
 use anyhow::{bail, Context, Result};
@@ -51,6 +53,7 @@ mod fuzz;
 mod module_cycles;
 mod process;
 mod qemu;
+mod readme_figures;
 mod sizes;
 mod toolchain;
 mod tune_table;
@@ -144,6 +147,8 @@ fn ci_static_checks(step: &dyn Fn(&str)) -> Result<()> {
     arch::arch(&[])?;
     step("no production file over 700 lines before its tests, no function over 80 lines, no too_many_arguments allow");
     sizes::sizes(&[])?;
+    step("README.md's figures of tune against the truth are the ones docs/TUNE.md and docs/TUNE-holdout.md state");
+    readme_figures::readme_figures()?;
     Ok(())
 }
 
@@ -236,6 +241,7 @@ fn main() -> Result<()> {
         Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
         Some("arch") => arch::arch(&args[1..]),
         Some("sizes") => sizes::sizes(&args[1..]),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print], sizes"),
+        Some("readme-figures") => readme_figures::readme_figures(),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print], sizes, readme-figures"),
     }
 }
