@@ -23,7 +23,8 @@ pub struct Args {
     /// CSV output file (default: standard output).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
-    /// Also draw ξ(τ) and H_T(τ) to this figure file (.svg or .png).
+    /// Also draw ξ(τ), H_T(τ) and the energy audit (E_d, E_g, residual) to this figure file
+    /// (.svg or .png).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Write every n-th sample only (the audit columns still cover the last period only).
@@ -99,7 +100,12 @@ pub fn run(args: &Args) -> Result<()> {
     }
     w.flush()?;
     if let Some(p) = &args.plot {
-        figure::write(p, trajectory::SIZE_PX, &trajectory::Trajectory(&rows))?;
+        let name = args.scene.display().to_string();
+        let fig = trajectory::Trajectory {
+            rows: &rows,
+            name: &name,
+        };
+        figure::write(p, trajectory::SIZE_PX, &fig)?;
     }
     let joules = scene
         .rich
