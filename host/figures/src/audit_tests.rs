@@ -70,10 +70,11 @@ fn a_damped_wall_is_drawn_apart_from_the_spring_and_not_called_a_region() {
     let set = d
         .legend
         .iter()
-        .find(|l| l.starts_with("the set wall"))
+        .find(|l| l.starts_with("the wall with its damper"))
         .unwrap();
     assert!(
-        set.contains("B = 5.000e-4 N·m·s/rad") && set.contains("the region is the spring's alone"),
+        set.contains("B = 5.000e-4 N·m·s/rad")
+            && set.contains("the region named is the spring's alone"),
         "{set}"
     );
     assert!(

@@ -44,7 +44,26 @@ fn width_of<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, px: u
         .map_or(text.chars().count() as u32 * px * 6 / 10, |s| s.0)
 }
 
-/// `text` wrapped at spaces into lines no wider than `width` px at `px` font size.
+/// Unit words that stay on the line of the number before them.
+const UNITS: [&str; 11] = [
+    "N/m",
+    "N·m/rad",
+    "N·s/m",
+    "N·m·s/rad",
+    "s",
+    "ticks",
+    "Hz",
+    "rad/s",
+    "m/s",
+    "%",
+    "J",
+];
+
+fn is_unit(word: &str) -> bool {
+    UNITS.contains(&word.trim_end_matches([',', ';', ':', ')', '.']))
+}
+
+/// `text` wrapped at spaces (never before a unit word) into lines no wider than `width` px at `px` font size.
 pub fn wrap<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     text: &str,
@@ -59,7 +78,7 @@ pub fn wrap<DB: DrawingBackend>(
         } else {
             format!("{line} {word}")
         };
-        if line.is_empty() || width_of(area, &candidate, px) <= width {
+        if line.is_empty() || is_unit(word) || width_of(area, &candidate, px) <= width {
             line = candidate;
         } else {
             lines.push(std::mem::take(&mut line));

@@ -190,7 +190,7 @@ fn title(p: &Plane) -> String {
     match p.damper {
         None => format!("{}: (β, σ) plane of the spring wall ({fig}); at {k} it lies in region {}", p.name, r.region),
         Some(d) => format!(
-            "{}: (β, σ) plane of the spring alone ({fig}); at {k} the spring alone lies in region {}, the set wall adds a damper B = {} {bu}",
+            "{}: (β, σ) plane of the spring alone ({fig}); at {k} the spring alone lies in region {}, the wall adds a damper B = {} {bu}",
             p.name, r.region, sig(d.b)
         ),
     }
@@ -277,7 +277,7 @@ fn damped_label(r: &Report, d: Damper) -> String {
         )
     });
     format!(
-        "the set wall: this spring plus a damper B = {} {bu} (β_v = B/(KT) = {}); the damper adds damping the regions do not include, so the region is the spring's alone{limit}",
+        "the wall with its damper: this spring plus B = {} {bu} (β_v = B/(KT) = {}); the regions do not include a damper, so the region named is the spring's alone{limit}",
         sig(d.b),
         sig(d.beta_v)
     )
@@ -390,7 +390,7 @@ where
     Ok(())
 }
 
-/// The spring's point and, with a damper, the ring of the set wall around it.
+/// The spring's point and, with a damper, the ring of the damped wall around it.
 fn draw_point<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, p: &Plane) -> DrawResult
 where
     DB::ErrorType: 'static,

@@ -38,6 +38,9 @@
 //!   docs/TUNE-holdout.md and the number of plant files (also in `ci`).
 //! - `atlas`: the stability atlas of docs/ATLAS.md and docs/figures/atlas/ (`hostctl map` over
 //!   μ × τ_D, then `hostctl map atlas`).
+//! - `figures [--check]`: the figure gallery docs/FIGURES.md and docs/figures/gallery/ (every
+//!   kind of `hostctl` figure on a preset and a plant file, with its words as text); `--check`
+//!   compares those words with a fresh run and that every PNG is there (also in `ci`).
 use anyhow::{bail, Context, Result};
 use process::{cargo, run, run_counting, run_ignored, update_section};
 
@@ -47,6 +50,7 @@ mod bench;
 mod bench_firmware;
 mod board_emu;
 mod cluster;
+mod figures;
 mod firmware;
 mod flash;
 mod fuzz;
@@ -196,6 +200,8 @@ fn ci_campaigns(step: &dyn Fn(&str)) -> Result<()> {
     )?;
     step("docs/TUNE.md and docs/TUNE-holdout.md against a fresh run: every set wall rests, K ≥ 0.7 K*(B), supervisor rows stop, median ≥ 2, K* columns not stale");
     tune_table::ci_checks()?;
+    step("docs/FIGURES.md against a fresh run (every figure's title, axes, legend and values; every PNG it names present)");
+    figures::figures(&["--check".to_string()])?;
     step("tune on the random launch plants (quiet walls)");
     run_ignored("stiffwall-tests", "tune_plants", &["random_launch"], 1)?;
     step("the supervisor on every plant: 1.5 K*(0), and 1.5 K*(B) at the B and law tune sets (docs/TUNE.md's supervisor column)");
@@ -238,10 +244,11 @@ fn main() -> Result<()> {
         Some("ui-screenshots") => ui::screenshots(),
         Some("cluster-test") => cluster::cluster_test(&args[1..]),
         Some("atlas") => atlas::atlas(&args[1..]),
+        Some("figures") => figures::figures(&args[1..]),
         Some("module-cycles") => module_cycles::module_cycles(&args[1..]),
         Some("arch") => arch::arch(&args[1..]),
         Some("sizes") => sizes::sizes(&args[1..]),
         Some("readme-figures") => readme_figures::readme_figures(),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, module-cycles [--edges], arch [--print], sizes, readme-figures"),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, figures [--check], module-cycles [--edges], arch [--print], sizes, readme-figures"),
     }
 }
