@@ -242,3 +242,47 @@ fn replay_and_release_name_their_plant_and_mark_the_band_and_trip() {
         d.legend
     );
 }
+
+#[test]
+fn the_kb_map_legends_every_class_chatter_the_ceiling_and_k_max_in_its_units() {
+    use stiffwall_analysis::kb::{compute, KbSpec, Plant};
+    for (file, rot, k_hi, b_hi) in [
+        ("phantom-stiction.toml", false, 4000.0, 5.0),
+        ("rotary-realistic.toml", true, 8.0, 0.002),
+    ] {
+        let path = format!("{}/../../sim/plants/{file}", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let plant = Plant::from_scene_toml(format!("plant file {file}"), &text).unwrap();
+        let spec = KbSpec {
+            k: Axis {
+                lo: k_hi / 10.0,
+                hi: k_hi,
+                n: 3,
+            },
+            b: Axis {
+                lo: 0.0,
+                hi: b_hi,
+                n: 3,
+            },
+            xidot0: 5.0,
+            velocity: 0.0,
+            periods: 200,
+            history: History::HoldInitial,
+            damper: stiffwall_sim::rich::WallDamper::DeadBand(1),
+        };
+        let m = compute(&plant, &spec, &|| {});
+        let f = crate::kb_map::KbFigure(&m);
+        let d = assert_clean(&f, crate::kb_map::SIZE_PX, Some(rot));
+        assert!(
+            d.title.starts_with(&format!("plant file {file}")),
+            "{}",
+            d.title
+        );
+        assert_eq!(d.legend.len(), 7, "{:?}", d.legend);
+        assert!(
+            d.legend.iter().any(|l| l.starts_with("chatter")),
+            "{:?}",
+            d.legend
+        );
+    }
+}

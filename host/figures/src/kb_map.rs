@@ -83,8 +83,9 @@ impl Figure for KbFigure<'_> {
         let m = self.0;
         let mut d =
             Description::new(format!(
-            "{}: (K, B) map, the simulated class of each wall, ξ̇₀ = {}, {} periods, grid {} × {}",
-            m.plant.source, sig(m.spec.xidot0), m.spec.periods, m.spec.k.n, m.spec.b.n
+            "{}: (K, B) map, the simulated class of each wall (damper law {}), ξ̇₀ = {}, {} periods, grid {} × {}",
+            m.plant.source,
+            m.spec.damper, sig(m.spec.xidot0), m.spec.periods, m.spec.k.n, m.spec.b.n
         ));
         for a in kb_plot::axis_labels(m.units) {
             d.axis(a);

@@ -21,7 +21,7 @@ pub struct PlantFigure<'a>(pub &'a PlantReplay);
 const X_AXIS: &str = "t, time from the first sample [s]";
 const AXES: [&str; 2] = ["encoder count [ticks]", "model − recorded [ticks]"];
 const ENTRIES: [(RGBColor, &str); 3] = [
-    (BLUE, "recorded count"),
+    (BLUE, "recorded count (wide, beneath)"),
     (
         RED,
         "count of the plant model replayed from the recorded forces",
@@ -33,7 +33,7 @@ impl Figure for PlantFigure<'_> {
     fn describe(&self) -> Description {
         let p = self.0;
         let mut d = Description::new(format!(
-            "replay through the plant ({}): recorded and modelled encoder count",
+            "{}: a recording replayed through the plant, the recorded and the modelled encoder count",
             p.source
         ));
         d.axis(X_AXIS).axis(AXES[0]).axis(AXES[1]);
@@ -68,7 +68,10 @@ where
     let body = layout::titled(root, &d.title)?;
     let keys: Vec<(Glyph, String)> = ENTRIES
         .iter()
-        .map(|(c, l)| d.entry(l).map(|e| (Glyph::Line(*c, 2), e)))
+        .map(|(c, l)| {
+            let w = if *c == BLUE { 5 } else { 2 };
+            d.entry(l).map(|e| (Glyph::Line(*c, w), e))
+        })
         .collect::<DrawResult<_>>()?;
     let (w, h) = body.dim_in_pixel();
     let (plots, right) = body.split_horizontally(w.saturating_sub(320));
@@ -91,15 +94,17 @@ where
         .axis_desc_style(("sans-serif", layout::AXIS_PX))
         .label_style(("sans-serif", layout::TICK_PX))
         .draw()?;
+    // The recorded count wide beneath the model's, so that both show where they agree.
     ch.draw_series(LineSeries::new(
         p.trace.iter().map(|r| (r.0, r.1 as f64)),
-        BLUE.stroke_width(2),
+        BLUE.stroke_width(5),
     ))?;
     ch.draw_series(LineSeries::new(
         p.trace.iter().map(|r| (r.0, r.2 as f64)),
         RED.stroke_width(2),
     ))?;
-    let emax = (p.max_ticks as f64).max(1.0) + 0.5;
+    let drawn = p.trace.iter().map(|r| (r.2 - r.1).abs()).max().unwrap_or(0);
+    let emax = (p.max_ticks.max(drawn) as f64).max(1.0) + 0.5;
     let mut ce = ChartBuilder::on(&bottom)
         .margin(10)
         .x_label_area_size(45)
