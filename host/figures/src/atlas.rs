@@ -89,7 +89,7 @@ impl Figure for PanelFigure<'_> {
     fn describe(&self) -> Description {
         let p = self.panel;
         let mut d = Description::new(format!(
-            "atlas panel μ = {}, τ_D = {}, ξ̇₀ = {}: simulated class ({} periods) and the analytic stability lines",
+            "atlas panel μ = {}, τ_D = {}, dξ/dτ(0) = {}: simulated class ({} periods) and the analytic stability lines",
             sig(p.mu),
             sig(p.tau_d),
             sig(p.xidot0),
@@ -219,7 +219,7 @@ impl SummaryFigure<'_> {
                 let c = Palette99::pick(i).to_rgba();
                 (
                     Glyph::Line(RGBColor(c.0, c.1, c.2), 2),
-                    format!("τ_D = {}, ξ̇₀ = {}", sig(*tau), sig(*xi)),
+                    format!("τ_D = {}, dξ/dτ(0) = {}", sig(*tau), sig(*xi)),
                 )
             })
             .collect()

@@ -83,7 +83,7 @@ impl Figure for KbFigure<'_> {
         let m = self.0;
         let mut d =
             Description::new(format!(
-            "{}: (K, B) map, the simulated class of each wall (damper law {}), ξ̇₀ = {}, {} periods, grid {} × {}",
+            "{}: (K, B) map, the simulated class of each wall (damper law {}), dξ/dτ(0) = {}, {} periods, grid {} × {}",
             m.plant.source,
             m.spec.damper, sig(m.spec.xidot0), m.spec.periods, m.spec.k.n, m.spec.b.n
         ));

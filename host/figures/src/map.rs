@@ -97,7 +97,7 @@ pub struct MapFigure<'a> {
 }
 
 const OVERLAY_LABEL: &str =
-    "analytic boundaries of Fig. 3 (τ_D = 0) or Fig. 5 / (19), velocity bound ξ̇₀, ξ̈ max = ξ̇₀/√μ";
+    "analytic boundaries of Fig. 3 (τ_D = 0) or Fig. 5 / (19), velocity bound dξ/dτ(0), d²ξ/dτ² max = dξ/dτ(0)/√μ";
 
 impl MapFigure<'_> {
     fn grid(&self) -> (usize, usize) {
@@ -129,7 +129,7 @@ impl MapFigure<'_> {
 
 fn panel_caption(p: &Panel, damping: f64) -> String {
     format!(
-        "μ = {}, τ_D = {}, ξ̇₀ = ξ̇ max = {}{}",
+        "μ = {}, τ_D = {}, dξ/dτ(0) = dξ/dτ max = {}{}",
         sig(p.mu),
         sig(p.tau_d),
         sig(p.xidot0),
@@ -145,7 +145,7 @@ impl Figure for MapFigure<'_> {
     fn describe(&self) -> Description {
         let s = &self.map.spec;
         let mut d = Description::new(format!(
-            "(β, σ) map: the simulated class of the wall at each grid point, {} panel(s), {} periods from ξ̇₀, grid {} × {}",
+            "(β, σ) map: the simulated class of the wall at each grid point, {} panel(s), {} periods from dξ/dτ(0), grid {} × {}",
             self.map.panels.len(),
             s.periods,
             s.beta.n,
