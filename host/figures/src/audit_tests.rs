@@ -216,6 +216,7 @@ fn replay_and_release_name_their_plant_and_mark_the_band_and_trip() {
         verdict: "settles",
         name: "virtual device",
         stiffness: 2.0,
+        damping: 0.0,
         rotary: true,
         trip: None,
         plane: Some(Plane::new(&r)),
@@ -233,7 +234,14 @@ fn replay_and_release_name_their_plant_and_mark_the_band_and_trip() {
     );
     f.trip = Some(5);
     f.plane = None;
+    f.damping = 1e-3;
     let d = assert_clean(&f, crate::release::SIZE_PX, Some(true));
+    assert!(
+        d.title
+            .contains("K = 2.000 N·m/rad, B = 0.001000 N·m·s/rad"),
+        "{}",
+        d.title
+    );
     assert!(
         d.legend
             .iter()

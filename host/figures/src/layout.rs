@@ -63,7 +63,7 @@ fn is_unit(word: &str) -> bool {
     UNITS.contains(&word.trim_end_matches([',', ';', ':', ')', '.']))
 }
 
-/// `text` wrapped at spaces (never before a unit word) into lines no wider than `width` px at `px` font size.
+/// `text` wrapped at spaces (never before a unit word, nor on either side of an `=`) into lines no wider than `width` px at `px` font size.
 pub fn wrap<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     text: &str,
@@ -78,7 +78,8 @@ pub fn wrap<DB: DrawingBackend>(
         } else {
             format!("{line} {word}")
         };
-        if line.is_empty() || is_unit(word) || width_of(area, &candidate, px) <= width {
+        let glued = is_unit(word) || word == "=" || line.ends_with(" =");
+        if line.is_empty() || glued || width_of(area, &candidate, px) <= width {
             line = candidate;
         } else {
             lines.push(std::mem::take(&mut line));

@@ -272,7 +272,7 @@ fn damped_label(r: &Report, d: Damper) -> String {
     let (ku, bu) = unit_words(r.params.rotational);
     let limit = d.k_max.map_or(String::new(), |k| {
         format!(
-            "; with it the exact linear limit is K_max(B) = {} {ku} (the (K, B) frontier figure)",
+            "; with it the exact linear limit is K_max(B) = {} {ku}",
             sig(k)
         )
     });

@@ -33,6 +33,8 @@ pub struct Release<'a> {
     pub name: &'a str,
     /// The test's stiffness K, N/m (N·m/rad).
     pub stiffness: f64,
+    /// The test's virtual damping B, N·s/m (N·m·s/rad); 0: the spring alone.
+    pub damping: f64,
     /// A rotary device.
     pub rotary: bool,
     /// The index into `counts` where the supervisor tripped, if it did.
@@ -79,10 +81,15 @@ impl Release<'_> {
     }
 
     fn title(&self) -> String {
-        let (ku, _) = unit_words(self.rotary);
+        let (ku, bu) = unit_words(self.rotary);
         let start = self.counts.first().copied().unwrap_or(0);
+        let b = if self.damping > 0.0 {
+            format!(", B = {} {bu}", sig(self.damping))
+        } else {
+            String::new()
+        };
         format!(
-            "{}: release test at K = {} {ku} from x = {start} ticks: {}",
+            "{}: release test at K = {} {ku}{b} from x = {start} ticks: {}",
             self.name,
             sig(self.stiffness),
             self.verdict

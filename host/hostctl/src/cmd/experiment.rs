@@ -140,9 +140,12 @@ fn release(a: &ReleaseArgs) -> Result<()> {
             verdict: verdict.describe(),
             name: &name,
             stiffness: f64::from(cfg.stiffness),
+            damping: f64::from(cfg.damping),
             rotary: c.info.counts_per_rev > 0,
             trip,
-            plane: report.as_ref().map(|r| release_plane(r, &name)),
+            plane: report
+                .as_ref()
+                .map(|r| release_plane(r, &name, f64::from(cfg.damping))),
         };
         figure::write(path, release_figure::SIZE_PX, &fig)?;
     }
@@ -164,13 +167,23 @@ fn release(a: &ReleaseArgs) -> Result<()> {
     Ok(())
 }
 
-/// The (β, σ) plane beside a release: the device, the release's equivalent velocity.
-fn release_plane<'a>(r: &'a analysis::Report, name: &str) -> stiffwall_figures::plane::Plane<'a> {
+/// The (β, σ) plane beside a release: the device, the release's equivalent velocity, and the
+/// config's damper B [N·s/m or N·m·s/rad] (0: none) drawn apart from the spring.
+fn release_plane<'a>(
+    r: &'a analysis::Report,
+    name: &str,
+    b: f64,
+) -> stiffwall_figures::plane::Plane<'a> {
+    let p = &r.params;
     stiffwall_figures::plane::Plane {
         report: r,
         name: name.to_owned(),
         velocity_source: "the release's equivalent velocity, ½K(dΔ)² = ½mv²".to_owned(),
-        damper: None,
+        damper: (b > 0.0).then(|| stiffwall_figures::plane::Damper {
+            b,
+            beta_v: b / (p.stiffness * p.period_s),
+            k_max: stiffwall_core::criteria::k_max_exact_linear(p, b).ok(),
+        }),
     }
 }
 
