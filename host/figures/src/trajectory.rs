@@ -84,6 +84,10 @@ impl Figure for Trajectory<'_> {
         if let Some(last) = self.rows.last() {
             d.value(format!("{} periods simulated", last.period));
         }
+        let silent = |r: &Row| r.e_d == 0.0 && r.e_g == 0.0 && r.residual == 0.0;
+        if !self.rows.is_empty() && self.rows.iter().all(silent) {
+            d.value("E_d, E_g and the residual are 0 in every row of this run");
+        }
         d
     }
 
@@ -123,7 +127,10 @@ where
         .collect::<DrawResult<_>>()?;
     let (w, h) = body.dim_in_pixel();
     let (plots, right) = body.split_horizontally(w.saturating_sub(300));
-    layout::legend(&right.margin(14, 0, 0, 8), &keys)?;
+    let right = right.margin(14, 0, 0, 8);
+    layout::legend(&right, &keys)?;
+    let lh = layout::legend_height(&right, &d.legend, right.dim_in_pixel().0);
+    layout::notes(&right.split_vertically(lh + 10).1, &d.values)?;
     let rows = f.rows;
     let t1 = rows.last().map_or(1.0, |r| r.period as f64).max(1.0);
     let tau = |r: &Row| r.period as f64;
