@@ -72,18 +72,32 @@ pub fn wrap<DB: DrawingBackend>(
 ) -> Vec<String> {
     let mut lines: Vec<String> = Vec::new();
     let mut line = String::new();
+    // Byte offset in `line` where its last unbreakable group (a number with its `=` and
+    // unit) starts: a glued word that does not fit moves the whole group to the next line.
+    let mut group = 0;
     for word in text.split(' ') {
+        let glued = is_unit(word) || word == "=" || line.ends_with(" =");
+        if !glued && !line.is_empty() {
+            group = line.len() + 1;
+        }
         let candidate = if line.is_empty() {
             word.to_owned()
         } else {
             format!("{line} {word}")
         };
-        let glued = is_unit(word) || word == "=" || line.ends_with(" =");
-        if line.is_empty() || glued || width_of(area, &candidate, px) <= width {
+        if line.is_empty() || width_of(area, &candidate, px) <= width {
             line = candidate;
-        } else {
+        } else if !glued {
             lines.push(std::mem::take(&mut line));
             line = word.to_owned();
+            group = 0;
+        } else if group > 0 {
+            let tail = candidate[group..].to_owned();
+            line.truncate(group - 1);
+            lines.push(std::mem::replace(&mut line, tail));
+            group = 0;
+        } else {
+            line = candidate;
         }
     }
     if !line.is_empty() {
@@ -240,4 +254,31 @@ pub fn notes_height<DB: DrawingBackend>(
         .map(|t| wrap(area, t, LEGEND_PX, width.saturating_sub(12)).len())
         .sum();
     n as u32 * (LEGEND_PX + 4) + 8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every wrapped line fits (a glued group that does not fit moves whole to the next line),
+    /// no line starts with a unit or an `=`, and no word is lost.
+    #[test]
+    fn wrapped_lines_fit_and_keep_numbers_with_their_units() {
+        let mut svg = String::new();
+        let root = SVGBackend::with_string(&mut svg, (800, 600)).into_drawing_area();
+        let text = "the spring alone at K = 3.347 N·m/rad: β = 0.002739, σ = 0.7764, region D; \
+                    dots at K/2 = 1.674, 2K = 6.694, 4K = 13.39 N·m/rad";
+        for width in [120, 200, 260, 330, 400] {
+            let lines = wrap(&root, text, LEGEND_PX, width);
+            assert_eq!(lines.join(" "), text, "width {width}");
+            for l in &lines {
+                assert!(
+                    width_of(&root, l, LEGEND_PX) <= width,
+                    "{width}: {l:?} of {lines:?}"
+                );
+                let first = l.split(' ').next().unwrap();
+                assert!(!is_unit(first) && first != "=", "{width}: {l:?}");
+            }
+        }
+    }
 }
