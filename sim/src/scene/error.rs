@@ -14,7 +14,8 @@ pub enum SceneError {
     #[error(transparent)]
     Toml(#[from] toml::de::Error),
     /// A value outside its allowed range (the name is the TOML key, e.g. `device.sigma`).
-    #[error("{} = {}: allowed range is {}", .0.name(), .0.value(), .0.allowed())]
+    /// The value is written as `{:?}` (`1e300`, not 301 digits).
+    #[error("{} = {:?}: allowed range is {}", .0.name(), .0.value(), .0.allowed())]
     Param(#[from] ParamError),
     /// A key the scene's unit system requires is missing.
     #[error("{key} is missing ({allowed})")]

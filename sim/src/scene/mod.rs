@@ -26,6 +26,7 @@
 //! Invariant: a [`Scene`] returned by [`Scene::from_toml`] is valid for its solver.
 
 mod error;
+pub mod field_bounds;
 mod plant_file;
 mod plant_keys;
 mod raw;

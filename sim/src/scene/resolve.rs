@@ -3,16 +3,20 @@
 //! Units: a physical scene is converted once through `stiffwall_core`'s Table I
 //! ([`PhysicalParams::to_dimensionless`] and [`Scale`]); the amplifier delay is core's eq. (5)
 //! ([`amplifier_delay`]). Every range check is `stiffwall_core::params::check_range`, so an
-//! error names the TOML key and the allowed range. Invariant: the returned scene passes the
+//! error names the TOML key and the allowed range; a physical device's and controller's keys
+//! are checked against their field's one range of [`super::field_bounds`] (the command line's
+//! too). Invariant: the returned scene passes the
 //! solver's own validation (μ > 0, β, σ ≥ 0, 0 ≤ τ_D ≤ [`MAX_TAU_D`]).
 
 use super::error::SceneError;
+use super::field_bounds::{
+    FieldBounds, COULOMB, COUNTS_PER_REV, MASS, PERIOD, RESOLUTION, STIFFNESS, VISCOUS,
+};
 use super::plant_keys::rotary_resolution;
 use super::raw::{
     RawAmp, RawController, RawDevice, RawHand, RawInitial, RawRun, RawScene, RawSolver,
 };
 use super::spec::{Scene, Solver};
-use crate::exact::MAX_BETA_V;
 use crate::params::{Effects, Params, MAX_TAU_D};
 use crate::plant::Motion;
 use crate::reference::{AmpFilter, Hand, Method};
@@ -96,90 +100,76 @@ fn dimensionless(d: &RawDevice, c: &RawController) -> Result<(Params, Option<Sca
     Ok((params, None))
 }
 
-/// The device and controller of a physical scene, converted through Table I.
+/// The device and controller of a physical scene, converted through Table I; every key is
+/// checked against its field's one range ([`super::field_bounds`], the same as the command line's).
 fn physical(d: &RawDevice, c: &RawController) -> Result<(Params, Option<Scale>), SceneError> {
-    let m = need("device.mass_kg", d.mass_kg, "kg, > 0")?;
-    let b = need("device.viscous_ns_per_m", d.viscous_ns_per_m, "N s/m, >= 0")?;
-    let cc = need("device.coulomb_n", d.coulomb_n, "N, >= 0")?;
+    let rot = d.counts_per_rev.is_some();
+    let m = need("device.mass_kg", d.mass_kg, MASS.allowed)?;
+    let b = need(
+        "device.viscous_ns_per_m",
+        d.viscous_ns_per_m,
+        VISCOUS.allowed,
+    )?;
+    let cc = need("device.coulomb_n", d.coulomb_n, COULOMB.allowed)?;
     let delta = match (d.resolution_m, d.counts_per_rev) {
         (Some(_), Some(_)) => {
             return conflict("device", "give resolution_m or counts_per_rev, not both")
         }
-        (None, Some(n)) => rotary_resolution(n)?,
-        (r, None) => need("device.resolution_m", r, "m, > 0")?,
+        (None, Some(n)) => {
+            COUNTS_PER_REV.check("device.counts_per_rev", f64::from(n), true)?;
+            rotary_resolution(n)?
+        }
+        (r, None) => RESOLUTION.check(
+            "device.resolution_m",
+            need("device.resolution_m", r, RESOLUTION.allowed)?,
+            false,
+        )?,
     };
     let k = need(
         "controller.stiffness_n_per_m",
         c.stiffness_n_per_m,
-        "N/m, > 0",
+        STIFFNESS.allowed,
     )?;
-    let t = need("controller.period_s", c.period_s, "s, > 0")?;
+    let t = need("controller.period_s", c.period_s, PERIOD.allowed)?;
     if c.tau_d.is_some() {
         return conflict(
             "controller.tau_d",
             "belongs to dimensionless scenes; use controller.extra_delay_s",
         );
     }
-    let t = range("controller.period_s", t, 0.0, true, 10.0, "(0, 10] s")?;
+    let t = PERIOD.check("controller.period_s", t, rot)?;
     let p = PhysicalParams {
-        mass: range("device.mass_kg", m, 0.0, true, 1e6, "(0, 1e6] kg")?,
-        viscous: range(
-            "device.viscous_ns_per_m",
-            b,
-            0.0,
-            false,
-            1e9,
-            "[0, 1e9] N s/m",
-        )?,
-        coulomb: range("device.coulomb_n", cc, 0.0, false, 1e9, "[0, 1e9] N")?,
-        resolution: range("device.resolution_m", delta, 0.0, true, 1.0, "(0, 1] m")?,
+        mass: MASS.check("device.mass_kg", m, rot)?,
+        viscous: VISCOUS.check("device.viscous_ns_per_m", b, rot)?,
+        coulomb: COULOMB.check("device.coulomb_n", cc, rot)?,
+        resolution: delta,
         period_s: t,
-        stiffness: range(
-            "controller.stiffness_n_per_m",
-            k,
-            0.0,
-            true,
-            1e12,
-            "(0, 1e12] N/m",
-        )?,
-        delay_s: range(
+        stiffness: STIFFNESS.check("controller.stiffness_n_per_m", k, rot)?,
+        delay_s: FieldBounds::check_delay(
             "controller.extra_delay_s",
             c.extra_delay_s.unwrap_or(0.0),
-            0.0,
-            false,
-            MAX_TAU_D * t,
-            "[0, 250 periods] s",
+            Some(t),
         )?,
-        rotational: d.counts_per_rev.is_some(),
+        rotational: rot,
     };
     Ok((p.to_dimensionless()?, Some(p.scale())))
 }
 
 /// `controller.virtual_damping_ns_per_m` (B, N·s/m or N·m·s/rad; default 0) of a physical
-/// scene as the dimensionless β_v = B/(K·T) of the solvers, checked against [0, 1e9] and
-/// β_v ≤ [`MAX_BETA_V`]. The firmware's own limit (which depends on the board) is checked where
-/// the virtual device builds its boot configuration.
+/// scene as the dimensionless β_v = B/(K·T) of the solvers, checked against
+/// [`super::field_bounds::DAMPING`]'s range and β_v ≤ [`crate::exact::MAX_BETA_V`], with one
+/// message for both. The firmware's own limit (which depends
+/// on the board) is checked where the virtual device builds its boot configuration.
 fn virtual_damping(raw: &RawScene, scale: Option<Scale>) -> Result<f64, SceneError> {
-    const KEY: &str = "controller.virtual_damping_ns_per_m";
     let (Some(b), Some(s)) = (raw.controller.virtual_damping_ns_per_m, scale) else {
         return Ok(0.0);
     };
-    let b = range(
-        KEY,
-        b,
-        0.0,
-        false,
-        1e9,
-        "[0, 1e9] N s/m (N m s/rad on a rotary device)",
-    )?;
     let kt = s.stiffness * s.period_s;
-    range(
-        KEY,
+    let b = FieldBounds::check_damping(
+        "controller.virtual_damping_ns_per_m",
         b,
-        0.0,
-        false,
-        MAX_BETA_V * kt,
-        "[0, 1000 K T] N s/m (beta_v = B/(K T) at most 1000)",
+        raw.device.counts_per_rev.is_some(),
+        Some(kt),
     )?;
     Ok(b / kt)
 }
