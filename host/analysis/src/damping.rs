@@ -2,7 +2,10 @@
 //! boundary K_max(B), its closed forms and the frontier over B (`stiffwall_core::criteria`).
 //!
 //! Units: B in N·s/m (N·m·s/rad with `--rotational`), K in N/m (N·m/rad). The frontier is
-//! [`criteria::FRONTIER_POINTS`] values of B on the linear grid 0 ..= 4·m/T.
+//! [`criteria::FRONTIER_POINTS`] values of B on the linear grid 0 ..= 4·m/T, cut after the first
+//! B where K_max(B) is 0 (from there on the damper alone destabilises the loop); the best B
+//! ([`search`]) is the grid's best refined by golden section between its neighbours, or the
+//! user's B when that is higher, so it is never below any K_max it is compared with.
 //!
 //! [`figure`] is the frontier figure's data: K_max(B) over the same grid, the best B and the
 //! operating point (B given, the device's K).
@@ -41,12 +44,16 @@ pub struct DampingReport {
     pub k_max_small_b: f64,
     /// Whether the device's (K, B) is stable by the exact linear test.
     pub stable: bool,
-    /// K_max(B) on the linear grid 0 ..= 4·m/T.
+    /// K_max(B) on the linear grid 0 ..= 4·m/T, up to and including the first B where it is 0.
     pub frontier: Vec<FrontierPoint>,
-    /// The grid B that maximises K_max.
+    /// The first grid B where K_max(B) is 0 (null when it is positive on the whole grid).
+    pub k_max_zero_from_b: Option<f64>,
+    /// The B that maximises K_max ([`search`]: the grid refined by golden section, or `b_set`).
     pub b_opt: f64,
     /// K_max at `b_opt`.
     pub k_max_opt: f64,
+    /// The stiffest wall at `b_opt` that can come to rest: min(`k_max_opt`, `quiet_ceiling`).
+    pub k_opt_at_rest: f64,
     /// The quiet ceiling 2c/Δ (`stiffwall_core::rest::quiet_ceiling`, Coulomb friction only:
     /// static friction raises it): above it no count can hold the wall's force KΔ/2.
     pub quiet_ceiling: f64,
@@ -68,13 +75,86 @@ pub fn kb_region(k: f64, k_max: f64, quiet_ceiling: f64) -> &'static str {
     }
 }
 
+/// The frontier K_max(B) of a device and its best B ([`search`]).
+#[derive(Debug, Clone)]
+pub struct Searched {
+    /// K_max(B) on the grid 0 ..= 4·m/T, up to and including the first B where it is 0.
+    pub frontier: Vec<FrontierPoint>,
+    /// The first grid B where K_max(B) is 0.
+    pub zero_from_b: Option<f64>,
+    /// The best B found.
+    pub b_opt: f64,
+    /// K_max at `b_opt`, at least every K_max of the grid and at `b_user`.
+    pub k_max_opt: f64,
+}
+
+/// Golden-section steps refining the grid's best B (the bracket shrinks to 0.618^40 ≈ 4e-9 of
+/// two grid steps).
+const GOLDEN_STEPS: usize = 40;
+
+/// K_max(B) on the grid 0 ..= 4·m/T (cut after its first 0), and the best B: the grid's best
+/// refined by golden section between its two neighbours, or `b_user` when K_max is higher
+/// there. The best K_max is the largest of every K_max evaluated, so it is never below the
+/// grid's or the user's.
+///
+/// # Errors
+/// A parameter out of range, or `b_user` negative, NaN or infinite (named `damping`).
+pub fn search(p: &PhysicalParams, b_user: Option<f64>) -> Result<Searched, ParamError> {
+    let f = criteria::frontier(p, FRONTIER_B_MAX_M_PER_T * p.mass / p.period_s)?;
+    let n = criteria::FRONTIER_POINTS;
+    let mut best = (f.b_opt_n_s_per_m, f.k_max_opt);
+    let i = f.b_n_s_per_m.iter().position(|&b| b == best.0).unwrap_or(0);
+    let (mut lo, mut hi) = (
+        f.b_n_s_per_m[i.saturating_sub(1)],
+        f.b_n_s_per_m[(i + 1).min(n - 1)],
+    );
+    let eval = |b: f64, best: &mut (f64, f64)| -> Result<f64, ParamError> {
+        let k = criteria::k_max_exact_linear(p, b)?;
+        if k > best.1 {
+            *best = (b, k);
+        }
+        Ok(k)
+    };
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut x1, mut x2) = (hi - r * (hi - lo), lo + r * (hi - lo));
+    let (mut k1, mut k2) = (eval(x1, &mut best)?, eval(x2, &mut best)?);
+    for _ in 0..GOLDEN_STEPS {
+        if k1 >= k2 {
+            (hi, x2, k2) = (x2, x1, k1);
+            x1 = hi - r * (hi - lo);
+            k1 = eval(x1, &mut best)?;
+        } else {
+            (lo, x1, k1) = (x1, x2, k2);
+            x2 = lo + r * (hi - lo);
+            k2 = eval(x2, &mut best)?;
+        }
+    }
+    if let Some(b) = b_user {
+        eval(criteria::check_damping(b)?, &mut best)?;
+    }
+    let zero = f.k_max.iter().position(|&k| k <= 0.0);
+    let frontier = f
+        .b_n_s_per_m
+        .iter()
+        .zip(f.k_max.iter())
+        .take(zero.map_or(n, |z| z + 1))
+        .map(|(&b, &k_max)| FrontierPoint { b, k_max })
+        .collect();
+    Ok(Searched {
+        frontier,
+        zero_from_b: zero.map(|z| f.b_n_s_per_m[z]),
+        b_opt: best.0,
+        k_max_opt: best.1,
+    })
+}
+
 /// Computes the damper analysis of `p` at virtual damping `b_set`.
 ///
 /// # Errors
 /// B negative, NaN or infinite (named `damping`), or a parameter out of range.
 pub fn damping_report(p: &PhysicalParams, b_set: f64) -> Result<DampingReport, ParamError> {
     criteria::check_damping(b_set)?;
-    let f = criteria::frontier(p, FRONTIER_B_MAX_M_PER_T * p.mass / p.period_s)?;
+    let f = search(p, Some(b_set))?;
     let k_max = criteria::k_max_exact_linear(p, b_set)?;
     let quiet_ceiling = stiffwall_core::rest::quiet_ceiling(p.coulomb, 0.0, p.resolution);
     Ok(DampingReport {
@@ -86,14 +166,11 @@ pub fn damping_report(p: &PhysicalParams, b_set: f64) -> Result<DampingReport, P
         k_max_colgate_schenkel: criteria::k_max_colgate_schenkel_damped(p, b_set)?,
         k_max_small_b: criteria::k_max_small_b(p, b_set)?,
         stable: criteria::exact_linear_stable(p, b_set)?,
-        frontier: f
-            .b_n_s_per_m
-            .iter()
-            .zip(f.k_max.iter())
-            .map(|(&b, &k_max)| FrontierPoint { b, k_max })
-            .collect(),
-        b_opt: f.b_opt_n_s_per_m,
+        frontier: f.frontier,
+        k_max_zero_from_b: f.zero_from_b,
+        b_opt: f.b_opt,
         k_max_opt: f.k_max_opt,
+        k_opt_at_rest: f.k_max_opt.min(quiet_ceiling),
     })
 }
 
@@ -169,9 +246,19 @@ pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
     );
     let _ = writeln!(
         s,
-        "  best B on the grid: B = {:.5e} {b_u}, K_max = {:.5e} {k_u}",
+        "  best B (grid refined by golden section, your B included): B = {:.5e} {b_u}, K_max = \
+         {:.5e} {k_u}",
         d.b_opt, d.k_max_opt
     );
+    if d.k_max_opt > d.quiet_ceiling {
+        let _ = writeln!(
+            s,
+            "  that K_max is {:.3} x the quiet ceiling: not reachable at rest (it would chatter); \
+             the stiffest wall at rest there is capped at {:.5e} {k_u}",
+            d.k_max_opt / d.quiet_ceiling,
+            d.k_opt_at_rest
+        );
+    }
     let _ = writeln!(
         s,
         "  three regions of (K, B): quiet below the quiet ceiling 2c/Δ = {:.5e} {k_u} (a wall \
@@ -195,8 +282,19 @@ pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
         "  K_max(B), B linear in 0 ..= {FRONTIER_B_MAX_M_PER_T}·m/T:\n  {:>12} {:>12}",
         "B", "K_max"
     );
-    for pt in &d.frontier {
+    render_frontier(&mut s, &d.frontier, d.k_max_zero_from_b);
+    s
+}
+
+/// The K_max(B) rows up to the first 0, then one line for the rest.
+pub(crate) fn render_frontier(s: &mut String, frontier: &[FrontierPoint], zero: Option<f64>) {
+    for pt in frontier.iter().filter(|pt| pt.k_max > 0.0) {
         let _ = writeln!(s, "  {:>12.4e} {:>12.4e}", pt.b, pt.k_max);
     }
-    s
+    if let Some(b) = zero {
+        let _ = writeln!(
+            s,
+            "  K_max(B) = 0 from B = {b:.4e} on: the damper alone destabilises"
+        );
+    }
 }

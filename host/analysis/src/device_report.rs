@@ -1,6 +1,8 @@
 //! The paper's analysis of one device (Diolaiti et al. 2006, Sec. III, VII), behind `hostctl
 //! analyze` and reused by `tune` and `experiment` for their reports and (β, σ) figures; the
-//! spring + damper part is [`crate::damping`]. Rendering (text, figures) is the caller's.
+//! spring + damper part is [`crate::damping`]; the device's limits without a wall ("how stiff
+//! can it go", `analyze` without `--stiffness`) are [`stiffest`]. Rendering of figures is the
+//! caller's.
 //!
 //! Units: inputs are SI (kg, N·s/m, N, m, s, N/m, m/s, m/s²; with `--rotational`
 //! kg·m², N·m·s/rad, N·m, rad, N·m/rad, rad/s, rad/s²). The report gives the dimensionless
@@ -9,6 +11,8 @@
 //!
 //! Invariants: every number is validated by `stiffwall-core`; bad input is an error naming the
 //! field and its allowed range.
+
+pub mod stiffest;
 
 use crate::damping;
 use serde::Serialize;

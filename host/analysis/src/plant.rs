@@ -3,15 +3,14 @@
 //! its fields, resolved into a [`Friction`].
 //!
 //! Units: SI; for a linear device m in kg, b in N·s/m, c in N; for a rotational one m in kg·m²,
-//! b in N·m·s/rad, c in N·m. Invariants: the ranges are `stiffwall-core`'s
-//! ([`stiffwall_core::params::check_positive`], [`stiffwall_core::params::check_non_negative`]):
-//! m finite and > 0, b and c finite and >= 0; a refused value is an error naming the flag, its
-//! allowed range and the value. A preset name is matched case-insensitively against
-//! [`stiffwall_core::devices`].
+//! b in N·m·s/rad, c in N·m. Invariants: the ranges are the plausible ranges of
+//! `stiffwall_sim::scene::field_bounds` ([`MASS`], [`VISCOUS`], [`COULOMB`]: the same as the
+//! plant file's `device.mass_kg`, `viscous_ns_per_m`, `coulomb_n`, with the same message); a
+//! refused value is an error naming the flag, its allowed range and the value. A preset name is
+//! matched case-insensitively against [`stiffwall_core::devices`].
 
 use stiffwall_core::devices::{self, Device};
-use stiffwall_core::params::{check_non_negative, check_positive, NON_NEGATIVE, POSITIVE};
-use stiffwall_core::ParamError;
+use stiffwall_sim::scene::field_bounds::{FieldBounds, COULOMB, MASS, VISCOUS};
 
 /// A plant as given: a preset and overrides of its m, b, c (each named by its flag in
 /// errors, `--mass`, `--viscous`, `--coulomb`, `--device`).
@@ -38,18 +37,15 @@ pub enum PlantSpecError {
         /// The preset names.
         allowed: &'static str,
     },
-    /// A value outside core's range for its field.
-    #[error("--{flag} must be a finite number {range} (got {value})")]
+    /// A value outside its field's plausible range.
+    #[error("--{flag} must be {range} (got {value:?})")]
     OutOfRange {
         /// The flag, without dashes (`mass`).
         flag: &'static str,
         /// The value given.
         value: f64,
-        /// The allowed range, e.g. `> 0`.
+        /// The allowed range ([`FieldBounds::allowed`]).
         range: &'static str,
-        /// Core's verdict.
-        #[source]
-        source: ParamError,
     },
     /// Neither a preset nor all of m, b, c.
     #[error(
@@ -77,20 +73,18 @@ pub struct Friction {
 fn checked(
     flag: &'static str,
     value: Option<f64>,
-    check: fn(&'static str, f64) -> Result<f64, ParamError>,
+    bounds: &FieldBounds,
 ) -> Result<Option<f64>, PlantSpecError> {
+    // m, b and c have one range for both unit systems.
     value
         .map(|v| {
-            check(flag, v).map_err(|source| PlantSpecError::OutOfRange {
-                flag,
-                value: v,
-                range: match source.allowed() {
-                    POSITIVE => "> 0",
-                    NON_NEGATIVE => ">= 0",
-                    other => other,
-                },
-                source,
-            })
+            bounds
+                .check(flag, v, false)
+                .map_err(|_| PlantSpecError::OutOfRange {
+                    flag,
+                    value: v,
+                    range: bounds.allowed,
+                })
         })
         .transpose()
 }
@@ -113,15 +107,15 @@ impl PlantSpec {
         self.device.as_deref().map(find).transpose()
     }
 
-    /// `--mass`, `--viscous`, `--coulomb` as given, each checked against core's range.
+    /// `--mass`, `--viscous`, `--coulomb` as given, each checked against its field's range.
     ///
     /// # Errors
     /// [`PlantSpecError::OutOfRange`] for the first flag out of range.
     pub fn overrides(&self) -> Result<GivenFriction, PlantSpecError> {
         Ok((
-            checked("mass", self.mass, check_positive)?,
-            checked("viscous", self.viscous, check_non_negative)?,
-            checked("coulomb", self.coulomb, check_non_negative)?,
+            checked("mass", self.mass, &MASS)?,
+            checked("viscous", self.viscous, &VISCOUS)?,
+            checked("coulomb", self.coulomb, &COULOMB)?,
         ))
     }
 
@@ -186,22 +180,22 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// Every value, finite or not, is accepted exactly when core accepts it, and a refusal
-        /// names the flag and the value.
+        /// Every value, finite or not, is accepted exactly when it is finite and inside the
+        /// field's stated range (written out here), and a refusal names the flag and the value.
         #[test]
-        fn flags_accept_exactly_what_core_accepts(v in proptest::num::f64::ANY) {
-            for (flag, a, core_ok) in [
-                ("--mass", args(None, Some(v), None, None), check_positive("mass", v).is_ok()),
-                ("--viscous", args(None, None, Some(v), None), check_non_negative("viscous", v).is_ok()),
-                ("--coulomb", args(None, None, None, Some(v)), check_non_negative("coulomb", v).is_ok()),
+        fn flags_accept_exactly_the_fields_range(v in proptest::num::f64::ANY) {
+            for (flag, a, in_range) in [
+                ("--mass", args(None, Some(v), None, None), (1e-9..=1e3).contains(&v)),
+                ("--viscous", args(None, None, Some(v), None), (0.0..=1e4).contains(&v)),
+                ("--coulomb", args(None, None, None, Some(v)), (0.0..=1e4).contains(&v)),
             ] {
                 match a.overrides() {
-                    Ok(_) => prop_assert!(core_ok, "{flag} {v} accepted"),
+                    Ok(_) => prop_assert!(in_range, "{flag} {v} accepted"),
                     Err(e) => {
-                        prop_assert!(!core_ok, "{flag} {v} refused: {e}");
+                        prop_assert!(!in_range, "{flag} {v} refused: {e}");
                         let text = e.to_string();
                         prop_assert!(text.starts_with(flag), "{text}");
-                        prop_assert!(text.ends_with(&format!("(got {v})")), "{text}");
+                        prop_assert!(text.ends_with(&format!("(got {v:?})")), "{text}");
                     }
                 }
             }
@@ -218,28 +212,31 @@ mod tests {
     }
 
     #[test]
-    fn ranges_are_cores_and_errors_name_flag_range_and_value() {
-        let e = args(None, Some(-1.0), None, None).overrides().unwrap_err();
-        assert_eq!(e.to_string(), "--mass must be a finite number > 0 (got -1)");
-        assert_eq!(
-            std::error::Error::source(&e).unwrap().to_string(),
-            check_positive("mass", -1.0).unwrap_err().to_string()
-        );
+    fn errors_name_flag_range_and_value_with_one_message_per_field() {
+        let mass = "finite and in [1e-9, 1e3] kg (kg·m² on a rotary device)";
+        for v in [-1.0, 0.0, 1e300] {
+            let e = args(None, Some(v), None, None).overrides().unwrap_err();
+            assert_eq!(e.to_string(), format!("--mass must be {mass} (got {v:?})"));
+        }
         let e = args(None, None, Some(-0.1), None).overrides().unwrap_err();
         assert_eq!(
             e.to_string(),
-            "--viscous must be a finite number >= 0 (got -0.1)"
+            "--viscous must be finite and in [0, 1e4] N·s/m (N·m·s/rad on a rotary device) \
+             (got -0.1)"
         );
         let e = args(None, None, None, Some(f64::NAN))
             .overrides()
             .unwrap_err();
         assert_eq!(
             e.to_string(),
-            "--coulomb must be a finite number >= 0 (got NaN)"
+            "--coulomb must be finite and in [0, 1e4] N (N·m on a rotary device) (got NaN)"
         );
-        // The boundaries are core's: zero friction is allowed, zero mass is not.
+        // Zero friction is allowed, zero mass is not; the bounds themselves are.
         assert!(args(None, Some(0.0), None, None).overrides().is_err());
         assert!(args(None, Some(1e-9), Some(0.0), Some(0.0))
+            .overrides()
+            .is_ok());
+        assert!(args(None, Some(1e3), Some(1e4), Some(1e4))
             .overrides()
             .is_ok());
     }

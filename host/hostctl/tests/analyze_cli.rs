@@ -33,7 +33,7 @@ fn fails_naming(args: &[&str], needles: &[&str]) {
 
 #[test]
 fn phantom_preset_json() {
-    let v = json(&["--device", "phantom-1.0"]);
+    let v = json(&["--device", "phantom-1.0", "--stiffness", "1015"]);
     for key in [
         "mu",
         "beta",
@@ -92,7 +92,14 @@ fn velocity_and_flags_override_preset() {
     assert!((k - expect).abs() < 1e-6 * expect, "{k} vs {expect}");
     // K = 500 is below K_max(0.1 m/s) ≈ 597 N/m: region E at 0.1 m/s
     assert_eq!(v["region"], "E");
-    let v = json(&["--device", "phantom-1.0", "--velocity", "0.1"]);
+    let v = json(&[
+        "--device",
+        "phantom-1.0",
+        "--velocity",
+        "0.1",
+        "--stiffness",
+        "1015",
+    ]);
     assert_eq!(v["region"], "D");
 }
 
@@ -167,10 +174,17 @@ fn delayed_device_gets_f_regions() {
 
 #[test]
 fn maxon_rotational_preset_and_counts_per_rev() {
-    let v = json(&["--device", "maxon-re35"]);
+    let v = json(&["--device", "maxon-re35", "--stiffness", "2"]);
     assert_eq!(v["params"]["rotational"], true);
     assert_eq!(v["region"], "E");
-    let v2 = json(&["--device", "maxon-re35", "--counts-per-rev", "2048"]);
+    let v2 = json(&[
+        "--device",
+        "maxon-re35",
+        "--counts-per-rev",
+        "2048",
+        "--stiffness",
+        "2",
+    ]);
     let r = v2["params"]["resolution"].as_f64().unwrap();
     assert!((r - std::f64::consts::TAU / 2048.0).abs() < 1e-15);
     fails_naming(
@@ -199,7 +213,7 @@ fn list_devices_lists_all_presets() {
 
 #[test]
 fn table_output_is_readable() {
-    let out = hostctl(&["--device", "omega"]);
+    let out = hostctl(&["--device", "omega", "--stiffness", "14500"]);
     assert!(out.status.success());
     let s = String::from_utf8_lossy(&out.stdout);
     for n in [
@@ -217,11 +231,11 @@ fn table_output_is_readable() {
 fn bad_input_names_field_and_range() {
     fails_naming(
         &["--device", "phantom-1.0", "--mass", "-1"],
-        &["mass", "> 0", "-1"],
+        &["--mass", "[1e-9, 1e3] kg", "-1"],
     );
     fails_naming(
         &["--device", "phantom-1.0", "--period", "0"],
-        &["period", "> 0"],
+        &["--period", "[1e-6, 0.1] s"],
     );
     fails_naming(
         &["--device", "phantom-1.0", "--stiffness", "nan"],
@@ -229,7 +243,7 @@ fn bad_input_names_field_and_range() {
     );
     fails_naming(
         &["--device", "phantom-1.0", "--viscous", "-0.1"],
-        &["viscous", ">= 0"],
+        &["--viscous", "[0, 1e4] N·s/m"],
     );
     fails_naming(
         &["--device", "phantom-1.0", "--velocity", "inf"],

@@ -74,9 +74,14 @@ fn damping_json_agrees_with_core_and_closed_form() {
     assert!((k - small).abs() < 0.05 * small, "{k} vs {small}");
     assert!((d["beta_v"].as_f64().unwrap() - b_set / (2000.0 * 1e-3)).abs() < 1e-12);
     assert_eq!(d["stable"].as_bool().unwrap(), 2000.0 < k);
+    // The table is the core grid up to and including its first K_max = 0 (issue 47).
     let frontier = d["frontier"].as_array().unwrap();
-    assert_eq!(frontier.len(), criteria::FRONTIER_POINTS);
     let f = criteria::frontier(&p, 4.0 * 72.0).unwrap();
+    let zero = f.k_max.iter().position(|&k| k == 0.0);
+    assert_eq!(
+        frontier.len(),
+        zero.map_or(criteria::FRONTIER_POINTS, |z| z + 1)
+    );
     for (pt, (b, km)) in frontier
         .iter()
         .zip(f.b_n_s_per_m.iter().zip(f.k_max.iter()))
@@ -84,8 +89,18 @@ fn damping_json_agrees_with_core_and_closed_form() {
         assert_eq!(pt["b"].as_f64().unwrap(), *b);
         assert_eq!(pt["k_max"].as_f64().unwrap(), *km);
     }
-    assert_eq!(d["k_max_opt"].as_f64().unwrap(), f.k_max_opt);
-    assert_eq!(d["b_opt"].as_f64().unwrap(), f.b_opt_n_s_per_m);
+    assert_eq!(
+        d["k_max_zero_from_b"].as_f64(),
+        zero.map(|z| f.b_n_s_per_m[z])
+    );
+    // The best B is refined: never below the grid's best nor the user's B, and it is K_max
+    // there.
+    let (b_opt, k_opt) = (
+        d["b_opt"].as_f64().unwrap(),
+        d["k_max_opt"].as_f64().unwrap(),
+    );
+    assert!(k_opt >= f.k_max_opt && k_opt >= k, "{k_opt}");
+    assert_eq!(k_opt, criteria::k_max_exact_linear(&p, b_opt).unwrap());
     assert_eq!(
         frontier[0]["k_max"].as_f64().unwrap(),
         criteria::k_max_gil_avello_rubio(&p).unwrap()
@@ -107,7 +122,7 @@ fn bad_damping_refused() {
         assert!(!out.status.success(), "{bad} accepted");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
-            err.contains("damping") && err.contains(">= 0"),
+            err.contains("--damping") && err.contains("[0, 1e4] N·s/m"),
             "{bad}: {err}"
         );
         assert!(out.stdout.is_empty());

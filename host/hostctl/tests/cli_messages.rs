@@ -44,7 +44,7 @@ fn refused(args: &[&str], want: &str) -> String {
 fn negative_numbers_reach_the_range_check_of_their_flag() {
     refused(
         &["analyze", "--device", "phantom-1.0", "--period", "-1e-3"],
-        "period must be finite and > 0 (got -0.001)",
+        "--period must be finite and in [1e-6, 0.1] s (a 10 Hz to 1 MHz servo) (got -0.001)",
     );
     refused(&["map", "--mu", "-1", "--periods", "10"], "--mu -1");
     refused(

@@ -560,7 +560,10 @@ fn replay_of_a_plain_recording_and_wrong_plant() {
     ]);
     assert!(out.contains("--mass"), "{out}");
     let e = fails(&["replay", f.to_str().unwrap(), "--mass", "-1"]);
-    assert!(e.contains("--mass must be a finite number > 0"), "{e}");
+    assert!(
+        e.contains("--mass must be finite and in [1e-9, 1e3] kg"),
+        "{e}"
+    );
     let e = fails(&["replay", f.to_str().unwrap(), "--device", "nope"]);
     assert!(e.contains("unknown device \"nope\""), "{e}");
     // Decimated recordings: replays that need every tick say why they cannot run.

@@ -40,12 +40,12 @@ struct Entry {
 const ENTRIES: &[Entry] = &[
     Entry {
         heading: "analyze: the (β, σ) plane and the (K, B) frontier of a rotary preset with a damper",
-        runs: &["analyze --device maxon-re35 --damping 0.0005 --plot {G}/analyze-maxon-re35.png"],
+        runs: &["analyze --device maxon-re35 --stiffness 2 --damping 0.0005 --plot {G}/analyze-maxon-re35.png"],
         figures: &["analyze-maxon-re35.png", "analyze-maxon-re35-kb.png"],
     },
     Entry {
         heading: "analyze: the (β, σ) plane of a linear preset at a given velocity",
-        runs: &["analyze --device phantom-1.0 --velocity 0.05 --plot {G}/analyze-phantom-1.0.png"],
+        runs: &["analyze --device phantom-1.0 --stiffness 1015 --velocity 0.05 --plot {G}/analyze-phantom-1.0.png"],
         figures: &["analyze-phantom-1.0.png"],
     },
     Entry {
