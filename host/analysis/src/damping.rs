@@ -12,7 +12,7 @@
 //!
 //! Invariants: B is validated (finite, ≥ 0, named `damping`) before anything is computed.
 
-use crate::frontier::{Frontier, Mark, Units};
+use crate::frontier::{sig, Frontier, Mark, Units};
 use serde::Serialize;
 use std::fmt::Write as _;
 use stiffwall_core::{criteria, ParamError, PhysicalParams};
@@ -195,16 +195,23 @@ pub fn figure(d: &DampingReport, p: &PhysicalParams, device: Option<&str>) -> Fr
             b: d.b_opt,
             k: d.k_max_opt,
             label: format!(
-                "best B = {:.4e} {}: K_max = {:.4e} {}",
-                d.b_opt, u.b, d.k_max_opt, u.k
+                "best B = {} {}: K_max = {} {}",
+                sig(d.b_opt),
+                u.b,
+                sig(d.k_max_opt),
+                u.k
             ),
         }),
         chosen: Some(Mark {
             b: d.b_set,
             k: p.stiffness,
             label: format!(
-                "operating point B = {:.4e} {}, K = {:.4e} {} ({})",
-                d.b_set, u.b, p.stiffness, u.k, d.region
+                "operating point B = {} {}, K = {} {} ({})",
+                sig(d.b_set),
+                u.b,
+                sig(p.stiffness),
+                u.k,
+                d.region
             ),
         }),
         quiet_ceiling: Some(d.quiet_ceiling),

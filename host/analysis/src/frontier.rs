@@ -124,6 +124,24 @@ impl Frontier {
     }
 }
 
+/// `x` to 4 significant digits: plain between 10⁻³ and 10⁵ (`3.722`, `2640`), else with a
+/// power of ten (`3.507e6`); `n/a` for a value that is not finite.
+#[must_use]
+pub fn sig(x: f64) -> String {
+    if !x.is_finite() {
+        return "n/a".to_owned();
+    }
+    let a = x.abs();
+    if a == 0.0 {
+        "0".to_owned()
+    } else if (1e-3..1e5).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

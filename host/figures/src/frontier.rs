@@ -11,7 +11,7 @@
 //! restated; a K_max that is not finite is not drawn, one outside the plotted K range is
 //! clamped to it. The frontier figure's file is named [`kb_path`] of the (β, σ) figure's.
 
-use crate::describe::{sig, Description};
+use crate::describe::Description;
 use crate::figure::{self, DrawResult, Figure, FigureError};
 use crate::layout::{self, Glyph};
 use plotters::coord::types::RangedCoordf64;

@@ -80,7 +80,7 @@ fn analyze_damping_plot_writes_the_frontier_beside_the_plane() {
             "K, wall stiffness [N/m]",
             "exact linear K_max(B)",
             "best B = ",
-            "operating point B = 2.0000e0 N·s/m",
+            "operating point B = 2.000 N·s/m",
         ],
     );
     let png = dir.join("r.PNG");
