@@ -45,15 +45,19 @@ fn connect_paced(p: PhysicalParams, fast: bool) -> Client {
 #[test]
 fn bad_max_velocity_is_refused_before_touching_the_device() {
     let bin = env!("CARGO_BIN_EXE_hostctl");
-    for v in ["0", "NaN", "-1", "inf"] {
+    for v in ["0", "NaN", "-1", "inf", "1e300"] {
         let out = std::process::Command::new(bin)
             .args(["tune", "--fast", "--dry-run", "--max-velocity", v])
             .output()
             .unwrap();
         assert!(!out.status.success(), "{v}");
         let err = String::from_utf8_lossy(&out.stderr);
+        // The field's one range (issue 47), the refused value as given (not 301 digits).
         assert!(
-            err.contains("--max-velocity must be finite and > 0"),
+            err.contains(
+                "--max-velocity must be finite and in [0, 100] m/s, or [0, 1e4] rad/s on a \
+                 rotary device, and > 0 (got "
+            ) && err.contains(&format!("(got {v})").replace("NaN", "NaN")),
             "{v}: {err}"
         );
         assert!(
@@ -68,6 +72,17 @@ fn bad_max_velocity_is_refused_before_touching_the_device() {
         ..Settings::default()
     };
     assert!(tune_with(&mut c, &s, false).is_err());
+    assert_eq!(c.get_config().unwrap(), before);
+    // 500 passes as rad/s but not as m/s: a linear device refuses it once connected, before
+    // any test, with the field's one message.
+    let mut c = connect(preset("phantom-1.0"));
+    let before = c.get_config().unwrap();
+    let s = Settings {
+        max_velocity: Some(500.0),
+        ..Settings::default()
+    };
+    let e = tune_with(&mut c, &s, false).unwrap_err().to_string();
+    assert!(e.contains("[0, 100] m/s") && e.contains("got 500"), "{e}");
     assert_eq!(c.get_config().unwrap(), before);
 }
 
@@ -146,7 +161,9 @@ fn bad_damping_is_refused_naming_the_flag_and_its_range() {
         assert!(!out.status.success(), "{b}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
-            err.contains("--damping must be finite and >= 0 N·s/m"),
+            err.contains(
+                "--damping must be finite, in [0, 1e4] N·s/m (N·m·s/rad on a rotary device)"
+            ),
             "{b}: {err}"
         );
         assert!(
@@ -157,7 +174,7 @@ fn bad_damping_is_refused_naming_the_flag_and_its_range() {
     let mut c = connect(preset("maxon-re35"));
     let before = c.get_config().unwrap();
     let s = Settings {
-        damping: Damping::Fixed(1e9),
+        damping: Damping::Fixed(1.0),
         ..Settings::default()
     };
     let mut tests = 0;

@@ -42,7 +42,9 @@ use super::model_check;
 use super::outcome::{IdentifiedReport, Outcome};
 use super::progress::{Progress, Reporter};
 use super::search::{largest_settling_k, Search};
-use super::settings::{Criterion, Damping, Settings, FRICTION_MISMATCH_MARGIN, MISMATCH_MARGIN};
+use super::settings::{
+    velocity_error, Criterion, Damping, Settings, FRICTION_MISMATCH_MARGIN, MISMATCH_MARGIN,
+};
 use super::steps::{Notes, Run};
 use super::workspace::{finish, home_of, Place};
 use stiffwall_client::{Cancel, Client};
@@ -83,6 +85,16 @@ pub fn tune(
                 got: b.to_string(),
             }
             .into());
+        }
+    }
+    if let Some(v) = s.max_velocity {
+        // The plausible range of the device's kind (m/s or rad/s), before any test.
+        let rotational = c.info.counts_per_rev > 0;
+        if stiffwall_sim::scene::field_bounds::VELOCITY
+            .check("max_velocity", v, rotational)
+            .is_err()
+        {
+            return Err(velocity_error(v).into());
         }
     }
     // The client's experiments check the caller's token for the whole tune.

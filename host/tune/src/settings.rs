@@ -5,6 +5,8 @@
 //! Invariant: [`Settings::validate`] is the one place the settings are checked; the CLI and the
 //! live view call it before touching a device.
 
+use stiffwall_sim::scene::field_bounds::{DAMPING, VELOCITY};
+
 pub use super::error::SettingsError;
 pub use super::verdict::Criterion;
 
@@ -134,6 +136,26 @@ impl Default for Settings {
     }
 }
 
+/// `--max-velocity` out of its plausible range ([`VELOCITY`]'s one message, and > 0: tune needs
+/// a velocity to test at).
+pub(crate) fn velocity_error(v: f64) -> SettingsError {
+    SettingsError {
+        field: "max_velocity",
+        range: format!("{}, and > 0", VELOCITY.allowed),
+        got: short(v),
+    }
+}
+
+/// A refused number as a person reads it: `1e300`, not 301 digits.
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && a.is_finite() && !(1e-4..1e6).contains(&a) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
 impl Settings {
     /// Checks every field, naming it (its Rust name, see [`SettingsError`]) and its allowed
     /// range.
@@ -152,8 +174,11 @@ impl Settings {
             return bad("margin", "in (0, 1]", self.margin.to_string());
         }
         if let Some(v) = self.max_velocity {
-            if !(v.is_finite() && v > 0.0) {
-                return bad("max_velocity", "finite and > 0", v.to_string());
+            // The device's kind is not known here: the wider (rotary) bound, and the linear
+            // one once the device is connected (`tune`), both with the field's one message.
+            let (_, hi) = VELOCITY.range(true);
+            if !(v.is_finite() && v > 0.0 && v <= hi) {
+                return Err(velocity_error(v));
             }
         }
         if let Some([lo, hi]) = self.travel {
@@ -167,12 +192,8 @@ impl Settings {
             }
         }
         if let Damping::Fixed(b) = self.damping {
-            if !(b.is_finite() && b >= 0.0) {
-                return bad(
-                    "damping",
-                    "finite and >= 0 N·s/m (N·m·s/rad)",
-                    b.to_string(),
-                );
+            if DAMPING.check("damping", b, false).is_err() {
+                return bad("damping", DAMPING.allowed, short(b));
             }
         }
         if !(self.excite_seconds.is_finite() && (0.5..=1000.0).contains(&self.excite_seconds)) {
