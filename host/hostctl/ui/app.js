@@ -162,6 +162,8 @@ function rate() { return st.config ? st.config.config.servo_rate_hz : (st.hello 
 function onHello(m) {
   st.hello = m;
   $('target').textContent = m.target + ' — ' + m.device.firmware_name + ' ' + m.device.firmware_version;
+  $('plane-title').textContent = `(β, σ) plane of the spring wall — ${m.target}`;
+  $('kb-title').textContent = `(B, K) frontier of the spring + damper wall — ${m.target}`;
   document.querySelectorAll('.unit[data-unit]').forEach((e) => { e.textContent = m.units[e.dataset.unit] || ''; });
 }
 function onConfig(m) {
@@ -370,7 +372,8 @@ function drawPlane() {
     cv.dataset.wallOff = p.line ? '1' : '0';
     if (!p.line) return;
   } else delete cv.dataset.wallOff;
-  if (p.point) note.textContent = p.model ? `model: m = ${fmt(p.model.mass)}, b = ${fmt(p.model.viscous)}, c = ${fmt(p.model.coulomb)} (${p.model.source}); μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}` : '';
+  const un = st.hello ? st.hello.units : { m: '', b: '', c: '' };
+  if (p.point) note.textContent = p.model ? `model: m = ${fmt(p.model.mass)} ${un.m}, b = ${fmt(p.model.viscous)} ${un.b}, c = ${fmt(p.model.coulomb)} ${un.c} (${p.model.source}); μ = m/(KT²) = ${fmt(p.mu)}, τ_D = T_D/T = ${fmt(p.tau_d)}` : '';
   const [bmax, smax] = p.window;
   const L = 60; const B = 36; const T = 10; const R = 10;
   const X = (b) => L + b / bmax * (w - L - R);
@@ -389,8 +392,8 @@ function drawPlane() {
   }
   g.strokeStyle = '#333'; g.strokeRect(L, T, w - L - R, h - B - T);
   g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
-  g.fillText('β = b/(KT)', w / 2 - 30, h - 6);
-  g.save(); g.translate(11, h / 2 + 30); g.rotate(-Math.PI / 2); g.fillText('σ = c/(KΔ)', 0, 0); g.restore();
+  g.fillText('β = b/(KT) (dimensionless viscous friction)', w / 2 - 130, h - 6);
+  g.save(); g.translate(11, h / 2 + 110); g.rotate(-Math.PI / 2); g.fillText('σ = c/(KΔ) (dimensionless Coulomb friction)', 0, 0); g.restore();
   for (let i = 0; i <= 4; i++) {
     g.fillText(fmt(bmax * i / 4), X(bmax * i / 4) - 8, h - B + 14);
     g.fillText(fmt(smax * i / 4), 16, Y(smax * i / 4) + 4);
@@ -409,12 +412,12 @@ function drawPlane() {
     if (lim.beta > bmax || lim.sigma > smax) continue;
     const x = X(lim.beta); const y = Y(lim.sigma);
     g.strokeStyle = '#000'; g.beginPath(); g.moveTo(x - 5, y - 5); g.lineTo(x + 5, y + 5); g.moveTo(x + 5, y - 5); g.lineTo(x - 5, y + 5); g.stroke();
-    g.fillStyle = '#000'; g.fillText(`${lim.label} = ${fmt(lim.k)}`, x + 7, y + 4);
+    g.fillStyle = '#000'; g.fillText(`${lim.label} = ${fmt(lim.k)} ${st.hello ? st.hello.units.k : ''}`, x + 7, y + 4);
   }
   if (!p.point) return;
   const px = X(Math.min(beta, bmax)); const py = Y(Math.min(sigma, smax));
   g.fillStyle = '#000'; g.beginPath(); g.arc(px, py, 6, 0, 2 * Math.PI); g.fill();
-  g.fillText(`K = ${fmt(k)}`, px + 9, py - 8);
+  g.fillText(`K = ${fmt(k)} ${st.hello ? st.hello.units.k : ''}`, px + 9, py - 8);
   cv.dataset.beta = String(beta); cv.dataset.sigma = String(sigma);
   cv.dataset.px = px.toFixed(1); cv.dataset.py = py.toFixed(1); cv.dataset.k = String(k);
   cv.dataset.region = p.region;
@@ -450,7 +453,7 @@ function drawFrontier() {
     g.fillStyle = '#9660c8'; g.globalAlpha = 0.35; g.fillRect(X(0), T, w - L - R, Y(qc) - T); g.restore();
     g.strokeStyle = '#6a2c9a'; g.setLineDash([6, 4]); g.beginPath(); g.moveTo(X(0), Y(qc)); g.lineTo(w - R, Y(qc)); g.stroke(); g.setLineDash([]);
     g.fillStyle = '#6a2c9a'; g.font = '12px DejaVu Sans, sans-serif';
-    g.fillText(`quiet ceiling 2c/Δ = ${fmt(qc)}: chatter band above`, X(0) + 6, Math.max(Y(qc) - 4, T + 12));
+    g.fillText(`quiet ceiling 2c/Δ = ${fmt(qc)} ${st.hello ? st.hello.units.k : ''}: chatter band above`, X(0) + 6, Math.max(Y(qc) - 4, T + 12));
     cv.dataset.quietCeiling = String(qc);
   }
   g.strokeStyle = '#000'; g.lineWidth = 2; g.beginPath();
@@ -459,8 +462,8 @@ function drawFrontier() {
   g.strokeStyle = '#333'; g.strokeRect(L, T, w - L - R, h - B - T);
   g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
   const u = st.hello ? st.hello.units : { b: '', k: '' };
-  g.fillText(`B [${u.b || ''}]`, w / 2 - 20, h - 4);
-  g.save(); g.translate(11, h / 2 + 20); g.rotate(-Math.PI / 2); g.fillText(`K [${u.k || ''}]`, 0, 0); g.restore();
+  g.fillText(`B, virtual damping [${u.b || ''}]`, w / 2 - 80, h - 4);
+  g.save(); g.translate(11, h / 2 + 60); g.rotate(-Math.PI / 2); g.fillText(`K, stiffness [${u.k || ''}]`, 0, 0); g.restore();
   for (let i = 0; i <= 4; i++) {
     const lb = fmt(bmax * i / 4);
     g.fillText(lb, Math.min(X(bmax * i / 4) - 8, w - R - g.measureText(lb).width), h - B + 14);
@@ -468,7 +471,8 @@ function drawFrontier() {
   }
   const ox = X(f.b_opt); const oy = Y(f.k_max_opt);
   g.strokeStyle = '#000'; g.beginPath(); g.moveTo(ox - 5, oy - 5); g.lineTo(ox + 5, oy + 5); g.moveTo(ox + 5, oy - 5); g.lineTo(ox - 5, oy + 5); g.stroke();
-  g.fillText(`max K_max = ${fmt(f.k_max_opt)} at B = ${fmt(f.b_opt)}`, Math.min(ox + 7, w - 230), Math.max(oy - 6, T + 12));
+  const best = `max K_max = ${fmt(f.k_max_opt)} ${u.k || ''} at B = ${fmt(f.b_opt)} ${u.b || ''}`;
+  g.fillText(best, Math.min(ox + 7, w - R - g.measureText(best).width), Math.max(oy - 6, T + 12));
   if (!pt) { info.textContent = 'the wall is off: set a stiffness to see the operating point'; return; }
   const px = X(Math.min(pt.b, bmax)); const py = Y(pt.k);
   g.fillStyle = pt.stable ? '#000' : '#b71c1c'; g.beginPath(); g.arc(px, py, 6, 0, 2 * Math.PI); g.fill();
@@ -476,7 +480,7 @@ function drawFrontier() {
   cv.dataset.px = px.toFixed(1); cv.dataset.py = py.toFixed(1);
   cv.dataset.region = pt.region || '';
   const where = { quiet: 'below the quiet ceiling: it can come to rest', chatter: 'in the chatter band: stable, but above the quiet ceiling no count holds the wall, it toggles for ever', growth: 'above K_max(B): it grows' }[pt.region] || '';
-  info.textContent = `B = ${fmt(pt.b)} ${u.b || ''}, K = ${fmt(pt.k)} ${u.k || ''}: K_max(B) = ${fmt(pt.k_max)}, quiet ceiling ${fmt(qc)} — ${where} (the friction-free linear loop and 2c/Δ; the (β, σ) plane has the paper's regions)`;
+  info.textContent = `B = ${fmt(pt.b)} ${u.b || ''}, K = ${fmt(pt.k)} ${u.k || ''}: K_max(B) = ${fmt(pt.k_max)} ${u.k || ''}, quiet ceiling ${fmt(qc)} ${u.k || ''} — ${where} (the friction-free linear loop and 2c/Δ; the (β, σ) plane has the paper's regions)`;
 }
 
 // ---------- release ----------
@@ -580,9 +584,9 @@ function drawMap(m) {
     g.restore();
     g.strokeStyle = '#333'; g.lineWidth = 1; g.strokeRect(L, T, W, H);
     g.fillStyle = '#333'; g.font = '12px DejaVu Sans, sans-serif';
-    g.fillText(`μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}, ξ̇0 = ${p.xidot0}`, L + 4, oy + 14);
-    g.fillText(fmt(b0), L - 4, T + H + 14); g.fillText(fmt(b1), L + W - 36, T + H + 14); g.fillText('β', L + W / 2, T + H + 26);
-    g.fillText(fmt(s1), ox + 2, T + 10); g.fillText(fmt(s0), ox + 2, T + H); g.fillText('σ', ox + 40, T + H / 2);
+    g.fillText(`μ = ${fmt(p.mu)}, τ_D = ${fmt(p.tau_d)}, ξ̇0 = ${p.xidot0} ticks/period`, L + 4, oy + 14);
+    g.fillText(fmt(b0), L - 4, T + H + 14); g.fillText(fmt(b1), L + W - 36, T + H + 14); g.fillText('β = b/(KT)', L + W / 2 - 30, T + H + 26);
+    g.fillText(fmt(s1), ox + 2, T + 10); g.fillText(fmt(s0), ox + 2, T + H); g.save(); g.translate(ox + 44, T + H / 2 + 30); g.rotate(-Math.PI / 2); g.fillText('σ = c/(KΔ)', 0, 0); g.restore();
   });
   cv.dataset.panels = String(n);
 }
