@@ -246,7 +246,7 @@ pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
     );
     let _ = writeln!(
         s,
-        "  operating point K = {:.5e}, B = {:.5e}: {} by the exact linear boundary",
+        "  operating point K = {:.5e} {k_u}, B = {:.5e} {b_u}: {} by the exact linear boundary",
         p.stiffness,
         d.b_set,
         if d.stable { "stable" } else { "UNSTABLE" }
@@ -286,17 +286,24 @@ pub fn render(d: &DampingReport, p: &PhysicalParams) -> String {
     );
     let _ = writeln!(
         s,
-        "  K_max(B), B linear in 0 ..= {FRONTIER_B_MAX_M_PER_T}·m/T:\n  {:>12} {:>12}",
-        "B", "K_max"
+        "  K_max(B), B linear in 0 ..= {FRONTIER_B_MAX_M_PER_T}·m/T:"
     );
-    render_frontier(&mut s, &d.frontier, d.k_max_zero_from_b);
+    render_frontier(&mut s, &d.frontier, d.k_max_zero_from_b, (b_u, k_u));
     s
 }
 
-/// The K_max(B) rows up to the first 0, then one line for the rest.
-pub(crate) fn render_frontier(s: &mut String, frontier: &[FrontierPoint], zero: Option<f64>) {
+/// The K_max(B) rows under a header naming the units (B's and K's), up to the first 0, then
+/// one line for the rest.
+pub(crate) fn render_frontier(
+    s: &mut String,
+    frontier: &[FrontierPoint],
+    zero: Option<f64>,
+    (b_unit, k_unit): (&str, &str),
+) {
+    let (b, k) = (format!("B [{b_unit}]"), format!("K_max [{k_unit}]"));
+    let _ = writeln!(s, "  {b:>16} {k:>16}");
     for pt in frontier.iter().filter(|pt| pt.k_max > 0.0) {
-        let _ = writeln!(s, "  {:>12.4e} {:>12.4e}", pt.b, pt.k_max);
+        let _ = writeln!(s, "  {:>16.4e} {:>16.4e}", pt.b, pt.k_max);
     }
     if let Some(b) = zero {
         let _ = writeln!(

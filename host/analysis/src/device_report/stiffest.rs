@@ -385,8 +385,8 @@ fn render_damped(s: &mut String, r: &Stiffest) {
             );
         }
     }
-    let _ = writeln!(s, "  K_max(B):\n  {:>12} {:>12}", "B", "K_max");
-    damping::render_frontier(s, &r.frontier, r.k_max_zero_from_b);
+    let _ = writeln!(s, "  K_max(B):");
+    damping::render_frontier(s, &r.frontier, r.k_max_zero_from_b, (u.b, u.k));
 }
 
 #[cfg(test)]
