@@ -186,7 +186,8 @@ mod tests {
         };
         assert_eq!(
             page_settings(&bad).unwrap_err(),
-            "max velocity must be finite and > 0 (got -1)"
+            "max velocity must be finite and in [0, 100] m/s, or [0, 1e4] rad/s on a rotary \
+             device, and > 0 (got -1)"
         );
     }
 }
