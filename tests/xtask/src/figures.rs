@@ -191,8 +191,23 @@ fn draw_all(hostctl: &Path, root: &Path, gallery: &Path, scratch: &Path) -> Resu
             let _ = write!(md, "\n![{f}](figures/gallery/{f})\n\n{text}");
         }
     }
+    md.push_str(LIVE_VIEW);
     Ok(md)
 }
+
+/// The live view's panels are drawn by the browser, not by `hostctl`: the page shows the
+/// screenshots that `cargo xtask ui-screenshots` takes (its browser test runs in `ci`).
+const LIVE_VIEW: &str = "\n## hostctl ui: the live view's panels\n\n\
+Drawn by the page in the browser, so not by this xtask: `cargo xtask ui-screenshots` takes \
+these through the browser test that `cargo xtask ci` runs. Traces of position [counts], force \
+[N or N·m] and storage energy H_T/(KΔ²) with the fault bits over time [s]; the (β, σ) plane of \
+the spring wall of the connected device (regions A–E of the spring alone, critical line, the \
+path of the point as K grows, the stiffness limits and the configured K with its unit, a \
+legend under it); the (B, K) frontier of the spring + damper wall (K_max(B), the quiet \
+ceiling 2c/Δ, the chatter band, the best B and the configured (B, K) with units, a legend \
+under it); the map viewer's panels (β = b/(KT), σ = c/(KΔ), ξ̇0 in ticks/period).\n\n\
+![ui-overview.png](figures/ui-overview.png)\n\n\
+![ui-map.png](figures/ui-map.png)\n";
 
 const HEADER: &str = "# Figure gallery\n\n\
 Every kind of figure the `hostctl` commands write, drawn on a preset and, where the command \
