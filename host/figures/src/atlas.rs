@@ -136,15 +136,8 @@ where
     let (sy0, sy1) = (s.sigma.lo - ds / 2.0, s.sigma.hi + ds / 2.0);
     let d = f.describe();
     let body = layout::titled(root, &d.title)?;
-    let keys: Vec<(Glyph, String)> = f
-        .entries()
-        .into_iter()
-        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-        .collect::<DrawResult<_>>()?;
-    let (w, _) = body.dim_in_pixel();
-    let texts: Vec<String> = keys.iter().map(|k| k.1.clone()).collect();
-    let (top, body) = body.split_vertically(layout::legend_height(&body, &texts, w - 20));
-    layout::legend(&top.margin(0, 4, 10, 10), &keys)?;
+    let keys = layout::keys(&d, f.entries())?;
+    let body = layout::legend_above(&body, &keys)?;
     let mut chart = ChartBuilder::on(&body)
         .margin(10)
         .x_label_area_size(45)
@@ -308,10 +301,6 @@ where
             chart.draw_series(pts.iter().map(|&q| Circle::new(q, 3, color.filled())))?;
         }
     }
-    let entries: Vec<(Glyph, String)> = f
-        .entries()
-        .into_iter()
-        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-        .collect::<DrawResult<_>>()?;
+    let entries = layout::keys(&d, f.entries())?;
     layout::legend(&right.margin(14, 0, 0, 8), &entries)
 }

@@ -194,10 +194,7 @@ impl Figure for Frontier {
             chart.draw_series(DashedLineSeries::new(vec![(0.0, k), (x1, k)], 8, 5, style))?;
         }
         draw_points(self, &mut chart)?;
-        let keys: Vec<(Glyph, String)> = entries(self)
-            .into_iter()
-            .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-            .collect::<DrawResult<_>>()?;
+        let keys = layout::keys(&d, entries(self))?;
         layout::legend(&right.margin(14, 0, 0, 8), &keys)
     }
 }

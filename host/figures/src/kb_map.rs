@@ -140,11 +140,7 @@ impl Figure for KbFigure<'_> {
         }
         let line: Vec<(f64, f64)> = m.boundary.iter().map(|p| (p.b, p.k_max)).collect();
         kb_plot::draw_boundary(&mut chart, &line, (y0, y1))?;
-        let keys: Vec<(Glyph, String)> = self
-            .entries()
-            .into_iter()
-            .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-            .collect::<DrawResult<_>>()?;
+        let keys = layout::keys(&d, self.entries())?;
         layout::legend(&right.margin(14, 0, 0, 8), &keys)
     }
 }

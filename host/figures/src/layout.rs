@@ -6,6 +6,7 @@
 //! wider than the area stands alone on its line. The legend draws exactly the entries given, in
 //! order, each with the glyph of its series.
 
+use crate::describe::Description;
 use crate::figure::DrawResult;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -188,6 +189,40 @@ where
         Glyph::Triangle(c) => area.draw(&TriangleMarker::new((x + 11, y), 7, c.filled()))?,
     }
     Ok(())
+}
+
+/// The legend's keys of a figure: each `(glyph, label)` of `entries` checked against the
+/// figure's description `d` ([`Description::entry`]), so no series is drawn without its legend
+/// entry.
+///
+/// # Errors
+/// A label the description does not list.
+pub fn keys(
+    d: &Description,
+    entries: impl IntoIterator<Item = (Glyph, String)>,
+) -> DrawResult<Vec<(Glyph, String)>> {
+    entries
+        .into_iter()
+        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
+        .collect()
+}
+
+/// Draws the legend `keys` across the top of `body` and returns the area below it.
+///
+/// # Errors
+/// A drawing error.
+pub fn legend_above<DB: DrawingBackend>(
+    body: &DrawingArea<DB, Shift>,
+    keys: &[(Glyph, String)],
+) -> DrawResult<DrawingArea<DB, Shift>>
+where
+    DB::ErrorType: 'static,
+{
+    let (w, _) = body.dim_in_pixel();
+    let texts: Vec<String> = keys.iter().map(|k| k.1.clone()).collect();
+    let (top, below) = body.split_vertically(legend_height(body, &texts, w - 20));
+    legend(&top.margin(0, 4, 10, 10), keys)?;
+    Ok(below)
 }
 
 /// Draws the legend `entries` (glyph, text) into `area`, top to bottom, each text wrapped to

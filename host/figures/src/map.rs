@@ -193,15 +193,8 @@ where
     root.fill(&WHITE)?;
     let d = f.describe();
     let body = layout::titled(root, &d.title)?;
-    let keys: Vec<(Glyph, String)> = f
-        .entries()
-        .into_iter()
-        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-        .collect::<DrawResult<_>>()?;
-    let (w, _) = body.dim_in_pixel();
-    let texts: Vec<String> = keys.iter().map(|k| k.1.clone()).collect();
-    let (top, panels) = body.split_vertically(layout::legend_height(&body, &texts, w - 20));
-    layout::legend(&top.margin(0, 4, 10, 10), &keys)?;
+    let keys = layout::keys(&d, f.entries())?;
+    let panels = layout::legend_above(&body, &keys)?;
     let (cols, rows) = f.grid();
     let s = &f.map.spec;
     let (db, ds) = (

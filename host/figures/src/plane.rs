@@ -324,10 +324,7 @@ where
     draw_regions(&mut chart, p, &win)?;
     draw_path(&mut chart, r, &win)?;
     draw_point(&mut chart, p)?;
-    let keys: Vec<(Glyph, String)> = entries(p)
-        .into_iter()
-        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-        .collect::<DrawResult<_>>()?;
+    let keys = layout::keys(&d, entries(p))?;
     layout::legend(&right.margin(14, 0, 0, 8), &keys)
 }
 

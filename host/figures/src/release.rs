@@ -149,11 +149,7 @@ where
         None => root.clone(),
     };
     let body = layout::titled(&right, &d.title)?;
-    let keys: Vec<(Glyph, String)> = f
-        .entries()
-        .into_iter()
-        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-        .collect::<DrawResult<_>>()?;
+    let keys = layout::keys(&d, f.entries())?;
     let (w, _) = body.dim_in_pixel();
     let texts: Vec<String> = keys.iter().map(|k| k.1.clone()).collect();
     let lh = layout::legend_height(&body, &texts, w - 30);

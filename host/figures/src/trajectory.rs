@@ -121,10 +121,7 @@ where
     root.fill(&WHITE)?;
     let d = f.describe();
     let body = layout::titled(root, &d.title)?;
-    let keys: Vec<(Glyph, String)> = entries()
-        .into_iter()
-        .map(|(g, e)| d.entry(&e).map(|e| (g, e)))
-        .collect::<DrawResult<_>>()?;
+    let keys = layout::keys(&d, entries())?;
     let (w, h) = body.dim_in_pixel();
     let (plots, right) = body.split_horizontally(w.saturating_sub(300));
     let right = right.margin(14, 0, 0, 8);
