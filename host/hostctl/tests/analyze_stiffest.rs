@@ -8,28 +8,18 @@
 //! 0.752–0.798 and 0.764–1.340 (delta: its spring rests above the describing function's
 //! limit). Three presets run here (a linear capped one, the rotary uncapped one, delta).
 
-use std::process::{Command, Output};
+#[path = "support/cli.rs"]
+mod cli;
+use cli::hostctl;
 
 /// Tune's set K over analyze's prediction at tune's B (README.md, analyze row).
 const DAMPED_MARGIN: (f64, f64) = (0.70, 0.85);
 /// Tune's spring-only K over analyze's spring-only prediction (README.md, analyze row).
 const SPRING_MARGIN: (f64, f64) = (0.70, 1.40);
 
-fn hostctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hostctl"))
-        .args(args)
-        .output()
-        .expect("run hostctl")
-}
-
+/// `hostctl ARGS --json`'s document (the run must succeed).
 fn json(args: &[&str]) -> serde_json::Value {
-    let out = hostctl(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON")
+    cli::json(&cli::ok(args))
 }
 
 fn num(v: &serde_json::Value, path: &[&str]) -> f64 {

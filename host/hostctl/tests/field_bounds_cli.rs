@@ -3,15 +3,11 @@
 //! nothing is written; the README's examples are inside the ranges.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 use stiffwall_sim::scene::field_bounds::{self as fb, FieldBounds};
 
-fn hostctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hostctl"))
-        .args(args)
-        .output()
-        .expect("run hostctl")
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::hostctl;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("stiffwall-bounds-{}", std::process::id()));
