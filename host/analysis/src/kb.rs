@@ -77,15 +77,6 @@ fn as_text<S: serde::Serializer>(d: &WallDamper, s: S) -> Result<S::Ok, S::Error
     s.collect_str(d)
 }
 
-/// The law's dead band in counts per period (0: the plain difference).
-#[must_use]
-pub fn dead_band(d: WallDamper) -> u8 {
-    match d {
-        WallDamper::Difference => 0,
-        WallDamper::DeadBand(n) => n,
-    }
-}
-
 /// One classified (K, B) point.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct KbPoint {
@@ -272,7 +263,7 @@ fn point(plant: &Plant, spec: &KbSpec, index: usize) -> KbPoint {
     let (d, beta_v) = plant
         .at(k, b)
         .unwrap_or((stiffwall_sim::Params::BASE, f64::NAN));
-    let law = (beta_v, dead_band(spec.damper));
+    let law = (beta_v, spec.damper.dead_band());
     let o = smap::simulate_point_law(d, spec.xidot0, spec.periods, spec.history, law);
     let phys = plant.physical(k);
     KbPoint {

@@ -158,6 +158,16 @@ pub enum WallDamper {
 }
 
 impl WallDamper {
+    /// The dead band in counts per tick: 0 for the plain difference (the exact solver's
+    /// `Exact::with_dead_band` argument).
+    #[must_use]
+    pub fn dead_band(self) -> u8 {
+        match self {
+            Self::Difference => 0,
+            Self::DeadBand(n) => n,
+        }
+    }
+
     /// Parses `"difference"` or `"dead-band-N"` (N decimal without sign or leading zeros, in
     /// 1..=[`MAX_DAMPER_DEAD_BAND`]); `None` for anything else.
     #[must_use]

@@ -73,13 +73,14 @@ pub struct KbArgs {
 /// The damper law of the map: `--damper`, else the plant file's, else the firmware's default.
 #[must_use]
 pub fn damper_of(a: &KbArgs, plant: &Plant) -> WallDamper {
-    match a.damper {
-        Some(DamperLaw::Difference) => WallDamper::Difference,
-        Some(DamperLaw::DeadBand { counts }) => WallDamper::DeadBand(counts),
-        None => plant.damper.unwrap_or(match DamperLaw::default() {
-            DamperLaw::Difference => WallDamper::Difference,
-            DamperLaw::DeadBand { counts } => WallDamper::DeadBand(counts),
-        }),
+    let law = match (a.damper, plant.damper) {
+        (Some(law), _) => law,
+        (None, Some(file)) => return file,
+        (None, None) => DamperLaw::default(),
+    };
+    match law {
+        DamperLaw::Difference => WallDamper::Difference,
+        DamperLaw::DeadBand { counts } => WallDamper::DeadBand(counts),
     }
 }
 
