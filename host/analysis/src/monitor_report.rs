@@ -126,8 +126,6 @@ pub fn monitor_recording(
         m: EnergyMonitor::default(),
         growing: false,
         over: false,
-        k: f64::from(cfg.stiffness),
-        de,
     };
     let one_sided = cfg.wall == WallMode::OneSided;
     for seg in rec.segments() {
@@ -176,10 +174,6 @@ struct Tracker<'a> {
     growing: bool,
     /// The limit fault was raised at the last update.
     over: bool,
-    /// The wall's stiffness K (the storage function's scale), N/m or N·m/rad.
-    k: f64,
-    /// The effective count Δ_eff, m or rad.
-    de: f64,
 }
 
 impl Tracker<'_> {
@@ -201,7 +195,7 @@ impl Tracker<'_> {
             r.max_e8 = Some((e8, s.tick));
         }
         let score = self.m.score();
-        let (k, de) = (self.k, self.de);
+        let e8_j = r.e8_j;
         let mut event = |fault: &'static str, (peak_n, peak_e8): (i32, u64)| {
             r.events.push(MonitorEvent {
                 fault,
@@ -211,7 +205,7 @@ impl Tracker<'_> {
                 score,
                 peak_n,
                 peak_e8,
-                peak_energy_j: peak_e8 as f64 * k * de * de / 8.0,
+                peak_energy_j: peak_e8 as f64 * e8_j,
                 device_latched_here: latched_here,
             });
         };
