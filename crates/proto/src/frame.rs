@@ -342,13 +342,13 @@ mod tests {
     /// Issue 11, item 6: an over-long varint tag (`84 00` for 4) is not LoadDefaults.
     #[test]
     fn overlong_varint_tag_is_refused() {
-        // Version 4, the tag `84 00`, the CRC; COBS: `03` (two bytes, then the 0x00), `05`
+        // Version 5, the tag `84 00`, the CRC; COBS: `03` (two bytes, then the 0x00), `05`
         // (the four CRC bytes).
-        let frame = [0x03, 0x04, 0x84, 0x05, 0x81, 0x2c, 0xa7, 0xa7, 0x00];
-        // The CRC is right (zlib.crc32(b'\x04\x84\x00')): only the encoding is wrong.
+        let frame = [0x03, 0x05, 0x84, 0x05, 0xb6, 0x46, 0x65, 0xa6, 0x00];
+        // The CRC is right (zlib.crc32(b'\x05\x84\x00')): only the encoding is wrong.
         assert_eq!(
-            CRC32.checksum(&[0x04, 0x84, 0x00]).to_le_bytes(),
-            [0x81, 0x2c, 0xa7, 0xa7]
+            CRC32.checksum(&[0x05, 0x84, 0x00]).to_le_bytes(),
+            [0xb6, 0x46, 0x65, 0xa6]
         );
         assert_eq!(decode_bytes(&frame), Err(FrameError::Deserialize));
         // The canonical form of the same message decodes.
@@ -361,9 +361,9 @@ mod tests {
     /// not `UnknownTag(4294967295)`.
     #[test]
     fn varint_overflow_in_fifth_byte_is_a_decode_error() {
-        // Version 4, the five varint bytes, zlib.crc32(b'\x04\xff\xff\xff\xff\x7f') LE.
+        // Version 5, the five varint bytes, zlib.crc32(b'\x05\xff\xff\xff\xff\x7f') LE.
         let frame = [
-            0x0b, 0x04, 0xff, 0xff, 0xff, 0xff, 0x7f, 0xfa, 0x87, 0x34, 0xd3, 0x00,
+            0x0b, 0x05, 0xff, 0xff, 0xff, 0xff, 0x7f, 0x5f, 0x54, 0x68, 0x18, 0x00,
         ];
         assert_eq!(decode_bytes(&frame), Err(FrameError::Deserialize));
         // The largest u32 (fifth byte 0x0f) is a valid varint, hence an unknown tag.
@@ -376,14 +376,14 @@ mod tests {
     #[test]
     fn overlong_varint_in_a_field_is_refused() {
         // StreamStart (tag 5) with decimation 1 written as `81 00`.
-        let payload_body = [0x04u8, 0x05, 0x81, 0x00];
+        let payload_body = [0x05u8, 0x05, 0x81, 0x00];
         let mut payload = payload_body.to_vec();
         payload.extend(CRC32.checksum(&payload_body).to_le_bytes());
         assert_eq!(
             decode_payload::<HostMsg>(&payload),
             Err(FrameError::Deserialize)
         );
-        let canonical_body = [0x04u8, 0x05, 0x01];
+        let canonical_body = [0x05u8, 0x05, 0x01];
         let mut payload = canonical_body.to_vec();
         payload.extend(CRC32.checksum(&canonical_body).to_le_bytes());
         assert_eq!(
@@ -422,12 +422,12 @@ mod tests {
 
     #[test]
     fn heartbeat_literal_bytes() {
-        // payload = [version 4, tag 10 (Heartbeat)] ++ CRC-32 LE.
+        // payload = [version 5, tag 10 (Heartbeat)] ++ CRC-32 LE.
         let mut out = [0u8; 32];
         let f = encode(&HostMsg::Heartbeat, &mut out).unwrap();
-        let crc = CRC32.checksum(&[4, 10]).to_le_bytes();
-        assert_eq!(crc, [0xe5, 0x3e, 0x60, 0xc5]); // zlib.crc32(b'\x04\x0a')
-        assert_eq!(f, &[0x07, 0x04, 0x0a, 0xe5, 0x3e, 0x60, 0xc5, 0x00]);
+        let crc = CRC32.checksum(&[5, 10]).to_le_bytes();
+        assert_eq!(crc, [0xa4, 0x0f, 0x7b, 0xdc]); // zlib.crc32(b'\x05\x0a')
+        assert_eq!(f, &[0x07, 0x05, 0x0a, 0xa4, 0x0f, 0x7b, 0xdc, 0x00]);
         let mut d = FrameDecoder::new();
         let mut r = None;
         for &b in f {
@@ -438,13 +438,13 @@ mod tests {
 
     #[test]
     fn stream_start_literal_bytes() {
-        // StreamStart is tag 5, decimation 300 = varint [0xac, 0x02]; version 4;
-        // zlib.crc32(b'\x04\x05\xac\x02') LE.
+        // StreamStart is tag 5, decimation 300 = varint [0xac, 0x02]; version 5;
+        // zlib.crc32(b'\x05\x05\xac\x02') LE.
         let mut out = [0u8; 32];
         let f = encode(&HostMsg::StreamStart { decimation: 300 }, &mut out).unwrap();
         assert_eq!(
             f,
-            &[0x09, 0x04, 0x05, 0xac, 0x02, 0x69, 0x18, 0x51, 0x44, 0x00]
+            &[0x09, 0x05, 0x05, 0xac, 0x02, 0x0c, 0x7f, 0xed, 0xfc, 0x00]
         );
     }
 
@@ -476,7 +476,7 @@ mod tests {
     fn errors_are_distinct() {
         let mut d = FrameDecoder::new();
         // Bad CRC.
-        let bad_crc = [0x07, 0x04, 0x0a, 0xe5, 0x3e, 0x60, 0xc4, 0x00];
+        let bad_crc = [0x07, 0x05, 0x0a, 0xa4, 0x0f, 0x7b, 0xdd, 0x00];
         let r: std::vec::Vec<_> = bad_crc
             .iter()
             .filter_map(|&b| d.feed::<HostMsg>(b))
@@ -484,7 +484,7 @@ mod tests {
         assert_eq!(r, [Err(FrameError::Crc)]);
         // Versions 1 and 2 (a host or device of protocol 1 or 2).
         let mut enc = [0u8; 16];
-        for old in [1u8, 2, 3] {
+        for old in [1u8, 2, 3, 4] {
             let crc = CRC32.checksum(&[old, 10]).to_le_bytes();
             let mut p = std::vec![old, 10];
             p.extend_from_slice(&crc);
@@ -497,8 +497,8 @@ mod tests {
             assert_eq!(r, [Err(FrameError::VersionMismatch { got: old })]);
         }
         // Unknown tag 99.
-        let crc = CRC32.checksum(&[4, 99]).to_le_bytes();
-        let mut p = std::vec![4u8, 99];
+        let crc = CRC32.checksum(&[5, 99]).to_le_bytes();
+        let mut p = std::vec![5u8, 99];
         p.extend_from_slice(&crc);
         let n = cobs::encode(&p, &mut enc);
         let r: std::vec::Vec<_> = enc[..n]
@@ -508,8 +508,8 @@ mod tests {
             .collect();
         assert_eq!(r, [Err(FrameError::UnknownTag(99))]);
         // Truncated body: StreamStart without decimation.
-        let crc = CRC32.checksum(&[4, 5]).to_le_bytes();
-        let mut p = std::vec![4u8, 5];
+        let crc = CRC32.checksum(&[5, 5]).to_le_bytes();
+        let mut p = std::vec![5u8, 5];
         p.extend_from_slice(&crc);
         let n = cobs::encode(&p, &mut enc);
         let r: std::vec::Vec<_> = enc[..n]
@@ -530,7 +530,7 @@ mod tests {
             r.extend(d.feed::<HostMsg>(0x55));
         }
         r.extend(d.feed::<HostMsg>(0));
-        for &b in &[0x07, 0x04, 0x0a, 0xe5, 0x3e, 0x60, 0xc5, 0x00] {
+        for &b in &[0x07, 0x05, 0x0a, 0xa4, 0x0f, 0x7b, 0xdc, 0x00] {
             r.extend(d.feed::<HostMsg>(b));
         }
         assert_eq!(r, [Err(FrameError::Oversize), Ok(HostMsg::Heartbeat)]);

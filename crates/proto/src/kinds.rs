@@ -30,11 +30,13 @@ impl HostMsg {
             Self::Shutdown { .. } => "Shutdown",
             Self::Impact { .. } => "Impact",
             Self::PrepareTest { .. } => "PrepareTest",
+            Self::SetProfile(_) => "SetProfile",
+            Self::GetProfile => "GetProfile",
         }
     }
 
     /// The [`Request`] a device's `Ack` to this message carries; `None` for the messages
-    /// answered otherwise (`Hello`, `GetConfig`, `LoadDefaults`, `GetFaults`).
+    /// answered otherwise (`Hello`, `GetConfig`, `LoadDefaults`, `GetFaults`, `GetProfile`).
     #[must_use]
     pub fn ack_kind(&self) -> Option<Request> {
         Some(match self {
@@ -51,9 +53,12 @@ impl HostMsg {
             Self::Shutdown { .. } => Request::Shutdown,
             Self::Impact { .. } => Request::Impact,
             Self::PrepareTest { .. } => Request::PrepareTest,
-            Self::Hello { .. } | Self::GetConfig | Self::LoadDefaults | Self::GetFaults => {
-                return None
-            }
+            Self::SetProfile(_) => Request::SetProfile,
+            Self::Hello { .. }
+            | Self::GetConfig
+            | Self::LoadDefaults
+            | Self::GetFaults
+            | Self::GetProfile => return None,
         })
     }
 }
@@ -70,6 +75,7 @@ impl DeviceMsg {
             Self::Faults(_) => "Faults",
             Self::ExperimentDone { .. } => "ExperimentDone",
             Self::Error { .. } => "Error",
+            Self::Profile(_) => "Profile",
         }
     }
 }

@@ -5,6 +5,8 @@
 //!   servo configuration, serialized with postcard. Physical quantities are SI (`f32`); force
 //!   and position on the device side are output codes and encoder counts, named as such.
 //! - [`damper`]: the virtual damper's law in the servo configuration and its text form.
+//! - [`profile`]: a haptic profile (walls, springs, detents, viscous zones) and each element's
+//!   force law (protocol 5).
 //! - [`kinds`]: what a message is, as values (its name, the request an `Ack` echoes, which
 //!   error codes are framing errors and which are transient).
 //! - [`frame`]: the framing. One frame on the wire is
@@ -24,7 +26,9 @@ pub mod damper;
 pub mod frame;
 pub mod kinds;
 pub mod msg;
+pub mod profile;
 
 pub use damper::{DamperLaw, ParseDamperLawError, LAW_NAME_LEN, MAX_DEADBAND_COUNTS};
 pub use frame::{encode, FrameDecoder, FrameError, Message, MAX_FRAME, MAX_PAYLOAD};
 pub use msg::*;
+pub use profile::{Profile, ProfileElement, ProfileField, Side, MAX_DETENTS, MAX_PROFILE_ELEMENTS};

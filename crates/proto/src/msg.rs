@@ -15,6 +15,7 @@ use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
 use crate::damper::DamperLaw;
+use crate::profile::{Profile, ProfileField};
 
 /// Protocol version carried in the first byte of every frame and in the handshake.
 /// Bump on any incompatible change of a message or of the framing.
@@ -30,7 +31,11 @@ use crate::damper::DamperLaw;
 /// Version 4: [`ErrorCode::QueueFull`] answers a request the servo's command queue had no room
 /// for (before: `Busy` with the text "servo queue full", which a host could only recognise by
 /// its text); a version-3 host would not decode it, so the handshake refuses one.
-pub const PROTOCOL_VERSION: u8 = 4;
+///
+/// Version 5: haptic profiles ([`crate::profile`]): [`HostMsg::SetProfile`],
+/// [`HostMsg::GetProfile`], [`DeviceMsg::Profile`], [`Request::SetProfile`],
+/// [`ErrorCode::InvalidProfile`] and [`ErrorDetail::ProfileField`], all appended.
+pub const PROTOCOL_VERSION: u8 = 5;
 
 /// Telemetry samples per [`TelemetryBatch`].
 pub const TELEMETRY_BATCH: usize = 24;
@@ -166,6 +171,15 @@ pub enum HostMsg {
         /// Base length b of the decay checkpoints, servo ticks, 0..=10⁷ (0 = none).
         decay_base_ticks: u32,
     },
+    /// Validate and apply a haptic profile (protocol 5; not persisted until `SaveConfig`,
+    /// which saves it with the config). The servo takes it between two ticks, whole: no tick
+    /// renders part of it. An empty profile renders the config's own wall again. Answer: `Ack`;
+    /// `Error(InvalidProfile)` with [`ErrorDetail::ProfileField`] naming the element, its field
+    /// and the allowed range (a refused profile changes nothing); `Error(Busy)` while an
+    /// experiment runs.
+    SetProfile(Profile),
+    /// Read the active profile (protocol 5). Answer: [`DeviceMsg::Profile`].
+    GetProfile,
 }
 
 /// Messages from the device to the host.
@@ -199,6 +213,8 @@ pub enum DeviceMsg {
         /// Details (field and range, versions, tag).
         detail: ErrorDetail,
     },
+    /// The active haptic profile (protocol 5; empty: the config's wall).
+    Profile(Profile),
 }
 
 /// Request kinds, echoed in [`DeviceMsg::Ack`].
@@ -219,6 +235,8 @@ pub enum Request {
     Shutdown,
     Impact,
     PrepareTest,
+    /// `SetProfile` (protocol 5).
+    SetProfile,
 }
 
 /// Experiment kinds.
@@ -555,6 +573,8 @@ pub enum ErrorCode {
     /// The servo's command queue is full (it takes one command per tick): transient, the
     /// request may be repeated unchanged (protocol version 4).
     QueueFull,
+    /// `SetProfile` refused: see detail ([`ErrorDetail::ProfileField`]; protocol 5).
+    InvalidProfile,
 }
 
 /// Fields of [`ServoConfig`] (for error details).
@@ -654,6 +674,18 @@ pub enum ErrorDetail {
     Repeated {
         /// Bad frames this reply stands for.
         count: u32,
+    },
+    /// A profile element's field outside its allowed range `[min, max]` (or not finite;
+    /// protocol 5).
+    ProfileField {
+        /// The element's index in the profile (0-based).
+        element: u8,
+        /// Which field.
+        field: ProfileField,
+        /// Smallest allowed value.
+        min: f64,
+        /// Largest allowed value.
+        max: f64,
     },
 }
 

@@ -190,6 +190,11 @@ impl<S: ConfigStorage> Device<'_, S> {
                 ack(Request::Heartbeat)
             }
             HostMsg::GetFaults => self.fault_report(),
+            // Protocol 5's profile messages: refused until the servo renders profiles.
+            HostMsg::SetProfile(_) | HostMsg::GetProfile => DeviceMsg::Error {
+                code: ErrorCode::InvalidProfile,
+                detail: ErrorDetail::None,
+            },
             HostMsg::ClearFaults => self.queued(ServoCmd::ClearFaults, Request::ClearFaults),
             HostMsg::Stop => self.queued(ServoCmd::Stop, Request::Stop),
             HostMsg::Shutdown { exit_code } => {

@@ -28,6 +28,7 @@ pub fn describe_error_named(code: ErrorCode, detail: &ErrorDetail, label: FieldL
         ErrorCode::Busy => "device busy",
         ErrorCode::InvalidArgument => "argument out of range",
         ErrorCode::QueueFull => "the servo's command queue is full",
+        ErrorCode::InvalidProfile => "profile refused",
     };
     match detail {
         ErrorDetail::None => what.to_string(),
@@ -64,6 +65,16 @@ pub fn describe_error_named(code: ErrorCode, detail: &ErrorDetail, label: FieldL
         ErrorDetail::Tag(t) => format!("{what}: tag {t}"),
         ErrorDetail::Text(t) => format!("{what}: {t}"),
         ErrorDetail::Repeated { count } => format!("{what} ({count} frames in a row)"),
+        ErrorDetail::ProfileField {
+            element,
+            field,
+            min,
+            max,
+        } => format!(
+            "{what}: element {element}: {field} must be within [{}, {}]",
+            readable(*min),
+            readable(*max)
+        ),
     }
 }
 
