@@ -62,7 +62,7 @@ fn stages<N: Numeric>(c: &mut Criterion) {
     let name = N::NAME;
     let mut g = c.benchmark_group(format!("servo_tick/{name}"));
     {
-        let mut ch = Channels::new();
+        let mut ch = Channels::<N>::for_numeric();
         let (sp, _hp) = ch.split();
         let mut s: Servo<'_, N> = Servo::new(board, &cfg(), sp);
         let (mut e, mut o) = (enc(), Sink(0));
@@ -82,7 +82,7 @@ fn stages<N: Numeric>(c: &mut Criterion) {
     }
     {
         // Full tick with telemetry every tick; the consumer drains so the push succeeds.
-        let mut ch = Channels::new();
+        let mut ch = Channels::<N>::for_numeric();
         let (sp, mut hp) = ch.split();
         let mut s: Servo<'_, N> = Servo::new(board, &cfg(), sp);
         s.command(0, stiffwall_firmware::ServoCmd::Stream { decimation: 1 });

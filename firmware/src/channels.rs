@@ -7,11 +7,18 @@
 //! Invariants: the servo is the single producer of telemetry and events and the single consumer
 //! of commands ([`ServoPort`]); the main loop is the other end ([`HostPort`]). Neither end
 //! blocks or allocates; a full queue refuses the item (the servo counts dropped samples in
-//! [`Shared::dropped`]). This module imports nothing else of the crate.
+//! [`Shared::dropped`]). A compiled haptic profile travels in a queue of its own
+//! (`ProfileTable`s are kilobytes: in [`ServoCmd`] they would make every command's copy out of
+//! the queue that long), announced by one [`ServoCmd::Profile`] in the command queue, so it
+//! takes effect in order with the configs around it, whole, between two ticks. The channels are
+//! generic over the servo's numeric back-end `N` (the table's gain forms), `Fx64` by default.
+//! This module imports only the numeric back-ends and the profile table of the crate.
 
 use core::sync::atomic::{AtomicBool, AtomicU32};
 // heapless 0.8's SPSC queue: its capacity is a const generic, so enqueue/dequeue have no
 // division by a runtime capacity (0.9's has one, a panic path; see the workspace Cargo.toml).
+use crate::numeric::{Fx64, Numeric};
+use crate::profile::ProfileTable;
 use heapless::Vec;
 use heapless08::spsc::{Consumer, Producer, Queue};
 use stiffwall_proto::{ExciteProfile, ExperimentKind, Sample, ServoConfig, TABLE_CHUNK};
@@ -22,6 +29,8 @@ pub const TELEMETRY_QUEUE: usize = 256;
 pub const COMMAND_QUEUE: usize = 4;
 /// Event queue length.
 pub const EVENT_QUEUE: usize = 8;
+/// Profile queue length (one compiled profile in flight).
+pub const PROFILE_QUEUE: usize = 2;
 
 /// A telemetry sample with its sample number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -88,6 +97,9 @@ pub enum ServoCmd {
     ClearFaults,
     /// Abort the running experiment.
     Stop,
+    /// Take the next compiled profile from the profile queue and render it (an empty one
+    /// renders the config's wall again). Enqueued after its table.
+    Profile,
 }
 
 /// A release or impact test prepared by `HostMsg::PrepareTest`: run with `run` from its first
@@ -159,14 +171,15 @@ impl Shared {
 
 /// The queues and shared state between the servo (interrupt) and the main loop. Allocate it
 /// statically (e.g. `static_cell`) on a board, or on the stack in tests, then [`Channels::split`].
-pub struct Channels {
+pub struct Channels<N: Numeric = Fx64> {
     telemetry: Queue<TelemetryItem, TELEMETRY_QUEUE>,
     commands: Queue<ServoCmd, COMMAND_QUEUE>,
     events: Queue<ServoEvent, EVENT_QUEUE>,
+    profiles: Queue<ProfileTable<N>, PROFILE_QUEUE>,
     shared: Shared,
 }
 
-impl core::fmt::Debug for Channels {
+impl<N: Numeric> core::fmt::Debug for Channels<N> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Channels")
             .field("shared", &self.shared)
@@ -181,40 +194,53 @@ impl Default for Channels {
 }
 
 impl Channels {
-    /// Empty queues.
+    /// Empty queues, for the default back-end (`Fx64`).
     #[must_use]
     pub const fn new() -> Self {
+        Self::for_numeric()
+    }
+}
+
+impl<N: Numeric> Channels<N> {
+    /// Empty queues, for a servo of back-end `N`.
+    #[must_use]
+    pub const fn for_numeric() -> Self {
         Self {
             telemetry: Queue::new(),
             commands: Queue::new(),
             events: Queue::new(),
+            profiles: Queue::new(),
             shared: Shared::new(),
         }
     }
 
     /// The servo's end and the main loop's end.
-    pub fn split(&mut self) -> (ServoPort<'_>, HostPort<'_>) {
+    pub fn split(&mut self) -> (ServoPort<'_, N>, HostPort<'_, N>) {
         let Channels {
             telemetry,
             commands,
             events,
+            profiles,
             shared,
         } = self;
         let shared: &Shared = shared;
         let (tp, tc) = telemetry.split();
         let (cp, cc) = commands.split();
         let (ep, ec) = events.split();
+        let (pp, pc) = profiles.split();
         (
             ServoPort {
                 telemetry: tp,
                 commands: cc,
                 events: ep,
+                profiles: pc,
                 shared,
             },
             HostPort {
                 telemetry: tc,
                 commands: cp,
                 events: ec,
+                profiles: pp,
                 shared,
             },
         )
@@ -222,26 +248,29 @@ impl Channels {
 }
 
 /// The servo's end of [`Channels`].
-pub struct ServoPort<'a> {
+pub struct ServoPort<'a, N: Numeric = Fx64> {
     pub(crate) telemetry: Producer<'a, TelemetryItem, TELEMETRY_QUEUE>,
     pub(crate) commands: Consumer<'a, ServoCmd, COMMAND_QUEUE>,
     pub(crate) events: Producer<'a, ServoEvent, EVENT_QUEUE>,
+    pub(crate) profiles: Consumer<'a, ProfileTable<N>, PROFILE_QUEUE>,
     pub(crate) shared: &'a Shared,
 }
 
 /// The main loop's end of [`Channels`].
-pub struct HostPort<'a> {
+pub struct HostPort<'a, N: Numeric = Fx64> {
     /// Telemetry samples from the servo.
     pub telemetry: Consumer<'a, TelemetryItem, TELEMETRY_QUEUE>,
     /// Commands to the servo.
     pub commands: Producer<'a, ServoCmd, COMMAND_QUEUE>,
     /// Events from the servo.
     pub events: Consumer<'a, ServoEvent, EVENT_QUEUE>,
+    /// Compiled profiles to the servo (each announced by a [`ServoCmd::Profile`]).
+    pub profiles: Producer<'a, ProfileTable<N>, PROFILE_QUEUE>,
     /// Shared atomics.
     pub shared: &'a Shared,
 }
 
-impl core::fmt::Debug for ServoPort<'_> {
+impl<N: Numeric> core::fmt::Debug for ServoPort<'_, N> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("ServoPort")
             .field("shared", self.shared)
@@ -249,7 +278,7 @@ impl core::fmt::Debug for ServoPort<'_> {
     }
 }
 
-impl core::fmt::Debug for HostPort<'_> {
+impl<N: Numeric> core::fmt::Debug for HostPort<'_, N> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("HostPort")
             .field("shared", self.shared)

@@ -23,6 +23,8 @@ pub(crate) enum Mode {
     Released,
     /// Holding or exciting.
     Other,
+    /// The haptic profile (no experiment; a profile is active).
+    Profile,
 }
 
 /// The running experiment.

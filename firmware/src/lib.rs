@@ -103,6 +103,7 @@ pub mod device;
 pub mod experiment;
 pub mod hal;
 pub mod numeric;
+pub mod profile;
 pub mod servo;
 pub mod store;
 
@@ -116,6 +117,7 @@ pub use hal::{
     ByteLink, ConfigStorage, Encoder, ForceOutput, HeldCode, NoStorage, SampledCount, StorageError,
 };
 pub use numeric::{Fx32, Fx64, Numeric, F32};
+pub use profile::{ProfileError, ProfileTable};
 pub use servo::Servo;
 /// The energy monitor (the dissipation check, eq. (35)), from `stiffwall-core`.
 pub use stiffwall_core::monitor;

@@ -20,6 +20,19 @@
 //! bounded work. Time is only the `now` argument. It is the single producer of the telemetry
 //! and event queues and the single consumer of the command queue ([`Channels`](crate::Channels)).
 //!
+//! Profile mode (protocol 5, [`crate::profile`]): while a non-empty profile is active and no
+//! experiment runs, the mode is `Mode::Profile` and the commanded code is the profile's (the
+//! saturating sum of its elements' codes, each on its own effective count), then the same delay
+//! line, clamp and output; the wall's own tick (`step::<_, true>`, `Mode::Wall`) is unchanged,
+//! the profile taking the experiments' out-of-line path. It is no experiment
+//! (`experiment_running()` stays false). Experiments (release, impact, excitation) run on the
+//! config's wall as before, and the profile renders again on the tick they end. In profile mode
+//! the energy monitor (about the config wall's storage function, which is not what renders)
+//! and the heartbeat watchdog (which guards experiments) are off; the encoder-jump,
+//! over-velocity and travel checks stay. A profile arrives as one `ServoCmd::Profile` (its
+//! table in the channels' profile queue), applied whole between two ticks; the delay line
+//! restarts empty and the monitor afresh, as for a config; an empty profile is the wall again.
+//!
 //! Layout: the channels are [`crate::channels`], the experiments (hold/release, excitation
 //! generators) [`crate::experiment`], the energy monitor `stiffwall_core::monitor` (the
 //! dissipation check shared with `hostctl replay`); this module is the tick that uses them.
@@ -32,6 +45,7 @@ use crate::config::{BoardInfo, Gains, VEL_WINDOW};
 use crate::experiment::{EndWatch, Excitation, Experiment, Hold, Launch, Mode};
 use crate::hal::{Encoder, ForceOutput};
 use crate::numeric::{Fx64, Numeric, Shift};
+use crate::profile::ProfileTable;
 use core::sync::atomic::Ordering;
 use stiffwall_core::monitor::{self, energy_e8_u32, EnergyMonitor};
 use stiffwall_proto::{fault, flags, ExperimentKind, Sample, ServoConfig, MAX_TABLE};
@@ -51,6 +65,8 @@ mod experiment_tests;
 mod fault_tests;
 #[cfg(test)]
 mod fixture;
+#[cfg(test)]
+mod profile_tests;
 #[cfg(test)]
 mod spring_tests;
 #[cfg(test)]
@@ -104,19 +120,25 @@ pub struct Servo<'a, N: Numeric = Fx64> {
     /// from 0, wrapping) and the tick it reaches 0 pushes nothing.
     decim_left: u32,
     seq: u32,
-    port: ServoPort<'a>,
+    port: ServoPort<'a, N>,
     exp: Experiment,
     /// The running test's end rule (`HostMsg::PrepareTest`), if it has one.
     end: Option<DecidedEnd>,
     /// Its end watch, from the release on.
     settle: Option<EndWatch>,
     board: BoardInfo,
+    /// The raw count of the previous tick, kept on every tick but the wall's (`step`'s
+    /// `WALL` path), and set when a profile arrives: the profile's elements take their
+    /// backward differences from it.
+    prev_pos: i32,
+    /// The active haptic profile (empty: the config's wall).
+    profile: ProfileTable<N>,
     table: [i16; MAX_TABLE],
 }
 
 impl<'a, N: Numeric> Servo<'a, N> {
     /// A servo for `board` with the (validated) config `cfg`, talking through `port`.
-    pub fn new(board: BoardInfo, cfg: &ServoConfig, port: ServoPort<'a>) -> Self {
+    pub fn new(board: BoardInfo, cfg: &ServoConfig, port: ServoPort<'a, N>) -> Self {
         let bits = u32::from(board.encoder_bits.clamp(1, 32));
         Self {
             board,
@@ -138,6 +160,8 @@ impl<'a, N: Numeric> Servo<'a, N> {
             end: None,
             settle: None,
             mode: Mode::Wall,
+            prev_pos: 0,
+            profile: ProfileTable::empty(),
             table: [0; MAX_TABLE],
             decimation: 0,
             user_decimation: 0,
@@ -188,10 +212,39 @@ impl<'a, N: Numeric> Servo<'a, N> {
         self.pos
     }
 
-    /// An experiment is running.
+    /// An experiment is running (the wall and the profile are no experiments).
     #[must_use]
     pub fn experiment_running(&self) -> bool {
-        self.mode != Mode::Wall
+        !matches!(self.mode, Mode::Wall | Mode::Profile)
+    }
+
+    /// The active haptic profile (empty: the config's wall renders).
+    #[must_use]
+    pub fn profile(&self) -> &ProfileTable<N> {
+        &self.profile
+    }
+
+    /// Renders `table` from the next tick on (an empty one: the config's wall), as a
+    /// `ServoCmd::Profile` does; for tests and boot. The delay line restarts empty and the
+    /// energy monitor afresh, as for a config; a running experiment keeps running, and the
+    /// profile renders when it ends.
+    pub fn set_profile(&mut self, table: ProfileTable<N>) {
+        self.profile = table;
+        self.prev_pos = self.pos;
+        self.ring = [0; RING];
+        self.monitor.reset();
+        if !self.experiment_running() {
+            self.mode = self.idle_mode();
+        }
+    }
+
+    /// The mode without an experiment: the profile when one is active, else the wall.
+    fn idle_mode(&self) -> Mode {
+        if self.profile.is_empty() {
+            Mode::Wall
+        } else {
+            Mode::Profile
+        }
     }
 
     /// Reads and unwraps the encoder; returns the raw count delta.
@@ -346,6 +399,7 @@ impl<'a, N: Numeric> Servo<'a, N> {
             Mode::Wall => self.wall_force(n, dn, n < self.g.contact_n),
             Mode::Released => (self.wall_code(n, dn), flags::RELEASED),
             Mode::Other => self.experiment_force(n, dn),
+            Mode::Profile => (self.profile.code(self.pos, self.prev_pos), 0),
         }
     }
 

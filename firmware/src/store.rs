@@ -1,15 +1,21 @@
-//! Two-slot, CRC-protected configuration store.
+//! Two-slot, CRC-protected store of the configuration and the haptic profile.
 //!
 //! Record layout (bytes, little-endian), at offset 0 of a slot:
-//! `magic "SWC3" (4) | generation u32 (4) | len u16 (2) | postcard(ServoConfig) (len) | CRC-32 (4)`
-//! with the CRC-32/ISO-HDLC over everything before it.
+//! `magic "SWC4" (4) | generation u32 (4) | len u16 (2) | postcard(ServoConfig, Profile) (len) | CRC-32 (4)`
+//! with the CRC-32/ISO-HDLC over everything before it (postcard writes the pair as the config's
+//! bytes followed by the profile's: its element count, then each element).
 //!
-//! Versions: records are written with magic `SWC3` (protocol 3's [`ServoConfig`], ending with
-//! its travel window `travel_min`, `travel_max`). Older records (same layout) are still read
-//! and migrated: `SWC2` (protocol 2's config: every field but the travel window) with no
-//! travel window, the supervision it ran with; `SWC1` (protocol 1's: every field before
-//! `damper`) also with `damper = DamperLaw::Difference`, the law it was saved under. The next
-//! save writes `SWC3`. Generations count across all three.
+//! Versions: records are written with magic `SWC4` (protocol 5: protocol 3's [`ServoConfig`]
+//! and the active [`Profile`]). Older records (same layout) are still read, with an empty
+//! profile (the config's wall, all they could render): `SWC3` (protocol 3's config, ending
+//! with its travel window `travel_min`, `travel_max`); `SWC2` (protocol 2's config: every field
+//! but the travel window) with no travel window, the supervision it ran with; `SWC1` (protocol
+//! 1's: every field before `damper`) also with `damper = DamperLaw::Difference`, the law it was
+//! saved under. The next save writes `SWC4`. Generations count across all four.
+//!
+//! Size: the largest record (the longest config and [`MAX_PROFILE_ELEMENTS`] detent trains,
+//! every varint at its longest) is [`LARGEST_RECORD`] bytes, within [`RECORD_MAX`]; a board's
+//! config slot must hold it (the test `the_largest_record_fits` states the figure).
 //!
 //! Invariant: [`ConfigStore::save`] always writes the slot that does *not* hold the newest
 //! valid record, with generation = newest + 1. A write interrupted at any byte therefore leaves
@@ -19,12 +25,19 @@
 use crate::hal::{ConfigStorage, StorageError};
 use crc::{Crc, CRC_32_ISO_HDLC};
 use serde::Deserialize;
+use stiffwall_proto::profile::{Profile, MAX_PROFILE_ELEMENTS};
 use stiffwall_proto::{DamperLaw, SafeMode, ServoConfig, WallMode};
 
-/// Largest record, bytes.
-pub const RECORD_MAX: usize = 128;
-/// The magic of the records written (protocol 3's config).
-const MAGIC: [u8; 4] = *b"SWC3";
+/// Largest record, bytes (a config slot holds at least this many).
+pub const RECORD_MAX: usize = 640;
+/// The longest record the firmware writes: a header, the longest config (64 bytes), the
+/// longest profile (1 + 16 × 27 bytes: detent trains, every varint at its longest), the CRC.
+pub const LARGEST_RECORD: usize = HEADER + 64 + 1 + MAX_PROFILE_ELEMENTS * 27 + 4;
+const _: () = assert!(LARGEST_RECORD <= RECORD_MAX);
+/// The magic of the records written (protocol 3's config and protocol 5's profile).
+const MAGIC: [u8; 4] = *b"SWC4";
+/// The magic of a record of protocol 3's config alone, read with an empty profile.
+const MAGIC_V3: [u8; 4] = *b"SWC3";
 /// The magic of a record of protocol 2's config ([`ServoConfigV2`]), read and migrated.
 const MAGIC_V2: [u8; 4] = *b"SWC2";
 /// The magic of a record of protocol 1's config ([`ServoConfigV1`]), read and migrated.
@@ -114,13 +127,19 @@ enum Layout {
     V1,
     V2,
     V3,
+    V4,
 }
 
-/// Parses one record (`SWC3`, or `SWC2` / `SWC1` migrated); `None` if it is not a valid
-/// record.
-fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
+/// What a record holds: its generation, the config, the profile.
+type Record = (u32, ServoConfig, Profile);
+
+/// Parses one record (`SWC4`, or `SWC3` / `SWC2` / `SWC1` migrated, with an empty profile);
+/// `None` if it is not a valid record.
+fn parse(buf: &[u8]) -> Option<Record> {
     let magic = buf.get(..4)?;
     let layout = if magic == MAGIC {
+        Layout::V4
+    } else if magic == MAGIC_V3 {
         Layout::V3
     } else if magic == MAGIC_V2 {
         Layout::V2
@@ -137,19 +156,31 @@ fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
         return None;
     }
     let body = buf.get(HEADER..end)?;
-    let cfg = match layout {
-        Layout::V1 => postcard::from_bytes::<ServoConfigV1>(body).ok()?.into(),
-        Layout::V2 => postcard::from_bytes::<ServoConfigV2>(body).ok()?.into(),
-        Layout::V3 => postcard::from_bytes(body).ok()?,
+    let (cfg, profile) = match layout {
+        Layout::V1 => (
+            postcard::from_bytes::<ServoConfigV1>(body).ok()?.into(),
+            Profile::default(),
+        ),
+        Layout::V2 => (
+            postcard::from_bytes::<ServoConfigV2>(body).ok()?.into(),
+            Profile::default(),
+        ),
+        Layout::V3 => (postcard::from_bytes(body).ok()?, Profile::default()),
+        Layout::V4 => postcard::from_bytes(body).ok()?,
     };
-    Some((gen, cfg))
+    Some((gen, cfg, profile))
 }
 
-/// Builds a record for `cfg` with `gen` into `buf`; returns its length.
-fn build(cfg: &ServoConfig, gen: u32, buf: &mut [u8; RECORD_MAX]) -> Option<usize> {
+/// Builds a record for `cfg` and `profile` with `gen` into `buf`; returns its length.
+fn build(
+    cfg: &ServoConfig,
+    profile: &Profile,
+    gen: u32,
+    buf: &mut [u8; RECORD_MAX],
+) -> Option<usize> {
     buf[..4].copy_from_slice(&MAGIC);
     buf[4..8].copy_from_slice(&gen.to_le_bytes());
-    let len = postcard::to_slice(cfg, &mut buf[HEADER..RECORD_MAX - 4])
+    let len = postcard::to_slice(&(cfg, profile), &mut buf[HEADER..RECORD_MAX - 4])
         .ok()?
         .len();
     buf[8..10].copy_from_slice(&u16::try_from(len).ok()?.to_le_bytes());
@@ -176,7 +207,7 @@ impl<S: ConfigStorage> ConfigStore<S> {
         self.storage
     }
 
-    fn read_slot(&mut self, slot: usize) -> Option<(u32, ServoConfig)> {
+    fn read_slot(&mut self, slot: usize) -> Option<Record> {
         let mut buf = [0u8; RECORD_MAX];
         let n = self.storage.slot_len().min(RECORD_MAX);
         let b = buf.get_mut(..n)?;
@@ -184,12 +215,12 @@ impl<S: ConfigStorage> ConfigStore<S> {
         parse(b)
     }
 
-    /// The newest valid record: `(slot, generation, config)`.
-    pub fn newest(&mut self) -> Option<(usize, u32, ServoConfig)> {
-        let a = self.read_slot(0).map(|(g, c)| (0, g, c));
-        let b = self.read_slot(1).map(|(g, c)| (1, g, c));
+    /// The newest valid record: `(slot, (generation, config, profile))`.
+    fn newest_record(&mut self) -> Option<(usize, Record)> {
+        let a = self.read_slot(0).map(|r| (0, r));
+        let b = self.read_slot(1).map(|r| (1, r));
         match (a, b) {
-            (Some(a), Some(b)) => Some(if b.1.wrapping_sub(a.1) as i32 > 0 {
+            (Some(a), Some(b)) => Some(if (b.1).0.wrapping_sub((a.1).0) as i32 > 0 {
                 b
             } else {
                 a
@@ -198,23 +229,47 @@ impl<S: ConfigStorage> ConfigStore<S> {
         }
     }
 
+    /// The newest valid record: `(slot, generation, config)`.
+    pub fn newest(&mut self) -> Option<(usize, u32, ServoConfig)> {
+        self.newest_record().map(|(s, (g, c, _))| (s, g, c))
+    }
+
     /// The newest valid config, if any.
     pub fn load(&mut self) -> Option<ServoConfig> {
         self.newest().map(|(_, _, c)| c)
     }
 
-    /// Saves `cfg` into the slot not holding the newest record.
+    /// The newest valid config and the profile saved with it (empty for a record older than
+    /// protocol 5), if any.
+    pub fn load_with_profile(&mut self) -> Option<(ServoConfig, Profile)> {
+        self.newest_record().map(|(_, (_, c, p))| (c, p))
+    }
+
+    /// Saves `cfg` with an empty profile (see [`ConfigStore::save_with_profile`]).
     ///
     /// # Errors
-    /// [`StorageError`] if the storage is too small or the write failed (the previous config
-    /// stays loadable).
+    /// As [`ConfigStore::save_with_profile`].
     pub fn save(&mut self, cfg: &ServoConfig) -> Result<(), StorageError> {
+        self.save_with_profile(cfg, &Profile::default())
+    }
+
+    /// Saves `cfg` and `profile` into the slot not holding the newest record.
+    ///
+    /// # Errors
+    /// [`StorageError`] if the storage is too small or the write failed (the previous record
+    /// stays loadable).
+    pub fn save_with_profile(
+        &mut self,
+        cfg: &ServoConfig,
+        profile: &Profile,
+    ) -> Result<(), StorageError> {
         let (slot, gen) = match self.newest() {
             Some((s, g, _)) => (1 - s, g.wrapping_add(1)),
             None => (0, 1),
         };
         let mut buf = [0u8; RECORD_MAX];
-        let n = build(cfg, gen, &mut buf).ok_or(StorageError::RecordTooLong { max: RECORD_MAX })?;
+        let n = build(cfg, profile, gen, &mut buf)
+            .ok_or(StorageError::RecordTooLong { max: RECORD_MAX })?;
         let slot_len = self.storage.slot_len();
         if n > slot_len {
             return Err(StorageError::TooLong { len: n, slot_len });
@@ -286,6 +341,20 @@ impl ConfigStorage for MemStorage {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use stiffwall_proto::profile::{ProfileElement, Side, MAX_DETENTS};
+
+    /// A record of `cfg` with no profile.
+    fn build(cfg: &ServoConfig, gen: u32, buf: &mut [u8; RECORD_MAX]) -> Option<usize> {
+        super::build(cfg, &Profile::default(), gen, buf)
+    }
+
+    /// A record's generation and config, its profile empty.
+    fn parse(buf: &[u8]) -> Option<(u32, ServoConfig)> {
+        super::parse(buf).map(|(g, c, p)| {
+            assert_eq!(p, Profile::default());
+            (g, c)
+        })
+    }
 
     fn cfg(k: f32) -> ServoConfig {
         ServoConfig {
@@ -310,7 +379,7 @@ mod tests {
     fn record_literal_header() {
         let mut buf = [0u8; RECORD_MAX];
         let n = build(&cfg(0.0), 7, &mut buf).unwrap();
-        assert_eq!(&buf[..8], &[b'S', b'W', b'C', b'3', 7, 0, 0, 0]);
+        assert_eq!(&buf[..8], &[b'S', b'W', b'C', b'4', 7, 0, 0, 0]);
         assert_eq!(
             usize::from(u16::from_le_bytes([buf[8], buf[9]])) + HEADER + 4,
             n
@@ -360,10 +429,10 @@ mod tests {
         }
     }
 
+    /// An `SWC3` record (protocol 3, before profiles) of the default config, as protocol 3
+    /// wrote it: still loads, with an empty profile.
     #[test]
     fn record_literal_bytes_of_the_default_config() {
-        let mut buf = [0u8; RECORD_MAX];
-        let n = build(&ServoConfig::default(), 7, &mut buf).unwrap();
         let mut want = std::vec![b'S', b'W', b'C', b'3', 7, 0, 0, 0, 41, 0];
         want.extend_from_slice(&[0x00; 4]); // stiffness 0.0
         want.extend_from_slice(&[0x00; 4]); // damping 0.0
@@ -371,7 +440,121 @@ mod tests {
         want.extend_from_slice(&[0x01, 0x01]); // damper: DeadBand (variant 1), counts 1
         want.extend_from_slice(&[0x00, 0x00]); // travel_min, travel_max: None
         want.extend_from_slice(&[0x73, 0x87, 0xac, 0x28]); // zlib.crc32 of the bytes before
+        assert_eq!(parse(&want), Some((7, ServoConfig::default())));
+    }
+
+    /// A one-wall profile (the wire's literal-bytes element of `stiffwall_proto::profile`).
+    fn one_wall() -> Profile {
+        let mut p = Profile::default();
+        p.elements
+            .push(ProfileElement::Wall {
+                position: -3,
+                side: Side::Upper,
+                stiffness: 1.0,
+                damping: 0.0,
+                damper: DamperLaw::DeadBand { counts: 1 },
+            })
+            .unwrap();
+        p
+    }
+
+    /// An `SWC4` record written out: the header, the default config's 41 bytes, the profile
+    /// (its element count, then the element's postcard bytes), the CRC-32 (Python's
+    /// `zlib.crc32` of the 65 bytes before it).
+    #[test]
+    fn swc4_record_literal_bytes() {
+        let mut buf = [0u8; RECORD_MAX];
+        let n = super::build(&ServoConfig::default(), &one_wall(), 7, &mut buf).unwrap();
+        let mut want = std::vec![b'S', b'W', b'C', b'4', 7, 0, 0, 0, 55, 0];
+        want.extend_from_slice(&[0x00; 8]); // stiffness, damping 0.0
+        want.extend_from_slice(&V1_PAYLOAD[8..]); // the rest of protocol 1's defaults
+        want.extend_from_slice(&[0x01, 0x01, 0x00, 0x00]); // damper, travel window
+        #[rustfmt::skip]
+        want.extend_from_slice(&[
+            0x01,                   // one element
+            0x00, 0x05, 0x01,       // Wall, position −3, side Upper
+            0x00, 0x00, 0x80, 0x3f, // stiffness 1.0
+            0x00, 0x00, 0x00, 0x00, // damping 0.0
+            0x01, 0x01,             // damper: DeadBand, counts 1
+        ]);
+        want.extend_from_slice(&[0xa6, 0xb0, 0xf4, 0x0f]);
         assert_eq!(&buf[..n], &want[..]);
+        assert_eq!(
+            super::parse(&want),
+            Some((7, ServoConfig::default(), one_wall()))
+        );
+    }
+
+    /// The longest record (the longest config, [`MAX_PROFILE_ELEMENTS`] detent trains with
+    /// every varint at its longest) is [`LARGEST_RECORD`] = 511 bytes, within [`RECORD_MAX`]
+    /// and every board's config slot (the Nucleo's 128 KiB sector; the virtual device's and
+    /// the tests' [`MemStorage`] is `RECORD_MAX`; the QEMU board stores nothing).
+    #[test]
+    fn the_largest_record_fits() {
+        let c = ServoConfig {
+            servo_rate_hz: u32::MAX,
+            wall_position: i32::MIN,
+            encoder_jump_counts: u32::MAX,
+            heartbeat_timeout_ms: u32::MAX,
+            damper: DamperLaw::DeadBand { counts: u8::MAX },
+            travel_min: Some(i32::MIN),
+            travel_max: Some(i32::MAX),
+            ..ServoConfig::default()
+        };
+        let mut p = Profile::default();
+        for _ in 0..MAX_PROFILE_ELEMENTS {
+            p.elements
+                .push(ProfileElement::Detents {
+                    first: i32::MIN,
+                    pitch_counts: f64::MAX,
+                    count: u16::MAX,
+                    strength: f32::MAX,
+                    damping: f32::MAX,
+                    damper: DamperLaw::DeadBand { counts: u8::MAX },
+                })
+                .unwrap();
+        }
+        let mut buf = [0u8; RECORD_MAX];
+        let n = super::build(&c, &p, u32::MAX, &mut buf).unwrap();
+        assert_eq!(n, LARGEST_RECORD);
+        assert_eq!(LARGEST_RECORD, 511);
+        assert_eq!(super::parse(&buf[..n]), Some((u32::MAX, c, p)));
+        let _ = MAX_DETENTS;
+    }
+
+    /// A save of a config with a profile over an `SWC3` record, interrupted at every byte,
+    /// leaves the SWC3 config (and no profile) loadable; complete, both load.
+    #[test]
+    fn interrupted_write_with_a_profile_keeps_the_previous_record() {
+        let mut m = MemStorage::default();
+        let mut old = std::vec![b'S', b'W', b'C', b'3', 7, 0, 0, 0, 41, 0];
+        old.extend_from_slice(&[0x00; 8]);
+        old.extend_from_slice(&V1_PAYLOAD[8..]);
+        old.extend_from_slice(&[0x01, 0x01, 0x00, 0x00, 0x73, 0x87, 0xac, 0x28]);
+        m.slots[0][..old.len()].copy_from_slice(&old);
+        let new = cfg(5.0);
+        let mut full = [0u8; RECORD_MAX];
+        let n = super::build(&new, &one_wall(), 8, &mut full).unwrap();
+        for erase_first in [true, false] {
+            for k in 0..=n {
+                let mut s = ConfigStore::new(MemStorage {
+                    erase_first,
+                    ..m.clone()
+                });
+                s.storage.interrupt_after = Some(k);
+                assert!(s.save_with_profile(&new, &one_wall()).is_err());
+                let want = if k == n {
+                    (new, one_wall())
+                } else {
+                    (ServoConfig::default(), Profile::default())
+                };
+                assert_eq!(s.load_with_profile(), Some(want), "interrupted at byte {k}");
+            }
+        }
+        let mut s = ConfigStore::new(m);
+        s.save_with_profile(&new, &one_wall()).unwrap();
+        assert_eq!(s.load_with_profile(), Some((new, one_wall())));
+        assert_eq!(&s.storage.slots[1][..4], b"SWC4");
     }
 
     /// An `SWC2` record of generation 9: [`V1_PAYLOAD`] then the damper `DeadBand`
@@ -426,7 +609,7 @@ mod tests {
             assert_eq!(s.newest(), Some((slot, 9, v2_config())));
             s.save(&travel).unwrap();
             assert_eq!(s.newest(), Some((1 - slot, 10, travel)));
-            assert_eq!(&s.storage.slots[1 - slot][..4], b"SWC3");
+            assert_eq!(&s.storage.slots[1 - slot][..4], b"SWC4");
             assert_eq!(&s.storage.slots[slot][..rec.len()], &rec[..]);
             // Interrupted at every byte: the SWC2 config stays loadable.
             let mut full = [0u8; RECORD_MAX];
@@ -478,11 +661,11 @@ mod tests {
             s.save(&v1_config()).unwrap();
             let (new_slot, gen, got) = s.newest().unwrap();
             assert_eq!((new_slot, gen, got), (1 - slot, 6, v1_config()));
-            assert_eq!(&s.storage.slots[new_slot][..4], b"SWC3");
+            assert_eq!(&s.storage.slots[new_slot][..4], b"SWC4");
             // The v1 record is untouched until the slot is needed again.
             assert_eq!(&s.storage.slots[slot][..rec.len()], &rec[..]);
             s.save(&cfg(3.0)).unwrap();
-            assert_eq!(&s.storage.slots[slot][..4], b"SWC3");
+            assert_eq!(&s.storage.slots[slot][..4], b"SWC4");
             assert_eq!(s.load(), Some(cfg(3.0)));
         }
     }

@@ -127,7 +127,7 @@ pub struct Gains<N: Numeric> {
 
 /// The output limit in codes: `force_limit` over the code's force, rounded, within
 /// [0, min(board max, `MAX_LIMIT_CODES`)] (0 when not finite).
-fn limit_codes(cfg: &ServoConfig, board: &BoardInfo) -> i32 {
+pub(crate) fn limit_codes(cfg: &ServoConfig, board: &BoardInfo) -> i32 {
     let codes = libm::round(f64::from(cfg.force_limit) / f64::from(board.force_per_code));
     if codes.is_finite() {
         (codes as i32).clamp(0, board.max_code.clamp(0, MAX_LIMIT_CODES))
@@ -155,7 +155,7 @@ fn energy_limit_e8(cfg: &ServoConfig, kd2: f64) -> u64 {
 /// code (|g|·DAMPER_V_MAX, rounded up, + 1 for the rounding), so that spring + damper is still
 /// exactly clamped at every count (without a damper the bound is the spring-only one, bit for
 /// bit); `kf` = K·Δ_eff/2 and `damp` the damper gain, in codes. At most 2^29.
-fn saturation_count(limit: i32, kf: f64, damp: f64) -> i32 {
+pub(crate) fn saturation_count(limit: i32, kf: f64, damp: f64) -> i32 {
     let damp_max = libm::ceil(libm::fabs(damp) * f64::from(DAMPER_V_MAX));
     let damp_max = if damp_max > 0.0 { damp_max + 1.0 } else { 0.0 };
     if kf > 0.0 {
@@ -255,7 +255,7 @@ impl<N: Numeric> Gains<N> {
     /// The spring codes at the count clamp: at n = `n_sat` (the code for every n ≥ `n_sat`)
     /// and at n = −`n_sat`−1 (for every n below). n_sat ≤ 2^29: |2n+1| < 2^31 (the codes at
     /// the bounds, as the servo used to compute them after clamping n).
-    fn spring_bounds(k_half: N::Gain, n_sat: i32) -> (i32, i32) {
+    pub(crate) fn spring_bounds(k_half: N::Gain, n_sat: i32) -> (i32, i32) {
         let spring_hi =
             N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1).wrapping_neg());
         let spring_lo = N::mul_bounded(k_half, n_sat.wrapping_mul(2).wrapping_add(1));
@@ -275,7 +275,7 @@ impl<N: Numeric> Gains<N> {
 
 /// When the wall's damper acts ([`Gains::damper_band`]): |dn| above the law's dead band
 /// (saturated to [`MAX_DEADBAND_COUNTS`]), never when `on` is false (no damper).
-fn damper_band(on: bool, law: DamperLaw) -> AbsBound {
+pub(crate) fn damper_band(on: bool, law: DamperLaw) -> AbsBound {
     if on {
         AbsBound::new(u32::from(law.dead_band().min(MAX_DEADBAND_COUNTS)))
     } else {

@@ -10,6 +10,7 @@
 use super::{Device, RejectedRun, REPLIES, REPLY_BUDGET};
 use crate::channels::ServoEvent;
 use crate::hal::{ByteLink, ConfigStorage};
+use crate::numeric::Numeric;
 use stiffwall_proto::{encode, DeviceMsg, ErrorDetail, HostMsg, TelemetryBatch, TELEMETRY_BATCH};
 
 /// Bytes read per `poll` at most.
@@ -33,7 +34,7 @@ fn rejected_reply(run: RejectedRun) -> DeviceMsg {
     }
 }
 
-impl<S: ConfigStorage> Device<'_, S> {
+impl<S: ConfigStorage, N: Numeric> Device<'_, S, N> {
     /// One main-loop step: read and handle frames, collect telemetry, send what the link takes.
     pub fn poll(&mut self, now: u32, link: &mut impl ByteLink) {
         // 1. Requests (only while a reply has room; the pending run of bad frames holds one).

@@ -15,7 +15,14 @@
 //!   [`REPLY_BUDGET`] replies are sent before it, so neither a flood of requests nor one of bad
 //!   frames starves telemetry, and replies still leave at a bounded share of the link.
 //! - A refused request (bad range, busy, store failure) changes nothing. `SetConfig` is
-//!   validated field by field ([`crate::config::validate`]) before it reaches the servo.
+//!   validated field by field ([`crate::config::validate`]) before it reaches the servo, and
+//!   `SetProfile` element by element ([`crate::profile::validate`]).
+//! - The haptic profile (`SetProfile`, protocol 5): the device keeps the wire [`Profile`] (for
+//!   `GetProfile`, for `SaveConfig`, which saves it with the config, and to compile it again
+//!   when a `SetConfig` changes the rate or the shift: a config under which the active profile
+//!   is out of range is refused with `InvalidProfile`); it compiles it in the main loop and
+//!   queues the table for the servo with one `ServoCmd::Profile`. Boot loads both and queues the
+//!   stored profile for the servo's first tick.
 //! - Telemetry batches hold consecutive samples only. The device counts lost samples from the
 //!   gaps in the servo's sample numbers, so `TelemetryBatch::dropped` is exact: between two
 //!   batches, `seq` jumps by exactly the growth of `dropped`.
@@ -26,16 +33,20 @@
 //! ([`Device::poll`]: frames in, telemetry batches, replies out); `requests` the answer to
 //! each request ([`Device::handle`]).
 
-use crate::channels::{HostPort, ServoEvent};
+use crate::channels::{HostPort, ServoCmd, ServoEvent};
 use crate::config::{validate, BoardInfo};
 use crate::hal::ConfigStorage;
+use crate::numeric::{Fx64, Numeric};
 use crate::store::ConfigStore;
 use heapless::Deque;
 use stiffwall_proto::{
-    DeviceMsg, ErrorCode, ErrorDetail, FrameDecoder, ServoConfig, TelemetryBatch, MAX_FRAME,
+    DeviceMsg, ErrorCode, ErrorDetail, FrameDecoder, Profile, ServoConfig, TelemetryBatch,
+    MAX_FRAME,
 };
 
 mod link;
+#[cfg(test)]
+mod profile_tests;
 mod requests;
 #[cfg(test)]
 mod tests;
@@ -87,14 +98,17 @@ struct EndRule {
     decay_base: u32,
 }
 
-/// The main-loop side of the firmware.
+/// The main-loop side of the firmware (`N`: the servo's numeric back-end, whose gain forms
+/// the compiled profile is in).
 #[derive(Debug)]
-pub struct Device<'a, S: ConfigStorage> {
+pub struct Device<'a, S: ConfigStorage, N: Numeric = Fx64> {
     board: BoardInfo,
     config: ServoConfig,
+    /// The active haptic profile as it arrived (empty: the config's wall).
+    profile: Profile,
     defaults: ServoConfig,
     store: ConfigStore<S>,
-    port: HostPort<'a>,
+    port: HostPort<'a, N>,
     decoder: FrameDecoder,
     tx: [u8; MAX_FRAME],
     tx_len: usize,
@@ -117,24 +131,33 @@ pub struct Device<'a, S: ConfigStorage> {
     stats: DeviceStats,
 }
 
-impl<'a, S: ConfigStorage> Device<'a, S> {
-    /// A device for `board`: loads the newest valid stored config (falling back to `defaults`
-    /// when none is stored or it fails validation). Build the [`crate::Servo`] with
-    /// [`Device::config`].
+impl<'a, S: ConfigStorage, N: Numeric> Device<'a, S, N> {
+    /// A device for `board`: loads the newest valid stored config and its profile (falling
+    /// back to `defaults` and no profile when none is stored or the config fails validation;
+    /// to the config alone when the profile does). Build the [`crate::Servo`] with
+    /// [`Device::config`]; a stored profile is queued for the servo's first tick.
     pub fn new(
         board: BoardInfo,
         store: ConfigStore<S>,
-        port: HostPort<'a>,
+        port: HostPort<'a, N>,
         defaults: ServoConfig,
     ) -> Self {
         let mut store = store;
-        let config = match store.load() {
-            Some(c) if validate(&c, &board).is_ok() => c,
-            _ => defaults,
+        let (config, profile) = match store.load_with_profile() {
+            Some((c, p)) if validate(&c, &board).is_ok() => {
+                let p = if crate::profile::validate(&p, &c, &board).is_ok() {
+                    p
+                } else {
+                    Profile::default()
+                };
+                (c, p)
+            }
+            _ => (defaults, Profile::default()),
         };
-        Self {
+        let mut device = Self {
             board,
             config,
+            profile: Profile::default(),
             defaults,
             store,
             port,
@@ -159,7 +182,31 @@ impl<'a, S: ConfigStorage> Device<'a, S> {
             rate_change: None,
             shutdown: None,
             stats: DeviceStats::default(),
+        };
+        if !profile.elements.is_empty() {
+            // Fresh queues: room for the table and its command.
+            if device.send_profile(&profile, &config) {
+                device.profile = profile;
+            }
         }
+        device
+    }
+
+    /// Compiles `profile` for `cfg` and queues it for the servo (the table, then its
+    /// `ServoCmd::Profile`); false, nothing queued, when either queue has no room.
+    fn send_profile(&mut self, profile: &Profile, cfg: &ServoConfig) -> bool {
+        if !self.port.profiles.ready() || !self.port.commands.ready() {
+            return false;
+        }
+        let table = crate::profile::compile::<N>(profile, cfg, &self.board);
+        // Both have room, and only this end adds to them: neither enqueue fails.
+        self.port.profiles.enqueue(table).is_ok()
+            && self.port.commands.enqueue(ServoCmd::Profile).is_ok()
+    }
+
+    /// The active haptic profile (empty: the config's wall).
+    pub fn profile(&self) -> &Profile {
+        &self.profile
     }
 
     /// The active configuration.

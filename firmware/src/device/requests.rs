@@ -10,10 +10,12 @@ use super::{Device, EndRule, MAX_DEFLECTION, MAX_EXPERIMENT_TICKS, MAX_LAUNCH_MI
 use crate::channels::{DecidedEnd, ServoCmd};
 use crate::config::{validate, ConfigError};
 use crate::hal::ConfigStorage;
+use crate::numeric::Numeric;
+use crate::profile::ProfileError;
 use core::sync::atomic::Ordering;
 use stiffwall_proto::{
-    ConfigField, DeviceMsg, ErrorCode, ErrorDetail, ExciteProfile, FaultReport, HostMsg, Request,
-    ServoConfig, MAX_TABLE, PROTOCOL_VERSION,
+    ConfigField, DeviceMsg, ErrorCode, ErrorDetail, ExciteProfile, FaultReport, HostMsg, Profile,
+    Request, ServoConfig, MAX_TABLE, PROTOCOL_VERSION,
 };
 
 fn invalid(field: ConfigField, min: f64, max: f64) -> DeviceMsg {
@@ -28,6 +30,19 @@ fn invalid_config(e: ConfigError) -> DeviceMsg {
     DeviceMsg::Error {
         code: ErrorCode::InvalidConfig,
         detail: ErrorDetail::Field {
+            field: e.field,
+            min: e.min,
+            max: e.max,
+        },
+    }
+}
+
+/// A profile refused: the element, its field and the field's range.
+fn invalid_profile(e: ProfileError) -> DeviceMsg {
+    DeviceMsg::Error {
+        code: ErrorCode::InvalidProfile,
+        detail: ErrorDetail::ProfileField {
+            element: e.element,
             field: e.field,
             min: e.min,
             max: e.max,
@@ -58,7 +73,7 @@ fn ticks_refused(ticks: u32) -> Option<DeviceMsg> {
         .then(|| invalid(ConfigField::Argument, 1.0, f64::from(MAX_EXPERIMENT_TICKS)))
 }
 
-impl<S: ConfigStorage> Device<'_, S> {
+impl<S: ConfigStorage, N: Numeric> Device<'_, S, N> {
     fn send_servo(&mut self, cmd: ServoCmd) -> bool {
         self.port.commands.enqueue(cmd).is_ok()
     }
@@ -71,11 +86,27 @@ impl<S: ConfigStorage> Device<'_, S> {
         if let Err(e) = validate(&cfg, &self.board) {
             return invalid_config(e);
         }
+        // The active profile, compiled again for the new config (rate, shift), must still be
+        // in range under it.
+        if let Err(e) = crate::profile::validate(&self.profile, &cfg, &self.board) {
+            return invalid_profile(e);
+        }
         if self.experiment_running() {
             return busy("experiment running");
         }
+        let with_profile = !self.profile.elements.is_empty();
+        // The config and the profile compiled for it go together, or neither.
+        let room = self.port.commands.capacity() - self.port.commands.len();
+        if room < 1 + usize::from(with_profile) || (with_profile && !self.port.profiles.ready()) {
+            return queue_full();
+        }
         if !self.send_servo(ServoCmd::Config(cfg)) {
             return queue_full();
+        }
+        if with_profile {
+            let p = self.profile.clone();
+            // Room checked above.
+            let _ = self.send_profile(&p, &cfg);
         }
         if cfg.servo_rate_hz != self.config.servo_rate_hz {
             self.rate_change = Some(cfg.servo_rate_hz);
@@ -143,13 +174,15 @@ impl<S: ConfigStorage> Device<'_, S> {
                 let d = self.defaults;
                 self.apply(d, DeviceMsg::Config(d))
             }
-            HostMsg::SaveConfig => match self.store.save(&self.config) {
-                Ok(()) => ack(Request::SaveConfig),
-                Err(_) => DeviceMsg::Error {
-                    code: ErrorCode::StoreFailed,
-                    detail: ErrorDetail::None,
-                },
-            },
+            HostMsg::SaveConfig => {
+                match self.store.save_with_profile(&self.config, &self.profile) {
+                    Ok(()) => ack(Request::SaveConfig),
+                    Err(_) => DeviceMsg::Error {
+                        code: ErrorCode::StoreFailed,
+                        detail: ErrorDetail::None,
+                    },
+                }
+            }
             HostMsg::StreamStart { decimation } => {
                 if decimation == 0 {
                     invalid(ConfigField::Argument, 1.0, f64::from(u16::MAX))
@@ -190,11 +223,8 @@ impl<S: ConfigStorage> Device<'_, S> {
                 ack(Request::Heartbeat)
             }
             HostMsg::GetFaults => self.fault_report(),
-            // Protocol 5's profile messages: refused until the servo renders profiles.
-            HostMsg::SetProfile(_) | HostMsg::GetProfile => DeviceMsg::Error {
-                code: ErrorCode::InvalidProfile,
-                detail: ErrorDetail::None,
-            },
+            HostMsg::SetProfile(p) => self.set_profile(p),
+            HostMsg::GetProfile => DeviceMsg::Profile(self.profile.clone()),
             HostMsg::ClearFaults => self.queued(ServoCmd::ClearFaults, Request::ClearFaults),
             HostMsg::Stop => self.queued(ServoCmd::Stop, Request::Stop),
             HostMsg::Shutdown { exit_code } => {
@@ -208,6 +238,23 @@ impl<S: ConfigStorage> Device<'_, S> {
                 decay_base_ticks,
             } => self.prepare_test(config, min_run_ticks, within_one_count, decay_base_ticks),
         }
+    }
+
+    /// `SetProfile`: refused while an experiment runs, validated for the active config,
+    /// compiled and queued for the servo (an empty profile: the config's wall again).
+    fn set_profile(&mut self, p: Profile) -> DeviceMsg {
+        if self.experiment_running() {
+            return busy("experiment running");
+        }
+        if let Err(e) = crate::profile::validate(&p, &self.config, &self.board) {
+            return invalid_profile(e);
+        }
+        let cfg = self.config;
+        if !self.send_profile(&p, &cfg) {
+            return queue_full();
+        }
+        self.profile = p;
+        DeviceMsg::Ack(Request::SetProfile)
     }
 
     /// The reply to `Hello`: the device's identity, or a version mismatch.

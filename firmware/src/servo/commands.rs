@@ -22,7 +22,7 @@ impl<N: Numeric> Servo<'_, N> {
             ServoCmd::Config(cfg) => self.apply_config(&cfg),
             ServoCmd::Stream { decimation } => {
                 self.user_decimation = decimation;
-                if self.mode == Mode::Wall {
+                if !self.experiment_running() {
                     self.decimation = decimation;
                 }
                 self.decim_left = u32::from(self.decimation);
@@ -82,12 +82,17 @@ impl<N: Numeric> Servo<'_, N> {
                 self.monitor.reset();
             }
             ServoCmd::Stop => self.end_experiment(false),
+            ServoCmd::Profile => {
+                if let Some(t) = self.port.profiles.dequeue() {
+                    self.set_profile(t);
+                }
+            }
         }
     }
 
     /// A start refused because faults latched after the main loop checked: report it ended.
     fn refuse_experiment(&mut self, kind: ExperimentKind) {
-        if self.mode == Mode::Wall {
+        if !self.experiment_running() {
             self.port.shared.experiment.store(false, Ordering::Relaxed);
         }
         let _ = self.port.events.enqueue(ServoEvent::ExperimentDone {

@@ -27,7 +27,10 @@ use stiffwall_proto::{flags, ExperimentKind};
 
 impl<N: Numeric> Servo<'_, N> {
     pub(super) fn set_exp(&mut self, e: Experiment) {
-        self.mode = e.mode();
+        self.mode = match e.mode() {
+            Mode::Wall => self.idle_mode(),
+            m => m,
+        };
         self.exp = e;
     }
 
@@ -73,10 +76,12 @@ impl<N: Numeric> Servo<'_, N> {
         }
     }
 
-    /// Experiment bookkeeping after the output.
+    /// Bookkeeping after the output of a tick that is not the wall's: the previous raw count
+    /// (the profile's backward differences), the experiment's.
     #[inline]
     pub(super) fn advance(&mut self, n: i32, dn: i32) {
-        if self.mode != Mode::Wall {
+        self.prev_pos = self.pos;
+        if matches!(self.mode, Mode::Released | Mode::Other) {
             self.advance_experiment(n, dn);
         }
     }

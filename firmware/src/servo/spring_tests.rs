@@ -31,7 +31,7 @@ fn check_backend<Nm: Numeric>(
         force_limit: 30.0,
         ..ServoConfig::default()
     };
-    let mut ch = Channels::new();
+    let mut ch = Channels::<Nm>::for_numeric();
     let (sp, _hp) = ch.split();
     let s: Servo<'_, Nm> = Servo::new(b, &cfg, sp);
     let code = s.spring_code(n);
@@ -83,7 +83,7 @@ fn check_same_as_reference<Nm: Numeric>(
         },
         ..ServoConfig::default()
     };
-    let mut ch = Channels::new();
+    let mut ch = Channels::<Nm>::for_numeric();
     let (sp, _hp) = ch.split();
     let s: Servo<'_, Nm> = Servo::new(board(), &cfg, sp);
     let g = s.gains();

@@ -57,7 +57,9 @@ impl<N: Numeric> Servo<'_, N> {
             new_faults |= fault::OVER_VELOCITY;
         }
         let mut fl = 0u16;
-        let monitoring = self.g.energy_monitor && (WALL || self.mode != Mode::Other);
+        // The monitor watches the config wall's storage function: on the wall and a release
+        // test's released phase, not while holding, exciting or rendering a profile.
+        let monitoring = self.g.energy_monitor && (WALL || self.mode == Mode::Released);
         if monitoring {
             if free {
                 // Outside a one-sided wall the spring stores nothing: free motion (the user
@@ -86,7 +88,8 @@ impl<N: Numeric> Servo<'_, N> {
                 }
             }
         }
-        if !WALL && self.g.heartbeat_ticks > 0 {
+        // The heartbeat watchdog guards experiments only (not the wall, not a profile).
+        if !WALL && self.mode != Mode::Profile && self.g.heartbeat_ticks > 0 {
             new_faults |= self.heartbeat(now);
         }
         (new_faults, fl)
@@ -137,6 +140,7 @@ impl<N: Numeric> Servo<'_, N> {
     pub(super) fn prime(&mut self, n: i32) {
         self.halt &= !UNPRIMED;
         self.prev_n = n;
+        self.prev_pos = self.pos;
         self.vel_hist = [self.pos; VEL_WINDOW];
     }
 

@@ -134,7 +134,7 @@ impl<N: Numeric> Servo<'_, N> {
     /// free space (n < 0) the code is 0, so moving the device around outside the wall feels no
     /// drag.
     #[inline(always)]
-    pub(super) fn wall_code(&self, n: i32, dn: i32) -> i32 {
+    pub(crate) fn wall_code(&self, n: i32, dn: i32) -> i32 {
         if n < self.g.contact_n {
             0
         } else {
