@@ -161,7 +161,7 @@ fn full<N: Numeric>(
 fn stages<N: Numeric>(baseline: u64) {
     let board = stiffwall_board_qemu_an386::plant::board_info();
     let cfg = config();
-    let mut channels = Channels::new();
+    let mut channels = Channels::<N>::for_numeric();
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
     let table = black_box(sweep_table(1));
@@ -219,7 +219,7 @@ fn stages<N: Numeric>(baseline: u64) {
         table: &table2,
         i: 0,
     };
-    let mut channels = Channels::new();
+    let mut channels = Channels::<N>::for_numeric();
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &damped, servo_port);
     start_stream(&mut host);
@@ -249,7 +249,7 @@ fn damped_config(cfg: &ServoConfig) -> ServoConfig {
 }
 
 /// Queues telemetry at every tick (the full tick's push).
-fn start_stream(host: &mut HostPort<'_>) {
+fn start_stream<N: Numeric>(host: &mut HostPort<'_, N>) {
     if host
         .commands
         .enqueue(ServoCmd::Stream { decimation: 1 })
@@ -356,7 +356,7 @@ const AT_CLEAR: u32 = 13_000;
 /// for I32F32, 3 to 5 for the others; the servo's code is the same.)
 fn worst<N: Numeric>(board: BoardInfo, damped: &ServoConfig, table: &[u32; SWEEP_LEN]) {
     let (cfg, changed, end) = worst_configs(damped);
-    let mut channels = Channels::new();
+    let mut channels = Channels::<N>::for_numeric();
     let (servo_port, mut host) = channels.split();
     let mut servo: Servo<'_, N> = Servo::new(board, &cfg, servo_port);
     let mut enc = Script {

@@ -14,7 +14,7 @@ use stiffwall_firmware::{Channels, Fx32, Fx64, Numeric, Servo, F32};
 use stiffwall_proto::ServoConfig;
 
 fn run<N: Numeric>() {
-    let mut channels = Channels::new();
+    let mut channels = Channels::<N>::for_numeric();
     let (port, _host) = channels.split();
     let cfg: ServoConfig = black_box(ServoConfig::default());
     let mut servo: Servo<'_, N> = Servo::new(board_info(), &cfg, port);
