@@ -40,11 +40,11 @@ pub trait Message: Serialize + DeserializeOwned {
 }
 
 impl Message for HostMsg {
-    const VARIANTS: u32 = 17;
+    const VARIANTS: u32 = 19;
 }
 
 impl Message for DeviceMsg {
-    const VARIANTS: u32 = 7;
+    const VARIANTS: u32 = 8;
 }
 
 /// Framing errors. Each maps to a distinct [`ErrorCode`].
@@ -707,25 +707,13 @@ mod tests {
 
     #[test]
     fn tag_counts_match_enums() {
-        // The last variant's tag is VARIANTS - 1.
+        // The last variant's tag is VARIANTS - 1 (protocol 5's profile messages are last).
         let mut buf = [0u8; 128];
         assert_eq!(
-            postcard::to_slice(
-                &HostMsg::PrepareTest {
-                    config: ServoConfig::default(),
-                    min_run_ticks: 0,
-                    within_one_count: false,
-                    decay_base_ticks: 0
-                },
-                &mut buf
-            )
-            .unwrap()[0] as u32,
+            postcard::to_slice(&HostMsg::GetProfile, &mut buf).unwrap()[0] as u32,
             HostMsg::VARIANTS - 1
         );
-        let m = DeviceMsg::Error {
-            code: ErrorCode::Crc,
-            detail: ErrorDetail::None,
-        };
+        let m = DeviceMsg::Profile(crate::profile::Profile::default());
         assert_eq!(
             postcard::to_slice(&m, &mut buf).unwrap()[0] as u32,
             DeviceMsg::VARIANTS - 1

@@ -10,7 +10,7 @@ use crate::error::{ClientError, Result};
 use crate::transport::Transport;
 use std::time::Duration;
 use stiffwall_proto::{
-    DeviceInfo, DeviceMsg, FaultReport, HostMsg, Sample, ServoConfig, TelemetryBatch,
+    DeviceInfo, DeviceMsg, FaultReport, HostMsg, Profile, Sample, ServoConfig, TelemetryBatch,
     PROTOCOL_VERSION,
 };
 
@@ -133,7 +133,24 @@ impl Client {
         self.request(&HostMsg::SetConfig(*config)).map(drop)
     }
 
-    /// Persists the active configuration.
+    /// Applies a haptic profile (protocol 5; validated by the device element by element: a
+    /// refused one changes nothing, and the error names the element, its field and range, in
+    /// [`crate::describe_error`]'s words). An empty profile renders the config's wall again.
+    /// Persisted with the config by [`Client::save_config`].
+    pub fn set_profile(&mut self, profile: &Profile) -> Result<()> {
+        self.request(&HostMsg::SetProfile(profile.clone()))
+            .map(drop)
+    }
+
+    /// Reads the active haptic profile (empty: the config's wall).
+    pub fn get_profile(&mut self) -> Result<Profile> {
+        match self.request(&HostMsg::GetProfile)? {
+            DeviceMsg::Profile(p) => Ok(p),
+            other => Err(unexpected("GetProfile", &other)),
+        }
+    }
+
+    /// Persists the active configuration and haptic profile.
     pub fn save_config(&mut self) -> Result<()> {
         self.request(&HostMsg::SaveConfig).map(drop)
     }

@@ -331,6 +331,7 @@ impl Link {
                         matches!(msg, HostMsg::GetConfig | HostMsg::LoadDefaults)
                     }
                     DeviceMsg::Faults(_) => matches!(msg, HostMsg::GetFaults),
+                    DeviceMsg::Profile(_) => matches!(msg, HostMsg::GetProfile),
                     DeviceMsg::HelloReply(_) => matches!(msg, HostMsg::Hello { .. }),
                     _ => false,
                 },
