@@ -192,26 +192,4 @@ mod tests {
         let mut buf = [0u8; 32];
         assert_eq!(postcard::to_slice(&e, &mut buf).unwrap(), &want[..]);
     }
-
-    /// The largest profile (16 detent trains, the widest element) fits one frame's payload
-    /// with the message tag around it.
-    #[test]
-    fn the_largest_profile_fits_a_frame() {
-        let mut p = Profile::default();
-        for _ in 0..MAX_PROFILE_ELEMENTS {
-            p.elements
-                .push(ProfileElement::Detents {
-                    first: i32::MIN,
-                    pitch_counts: f64::MAX,
-                    count: MAX_DETENTS,
-                    strength: f32::MAX,
-                    damping: f32::MAX,
-                    damper: DamperLaw::DeadBand { counts: 8 },
-                })
-                .unwrap();
-        }
-        let mut buf = [0u8; crate::MAX_PAYLOAD];
-        let n = postcard::to_slice(&p, &mut buf).unwrap().len();
-        assert!(n + 8 < crate::MAX_PAYLOAD, "{n} bytes");
-    }
 }

@@ -7,6 +7,8 @@
 //!   `list_devices`), its spring + damper part ([`damping`], its text `damping::render`) and
 //!   the data of its (K, B) frontier figure ([`frontier`]); the plant as given, a preset and
 //!   m, b, c ([`plant`]);
+//! - haptic profiles: a profile rendered by the firmware's own servo against the virtual
+//!   device's plant from releases and impacts at each element ([`profile_run`]);
 //! - scenes: the one-screen summary of a simulated scene, verdict and energy audit
 //!   ([`scene_summary`]);
 //! - recordings: the replay engines ([`replay`]) and the energy-monitor replay
@@ -36,6 +38,7 @@ pub mod live;
 pub mod map_file;
 pub mod monitor_report;
 pub mod plant;
+pub mod profile_run;
 pub mod release;
 pub mod replay;
 pub mod scene_summary;
