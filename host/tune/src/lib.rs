@@ -52,6 +52,7 @@ mod left;
 mod model_check;
 mod outcome;
 mod procedure;
+pub mod profile;
 mod progress;
 mod reach;
 mod reaim;
