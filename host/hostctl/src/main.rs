@@ -35,6 +35,8 @@ enum Command {
     Experiment(cmd::experiment::Args),
     /// Find and set the largest stable wall stiffness, with evidence.
     Tune(cmd::tune::Args),
+    /// Check a haptic profile file against a device's verified stiffness.
+    Profile(cmd::profile::Args),
     /// Live view of the device in the browser (traces, (beta, sigma) plane, release, tune).
     #[cfg(feature = "ui")]
     Ui(cmd::ui::Args),
@@ -56,6 +58,7 @@ fn main() -> std::process::ExitCode {
         Command::Replay(a) => cmd::replay::run(a),
         Command::Experiment(a) => cmd::experiment::run(a),
         Command::Tune(a) => cmd::tune::run(a),
+        Command::Profile(a) => return cmd::profile::main(a),
         #[cfg(feature = "ui")]
         Command::Ui(a) => cmd::ui::run(a),
         Command::Virtual(a) => cmd::r#virtual::run(a),

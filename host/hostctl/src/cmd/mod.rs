@@ -6,6 +6,7 @@ pub mod experiment;
 pub mod faults;
 pub mod info;
 pub mod map;
+pub mod profile;
 pub mod record;
 pub mod replay;
 pub mod simulate;
