@@ -200,12 +200,14 @@ pub fn detent_minima(e: &ProfileElement) -> Vec<f64> {
     }
 }
 
-/// True when the count `n` lies within one count of the minimum `m` (raw counts): the
-/// count's centre n + ½ is at most one count from it (the two counts beside a minimum on a
-/// count boundary).
+/// True when the count `n` lies within one count of the minimum `m` (raw counts, fractional):
+/// it is the count holding the minimum, ⌊m⌋, or one beside it. A detent whose force one and a
+/// half counts from its minimum exceeds static friction, A·sin(3π·Δ/pitch) > F_s (the check's
+/// centring rule), can rest in no other count: every other count's centre is at least 1.5
+/// counts from the minimum.
 #[must_use]
 pub fn within_one_count(n: i64, m: f64) -> bool {
-    ((n as f64 + 0.5) - m).abs() <= 1.0
+    (n - m.floor() as i64).abs() <= 1
 }
 
 /// The starts a user meets at each element, for a device of resolution `resolution` (m or rad

@@ -106,7 +106,7 @@ fn the_strong_detent_names_its_element_and_limit() {
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.contains("verdict: FAIL (element 1 (detents))"), "{out}");
     assert!(
-        out.contains("FAIL: K = 12.00 N·m/rad is above its limit"),
+        out.contains("FAIL: K = 7.680 N·m/rad is above its limit"),
         "{out}"
     );
     assert!(out.contains("strongest that passes: strength = "), "{out}");
