@@ -3,61 +3,15 @@
 //! binary against the built-in virtual device: served on a pseudo-terminal by `hostctl
 //! virtual`, so that one device (and its latched faults) outlives several hostctl runs.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use stiffwall_proto::fault;
 
 #[path = "support/cli.rs"]
 mod cli;
+#[path = "support/served.rs"]
+mod served;
 use cli::{fails, json, ok};
-
-/// `hostctl virtual` (paced, the default preset) serving its pty; stopped with SIGINT (its
-/// Ctrl-C) when dropped.
-struct Served {
-    child: Child,
-    pty: String,
-}
-
-impl Served {
-    fn start() -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_hostctl"))
-            .args(["virtual"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        let pty = line.trim().strip_prefix("pty: ").expect(&line).to_string();
-        Self { child, pty }
-    }
-
-    /// `args` with `--port PTY` appended.
-    fn args<'a>(&'a self, args: &[&'a str]) -> Vec<&'a str> {
-        let mut v = args.to_vec();
-        v.extend(["--port", self.pty.as_str()]);
-        v
-    }
-}
-
-impl Drop for Served {
-    fn drop(&mut self) {
-        let pid = self.child.id().to_string();
-        let _ = Command::new("kill").args(["-INT", &pid]).status();
-        let t0 = Instant::now();
-        while t0.elapsed() < Duration::from_secs(10) {
-            if let Ok(Some(_)) = self.child.try_wait() {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use served::Served;
 
 /// The device's fault report (`hostctl faults --json`).
 fn faults_json(d: &Served) -> serde_json::Value {

@@ -97,9 +97,28 @@ pub fn tune(
             return Err(velocity_error(v).into());
         }
     }
+    // A haptic profile renders in place of the config's wall, including the walks' springs
+    // between tests: off for the tune, back (and saved with a saved wall) after it.
+    let profile = c.get_profile().map_err(|e| TuneError::Device {
+        during: format!("reading the active profile: {e}"),
+        source: e,
+    })?;
+    let reporter = Reporter::new(progress);
+    if !profile.elements.is_empty() {
+        c.set_profile(&stiffwall_proto::Profile::default())
+            .map_err(|e| TuneError::Device {
+                during: format!("turning the active profile off for the tune: {e}"),
+                source: e,
+            })?;
+        reporter.report(Progress::Finding {
+            text: format!(
+                "a haptic profile of {} elements is active: off during the tune, back after it",
+                profile.elements.len()
+            ),
+        });
+    }
     // The client's experiments check the caller's token for the whole tune.
     let outer = c.set_cancel(cancel.clone());
-    let reporter = Reporter::new(progress);
     let mut place = Place::default();
     let result = tune_inner(c, s, &original, &reporter, &mut place)
         .map_err(|e| TuneError::from_step(e, cancel.is_cancelled()));
@@ -107,6 +126,29 @@ pub fn tune(
     c.set_cancel(stiffwall_client::Cancel::default());
     let finished = finish(c, s, &original, &place, result, &reporter);
     c.set_cancel(outer);
+    restore_profile(c, &profile, finished)
+}
+
+/// The profile that was active before the tune, back (and saved when the tune saved its
+/// wall, so the store holds both); a failure to restore it is the tune's error.
+fn restore_profile(
+    c: &mut Client,
+    profile: &stiffwall_proto::Profile,
+    finished: Result<Outcome, TuneError>,
+) -> Result<Outcome, TuneError> {
+    if profile.elements.is_empty() {
+        return finished;
+    }
+    let device = |during: &str, e: stiffwall_client::ClientError| TuneError::Device {
+        during: format!("{during}: {e}"),
+        source: e,
+    };
+    c.set_profile(profile)
+        .map_err(|e| device("restoring the haptic profile active before the tune", e))?;
+    if finished.as_ref().is_ok_and(|o| o.saved) {
+        c.save_config()
+            .map_err(|e| device("saving the config with the restored profile", e))?;
+    }
     finished
 }
 

@@ -1,11 +1,15 @@
 //! `hostctl profile check FILE`: checks a haptic profile file (`profiles/README.md`) against
 //! what a tune verified on a device: a tune result (`--tune-json`, the output of `hostctl tune
 //! --json`) or a fresh dry-run tune on the device the connection flags name (the built-in
-//! virtual device runs fast). The file format, the lowering and the check are
-//! `stiffwall_tune::profile`'s; this parses flags and prints.
+//! virtual device runs fast). `hostctl profile load FILE` checks it the same way on the
+//! connected device and loads it (`SetProfile`; `--save` persists it with the config), refusing
+//! a failing profile unless `--force`; `profile show` prints the device's active profile and
+//! `profile clear` returns it to the config's single wall. The file format, the lowering and
+//! the check are `stiffwall_tune::profile`'s; this parses flags and prints.
 //!
-//! Exit codes: 0 every element passes, 1 the check fails, 2 the file, the flags or the tune
-//! are refused (as every hostctl command's errors).
+//! Exit codes: 0 every element passes (and, for `load`, the profile is loaded), 1 the check
+//! fails (nothing loaded without `--force`), 2 the file, the flags, the tune or the device
+//! refused (as every hostctl command's errors).
 
 use crate::device::connect::ConnectArgs;
 use crate::output::{emit, emit_json};
@@ -27,6 +31,37 @@ pub struct Args {
 pub enum Command {
     /// Check a profile file against a device's verified stiffness (a tune's result).
     Check(CheckArgs),
+    /// Check a profile file on the connected device and load it (refused when it fails,
+    /// unless --force).
+    Load(LoadArgs),
+    /// Print the device's active profile.
+    Show(ConnectArgs),
+    /// Return the device to the config's single wall (an empty profile; --save persists it).
+    Clear(ClearArgs),
+}
+
+/// Arguments of `hostctl profile load`.
+#[derive(Debug, clap::Args)]
+pub struct LoadArgs {
+    #[command(flatten)]
+    pub check: CheckArgs,
+    /// Load a profile that fails the check, listing the elements expected to chatter or grow.
+    #[arg(long)]
+    pub force: bool,
+    /// Also save the config and the profile on the device (SaveConfig), so it renders the
+    /// profile after a reboot.
+    #[arg(long)]
+    pub save: bool,
+}
+
+/// Arguments of `hostctl profile clear`.
+#[derive(Debug, clap::Args)]
+pub struct ClearArgs {
+    #[command(flatten)]
+    pub connect: ConnectArgs,
+    /// Also save (SaveConfig), so the device boots with its config's wall.
+    #[arg(long)]
+    pub save: bool,
 }
 
 /// Arguments of `hostctl profile check`.
@@ -47,16 +82,114 @@ pub struct CheckArgs {
 
 /// Runs `hostctl profile`, with its own exit codes (module header).
 pub fn main(a: &Args) -> ExitCode {
-    match a.command {
-        Command::Check(ref c) => match check(c) {
-            Ok(true) => ExitCode::SUCCESS,
-            Ok(false) => ExitCode::from(1),
-            Err(e) => {
-                eprintln!("error: {}", crate::cli_error::message(&e));
-                ExitCode::from(2)
-            }
-        },
+    let result = match a.command {
+        Command::Check(ref c) => check(c),
+        Command::Load(ref l) => load(l),
+        Command::Show(ref c) => show(c).map(|()| true),
+        Command::Clear(ref c) => clear(c).map(|()| true),
+    };
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
+        Err(e) => {
+            eprintln!("error: {}", crate::cli_error::message(&e));
+            ExitCode::from(2)
+        }
     }
+}
+
+/// The profile units of a connected device: rotary when it reports counts per revolution.
+fn device_of(info: &stiffwall_proto::DeviceInfo) -> Device {
+    if info.counts_per_rev > 0 {
+        Device {
+            rotational: true,
+            resolution: core::f64::consts::TAU / f64::from(info.counts_per_rev),
+        }
+    } else {
+        Device {
+            rotational: false,
+            resolution: f64::from(info.resolution),
+        }
+    }
+}
+
+/// `profile load`: the check on the connected device, then `SetProfile` (and `SaveConfig`
+/// with `--save`); whether the check passed.
+///
+/// # Errors
+/// The file refused, the tune failed, the device refused the profile or the save.
+pub fn load(a: &LoadArgs) -> Result<bool> {
+    let c = &a.check;
+    let file = read_file(&c.file)?;
+    let mut client = connect_for(c)?;
+    let device = device_of(&client.info);
+    let lowered =
+        profile::lower(&file, &device).map_err(|e| anyhow!("{}: {e}", c.file.display()))?;
+    let envelope = match &c.tune_json {
+        Some(path) => envelope_of_file(path)?,
+        None => tune_on(&mut client, c.connect.describe())?.0,
+    };
+    let report = profile::check(&lowered, &envelope);
+    emit(&profile::render(&report))?;
+    if !report.pass && !a.force {
+        eprintln!(
+            "not loaded: the profile fails the check (the device renders what it had);              --force loads it anyway"
+        );
+        return Ok(false);
+    }
+    if !report.pass {
+        for e in report.elements.iter().filter(|e| !e.pass) {
+            eprintln!(
+                "loading anyway (--force): element {} ({}) is expected to chatter or grow",
+                e.index, e.kind
+            );
+        }
+    }
+    let wire = lowered.wire();
+    client.set_profile(&wire)?;
+    anyhow::ensure!(
+        client.get_profile()? == wire,
+        "the device's active profile differs from the one sent"
+    );
+    if a.save {
+        client.save_config()?;
+    }
+    let saved = if a.save {
+        ", saved"
+    } else {
+        " (not saved: --save keeps it over a reboot)"
+    };
+    eprintln!(
+        "profile {} loaded on {}{saved}",
+        lowered.name,
+        c.connect.describe()
+    );
+    Ok(report.pass)
+}
+
+/// `profile show`: the device's active profile.
+///
+/// # Errors
+/// The connection or the request failed.
+pub fn show(c: &ConnectArgs) -> Result<()> {
+    let mut client = c.connect()?;
+    let device = device_of(&client.info);
+    let p = client.get_profile()?;
+    Ok(emit(&profile::render_wire(&p, &device))?)
+}
+
+/// `profile clear`: an empty profile (the config's wall), saved with `--save`.
+///
+/// # Errors
+/// The connection, the request or the save failed.
+pub fn clear(c: &ClearArgs) -> Result<()> {
+    let mut client = c.connect.connect()?;
+    client.set_profile(&stiffwall_proto::Profile::default())?;
+    if c.save {
+        client.save_config()?;
+    }
+    eprintln!("profile cleared: the device renders its config's wall");
+    Ok(())
 }
 
 /// `profile check`: whether every element passes.
@@ -64,10 +197,8 @@ pub fn main(a: &Args) -> ExitCode {
 /// # Errors
 /// The file unreadable or refused, the tune JSON unreadable, the tune failed.
 pub fn check(a: &CheckArgs) -> Result<bool> {
-    let text = std::fs::read_to_string(&a.file)
-        .with_context(|| format!("reading {}", a.file.display()))?;
     let named = |e: profile::ProfileError| anyhow!("{}: {e}", a.file.display());
-    let file = ProfileFile::from_toml(&text).map_err(named)?;
+    let file = read_file(&a.file)?;
     let (envelope, outcome) = match &a.tune_json {
         Some(path) => (envelope_of_file(path)?, None),
         None => {
@@ -91,6 +222,13 @@ pub fn check(a: &CheckArgs) -> Result<bool> {
         emit(&profile::render(&report))?;
     }
     Ok(report.pass)
+}
+
+/// The profile file at `path`, parsed (its name in the error).
+fn read_file(path: &Path) -> Result<ProfileFile> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    ProfileFile::from_toml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
 /// The envelope of a saved tune result.
@@ -117,36 +255,34 @@ fn envelope_of_file(path: &Path) -> Result<Envelope> {
     ))
 }
 
-/// A dry-run tune on the device of the connection flags (the virtual device fast), as
-/// `hostctl tune --dry-run` runs it; the file is lowered for the device first, so a bad file
-/// is refused before any test.
-fn fresh_tune(a: &CheckArgs, file: &ProfileFile) -> Result<(Envelope, Outcome)> {
+/// The device of the connection flags (the built-in virtual device fast).
+fn connect_for(a: &CheckArgs) -> Result<stiffwall_client::Client> {
     let mut connect = a.connect.clone();
     if connect.port.is_none() && !connect.qemu && !connect.board_emulator {
         connect.fast = true;
     }
-    let name = connect.describe();
-    let mut client = connect.connect()?;
-    let info = &client.info;
-    let device = if info.counts_per_rev > 0 {
-        Device {
-            rotational: true,
-            resolution: core::f64::consts::TAU / f64::from(info.counts_per_rev),
-        }
-    } else {
-        Device {
-            rotational: false,
-            resolution: f64::from(info.resolution),
-        }
-    };
+    connect.connect()
+}
+
+/// A dry-run tune on the device of the connection flags (the virtual device fast), as
+/// `hostctl tune --dry-run` runs it; the file is lowered for the device first, so a bad file
+/// is refused before any test.
+fn fresh_tune(a: &CheckArgs, file: &ProfileFile) -> Result<(Envelope, Outcome)> {
+    let mut client = connect_for(a)?;
+    let device = device_of(&client.info);
     profile::lower(file, &device).map_err(|e| anyhow!("{}: {e}", a.file.display()))?;
+    tune_on(&mut client, a.connect.describe())
+}
+
+/// A dry-run tune on `client` (its summary on stderr) and its envelope, named `name`.
+fn tune_on(client: &mut stiffwall_client::Client, name: String) -> Result<(Envelope, Outcome)> {
     crate::session::stop_on_ctrl_c();
     let cancel = stiffwall_client::Cancel::on_ctrl_c();
     let settings = Settings {
         dry_run: true,
         ..Settings::default()
     };
-    let o = stiffwall_tune::tune(&mut client, &settings, &cancel, &mut |e| {
+    let o = stiffwall_tune::tune(client, &settings, &cancel, &mut |e| {
         eprintln!("tune: {e}");
     })
     .map_err(|e| match e {

@@ -60,7 +60,7 @@ pub use error::{Place, ProfileError};
 pub use file::{Axis, ElementSpec, Positions, ProfileFile};
 pub use lower::lower;
 pub use placed::{Lowered, Origin, Placed};
-pub use render::render;
+pub use render::{render, render_wire};
 pub use units::{Device, Units};
 
 #[cfg(test)]

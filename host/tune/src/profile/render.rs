@@ -154,3 +154,92 @@ fn row(s: &mut String, c: &ElementCheck, u: Units) {
         );
     }
 }
+
+/// A device's active profile (the wire form `GetProfile` answers) as one line per element,
+/// positions in raw counts and in the device's units (`device`'s Δ), every number with its
+/// unit; "none (the config's wall)" for an empty profile. Ends with a newline.
+#[must_use]
+pub fn render_wire(p: &stiffwall_proto::Profile, device: &super::units::Device) -> String {
+    use stiffwall_proto::{ProfileElement as E, Side};
+    let u = device.units();
+    let at = |c: i32| {
+        let x = f64::from(c) * device.resolution;
+        format!("count {c} ({} {})", sig(x), u.position)
+    };
+    let kb = |k: f32, b: f32, law: stiffwall_proto::DamperLaw| {
+        format!(
+            "K = {} {}, B = {} {} ({law})",
+            sig(f64::from(k)),
+            u.stiffness,
+            sig(f64::from(b)),
+            u.damping
+        )
+    };
+    if p.elements.is_empty() {
+        return "profile: none (the config's wall)\n".to_owned();
+    }
+    let mut s = format!("profile: {} elements\n", p.elements.len());
+    for (i, e) in p.elements.iter().enumerate() {
+        let line = match *e {
+            E::Wall {
+                position,
+                side,
+                stiffness,
+                damping,
+                damper,
+            } => {
+                let side = if side == Side::Upper {
+                    "upper"
+                } else {
+                    "lower"
+                };
+                let kb = kb(stiffness, damping, damper);
+                format!("{side} wall at {}: {kb}", at(position))
+            }
+            E::Spring {
+                center,
+                stiffness,
+                damping,
+                damper,
+            } => {
+                format!(
+                    "spring centred at {}: {}",
+                    at(center),
+                    kb(stiffness, damping, damper)
+                )
+            }
+            E::Detents {
+                first,
+                pitch_counts,
+                count,
+                strength,
+                damping,
+                damper,
+            } => format!(
+                "{count} detents from {}, pitch {} counts ({} {}): A = {} {}, B = {} {} ({damper})",
+                at(first),
+                sig(pitch_counts),
+                sig(pitch_counts * device.resolution),
+                u.position,
+                sig(f64::from(strength)),
+                u.force,
+                sig(f64::from(damping)),
+                u.damping
+            ),
+            E::Viscous {
+                from,
+                to,
+                damping,
+                damper,
+            } => format!(
+                "viscous zone from {} to {}: B = {} {} ({damper})",
+                at(from),
+                at(to),
+                sig(f64::from(damping)),
+                u.damping
+            ),
+        };
+        let _ = writeln!(s, "  {}. {line}", i + 1);
+    }
+    s
+}
