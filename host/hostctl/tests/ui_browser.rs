@@ -3,7 +3,8 @@
 //! printed URL and checks what a person would see: the sample counter and the trace advance; a
 //! release test run from the page shows its verdict; changing K moves the operating point in
 //! the (β, σ) plane; K far above the limit trips the supervisor and the fault banner appears;
-//! a `hostctl map` JSON opens in the map viewer.
+//! a `hostctl map` JSON opens in the map viewer; a `--profile` is drawn over the position trace
+//! with its legend and element table, and an element that fails its check is marked.
 //!
 //! Opt-in (`#[ignore]`, like the QEMU scenarios): `cargo xtask ci` installs chromium and
 //! chromium-driver and runs it; `cargo xtask ui-screenshots` runs it with
@@ -590,5 +591,124 @@ fn the_page_in_chromium() {
         let _ = std::fs::remove_dir_all(&dir);
         step("map shown");
         c.close().await.unwrap();
+    });
+}
+
+/// A dry-run tune of the fast virtual maxon-re35 (`hostctl tune --json`), saved in a file.
+fn tune_json() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("stiffwall-ui-browser-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("tune.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_hostctl"))
+        .args([
+            "tune",
+            "--dry-run",
+            "--json",
+            "--fast",
+            "--device",
+            "maxon-re35",
+        ])
+        .output()
+        .expect("run hostctl tune");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::write(&path, &out.stdout).unwrap();
+    path
+}
+
+/// The profile overlay of the position panel on `server`'s page, once at least `want_drawn`
+/// elements are drawn: (elements drawn, the legend's kinds, the marks' labels, table rows).
+async fn profile_overlay(
+    c: &Client,
+    server: &Server,
+    want_drawn: usize,
+) -> (usize, String, String, usize) {
+    c.goto(&server.url).await.expect("load the page");
+    let long = Duration::from_secs(30);
+    let drawn = wait("the profile overlay", long, || async {
+        number(c, "traces", "data-profile-drawn")
+            .await
+            .filter(|n| *n as usize >= want_drawn)
+    })
+    .await as usize;
+    let legend = attr(c, "traces", "data-profile-legend")
+        .await
+        .unwrap_or_default();
+    let marked = attr(c, "traces", "data-profile-marked")
+        .await
+        .unwrap_or_default();
+    let rows = c
+        .find_all(Locator::Css("#profile-table tbody tr"))
+        .await
+        .unwrap()
+        .len();
+    assert!(
+        c.find(Locator::Id("profile-table"))
+            .await
+            .unwrap()
+            .is_displayed()
+            .await
+            .unwrap(),
+        "the element table is shown"
+    );
+    (drawn, legend, marked, rows)
+}
+
+#[test]
+#[ignore = "needs Debian's chromium and chromium-driver: run `cargo xtask ci` or `cargo xtask ui-screenshots`"]
+fn the_profile_overlay_in_chromium() {
+    let tune = tune_json();
+    let profiles = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../profiles");
+    let knob = profiles.join("knob-24-detents.toml");
+    let strong = profiles.join("too-strong-detent.toml");
+    let (_driver, driver_url) = start_driver();
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    rt.block_on(async {
+        let c = browser(&driver_url).await;
+        // The knob: a detent train between two end stops, checked and passing.
+        let server = Server::start(&[
+            "--device",
+            "maxon-re35",
+            "--profile",
+            knob.to_str().unwrap(),
+            "--tune-json",
+            tune.to_str().unwrap(),
+        ]);
+        let (drawn, legend, marked, rows) = profile_overlay(&c, &server, 3).await;
+        assert_eq!((drawn, rows), (3, 3), "legend {legend}, marks {marked}");
+        let kinds: Vec<&str> = legend.split(',').collect();
+        assert!(
+            kinds.contains(&"wall") && kinds.contains(&"detents"),
+            "{legend}"
+        );
+        let info = text_of(&c, "profile-info").await;
+        assert!(
+            info.contains("knob-24-detents") && info.contains("passes"),
+            "{info}"
+        );
+        shot(&c, "ui-profile.png").await;
+        drop(server);
+        // A detent above its limit, loaded anyway: marked "fails" on the trace and in the table.
+        let server = Server::start(&[
+            "--device",
+            "maxon-re35",
+            "--profile",
+            strong.to_str().unwrap(),
+            "--tune-json",
+            tune.to_str().unwrap(),
+            "--force-profile",
+        ]);
+        let (drawn, legend, marked, rows) = profile_overlay(&c, &server, 1).await;
+        assert_eq!((drawn, rows, legend.as_str()), (1, 1, "detents"));
+        assert!(marked.contains("fails"), "{marked}");
+        let row = text_of(&c, "profile-table").await;
+        assert!(
+            row.contains("fails") && row.contains("above its limit"),
+            "{row}"
+        );
+        let _ = c.close().await;
     });
 }

@@ -14,7 +14,7 @@ const ring = {
   flags: new Uint16Array(RING), energy: new Uint32Array(RING), n: 0, // total pushed
 };
 const st = {
-  hello: null, config: null, plane: null, status: null, faults: null,
+  hello: null, config: null, plane: null, status: null, faults: null, profile: null,
   paused: false, windowS: 2, viewEnd: null, nextId: 1, pending: new Map(),
   received: 0, lastSeq: -1, seqBase: null, frames: 0, fpsT: performance.now(), fps: 0,
   lagged: 0, ws: null, dirty: true,
@@ -97,6 +97,7 @@ function onJson(m) {
     case 'hello': onHello(m); break;
     case 'config': onConfig(m); break;
     case 'plane': st.plane = m; drawPlane(); drawFrontier(); break;
+    case 'profile': onProfile(m); break;
     case 'status': onStatus(m); break;
     case 'faults': onFaults(m); break;
     case 'release': onRelease(m); break;
@@ -293,7 +294,10 @@ function drawTraces() {
     const flat = vmax - vmin < 1e-12; const value = vmin;
     if (flat) { vmax = value + 1; vmin = value - 1; }
     const pad = flat ? 0 : (vmax - vmin) * 0.08; vmin -= pad; vmax += pad;
+    // The position lane also covers the profile's edges (walls, centres, trains, zones).
+    if (L === 0) [vmin, vmax] = profileRange(vmin, vmax);
     const Y = (v) => y1 - (v - vmin) / (vmax - vmin) * (y1 - y0 - 16);
+    if (L === 0) drawProfile(g, cv, left, pw, y0, y1, Y, vmin, vmax);
     g.fillStyle = '#555';
     if (flat) g.fillText(`= ${fmt(value)}`, 4, Y(value) + 4);
     else { g.fillText(fmt(vmax), 4, y0 + 20); g.fillText(fmt(vmin), 4, y1); }
@@ -325,6 +329,153 @@ function drawTraces() {
   cv.dataset.chatter = ch.state;
   cv.dataset.togglesPerS = ch.toggles.toFixed(1);
   $('trace-info').textContent = `${st.paused ? 'paused' : (st.running === 'tune' ? 'not live (tune has the link)' : 'live')} · ${st.windowS} s window · ${used.toLocaleString('en')} samples in ${cols} columns${fast} · ${ch.text}`;
+}
+
+// ---------- haptic profile (the `profile` message, wire.rs / profile.rs) ----------
+// Drawn over the position lane, in raw counts as the lane: walls shaded beyond their
+// surface, a spring's centre as a line, detent minima as thin lines over the train's span, a
+// viscous zone as a light band. An element near its limit (margin < near_limit) or failing
+// the check is drawn in its state's colour with a label.
+const PROFILE_STYLE = {
+  wall: { fill: 'rgba(100,116,139,0.22)', line: '#475569', label: 'wall (shaded: inside)' },
+  spring: { line: '#0f766e', label: 'spring centre' },
+  detents: { line: '#7c3aed', label: 'detent minima' },
+  viscous: { fill: 'rgba(250,204,21,0.20)', line: '#ca8a04', label: 'viscous zone' },
+};
+const STATE_COLOR = { near: '#ea580c', fails: '#dc2626' };
+function showProfile() { return st.profile && st.profile.elements.length > 0 && $('profile-show').checked; }
+function profileEdges(e) {
+  const g = e.geometry;
+  switch (e.wire_kind) {
+    case 'wall': return [g.position];
+    case 'spring': return [g.center];
+    case 'detents': return [g.first, g.first + (g.count - 1) * g.pitch];
+    case 'viscous': return [g.from, g.to];
+    default: return [];
+  }
+}
+function profileRange(vmin, vmax) {
+  if (!showProfile()) return [vmin, vmax];
+  let lo = vmin; let hi = vmax;
+  for (const e of st.profile.elements) for (const x of profileEdges(e)) { lo = Math.min(lo, x); hi = Math.max(hi, x); }
+  if (lo === vmin && hi === vmax) return [vmin, vmax];
+  const pad = (hi - lo) * 0.06;
+  return [lo - pad, hi + pad];
+}
+function stateLabel(e) {
+  if (e.state === 'fails') return 'fails';
+  if (e.state === 'near') return `near limit (margin ${e.check.margin.toFixed(2)})`;
+  return '';
+}
+function drawProfile(g, cv, left, pw, y0, y1, Y, vmin, vmax) {
+  const top = y0 + 16;
+  cv.dataset.profileElements = String(st.profile ? st.profile.elements.length : 0);
+  if (!showProfile()) { cv.dataset.profileDrawn = '0'; cv.dataset.profileLegend = ''; cv.dataset.profileMarked = ''; return; }
+  const clampY = (y) => Math.max(top, Math.min(y1, y));
+  const kinds = new Set(); const marked = []; let drawn = 0;
+  g.save();
+  g.beginPath(); g.rect(left, top, pw, y1 - top); g.clip();
+  for (const e of st.profile.elements) {
+    const s = PROFILE_STYLE[e.wire_kind]; if (!s) continue;
+    const mark = STATE_COLOR[e.state];
+    const geo = e.geometry; let at = null; let visible = false;
+    if (e.wire_kind === 'wall') {
+      const ys = Y(geo.position); const yEnd = geo.side === 'upper' ? top : y1;
+      visible = geo.side === 'upper' ? geo.position <= vmax : geo.position >= vmin;
+      g.fillStyle = mark ? 'rgba(220,38,38,0.16)' : s.fill;
+      g.fillRect(left, Math.min(ys, yEnd), pw, Math.abs(yEnd - ys));
+      g.strokeStyle = mark || s.line; g.lineWidth = 1.5;
+      g.beginPath(); g.moveTo(left, ys); g.lineTo(left + pw, ys); g.stroke();
+      at = ys;
+    } else if (e.wire_kind === 'spring') {
+      const y = Y(geo.center); visible = geo.center >= vmin && geo.center <= vmax;
+      g.strokeStyle = mark || s.line; g.lineWidth = 1.5; g.setLineDash([6, 3]);
+      g.beginPath(); g.moveTo(left, y); g.lineTo(left + pw, y); g.stroke(); g.setLineDash([]);
+      at = y;
+    } else if (e.wire_kind === 'detents') {
+      const j0 = Math.max(0, Math.ceil((vmin - geo.first) / geo.pitch));
+      const j1 = Math.min(geo.count - 1, Math.floor((vmax - geo.first) / geo.pitch));
+      visible = j1 >= j0;
+      g.strokeStyle = mark || s.line; g.lineWidth = 0.75;
+      // At most one line per 2 pixels: a denser train is drawn as its span.
+      const px = Math.abs(Y(geo.first + geo.pitch) - Y(geo.first));
+      if (visible && px < 2) {
+        g.fillStyle = mark ? 'rgba(220,38,38,0.10)' : 'rgba(124,58,237,0.10)';
+        const ya = Y(geo.first + j0 * geo.pitch); const yb = Y(geo.first + j1 * geo.pitch);
+        g.fillRect(left, Math.min(ya, yb), pw, Math.abs(yb - ya) + 1);
+      } else if (visible) {
+        g.beginPath();
+        for (let j = j0; j <= j1; j++) { const y = Math.round(Y(geo.first + j * geo.pitch)) + 0.5; g.moveTo(left, y); g.lineTo(left + pw, y); }
+        g.stroke();
+      }
+      at = Y(geo.first + ((j0 + j1) / 2) * geo.pitch);
+    } else if (e.wire_kind === 'viscous') {
+      const ya = Y(geo.from); const yb = Y(geo.to);
+      visible = geo.to >= vmin && geo.from <= vmax;
+      g.fillStyle = mark ? 'rgba(220,38,38,0.12)' : s.fill;
+      g.fillRect(left, Math.min(ya, yb), pw, Math.abs(yb - ya));
+      at = (ya + yb) / 2;
+    }
+    if (!visible) continue;
+    drawn++; kinds.add(e.wire_kind);
+    if (mark) {
+      const text = `#${e.index} ${e.kind}: ${stateLabel(e)}`;
+      marked.push(text);
+      g.font = 'bold 12px DejaVu Sans, sans-serif';
+      const tw = g.measureText(text).width;
+      const y = clampY(at) + (clampY(at) - top < 14 ? 12 : -3);
+      g.fillStyle = 'rgba(255,255,255,0.85)'; g.fillRect(left + 8, y - 11, tw + 6, 14);
+      g.fillStyle = mark; g.fillText(text, left + 11, y);
+    }
+  }
+  g.restore();
+  // The legend: one entry per kind drawn, and the marks in use.
+  const entries = [...kinds].map((k) => [PROFILE_STYLE[k].label, PROFILE_STYLE[k].fill || null, PROFILE_STYLE[k].line]);
+  for (const s8 of ['near', 'fails']) {
+    if (st.profile.elements.some((e) => e.state === s8)) entries.push([s8 === 'near' ? `near limit (margin < ${st.profile.near_limit})` : 'fails the check', null, STATE_COLOR[s8]]);
+  }
+  g.font = '11px DejaVu Sans, sans-serif';
+  const lw = Math.max(0, ...entries.map(([t]) => g.measureText(t).width)) + 30;
+  const lx = left + pw - lw - 4; let ly = y0 + 4;
+  if (entries.length) { g.fillStyle = 'rgba(255,255,255,0.9)'; g.fillRect(lx, ly, lw, entries.length * 14 + 4); }
+  for (const [text, fill, line] of entries) {
+    if (fill) { g.fillStyle = fill; g.fillRect(lx + 4, ly + 4, 16, 10); }
+    g.strokeStyle = line; g.lineWidth = 1.5;
+    g.beginPath(); g.moveTo(lx + 4, ly + 9); g.lineTo(lx + 20, ly + 9); g.stroke();
+    g.fillStyle = '#333'; g.fillText(text, lx + 24, ly + 13);
+    ly += 14;
+  }
+  g.font = '12px DejaVu Sans, sans-serif';
+  cv.dataset.profileDrawn = String(drawn);
+  cv.dataset.profileLegend = [...kinds].join(',');
+  cv.dataset.profileMarked = marked.join('|');
+}
+function onProfile(m) {
+  st.profile = m; st.dirty = true;
+  const info = $('profile-info'); const table = $('profile-table'); const body = table.querySelector('tbody');
+  info.dataset.source = m.elements.length ? m.source : 'none';
+  info.dataset.elements = String(m.elements.length);
+  if (!m.elements.length) {
+    info.textContent = "no haptic profile on the device: it renders the config's wall";
+    table.hidden = true; return;
+  }
+  const what = m.source === 'file' ? `profile "${m.name}" from ${m.file}` : "the device's active profile (not from --profile: elements numbered on the wire)";
+  const chk = m.checked_against ? ` · checked against ${m.checked_against}: ${m.pass ? 'passes' : 'FAILS'}` : ' · not checked (no --tune-json): no margins';
+  info.textContent = `${what}: ${m.elements.length} element${m.elements.length === 1 ? '' : 's'} over the position trace${chk}`;
+  body.textContent = '';
+  const num = (e, name) => { const n = e.numbers.find((x) => x.name === name); return n ? `${fmt(n.value)} ${n.unit}` : '–'; };
+  for (const e of m.elements) {
+    const tr = document.createElement('tr'); tr.className = e.state; tr.dataset.state = e.state;
+    const span = `${e.span.lo === null ? '−∞' : e.span.lo} … ${e.span.hi === null ? '+∞' : e.span.hi}`;
+    const c = e.check;
+    const cells = [String(e.index), e.kind + (e.part ? ` (${e.part})` : ''), span, num(e, 'K'), num(e, 'B'),
+      c && c.k_limit !== null ? `${fmt(c.k_limit)} ${m.units.k}` : '–', c && c.margin !== null ? c.margin.toFixed(2) : '–',
+      e.state === 'unchecked' ? '' : (stateLabel(e) || 'ok') + (c && c.problems.length ? `: ${c.problems.join('; ')}` : '')];
+    for (const t of cells) { const td = document.createElement('td'); td.textContent = t; tr.appendChild(td); }
+    if (e.wire_kind === 'detents') tr.title = `${num(e, 'strength')}, pitch ${num(e, 'pitch')} (${fmt(e.geometry.pitch)} counts), ${e.geometry.count} minima`;
+    body.appendChild(tr);
+  }
+  table.hidden = false;
 }
 
 // Chatter over the last second of device time before `end` (the rule of stiffwall_core::rest:
@@ -654,6 +805,7 @@ $('pause').onclick = () => {
   st.dirty = true;
   $('pause').textContent = st.paused ? 'Resume' : 'Pause';
 };
+$('profile-show').onchange = () => { st.dirty = true; };
 $('window').onchange = (e) => { st.windowS = Number(e.target.value); st.dirty = true; };
 function zoom(f) {
   st.windowS = Math.min(200, Math.max(0.005, st.windowS * f));

@@ -83,6 +83,7 @@ pub fn run(
     };
     d.hello();
     d.publish_config();
+    d.publish_profile();
     d.poll_faults();
     d.start_stream()?;
     let result = d.main_loop(&rx);
@@ -171,6 +172,19 @@ impl Dev {
                 self.xidot,
             ),
         );
+    }
+
+    /// The device's active profile (asked at connect), named and checked by `--profile`'s
+    /// file when it is what that file loaded.
+    fn publish_profile(&mut self) {
+        match self.client.get_profile() {
+            Ok(p) => self.shared.publish(
+                "profile",
+                super::profile::message(&self.client.info, &p, self.setup.profile.as_ref()),
+            ),
+            Err(e) => self.shared.event(&json!({"type": "log", "level": "error",
+                "message": format!("reading the device's profile: {e_text}", e_text = crate::cli_error::message(&e))})),
+        }
     }
 
     fn start_stream(&mut self) -> Result<()> {

@@ -7,12 +7,13 @@
 //! session), [`device`] (the thread that owns the device connection),
 //! [`wire`] (commands, events and the binary telemetry frames), [`plane`] (the (β, σ) plane
 //! and the map overlay, computed with the same code as the figures), [`frontier`] (the (B, K)
-//! frontier K_max(B) beside it, with the configured (B, K)), [`record`] (recording
+//! frontier K_max(B) beside it, with the configured (B, K)), [`profile`] (`--profile`, checked
+//! and loaded at start, and the device's active profile drawn over the position trace), [`record`] (recording
 //! from the page in `hostctl record`'s format), [`trace`] (a release test's trace, decimated
 //! for the page).
 //!
 //! Unlike the other commands, this one imports its siblings' argument definitions and checks
-//! (config set, experiment release, tune, map files): it is a front end over them, so that the
+//! (config set, experiment release, tune, map files, profile files): it is a front end over them, so that the
 //! page behaves exactly as the terminal (docs/ARCHITECTURE.md).
 //!
 //! Units: as in the other device commands (SI on the command line and on the page, device
@@ -25,6 +26,7 @@ pub mod app;
 pub mod conn;
 pub mod control;
 pub mod device;
+pub mod profile;
 pub mod record;
 pub mod security;
 pub mod server;
@@ -50,7 +52,7 @@ pub const DEFAULT_LISTEN: &str = "127.0.0.1:8737";
 /// Arguments of `hostctl ui`.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Examples:\n  hostctl ui\n  hostctl ui --device phantom-1.0 --rate 5000\n  hostctl ui --port /dev/ttyACM0 --model 6.28e-6 9e-6 2e-3\n  hostctl ui --listen 127.0.0.1:0 --fast\n\nOpen the printed URL (it carries the run's token). Recordings started from the page are\nwritten to --record-dir in the format of `hostctl record`."
+    after_help = "Examples:\n  hostctl ui\n  hostctl ui --device phantom-1.0 --rate 5000\n  hostctl ui --port /dev/ttyACM0 --model 6.28e-6 9e-6 2e-3\n  hostctl ui --listen 127.0.0.1:0 --fast\n  hostctl ui --device maxon-re35 --profile profiles/knob-24-detents.toml --tune-json tune.json\n\nOpen the printed URL (it carries the run's token). Recordings started from the page are\nwritten to --record-dir in the format of `hostctl record`."
 )]
 pub struct Args {
     /// Address to serve on. Anything but a loopback address exposes the device's controls to
@@ -65,6 +67,18 @@ pub struct Args {
     /// Directory that recordings started from the page are written to.
     #[arg(long, default_value = ".", value_name = "DIR")]
     pub record_dir: PathBuf,
+    /// A haptic profile file (TOML, profiles/README.md): lowered for the connected device and
+    /// loaded onto it (`SetProfile`) before serving, drawn over the position trace. Refused,
+    /// with nothing loaded, when it does not lower or fails the check against --tune-json.
+    #[arg(long, value_name = "FILE")]
+    pub profile: Option<PathBuf>,
+    /// A tune result (the output of `hostctl tune --json`) to check --profile against: each
+    /// element's margin (limit / local K) is shown and one that fails refuses the profile.
+    #[arg(long, value_name = "TUNE.json", requires = "profile")]
+    pub tune_json: Option<PathBuf>,
+    /// Load a --profile that fails the check anyway (what fails is printed and marked).
+    #[arg(long, requires = "tune_json")]
+    pub force_profile: bool,
     /// Configuration changes applied before serving (not saved).
     #[command(flatten)]
     pub set: Overrides,
@@ -114,7 +128,17 @@ pub fn run(a: &Args) -> Result<()> {
         );
     }
     crate::session::stop_on_ctrl_c();
-    let (client, _cfg) = a.set.connect_and_apply(&a.connect)?;
+    let (mut client, _cfg) = a.set.connect_and_apply(&a.connect)?;
+    let loaded = match &a.profile {
+        Some(file) => {
+            let l = profile::prepare(file, a.tune_json.as_deref(), a.force_profile, &client.info)?;
+            client.set_profile(&l.lowered.wire()).with_context(|| {
+                format!("--profile {}: loading it onto the device", file.display())
+            })?;
+            Some(l)
+        }
+        None => None,
+    };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -133,6 +157,7 @@ pub fn run(a: &Args) -> Result<()> {
         model,
         record_dir: a.record_dir.clone(),
         pace: a.connect.fast && a.connect.port.is_none() && !a.connect.qemu,
+        profile: loaded,
     };
     let dev_shared = Arc::clone(&shared);
     let dev = std::thread::Builder::new()

@@ -96,6 +96,8 @@ pub struct Setup {
     pub record_dir: PathBuf,
     /// Pace the stream (sleep between reads) because the virtual device runs `--fast`.
     pub pace: bool,
+    /// The `--profile` file loaded at start (names the active profile's elements, its check).
+    pub profile: Option<crate::cmd::ui::profile::Loaded>,
 }
 
 /// The thread's state.
