@@ -16,7 +16,8 @@
 //!   cycles per servo tick and CPU load for docs/BENCHMARKS.md.
 //! - `flash BOARD --features dac|pwm[,defmt]`: builds a real board's image and flashes it with
 //!   probe-rs (the board's runner; docs/toolchain.md).
-//! - `bench-firmware [--no-write]`: instructions per servo tick under QEMU `-icount`.
+//! - `bench-firmware [--no-write | --check]`: instructions per servo tick under QEMU `-icount`
+//!   (`--check`, in `ci`: docs/BENCHMARKS.md's section must be the fresh run's).
 //! - `fuzz [--frames N] [--seed S]`: the fuzz campaign with a chosen budget (CI runs 10⁷
 //!   frames, seed 1, docs/RELIABILITY.md's figures).
 //! - `bench [--quick] [--no-criterion]`: the simulator's accuracy-vs-time tables
@@ -218,8 +219,8 @@ fn ci_emulated_targets(step: &dyn Fn(&str)) -> Result<()> {
     qemu::qemu(&[])?;
     step("the Nucleo images on the board emulator (unicorn): boot, pty, tune vs the virtual device, flash store, watchdog, mutation checks");
     board_emu::board_emu(&[])?;
-    step("servo instruction budget under QEMU -icount");
-    bench_firmware::bench_firmware(&["--no-write".to_string()])?;
+    step("servo instruction budgets under QEMU -icount (the wall, the haptic profile), and docs/BENCHMARKS.md's figures against the run");
+    bench_firmware::bench_firmware(&["--check".to_string()])?;
     step("a Fig. 6 panel as a Slurm job array on a throw-away cluster (Debian's slurm-wlm and munge; root), with pre-emption");
     cluster::cluster_test(&[])?;
     Ok(())
@@ -249,6 +250,6 @@ fn main() -> Result<()> {
         Some("arch") => arch::arch(&args[1..]),
         Some("sizes") => sizes::sizes(&args[1..]),
         Some("readme-figures") => readme_figures::readme_figures(),
-        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, figures [--check], module-cycles [--edges], arch [--print], sizes, readme-figures"),
+        other => bail!("unknown xtask {other:?}; available: ci, unused-deps, firmware [--update-size-report], qemu [--bless], board-emu [--build] [--bench], flash BOARD --features dac|pwm[,defmt], bench-firmware [--no-write | --check], bench [--quick], tune-table [--quick] [--only NAME], ui-screenshots, fuzz [--frames N] [--seed S], cluster-test, atlas, figures [--check], module-cycles [--edges], arch [--print], sizes, readme-figures"),
     }
 }

@@ -17,58 +17,40 @@
 //! parked back on its last), a latched fault (an encoder jump) in safe-mode damping and the
 //! clearing of it: `BENCH-TICK <phase> <numeric> <virtual ns of the phase's longest tick>
 //! <its tick> <ticks in the phase>`, the per-tick stand-ins subtracted.
+//!
+//! Then the haptic profile (`bench/profile.rs`): the full tick with the damper in profile mode,
+//! the profile loaded as `HostMsg::SetProfile` loads it (validate, compile, the table queued,
+//! `ServoCmd::Profile`), the mean as above for one element of each kind and for 1, 4 and 16
+//! detent trains (`BENCH profile-… <numeric> …`; 16 trains is the worst case a user can load),
+//! and one run per detent stage with every tick timed alone: `BENCH-PROFILE-TICK <stage>
+//! <phase> <numeric> <ns> <tick> <ticks>` (the tick that takes the profile, a config change in
+//! profile mode, the render ticks) and `BENCH-COMPILE <stage> <numeric> <ns>` (the main loop's
+//! validate + compile + queue). The measuring kit (sweep, sink, batches, windows, the measured
+//! functions) is `bench/kit.rs`.
 #![no_std]
 #![no_main]
 
 use core::hint::black_box;
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use stiffwall_firmware::channels::DecidedEnd;
 use stiffwall_firmware::{
-    BoardInfo, Channels, Encoder, ForceOutput, Fx32, Fx64, HostPort, Numeric, Servo, ServoCmd,
-    ServoEvent, F32,
+    BoardInfo, Channels, Encoder, ForceOutput, Fx32, Fx64, Numeric, Servo, ServoCmd, ServoEvent,
+    F32,
 };
 use stiffwall_proto::{DamperLaw, SafeMode, ServoConfig};
 
-const BATCHES: u32 = 40;
-const PER_BATCH: u32 = 200;
-/// Virtual ns per SysTick count (a 25 MHz SysTick clock); one instruction is 2^S ns under
-/// `-icount shift=S`.
-const NS_PER_COUNT: u64 = 40;
+// The bench's modules sit in `bench/` beside this crate root (one folder per binary).
+#[path = "bench/kit.rs"]
+mod kit;
+#[path = "bench/profile.rs"]
+mod profile;
 
-/// Counts of a triangle sweep of ±256·`step` counts around the wall, `step` counts per tick.
-const SWEEP_LEN: usize = 1024;
-
-fn sweep_table(step: i32) -> [u32; SWEEP_LEN] {
-    let mut t = [0u32; SWEEP_LEN];
-    for (i, v) in t.iter_mut().enumerate() {
-        let p = i as i32;
-        let tri = if p < 512 { p - 256 } else { 768 - p };
-        *v = (tri * step) as u32 & 0xffff;
-    }
-    t
-}
-
-/// An encoder replaying the sweep: one load per read, like a timer's counter register, so the
-/// measured instructions are the servo's and not a synthetic encoder's.
-struct Sweep<'t> {
-    table: &'t [u32; SWEEP_LEN],
-    i: usize,
-}
-impl Encoder for Sweep<'_> {
-    fn count(&mut self) -> u32 {
-        self.i = (self.i + 1) & (SWEEP_LEN - 1);
-        self.table[self.i]
-    }
-}
-
-struct Sink;
-impl ForceOutput for Sink {
-    fn write(&mut self, code: i32) {
-        black_box(code);
-    }
-}
+use kit::{
+    check_no_faults, full, io, measure, report, spring, spring_delay, start_stream, supervised,
+    sweep_table, window, Sink, Sweep, BATCHES, NS_PER_COUNT, PER_BATCH, SWEEP_LEN,
+};
 
 /// Virtual damping of the damper-on stage, N·s/m (nonzero gain in every back-end).
 const DAMPING_N_S_PER_M: f32 = 0.01;
@@ -87,75 +69,6 @@ fn config() -> ServoConfig {
         heartbeat_timeout_ms: 0,
         ..ServoConfig::default()
     }
-}
-
-fn elapsed(start: u32, end: u32) -> u64 {
-    u64::from(start.wrapping_sub(end) & 0x00ff_ffff)
-}
-
-/// SysTick counts for `BATCHES × PER_BATCH` calls of `f`, with `between` run unmeasured.
-fn measure(mut f: impl FnMut(u32), mut between: impl FnMut()) -> u64 {
-    let mut total = 0;
-    let mut now = 0u32;
-    for _ in 0..BATCHES {
-        let start = SYST::get_current();
-        for _ in 0..PER_BATCH {
-            f(black_box(now));
-            now = now.wrapping_add(1);
-        }
-        total += elapsed(start, SYST::get_current());
-        between();
-    }
-    total
-}
-
-fn report(stage: &str, numeric: &str, counts: u64, baseline: u64) {
-    let ticks = u64::from(BATCHES * PER_BATCH);
-    let ns_x100 = counts.saturating_sub(baseline) * NS_PER_COUNT * 100 / ticks;
-    hprintln!("BENCH {} {} {}", stage, numeric, ns_x100);
-}
-
-// Each stage is measured as its own function, called once per tick, as the board's servo
-// interrupt calls `Servo::tick`: the stage's code is then compiled on its own and its count does
-// not move with the register allocation of this bench's loop (inlined into `main`, the spring
-// stage measured anywhere from 35 to 42 instructions as unrelated code changed). The call, the
-// return and the stand-ins are measured the same way (`io`) and subtracted.
-
-#[inline(never)]
-fn io(enc: &mut Sweep<'_>, out: &mut Sink) -> i32 {
-    let c = enc.count() as i32;
-    out.write(c);
-    c
-}
-
-#[inline(never)]
-fn spring<N: Numeric>(servo: &mut Servo<'_, N>, enc: &mut Sweep<'_>, out: &mut Sink) -> i32 {
-    servo.tick_spring(enc, out)
-}
-
-#[inline(never)]
-fn spring_delay<N: Numeric>(servo: &mut Servo<'_, N>, enc: &mut Sweep<'_>, out: &mut Sink) -> i32 {
-    servo.tick_spring_delay(enc, out)
-}
-
-#[inline(never)]
-fn supervised<N: Numeric>(
-    servo: &mut Servo<'_, N>,
-    now: u32,
-    enc: &mut Sweep<'_>,
-    out: &mut Sink,
-) -> i32 {
-    servo.tick_supervised(now, enc, out)
-}
-
-#[inline(never)]
-fn full<N: Numeric>(
-    servo: &mut Servo<'_, N>,
-    now: u32,
-    enc: &mut Sweep<'_>,
-    out: &mut Sink,
-) -> i32 {
-    servo.tick(now, enc, out)
 }
 
 fn stages<N: Numeric>(baseline: u64) {
@@ -232,6 +145,7 @@ fn stages<N: Numeric>(baseline: u64) {
     report("full+damper", N::NAME, c, baseline);
     check_no_faults(&servo, " with the damper");
     worst::<N>(board, &damped, &table2);
+    profile::stages::<N>(board, &damped, &table2, baseline);
 }
 
 /// The same config with the virtual damper on (B > 0, the default law: a dead band of one
@@ -246,30 +160,6 @@ fn damped_config(cfg: &ServoConfig) -> ServoConfig {
         hprintln!("BENCH-ERROR the damped stage is not the dead band of one count");
     }
     damped
-}
-
-/// Queues telemetry at every tick (the full tick's push).
-fn start_stream<N: Numeric>(host: &mut HostPort<'_, N>) {
-    if host
-        .commands
-        .enqueue(ServoCmd::Stream { decimation: 1 })
-        .is_err()
-    {
-        hprintln!("BENCH-ERROR command queue full");
-    }
-}
-
-/// A measured stage must latch no fault (the sweep stays within every limit); `what` ends the
-/// error line.
-fn check_no_faults<N: Numeric>(servo: &Servo<'_, N>, what: &str) {
-    if servo.faults() != 0 {
-        hprintln!(
-            "BENCH-ERROR faults {:#x} latched during {}{}",
-            servo.faults(),
-            N::NAME,
-            what
-        );
-    }
 }
 
 /// The worst tick's encoder: the sweep shifted by `offset` counts (a jump), or held still at
@@ -305,14 +195,6 @@ fn full_script<N: Numeric>(
     out: &mut Sink,
 ) -> i32 {
     servo.tick(now, enc, out)
-}
-
-/// Virtual ns of one call of `f`, the SysTick counter read around it.
-#[inline(always)]
-fn window(f: impl FnOnce()) -> u64 {
-    let start = SYST::get_current();
-    f();
-    elapsed(start, SYST::get_current()) * NS_PER_COUNT
 }
 
 /// The phases of the worst-tick run, in the order of [`WORST_PHASES`].
