@@ -14,8 +14,10 @@
 //! release counts, config across a power cycle, the watchdog, refusals, and the mutation checks
 //! (each mutant must fail its test); then the seven QEMU scenarios of `host/hostctl/tests/qemu.rs`
 //! on each image (`STIFFWALL_SCENARIO_BOARD`), against the transcripts in
-//! `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`. `--bench` prints the cycles per servo tick and the CPU load
-//! at 1, 5 and 10 kHz for docs/BENCHMARKS.md.
+//! `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`. `--bench` measures the cycles per servo tick and the CPU
+//! load at 1, 5, 10 and 20 kHz (a rate above the board's `max_rate_hz` reported refused), with
+//! the config's wall and with a 16-element profile loaded over the protocol, and writes the
+//! table into docs/BENCHMARKS.md (`board-emu` section).
 
 use crate::firmware::{self, root, Image, IMAGES};
 use crate::process::{run, run_counting};
@@ -151,63 +153,169 @@ fn scenarios() -> Result<()> {
     Ok(())
 }
 
-/// Measures cycles per servo tick and CPU load at 1, 5 and 10 kHz: the emulator serves its
-/// pty, hostctl sets the rate and a wall (K = 1 N·m/rad) and records 2 s of telemetry (the
-/// telemetry stream is part of the load); the emulator's statistics start at the rate change.
-fn figures(out: &Path, hostctl: &Path) -> Result<()> {
-    use std::io::BufRead;
-    let exe = root().join("host/board-emu/target/release/stiffwall-board-emu");
-    let csv = std::env::temp_dir().join(format!("board-emu-bench-{}.csv", std::process::id()));
-    println!("| image | servo rate | servo tick | CPU load (telemetry streaming) |");
-    println!("|---|---|---|---|");
-    for name in ["dac", "pwm"] {
-        for hz in [1000, 5000, 10000] {
-            let mut child = Command::new(&exe)
-                .arg("--elf")
-                .arg(out.join(format!("nucleo-f446re-{name}.elf")))
-                .args(["--pty", "--fast"])
-                .stdin(std::process::Stdio::piped())
-                .stdout(std::process::Stdio::piped())
-                .stderr(std::process::Stdio::piped())
-                .spawn()
-                .with_context(|| format!("starting {}", exe.display()))?;
-            let mut line = String::new();
-            std::io::BufReader::new(child.stdout.take().context("emulator stdout")?)
-                .read_line(&mut line)?;
-            let pty = line.trim().trim_start_matches("pty: ").to_string();
-            let rate = hz.to_string();
-            run(Command::new(hostctl).args([
-                "config",
-                "set",
-                "--rate",
-                &rate,
-                "--stiffness",
-                "1",
-                "--port",
-                &pty,
-            ]))?;
-            run(Command::new(hostctl)
-                .args(["record", "--seconds", "2", "--port", &pty])
-                .arg(&csv))?;
-            drop(child.stdin.take());
-            let o = child.wait_with_output()?;
-            let e = String::from_utf8_lossy(&o.stderr);
-            if !o.status.success() {
-                bail!("the emulator failed:\n{e}");
-            }
-            let find = |p: &str| {
-                e.lines()
-                    .find(|l| l.starts_with(p))
-                    .unwrap_or("")
-                    .to_string()
-            };
-            println!(
-                "| nucleo-f446re-{name} | {hz} Hz | {} | {} |",
-                find("servo tick:").trim_start_matches("servo tick: "),
-                find("CPU load:").trim_start_matches("CPU load: ")
+/// The rates of `--bench`, Hz (a rate above the board's `max_rate_hz` is reported refused).
+const BENCH_RATES: [u32; 4] = [1000, 5000, 10_000, 20_000];
+/// The rate set before each run's own (the statistics restart at a rate change: every run's
+/// window then starts at the change to its rate, the profile already loaded).
+const PRE_RATE_HZ: u32 = 2000;
+
+/// What a `--bench` run renders: the config's wall, or a profile loaded over the protocol.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Load {
+    Wall,
+    Profile,
+}
+
+/// The profile of `--bench` in the JSON form of `stiffwall_proto::profile::Profile` (the
+/// client's `set_profile` names the type; this crate does not depend on the protocol crate):
+/// the QEMU bench's worst case on the Nucleo's rig (8192 counts per turn, 0.1 N·m full
+/// scale), sixteen detent trains each spanning ±3000 counts around the start, 0.002 N·m each
+/// (their sum passes the 0.025 N·m force limit in places), each with a damper (1e-4
+/// N·m·s/rad, the default law, a dead band of one count).
+fn bench_profile() -> serde_json::Value {
+    let elements: Vec<serde_json::Value> = (0..16)
+        .map(|i| {
+            let pitch = 40.0 + 3.0 * f64::from(i);
+            serde_json::json!({ "Detents": {
+                "first": -3000 - i,
+                "pitch_counts": pitch,
+                "count": (6000.0 / pitch) as u32 + 2,
+                "strength": 0.002,
+                "damping": 1.0e-4,
+                "damper": { "DeadBand": { "counts": 1 } },
+            }})
+        })
+        .collect();
+    serde_json::json!({ "elements": elements })
+}
+
+/// Over the protocol, as a host: reads the board's highest rate; for [`Load::Profile`] sets
+/// [`PRE_RATE_HZ`] and loads [`bench_profile`] (`HostMsg::SetProfile`), else sets
+/// [`PRE_RATE_HZ`] only. Returns the board's `max_rate_hz`.
+fn prepare(pty: &str, load: Load) -> Result<u32> {
+    let port = stiffwall_client::open_port(pty, stiffwall_client::DEFAULT_BAUD)?;
+    let mut c = stiffwall_client::Client::connect(port, None)?;
+    let max = c.info.limits.max_rate_hz;
+    let mut cfg = c.get_config()?;
+    cfg.servo_rate_hz = PRE_RATE_HZ;
+    c.set_config(&cfg)?;
+    if load == Load::Profile {
+        let p = serde_json::from_value(bench_profile()).context("the bench profile")?;
+        c.set_profile(&p)?;
+        let back = c.get_profile()?;
+        if back.elements.len() != 16 {
+            bail!(
+                "the board holds {} profile elements, not 16",
+                back.elements.len()
             );
         }
     }
+    Ok(max)
+}
+
+/// One run's figures, from the emulator's report: (mean cycles, longest tick, CPU load).
+fn run_figures(report: &str) -> (String, String, String) {
+    let line = |p: &str| report.lines().find(|l| l.starts_with(p)).unwrap_or("");
+    let tick = line("servo tick:");
+    let after = |key: &str| {
+        tick.split_once(key)
+            .map(|(_, r)| r.split_whitespace().next().unwrap_or("").to_string())
+            .unwrap_or_default()
+    };
+    let load = line("CPU load:")
+        .trim_start_matches("CPU load: ")
+        .split(" awake")
+        .next()
+        .unwrap_or("")
+        .to_string();
+    (after("mean "), after("max "), load)
+}
+
+/// Measures cycles per servo tick and CPU load at [`BENCH_RATES`], with the wall and with
+/// [`bench_profile`]: the emulator serves its pty; the client reads the board's highest rate
+/// (a rate above it is reported refused, not forced), sets [`PRE_RATE_HZ`] and for the profile
+/// loads it over the protocol; then hostctl sets the rate and a wall (K = 1 N·m/rad: the
+/// config's wall, or the profile compiled again for the new rate) and records 2 s of telemetry
+/// (the telemetry stream is part of the load); the emulator's statistics start at the rate
+/// change. Prints the table and writes it into docs/BENCHMARKS.md (`board-emu` section).
+fn figures(out: &Path, hostctl: &Path) -> Result<()> {
+    let mut t = String::from(
+        "| image | servo rate | renders | servo tick: mean cycles | longest tick, cycles | CPU load (telemetry streaming) |\n\
+         |---|---:|---|---:|---:|---:|\n",
+    );
+    for name in ["dac", "pwm"] {
+        for hz in BENCH_RATES {
+            for load in [Load::Wall, Load::Profile] {
+                let what = match load {
+                    Load::Wall => "the wall",
+                    Load::Profile => "16 detent trains",
+                };
+                let row = bench_run(out, hostctl, name, hz, load)?;
+                let line = format!(
+                    "| nucleo-f446re-{name} | {} kHz | {what} | {row} |",
+                    hz / 1000
+                );
+                println!("{line}");
+                t.push_str(&line);
+                t.push('\n');
+            }
+        }
+    }
+    crate::process::update_section(
+        &root().join("docs/BENCHMARKS.md"),
+        "board-emu",
+        t.trim_end(),
+    )
+}
+
+/// One `--bench` run: the table's last three cells.
+fn bench_run(out: &Path, hostctl: &Path, name: &str, hz: u32, load: Load) -> Result<String> {
+    use std::io::BufRead;
+    let exe = root().join("host/board-emu/target/release/stiffwall-board-emu");
+    let csv = std::env::temp_dir().join(format!("board-emu-bench-{}.csv", std::process::id()));
+    let mut child = Command::new(&exe)
+        .arg("--elf")
+        .arg(out.join(format!("nucleo-f446re-{name}.elf")))
+        .args(["--pty", "--fast"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .with_context(|| format!("starting {}", exe.display()))?;
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().context("emulator stdout")?)
+        .read_line(&mut line)?;
+    let pty = line.trim().trim_start_matches("pty: ").to_string();
+    let max = prepare(&pty, load)?;
+    let refused = hz > max;
+    if !refused {
+        let rate = hz.to_string();
+        run(Command::new(hostctl).args([
+            "config",
+            "set",
+            "--rate",
+            &rate,
+            "--stiffness",
+            "1",
+            "--port",
+            &pty,
+        ]))?;
+        run(Command::new(hostctl)
+            .args(["record", "--seconds", "2", "--port", &pty])
+            .arg(&csv))?;
+    }
+    drop(child.stdin.take());
+    let o = child.wait_with_output()?;
+    let e = String::from_utf8_lossy(&o.stderr);
+    if !o.status.success() {
+        bail!("the emulator failed:\n{e}");
+    }
     let _ = std::fs::remove_file(&csv);
-    Ok(())
+    if refused {
+        return Ok(format!(
+            "refused: above the board's max_rate_hz, {max} Hz | – | –"
+        ));
+    }
+    let (mean, max_tick, cpu) = run_figures(&e);
+    Ok(format!("{mean} | {max_tick} | {cpu}"))
 }
