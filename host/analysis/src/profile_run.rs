@@ -224,7 +224,7 @@ pub fn starts(profile: &Profile, resolution: f64, velocity: f64, approach: i32) 
     for (i, e) in profile.elements.iter().enumerate() {
         let mut push = |label: String, c: f64, v: f64| {
             out.push(Start {
-                label: format!("element {i} ({}): {label}", e.kind_name()),
+                label: format!("element {} ({}): {label}", i + 1, e.kind_name()),
                 element: i,
                 position: at(c),
                 velocity: v,
@@ -284,4 +284,109 @@ pub fn starts(profile: &Profile, resolution: f64, velocity: f64, approach: i32) 
         }
     }
     out
+}
+
+/// An element's stiffest local slope, N/m (N·m/rad): its K, or a detent train's 2π·A/pitch
+/// (at a minimum); 0 for a viscous zone.
+#[must_use]
+pub fn local_k(e: &ProfileElement, resolution: f64) -> f64 {
+    match *e {
+        ProfileElement::Wall { stiffness, .. } | ProfileElement::Spring { stiffness, .. } => {
+            f64::from(stiffness)
+        }
+        ProfileElement::Detents {
+            strength,
+            pitch_counts,
+            ..
+        } => core::f64::consts::TAU * f64::from(strength) / (pitch_counts * resolution),
+        ProfileElement::Viscous { .. } => 0.0,
+    }
+}
+
+/// Runs `start` for at least 60 natural periods 2π√(m/K) of its element's local stiffness
+/// (the rest rule's run) and 20 000 ticks (a viscous zone, which has none: 20 000); returns
+/// the run and the natural period in ticks.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_start(
+    spec: &Spec,
+    profile: &Profile,
+    start: &Start,
+) -> Result<(Run, f64), ProfileRunError> {
+    let p = &spec.plant;
+    let k = profile
+        .elements
+        .get(start.element)
+        .map_or(0.0, |e| local_k(e, p.resolution));
+    let natural = core::f64::consts::TAU * (p.mass / k).sqrt() / p.period_s;
+    let ticks = if natural.is_finite() {
+        ((rest::REST_RUN_NATURAL_PERIODS * natural).ceil() as usize).max(20_000)
+    } else {
+        20_000
+    };
+    Ok((run(spec, profile, start, ticks, natural)?, natural))
+}
+
+/// Where a run came to rest, by the profile's elements.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RestPlace {
+    /// Within one count of minimum `minimum` of detent train `element`.
+    Detent {
+        /// The train's index in the profile.
+        element: usize,
+        /// The minimum's index in the train.
+        minimum: usize,
+    },
+    /// Within one count of the surface of wall `element` (its first count in contact, or the
+    /// free count beside it).
+    Wall {
+        /// The wall's index.
+        element: usize,
+    },
+    /// Inside a detent train's span but at no minimum and against no wall: not where the
+    /// profile holds the device.
+    OffDetent {
+        /// The train's index.
+        element: usize,
+    },
+    /// Elsewhere (free space, a spring, a viscous zone).
+    Elsewhere,
+}
+
+/// Where raw count `n` lies by `profile`'s elements (see [`RestPlace`]).
+#[must_use]
+pub fn rest_place(profile: &Profile, n: i64) -> RestPlace {
+    let walls = profile
+        .elements
+        .iter()
+        .enumerate()
+        .find_map(|(i, e)| match *e {
+            ProfileElement::Wall { position, .. } => {
+                let p = i64::from(position);
+                (p - 1..=p)
+                    .contains(&n)
+                    .then_some(RestPlace::Wall { element: i })
+            }
+            _ => None,
+        });
+    for (i, e) in profile.elements.iter().enumerate() {
+        let ProfileElement::Detents { pitch_counts, .. } = *e else {
+            continue;
+        };
+        let minima = detent_minima(e);
+        if let Some(j) = minima.iter().position(|&m| within_one_count(n, m)) {
+            return RestPlace::Detent {
+                element: i,
+                minimum: j,
+            };
+        }
+        let lo = minima.first().copied().unwrap_or(0.0) - pitch_counts / 2.0;
+        let hi = minima.last().copied().unwrap_or(0.0) + pitch_counts / 2.0;
+        let centre = n as f64 + 0.5;
+        if (lo..hi).contains(&centre) && walls.is_none() {
+            return RestPlace::OffDetent { element: i };
+        }
+    }
+    walls.unwrap_or(RestPlace::Elsewhere)
 }

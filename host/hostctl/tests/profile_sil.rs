@@ -7,10 +7,15 @@
 //! The profile the check refuses (`too-strong-detent.toml`) does not rest at its minima: the
 //! check's refusal is not merely conservative.
 
+#[path = "support/cli.rs"]
+mod cli;
+
 use std::path::{Path, PathBuf};
-use stiffwall_analysis::profile_run::{detent_minima, run, starts, within_one_count, Run, Start};
+use stiffwall_analysis::profile_run::{
+    detent_minima, rest_place, run_start, starts, within_one_count, RestPlace, Run, Start,
+};
 use stiffwall_client::{ConnectSpec, Pace, VirtualSpec};
-use stiffwall_proto::{Profile, ProfileElement};
+use stiffwall_proto::Profile;
 use stiffwall_tune::profile::{lower, Device, ProfileFile};
 
 /// The repository's root.
@@ -51,66 +56,18 @@ fn lowered(path: &Path, spec: &VirtualSpec) -> (ProfileFile, Profile) {
     (file, wire)
 }
 
-/// The element's stiffest local slope, N/m (N·m/rad): K, or a detent's 2π·A/pitch; 0 for a
-/// viscous zone.
-fn local_k(e: &ProfileElement, resolution: f64) -> f64 {
-    match *e {
-        ProfileElement::Wall { stiffness, .. } | ProfileElement::Spring { stiffness, .. } => {
-            f64::from(stiffness)
-        }
-        ProfileElement::Detents {
-            strength,
-            pitch_counts,
-            ..
-        } => std::f64::consts::TAU * f64::from(strength) / (pitch_counts * resolution),
-        ProfileElement::Viscous { .. } => 0.0,
-    }
-}
-
-/// Every start of `profile` on `spec`, run for at least 60 natural periods of its element
-/// (and 20 000 ticks; a viscous zone, which has none, 20 000), with the impact speed tune's default: 5 counts per servo period.
+/// Every start of `profile` on `spec` (`run_start`: at least 60 natural periods of its
+/// element), with the impact speed tune's default: 5 counts per servo period.
 fn run_all(spec: &VirtualSpec, profile: &Profile) -> Vec<(Start, Run, f64)> {
     let p = &spec.plant;
     let v = 5.0 * p.resolution / p.period_s;
     starts(profile, p.resolution, v, 10)
         .into_iter()
         .map(|st| {
-            let k = local_k(&profile.elements[st.element], p.resolution);
-            let natural = std::f64::consts::TAU * (p.mass / k).sqrt() / p.period_s;
-            let ticks = if natural.is_finite() {
-                ((60.0 * natural).ceil() as usize).max(20_000)
-            } else {
-                20_000
-            };
-            let r = run(spec, profile, &st, ticks, natural).unwrap();
+            let (r, natural) = run_start(spec, profile, &st).unwrap();
             (st, r, natural)
         })
         .collect()
-}
-
-/// The detent train (its minima) whose active range holds raw count `n`, if any.
-fn train_at(profile: &Profile, n: i64) -> Option<Vec<f64>> {
-    profile.elements.iter().find_map(|e| match *e {
-        ProfileElement::Detents { pitch_counts, .. } => {
-            let m = detent_minima(e);
-            let lo = m.first()? - pitch_counts / 2.0;
-            let hi = m.last()? + pitch_counts / 2.0;
-            (lo <= n as f64 + 0.5 && n as f64 + 0.5 < hi).then_some(m)
-        }
-        _ => None,
-    })
-}
-
-/// True when raw count `n` is within one count of a wall's surface (a wall's first count in
-/// contact, or the free count beside it): at rest against that wall.
-fn against_a_wall(profile: &Profile, n: i64) -> bool {
-    profile.elements.iter().any(|e| match *e {
-        // Either side: counts P − 1 and P hold the surface at P.
-        ProfileElement::Wall { position, .. } => {
-            (i64::from(position) - 1..=i64::from(position)).contains(&n)
-        }
-        _ => false,
-    })
 }
 
 /// The detent a start named "release … detent J" was released beside, and its minimum.
@@ -150,13 +107,10 @@ fn every_example_comes_to_rest_at_every_element_on_every_device_it_was_checked_f
                     r.final_span(natural)
                 );
                 let n = r.final_count();
-                if let Some(minima) = train_at(&profile, n) {
-                    assert!(
-                        minima.iter().any(|&m| within_one_count(n, m))
-                            || against_a_wall(&profile, n),
-                        "{at}: rests at count {n} inside a detent train, not within one count of a minimum"
-                    );
-                }
+                assert!(
+                    !matches!(rest_place(&profile, n), RestPlace::OffDetent { .. }),
+                    "{at}: rests at count {n} inside a detent train, not within one count of a minimum"
+                );
                 if let Some(m) = released_beside(&st, &profile) {
                     assert!(
                         within_one_count(n, m),
@@ -179,9 +133,11 @@ fn the_refused_detent_does_not_rest_at_its_minima() {
     let at_rest_at_a_minimum = all
         .iter()
         .filter(|(_, r, _)| {
-            let n = r.final_count();
             r.rests
-                && train_at(&profile, n).is_some_and(|m| m.iter().any(|&m| within_one_count(n, m)))
+                && matches!(
+                    rest_place(&profile, r.final_count()),
+                    RestPlace::Detent { .. }
+                )
         })
         .count();
     assert_eq!(
@@ -190,4 +146,35 @@ fn the_refused_detent_does_not_rest_at_its_minima() {
         "{at_rest_at_a_minimum} of {} runs of the refused detent rest at a minimum",
         all.len()
     );
+}
+
+/// `hostctl profile simulate` is the same proof from the command line: the knob's 32 starts
+/// (13 detents × 2 releases, 2 impacts across the train, 2 starts at each of its 2 end stops)
+/// all rest where it holds the device (exit 0); the refused detent's rest nowhere (exit 1).
+#[test]
+fn profile_simulate_prints_where_each_run_rests() {
+    let knob = root().join("profiles/knob-24-detents.toml");
+    let out = cli::ok(&[
+        "profile",
+        "simulate",
+        &knob.display().to_string(),
+        "--device",
+        "maxon-re35",
+    ]);
+    assert!(
+        out.contains("32 of 32 runs come to rest where the profile holds the device"),
+        "{out}"
+    );
+    assert!(out.contains("element 1 (detents): release ¼ pitch above detent 3: rests at count"));
+    let strong = root().join("profiles/too-strong-detent.toml");
+    let o = cli::hostctl(&[
+        "profile",
+        "simulate",
+        &strong.display().to_string(),
+        "--device",
+        "maxon-re35",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("0 of 10 runs"), "{out}");
 }

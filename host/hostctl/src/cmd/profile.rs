@@ -34,6 +34,9 @@ pub enum Command {
     /// Check a profile file on the connected device and load it (refused when it fails,
     /// unless --force).
     Load(LoadArgs),
+    /// Simulate the profile on the built-in virtual device (--device or --plant): the
+    /// firmware's servo against the plant, a release and an impact at every element.
+    Simulate(SimulateArgs),
     /// Print the device's active profile.
     Show(ConnectArgs),
     /// Return the device to the config's single wall (an empty profile; --save persists it).
@@ -52,6 +55,21 @@ pub struct LoadArgs {
     /// profile after a reboot.
     #[arg(long)]
     pub save: bool,
+}
+
+/// Arguments of `hostctl profile simulate`.
+#[derive(Debug, clap::Args)]
+pub struct SimulateArgs {
+    /// The profile file (TOML; profiles/README.md).
+    pub file: PathBuf,
+    #[command(flatten)]
+    pub connect: ConnectArgs,
+    /// Impact speed, m/s (rad/s), > 0 (default: 5 counts per servo period, tune's default).
+    #[arg(long, value_name = "V")]
+    pub velocity: Option<f64>,
+    /// Write every run's counts as CSV (`start,tick,count`).
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: Option<PathBuf>,
 }
 
 /// Arguments of `hostctl profile clear`.
@@ -85,6 +103,7 @@ pub fn main(a: &Args) -> ExitCode {
     let result = match a.command {
         Command::Check(ref c) => check(c),
         Command::Load(ref l) => load(l),
+        Command::Simulate(ref a) => simulate(a),
         Command::Show(ref c) => show(c).map(|()| true),
         Command::Clear(ref c) => clear(c).map(|()| true),
     };
@@ -167,6 +186,80 @@ pub fn load(a: &LoadArgs) -> Result<bool> {
     Ok(report.pass)
 }
 
+/// `profile simulate`: every start's run and where it came to rest; whether every run rests
+/// where the profile holds the device (at a detent's minimum, against a wall, or outside any
+/// detent train).
+///
+/// # Errors
+/// Not the built-in virtual device, a bad file or velocity, the device refused the profile,
+/// the CSV unwritable.
+pub fn simulate(a: &SimulateArgs) -> Result<bool> {
+    use stiffwall_analysis::profile_run::{rest_place, run_start, starts, RestPlace};
+    let file = read_file(&a.file)?;
+    let spec = a.connect.spec()?.virtual_spec()?.ok_or_else(|| {
+        anyhow!("profile simulate runs the built-in virtual device: give --device NAME or --plant FILE.toml")
+    })?;
+    let p = &spec.plant;
+    let device = Device {
+        rotational: p.rotational,
+        resolution: p.resolution,
+    };
+    let wire = profile::lower(&file, &device)
+        .map_err(|e| anyhow!("{}: {e}", a.file.display()))?
+        .wire();
+    let v = a.velocity.unwrap_or(5.0 * p.resolution / p.period_s);
+    anyhow::ensure!(
+        v.is_finite() && v > 0.0,
+        "--velocity {v}: allowed range is > 0"
+    );
+    let u = device.units();
+    let mut csv = String::from("start,tick,count\n");
+    let (mut good, all) = (0, starts(&wire, p.resolution, v, 10));
+    for (i, st) in all.iter().enumerate() {
+        let (r, natural) = run_start(&spec, &wire, st)?;
+        let n = r.final_count();
+        let place = rest_place(&wire, n);
+        let at = format!(
+            "count {n} ({} {})",
+            profile::units::sig(n as f64 * p.resolution),
+            u.position
+        );
+        let verdict = match (r.faults, r.rests, place) {
+            (f, _, _) if f != 0 => format!("fault {f:#x}"),
+            (_, false, _) => format!(
+                "does not come to rest (last counts span {})",
+                r.final_span(natural)
+            ),
+            (_, true, RestPlace::OffDetent { element }) => format!(
+                "rests at {at}, inside detent train {} at no minimum",
+                element + 1
+            ),
+            (_, true, RestPlace::Detent { element, minimum }) => format!(
+                "rests at {at}: minimum {minimum} of element {}",
+                element + 1
+            ),
+            (_, true, RestPlace::Wall { element }) => {
+                format!("rests at {at}: against the wall, element {}", element + 1)
+            }
+            (_, true, RestPlace::Elsewhere) => format!("rests at {at}"),
+        };
+        good +=
+            usize::from(r.faults == 0 && r.rests && !matches!(place, RestPlace::OffDetent { .. }));
+        println!("{}: {verdict}", st.label);
+        for (t, c) in r.counts.iter().enumerate() {
+            csv.push_str(&format!("{i},{t},{c}\n"));
+        }
+    }
+    println!(
+        "{good} of {} runs come to rest where the profile holds the device",
+        all.len()
+    );
+    if let Some(out) = &a.out {
+        std::fs::write(out, csv).with_context(|| format!("writing {}", out.display()))?;
+    }
+    Ok(good == all.len())
+}
+
 /// `profile show`: the device's active profile.
 ///
 /// # Errors
@@ -231,8 +324,8 @@ fn read_file(path: &Path) -> Result<ProfileFile> {
     ProfileFile::from_toml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
-/// The envelope of a saved tune result.
-fn envelope_of_file(path: &Path) -> Result<Envelope> {
+/// The envelope of a saved tune result (the live view's `--tune-json` too).
+pub(crate) fn envelope_of_file(path: &Path) -> Result<Envelope> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let mut v: serde_json::Value = serde_json::from_str(&text)

@@ -27,9 +27,8 @@ use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use stiffwall_proto::{DeviceInfo, Profile, ProfileElement, Side};
 use stiffwall_tune::profile::{
-    self, overlap, units::sig, Device, ElementCheck, Envelope, Lowered, ProfileFile, Report,
+    self, overlap, units::sig, Device, ElementCheck, Lowered, ProfileFile, Report,
 };
-use stiffwall_tune::Outcome;
 
 /// The version of the `profile` message.
 pub const PROFILE_MESSAGE_VERSION: u32 = 1;
@@ -62,34 +61,6 @@ pub fn device_of(info: &DeviceInfo) -> Device {
             resolution: f64::from(info.resolution),
         }
     }
-}
-
-/// The envelope of a saved tune result (the JSON `hostctl tune --json` prints, its `tune`
-/// object, or the bare object).
-///
-/// # Errors
-/// Unreadable, not JSON, not a tune result.
-pub fn envelope_of_file(path: &Path) -> Result<Envelope> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("--tune-json: reading {}", path.display()))?;
-    let mut v: Value = serde_json::from_str(&text)
-        .with_context(|| format!("--tune-json {}: not JSON", path.display()))?;
-    let target = v["target"].as_str().map(str::to_owned);
-    let tune = match v.get_mut("tune") {
-        Some(t) => t.take(),
-        None => v,
-    };
-    let o: Outcome = serde_json::from_value(tune).with_context(|| {
-        format!(
-            "--tune-json {}: not a tune result (the output of `hostctl tune --json`, or its \
-             `tune` object)",
-            path.display()
-        )
-    })?;
-    Ok(Envelope::from_outcome(
-        &o,
-        target.unwrap_or_else(|| path.display().to_string()),
-    ))
 }
 
 /// Where an element of a check is, as the profile library's errors name it.
@@ -137,7 +108,7 @@ pub fn prepare(
     let report = match tune_json {
         None => None,
         Some(path) => {
-            let envelope = envelope_of_file(path)?;
+            let envelope = crate::cmd::profile::envelope_of_file(path)?;
             let d = envelope.device;
             let same = d.rotational == device.rotational
                 && (d.resolution - device.resolution).abs() <= 1e-6 * device.resolution;
