@@ -220,7 +220,7 @@ fn ci_emulated_targets(step: &dyn Fn(&str)) -> Result<()> {
     step("the Nucleo images on the board emulator (unicorn): boot, pty, tune vs the virtual device, flash store, watchdog, mutation checks");
     board_emu::board_emu(&[])?;
     step("servo instruction budgets under QEMU -icount (the wall, the haptic profile), and docs/BENCHMARKS.md's figures against the run");
-    bench_firmware::bench_firmware(&["--check".to_string()])?;
+    bench_firmware::bench_firmware(&["--no-write".to_string()])?;
     step("a Fig. 6 panel as a Slurm job array on a throw-away cluster (Debian's slurm-wlm and munge; root), with pre-emption");
     cluster::cluster_test(&[])?;
     Ok(())

@@ -160,6 +160,18 @@ fn row(s: &mut String, c: &ElementCheck, u: Units) {
 /// unit; "none (the config's wall)" for an empty profile. Ends with a newline.
 #[must_use]
 pub fn render_wire(p: &stiffwall_proto::Profile, device: &super::units::Device) -> String {
+    if p.elements.is_empty() {
+        return "profile: none (the config's wall)\n".to_owned();
+    }
+    let mut s = format!("profile: {} elements\n", p.elements.len());
+    for (i, e) in p.elements.iter().enumerate() {
+        let _ = writeln!(s, "  {}. {}", i + 1, wire_line(e, device));
+    }
+    s
+}
+
+/// One wire element in words (see [`render_wire`]).
+fn wire_line(e: &stiffwall_proto::ProfileElement, device: &super::units::Device) -> String {
     use stiffwall_proto::{ProfileElement as E, Side};
     let u = device.units();
     let at = |c: i32| {
@@ -167,79 +179,69 @@ pub fn render_wire(p: &stiffwall_proto::Profile, device: &super::units::Device) 
         format!("count {c} ({} {})", sig(x), u.position)
     };
     let kb = |k: f32, b: f32, law: stiffwall_proto::DamperLaw| {
-        format!(
-            "K = {} {}, B = {} {} ({law})",
-            sig(f64::from(k)),
-            u.stiffness,
-            sig(f64::from(b)),
-            u.damping
-        )
+        let (k, b) = (sig(f64::from(k)), sig(f64::from(b)));
+        format!("K = {k} {}, B = {b} {} ({law})", u.stiffness, u.damping)
     };
-    if p.elements.is_empty() {
-        return "profile: none (the config's wall)\n".to_owned();
+    match *e {
+        E::Wall {
+            position,
+            side,
+            stiffness,
+            damping,
+            damper,
+        } => {
+            let side = if side == Side::Upper {
+                "upper"
+            } else {
+                "lower"
+            };
+            format!(
+                "{side} wall at {}: {}",
+                at(position),
+                kb(stiffness, damping, damper)
+            )
+        }
+        E::Spring {
+            center,
+            stiffness,
+            damping,
+            damper,
+        } => {
+            format!(
+                "spring centred at {}: {}",
+                at(center),
+                kb(stiffness, damping, damper)
+            )
+        }
+        E::Detents {
+            first,
+            pitch_counts,
+            count,
+            strength,
+            damping,
+            damper,
+        } => format!(
+            "{count} detents from {}, pitch {} counts ({} {}): A = {} {}, B = {} {} ({damper})",
+            at(first),
+            sig(pitch_counts),
+            sig(pitch_counts * device.resolution),
+            u.position,
+            sig(f64::from(strength)),
+            u.force,
+            sig(f64::from(damping)),
+            u.damping
+        ),
+        E::Viscous {
+            from,
+            to,
+            damping,
+            damper,
+        } => format!(
+            "viscous zone from {} to {}: B = {} {} ({damper})",
+            at(from),
+            at(to),
+            sig(f64::from(damping)),
+            u.damping
+        ),
     }
-    let mut s = format!("profile: {} elements\n", p.elements.len());
-    for (i, e) in p.elements.iter().enumerate() {
-        let line = match *e {
-            E::Wall {
-                position,
-                side,
-                stiffness,
-                damping,
-                damper,
-            } => {
-                let side = if side == Side::Upper {
-                    "upper"
-                } else {
-                    "lower"
-                };
-                let kb = kb(stiffness, damping, damper);
-                format!("{side} wall at {}: {kb}", at(position))
-            }
-            E::Spring {
-                center,
-                stiffness,
-                damping,
-                damper,
-            } => {
-                format!(
-                    "spring centred at {}: {}",
-                    at(center),
-                    kb(stiffness, damping, damper)
-                )
-            }
-            E::Detents {
-                first,
-                pitch_counts,
-                count,
-                strength,
-                damping,
-                damper,
-            } => format!(
-                "{count} detents from {}, pitch {} counts ({} {}): A = {} {}, B = {} {} ({damper})",
-                at(first),
-                sig(pitch_counts),
-                sig(pitch_counts * device.resolution),
-                u.position,
-                sig(f64::from(strength)),
-                u.force,
-                sig(f64::from(damping)),
-                u.damping
-            ),
-            E::Viscous {
-                from,
-                to,
-                damping,
-                damper,
-            } => format!(
-                "viscous zone from {} to {}: B = {} {} ({damper})",
-                at(from),
-                at(to),
-                sig(f64::from(damping)),
-                u.damping
-            ),
-        };
-        let _ = writeln!(s, "  {}. {line}", i + 1);
-    }
-    s
 }

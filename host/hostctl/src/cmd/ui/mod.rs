@@ -113,6 +113,21 @@ fn model(a: &Args) -> Result<Option<plane::Model>> {
     })
 }
 
+/// `--profile`: prepared (lowered, checked against `--tune-json`) and loaded onto the device.
+fn load_profile(
+    a: &Args,
+    client: &mut stiffwall_client::Client,
+) -> Result<Option<profile::Loaded>> {
+    let Some(file) = &a.profile else {
+        return Ok(None);
+    };
+    let l = profile::prepare(file, a.tune_json.as_deref(), a.force_profile, &client.info)?;
+    client
+        .set_profile(&l.lowered.wire())
+        .with_context(|| format!("--profile {}: loading it onto the device", file.display()))?;
+    Ok(Some(l))
+}
+
 /// Runs `hostctl ui` until Ctrl-C (or until the device disconnects).
 pub fn run(a: &Args) -> Result<()> {
     a.set.apply(&ServoConfig::default())?;
@@ -129,16 +144,7 @@ pub fn run(a: &Args) -> Result<()> {
     }
     crate::session::stop_on_ctrl_c();
     let (mut client, _cfg) = a.set.connect_and_apply(&a.connect)?;
-    let loaded = match &a.profile {
-        Some(file) => {
-            let l = profile::prepare(file, a.tune_json.as_deref(), a.force_profile, &client.info)?;
-            client.set_profile(&l.lowered.wire()).with_context(|| {
-                format!("--profile {}: loading it onto the device", file.display())
-            })?;
-            Some(l)
-        }
-        None => None,
-    };
+    let loaded = load_profile(a, &mut client)?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
