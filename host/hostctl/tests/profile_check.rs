@@ -76,8 +76,11 @@ fn every_example_passes_on_its_devices_and_the_strong_detent_fails() {
                 }
             }
             // A saved tune gives the same verdict.
-            let tune =
-                std::env::temp_dir().join(format!("profile-check-{}-{d}.json", std::process::id()));
+            let tune = std::env::temp_dir().join(format!(
+                "profile-check-{}-{}.json",
+                std::process::id(),
+                d.replace('/', "_")
+            ));
             std::fs::write(&tune, j["tune"].to_string()).unwrap();
             let o = hostctl(&[
                 "profile",

@@ -117,21 +117,6 @@ pub fn main(a: &Args) -> ExitCode {
     }
 }
 
-/// The profile units of a connected device: rotary when it reports counts per revolution.
-fn device_of(info: &stiffwall_proto::DeviceInfo) -> Device {
-    if info.counts_per_rev > 0 {
-        Device {
-            rotational: true,
-            resolution: core::f64::consts::TAU / f64::from(info.counts_per_rev),
-        }
-    } else {
-        Device {
-            rotational: false,
-            resolution: f64::from(info.resolution),
-        }
-    }
-}
-
 /// `profile load`: the check on the connected device, then `SetProfile` (and `SaveConfig`
 /// with `--save`); whether the check passed.
 ///
@@ -141,11 +126,11 @@ pub fn load(a: &LoadArgs) -> Result<bool> {
     let c = &a.check;
     let file = read_file(&c.file)?;
     let mut client = connect_for(c)?;
-    let device = device_of(&client.info);
+    let device = Device::of_info(&client.info);
     let lowered =
         profile::lower(&file, &device).map_err(|e| anyhow!("{}: {e}", c.file.display()))?;
     let envelope = match &c.tune_json {
-        Some(path) => envelope_of_file(path)?,
+        Some(path) => envelope_of_file(path)?.with_force_limit(force_limit(&client.info)),
         None => tune_on(&mut client, c.connect.describe())?.0,
     };
     let report = profile::check(&lowered, &envelope);
@@ -266,7 +251,7 @@ pub fn simulate(a: &SimulateArgs) -> Result<bool> {
 /// The connection or the request failed.
 pub fn show(c: &ConnectArgs) -> Result<()> {
     let mut client = c.connect()?;
-    let device = device_of(&client.info);
+    let device = Device::of_info(&client.info);
     let p = client.get_profile()?;
     Ok(emit(&profile::render_wire(&p, &device))?)
 }
@@ -362,7 +347,7 @@ fn connect_for(a: &CheckArgs) -> Result<stiffwall_client::Client> {
 /// is refused before any test.
 fn fresh_tune(a: &CheckArgs, file: &ProfileFile) -> Result<(Envelope, Outcome)> {
     let mut client = connect_for(a)?;
-    let device = device_of(&client.info);
+    let device = Device::of_info(&client.info);
     profile::lower(file, &device).map_err(|e| anyhow!("{}: {e}", a.file.display()))?;
     tune_on(&mut client, a.connect.describe())
 }
@@ -395,5 +380,12 @@ fn tune_on(client: &mut stiffwall_client::Client, name: String) -> Result<(Envel
         sig(o.quiet_ceiling),
         u.stiffness
     );
-    Ok((Envelope::from_outcome(&o, name), o))
+    let envelope = Envelope::from_outcome(&o, name).with_force_limit(force_limit(&client.info));
+    Ok((envelope, o))
+}
+
+/// The device's largest force, N (N·m): its largest output code × force per code (the most a
+/// detent's strength may be; the firmware refuses more).
+pub(crate) fn force_limit(info: &stiffwall_proto::DeviceInfo) -> f64 {
+    f64::from(info.max_code) * f64::from(info.force_per_code)
 }

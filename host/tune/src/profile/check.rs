@@ -282,7 +282,31 @@ fn element(i: usize, profile: &Lowered, spans: &[Span], env: &Envelope) -> Eleme
         strongest: None,
     };
     judge(&mut c, &p.element, delta, env.device.units(), &all);
+    beyond_force_limit(&mut c, &p.element, env);
     c
+}
+
+/// A detent train stronger than the device's force limit (when known): the firmware refuses
+/// it, so it fails, and the strongest that passes is at most that limit.
+fn beyond_force_limit(c: &mut ElementCheck, e: &ProfileElement, env: &Envelope) {
+    let (ProfileElement::Detents { strength, .. }, Some(limit)) = (*e, env.force_limit) else {
+        return;
+    };
+    if f64::from(strength) > limit {
+        let u = env.device.units();
+        c.problems.push(format!(
+            "strength A = {} {} is above the device's force limit {} {} (the device refuses it)",
+            sig(f64::from(strength)),
+            u.force,
+            sig(limit),
+            u.force
+        ));
+        c.strongest = Some(match c.strongest {
+            Some(Strongest::Strength(a)) => Strongest::Strength(a.min(limit)),
+            _ => Strongest::Strength(limit),
+        });
+        c.pass = false;
+    }
 }
 
 /// Fills in pass, problems and the strongest passing setting.

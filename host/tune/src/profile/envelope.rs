@@ -55,6 +55,10 @@ pub struct Envelope {
     pub coulomb: f64,
     /// Static friction F_s = max(c, quiet ceiling·Δ/2), N (N·m).
     pub static_friction: f64,
+    /// The device's largest force, N (N·m): its largest output code × force per code, the
+    /// most a detent's strength A may be (the firmware refuses more). None when unknown (a
+    /// saved tune result, which does not record it).
+    pub force_limit: Option<f64>,
 }
 
 /// Where an element's K*(B) comes from.
@@ -130,6 +134,16 @@ impl Envelope {
             quiet_ceiling: o.quiet_ceiling,
             coulomb,
             static_friction: coulomb.max(o.quiet_ceiling * device.resolution / 2.0),
+            force_limit: None,
+        }
+    }
+
+    /// The same envelope on a device whose largest force is `force_limit` N (N·m).
+    #[must_use]
+    pub fn with_force_limit(self, force_limit: f64) -> Self {
+        Self {
+            force_limit: Some(force_limit),
+            ..self
         }
     }
 
@@ -237,6 +251,7 @@ mod tests {
             quiet_ceiling: 5.0,
             coulomb: 0.002,
             static_friction: 0.0025,
+            force_limit: None,
         }
     }
 

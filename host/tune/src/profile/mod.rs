@@ -37,6 +37,7 @@
 //!     quiet_ceiling: 2000.0,
 //!     coulomb: 0.01,
 //!     static_friction: 0.01,
+//!     force_limit: None,
 //! };
 //! let report = check(&lower(&file, &device)?, &envelope);
 //! assert!(report.pass); // 400 N/m ≤ 0.8 × 600 = 480 N/m

@@ -46,6 +46,7 @@ fn envelope(
         quiet_ceiling: ceiling,
         coulomb: fs,
         static_friction: fs,
+        force_limit: None,
     }
 }
 
@@ -267,6 +268,39 @@ strength = 0.1
     ));
     assert!(d.centring.unwrap().pass);
     assert!(render(&r).contains("strongest that passes: strength = 0.04333 N·m"));
+}
+
+/// The same train of 4 detents at 24 per revolution within its stiffness limit on a device
+/// whose largest force is 0.08 N·m: A = 0.1 N·m is refused by the device, so the check fails
+/// it and the strongest passing strength is that limit, 0.08 N·m (the stiffness limit alone,
+/// 0.8 × 4.7 = 3.76 N·m/rad at B = 0.005, would allow 3.76/24 = 0.1567 N·m).
+#[test]
+fn a_detent_beyond_the_device_force_limit_fails() {
+    let text = r#"
+[profile]
+name = "strong"
+axis = "rotary"
+[[element]]
+kind = "detents"
+first = 0.0
+count = 4
+per_rev = 24
+strength = 0.1
+damping = 0.005
+"#;
+    let dev = rotary(8192.0);
+    let env = envelope(dev, &[(0.0, 1.3), (0.005, 4.7)], 0.8, 5.2, 0.002);
+    let lowered = lower(&parse(text), &dev).unwrap();
+    assert!(check(&lowered, &env).pass);
+    let r = check(&lowered, &env.with_force_limit(0.08));
+    let d = &r.elements[0];
+    assert!(!d.pass && !r.pass);
+    assert!(matches!(d.strongest, Some(Strongest::Strength(a)) if close(a, 0.08)));
+    let text = render(&r);
+    assert!(
+        text.contains("strength A = 0.1000 N·m is above the device's force limit 0.08000 N·m"),
+        "{text}"
+    );
 }
 
 fn refused(text: &str, dev: Device) -> String {

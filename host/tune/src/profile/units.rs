@@ -16,6 +16,23 @@ pub struct Device {
 }
 
 impl Device {
+    /// A connected device's, from its `HelloReply`: rotary when it reports counts per
+    /// revolution (Δ = 2π/counts), else linear with its resolution.
+    #[must_use]
+    pub fn of_info(info: &stiffwall_proto::DeviceInfo) -> Self {
+        if info.counts_per_rev > 0 {
+            Self {
+                rotational: true,
+                resolution: core::f64::consts::TAU / f64::from(info.counts_per_rev),
+            }
+        } else {
+            Self {
+                rotational: false,
+                resolution: f64::from(info.resolution),
+            }
+        }
+    }
+
     /// Counts per revolution 2π/Δ (of a rotary device; a linear device's is meaningless).
     #[must_use]
     pub fn counts_per_rev(&self) -> f64 {

@@ -47,22 +47,6 @@ pub struct Loaded {
     pub report: Option<Report>,
 }
 
-/// The profile library's device of a connected device.
-#[must_use]
-pub fn device_of(info: &DeviceInfo) -> Device {
-    if info.counts_per_rev > 0 {
-        Device {
-            rotational: true,
-            resolution: core::f64::consts::TAU / f64::from(info.counts_per_rev),
-        }
-    } else {
-        Device {
-            rotational: false,
-            resolution: f64::from(info.resolution),
-        }
-    }
-}
-
 /// Where an element of a check is, as the profile library's errors name it.
 fn place(e: &ElementCheck) -> String {
     match e.part {
@@ -103,12 +87,13 @@ pub fn prepare(
         )
     };
     let parsed = ProfileFile::from_toml(&text).map_err(named)?;
-    let device = device_of(info);
+    let device = Device::of_info(info);
     let lowered = profile::lower(&parsed, &device).map_err(named)?;
     let report = match tune_json {
         None => None,
         Some(path) => {
-            let envelope = crate::cmd::profile::envelope_of_file(path)?;
+            let envelope = crate::cmd::profile::envelope_of_file(path)?
+                .with_force_limit(crate::cmd::profile::force_limit(info));
             let d = envelope.device;
             let same = d.rotational == device.rotational
                 && (d.resolution - device.resolution).abs() <= 1e-6 * device.resolution;
@@ -222,7 +207,7 @@ fn describe(e: &ProfileElement, device: &Device) -> (Value, Vec<Value>) {
 /// start) names its elements and gives their check when `active` is what it loaded.
 #[must_use]
 pub fn message(info: &DeviceInfo, active: &Profile, loaded: Option<&Loaded>) -> Value {
-    let device = device_of(info);
+    let device = Device::of_info(info);
     let u = device.units();
     let from_file = loaded.filter(|l| l.lowered.wire() == *active);
     let report = from_file.and_then(|l| l.report.as_ref());
@@ -313,7 +298,7 @@ mod tests {
         )
         .unwrap();
         let i = info(0);
-        let lowered = profile::lower(&file, &device_of(&i)).unwrap();
+        let lowered = profile::lower(&file, &Device::of_info(&i)).unwrap();
         let loaded = Loaded {
             file: "slot.toml".into(),
             lowered: lowered.clone(),
