@@ -17,7 +17,11 @@
 //! `firmware/boards/nucleo-f446re/scenarios/{dac,pwm}/`. `--bench` measures the cycles per servo tick and the CPU
 //! load at 1, 5, 10 and 20 kHz (a rate above the board's `max_rate_hz` reported refused), with
 //! the config's wall and with a 16-element profile loaded over the protocol, and writes the
-//! table into docs/BENCHMARKS.md (`board-emu` section).
+//! table into docs/BENCHMARKS.md (`board-emu` section). The 20 kHz rows run on measurement
+//! images built only by `--bench`: the `dac` and `pwm` images with feature `bench-20khz`
+//! (`nucleo-f446re-dac-bench-20khz`, `nucleo-f446re-pwm-bench-20khz`; `max_rate_hz` 20 kHz,
+//! nothing else changed), recorded at decimation 2 (the link carries every second sample, as
+//! every sample at 10 kHz); the other rates run on the normal images at decimation 1.
 
 use crate::firmware::{self, root, Image, IMAGES};
 use crate::process::{run, run_counting};
@@ -61,8 +65,9 @@ fn emu_cargo(args: &[&str]) -> Command {
     c
 }
 
-/// Builds the images (with mutants unless `images_only`) and the emulator.
-fn build(mutants: bool) -> Result<PathBuf> {
+/// Builds the images (with mutants if `mutants`, with the `bench-20khz` measurement images if
+/// `bench`) and the emulator.
+fn build(mutants: bool, bench: bool) -> Result<PathBuf> {
     toolchain::ensure_board_emu_deps()?;
     let cross = toolchain::ensure_cross()?;
     let out = root().join("target/board-emu");
@@ -79,6 +84,14 @@ fn build(mutants: bool) -> Result<PathBuf> {
     // `hostctl --board-emulator --device phantom-1.0` picks.
     let phantom = firmware::build(cross, image("nucleo-f446re-dac"), &["rig-phantom"])?;
     copy(&phantom, &out, "nucleo-f446re-dac-phantom-1.0")?;
+    if bench {
+        // The 20 kHz measurement images (feature bench-20khz: `max_rate_hz` 20 kHz only).
+        for output in ["dac", "pwm"] {
+            let name = format!("nucleo-f446re-{output}");
+            let elf = firmware::build(cross, image(&name), &[BENCH_FEATURE])?;
+            copy(&elf, &out, &format!("{name}-{BENCH_FEATURE}"))?;
+        }
+    }
     let pwm = firmware::build(cross, image("nucleo-f446re-pwm"), &[])?;
     copy(&pwm, &out, "nucleo-f446re-pwm")?;
     // The dac image last: the board crate's own output path keeps the default build.
@@ -95,7 +108,7 @@ pub fn board_emu(args: &[String]) -> Result<()> {
     if let Some(bad) = args.iter().find(|a| *a != "--build" && *a != "--bench") {
         bail!("unknown argument {bad:?} for `cargo xtask board-emu` (allowed: --build, --bench)");
     }
-    let out = build(!build_only && !bench)?;
+    let out = build(!build_only && !bench, bench && !build_only)?;
     if build_only {
         eprintln!(
             "xtask: images in {}, emulator in host/board-emu/target/release; try \
@@ -155,6 +168,27 @@ fn scenarios() -> Result<()> {
 
 /// The rates of `--bench`, Hz (a rate above the board's `max_rate_hz` is reported refused).
 const BENCH_RATES: [u32; 4] = [1000, 5000, 10_000, 20_000];
+/// The board crate's feature of the measurement images (`max_rate_hz` 20 kHz), built only by
+/// `--bench`, for the rates above [`PRODUCT_MAX_HZ`].
+const BENCH_FEATURE: &str = "bench-20khz";
+/// The normal images' `max_rate_hz` (firmware/boards/nucleo-f446re/src/rig.rs): the highest
+/// rate at which the link streams every sample.
+const PRODUCT_MAX_HZ: u32 = 10_000;
+
+/// The image file (in `target/board-emu`, without `.elf`) and the telemetry decimation of a
+/// `--bench` run of output `name` at `hz`: above [`PRODUCT_MAX_HZ`], the `bench-20khz` image,
+/// recording every `hz / PRODUCT_MAX_HZ`-th sample (the link's share of samples at the normal
+/// images' limit); else the normal image, every sample.
+fn bench_image(name: &str, hz: u32) -> (String, u32) {
+    if hz > PRODUCT_MAX_HZ {
+        (
+            format!("nucleo-f446re-{name}-{BENCH_FEATURE}"),
+            hz.div_ceil(PRODUCT_MAX_HZ),
+        )
+    } else {
+        (format!("nucleo-f446re-{name}"), 1)
+    }
+}
 /// The rate set before each run's own (the statistics restart at a rate change: every run's
 /// window then starts at the change to its rate, the profile already loaded).
 const PRE_RATE_HZ: u32 = 2000;
@@ -232,7 +266,8 @@ fn run_figures(report: &str) -> (String, String, String) {
 }
 
 /// Measures cycles per servo tick and CPU load at [`BENCH_RATES`], with the wall and with
-/// [`bench_profile`]: the emulator serves its pty; the client reads the board's highest rate
+/// [`bench_profile`], each on the image and at the decimation of [`bench_image`]: the emulator
+/// serves its pty; the client reads the board's highest rate
 /// (a rate above it is reported refused, not forced), sets [`PRE_RATE_HZ`] and for the profile
 /// loads it over the protocol; then hostctl sets the rate and a wall (K = 1 N·m/rad: the
 /// config's wall, or the profile compiled again for the new rate) and records 2 s of telemetry
@@ -240,8 +275,8 @@ fn run_figures(report: &str) -> (String, String, String) {
 /// change. Prints the table and writes it into docs/BENCHMARKS.md (`board-emu` section).
 fn figures(out: &Path, hostctl: &Path) -> Result<()> {
     let mut t = String::from(
-        "| image | servo rate | renders | servo tick: mean cycles | longest tick, cycles | CPU load (telemetry streaming) |\n\
-         |---|---:|---|---:|---:|---:|\n",
+        "| image | servo rate | telemetry recorded | renders | servo tick: mean cycles | longest tick, cycles | CPU load (telemetry streaming) |\n\
+         |---|---:|---|---|---:|---:|---:|\n",
     );
     for name in ["dac", "pwm"] {
         for hz in BENCH_RATES {
@@ -250,9 +285,15 @@ fn figures(out: &Path, hostctl: &Path) -> Result<()> {
                     Load::Wall => "the wall",
                     Load::Profile => "16 detent trains",
                 };
-                let row = bench_run(out, hostctl, name, hz, load)?;
+                let (file, decimation) = bench_image(name, hz);
+                let row = bench_run(out, hostctl, &file, hz, decimation, load)?;
+                let recorded = if decimation == 1 {
+                    "every sample (decimation 1)".to_string()
+                } else {
+                    format!("1 sample in {decimation} (decimation {decimation})")
+                };
                 let line = format!(
-                    "| nucleo-f446re-{name} | {} kHz | {what} | {row} |",
+                    "| {file} | {} kHz | {recorded} | {what} | {row} |",
                     hz / 1000
                 );
                 println!("{line}");
@@ -268,14 +309,22 @@ fn figures(out: &Path, hostctl: &Path) -> Result<()> {
     )
 }
 
-/// One `--bench` run: the table's last three cells.
-fn bench_run(out: &Path, hostctl: &Path, name: &str, hz: u32, load: Load) -> Result<String> {
+/// One `--bench` run of image file `file` (in `out`, without `.elf`), recording every
+/// `decimation`-th sample: the table's last three cells.
+fn bench_run(
+    out: &Path,
+    hostctl: &Path,
+    file: &str,
+    hz: u32,
+    decimation: u32,
+    load: Load,
+) -> Result<String> {
     use std::io::BufRead;
     let exe = root().join("host/board-emu/target/release/stiffwall-board-emu");
     let csv = std::env::temp_dir().join(format!("board-emu-bench-{}.csv", std::process::id()));
     let mut child = Command::new(&exe)
         .arg("--elf")
-        .arg(out.join(format!("nucleo-f446re-{name}.elf")))
+        .arg(out.join(format!("{file}.elf")))
         .args(["--pty", "--fast"])
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
@@ -300,8 +349,10 @@ fn bench_run(out: &Path, hostctl: &Path, name: &str, hz: u32, load: Load) -> Res
             "--port",
             &pty,
         ]))?;
+        let decimation = decimation.to_string();
         run(Command::new(hostctl)
-            .args(["record", "--seconds", "2", "--port", &pty])
+            .args(["record", "--seconds", "2", "--decimation", &decimation])
+            .args(["--port", &pty])
             .arg(&csv))?;
     }
     drop(child.stdin.take());

@@ -8,6 +8,11 @@
 //! full-scale torque.
 //!
 //! Units: rad (m for a linear device) per count; N·m (N) per code; Hz.
+//!
+//! The highest servo rate is 10 kHz ([`MAX_RATE_HZ`]). Feature `bench-20khz` (a measurement
+//! image built only by `cargo xtask board-emu --bench`, never for a real board) raises it to
+//! 20 kHz and changes nothing else, so the board emulator can measure the cycles and CPU load
+//! at 20 kHz, recording every second sample.
 
 use crate::force::MAX_CODE;
 use stiffwall_firmware::BoardInfo;
@@ -69,7 +74,12 @@ pub static RIG: RigRecord = RigRecord {
 /// keep up with the 921600-baud link anyway).
 pub const MIN_RATE_HZ: u32 = 100;
 /// Highest servo rate, Hz.
+#[cfg(not(feature = "bench-20khz"))]
 pub const MAX_RATE_HZ: u32 = 10_000;
+/// Highest servo rate of the measurement image (feature `bench-20khz`), Hz: the board
+/// emulator's 20 kHz rows, recorded at decimation 2.
+#[cfg(feature = "bench-20khz")]
+pub const MAX_RATE_HZ: u32 = 20_000;
 
 /// The board facts for the firmware core.
 pub fn board_info() -> BoardInfo {
