@@ -640,7 +640,8 @@ fn fit_text(base: f64, per: f64, config0: f64) -> String {
          {config0:.0} for the config tick without elements): at 10 kHz (18 000 cycles per tick) {all10}\n\
          (room for {fit10} by the mean, {cfg10} by the config tick); at 20 kHz (9000 cycles) {all20}\n\
          (room for {fit20} and {cfg20}: the config tick is the bound). A profile holds at most 16.\n\
-         The nucleo-f446re refuses 20 kHz (`max_rate_hz` 10 kHz, firmware/boards/nucleo-f446re/\n\
-         src/rig.rs: the 921 600-baud link cannot stream every sample above it).\n",
+         The nucleo-f446re's images stop at 10 kHz (`max_rate_hz`, firmware/boards/nucleo-f446re/\n\
+         src/rig.rs: the 921 600-baud link cannot stream every sample above it); its 20 kHz figures\n\
+         are the board emulator's, on the measurement images of feature `bench-20khz` (below).\n",
     )
 }
