@@ -117,6 +117,34 @@ pub fn run(
     ticks: usize,
     natural_ticks: f64,
 ) -> Result<Run, ProfileRunError> {
+    run_traced(spec, profile, start, ticks, natural_ticks, &mut |_| {})
+}
+
+/// The plant at one servo tick of a run: its state at the sample instant (when the count of
+/// the same tick is read) and the force the servo commands from there for one period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Position, m (rad).
+    pub position: f64,
+    /// Velocity, m/s (rad/s).
+    pub velocity: f64,
+    /// Commanded force, N (N·m), held for the tick.
+    pub force: f64,
+}
+
+/// [`run`], calling `on_tick` with each tick's [`Sample`] (in tick order, one per count of the
+/// returned run; the run and its verdict are [`run`]'s).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_traced(
+    spec: &Spec,
+    profile: &Profile,
+    start: &Start,
+    ticks: usize,
+    natural_ticks: f64,
+    on_tick: &mut dyn FnMut(&Sample),
+) -> Result<Run, ProfileRunError> {
     let model = spec
         .plant_model()
         .map_err(|e| ProfileRunError::Plant(e.to_string()))?;
@@ -168,6 +196,11 @@ pub fn run(
     for _ in 0..ticks {
         counts.push(plant.encoder_count());
         let force = step(&mut servo, &plant, &mut tick);
+        on_tick(&Sample {
+            position: plant.position_m(),
+            velocity: plant.velocity_m_per_s(),
+            force,
+        });
         plant.advance(force, period_s);
         link.tx.clear();
         device.poll(tick, &mut link);

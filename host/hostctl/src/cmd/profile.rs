@@ -10,13 +10,21 @@
 //! Exit codes: 0 every element passes (and, for `load`, the profile is loaded), 1 the check
 //! fails (nothing loaded without `--force`), 2 the file, the flags, the tune or the device
 //! refused (as every hostctl command's errors).
+//!
+//! Shared with the commands that take a profile file: [`prepare`] (read, lowered for a
+//! connected device and checked against `--tune-json`: `hostctl ui --profile` and `hostctl
+//! virtual --profile`) and [`lower_for_spec`] (lowered for a virtual device's plant: `profile
+//! simulate` and `hostctl simulate SCENE --profile`).
 
 use crate::device::connect::ConnectArgs;
 use crate::output::{emit, emit_json};
-use anyhow::{anyhow, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use stiffwall_tune::profile::{self, Device, Envelope, ProfileFile};
+use stiffwall_proto::DeviceInfo;
+use stiffwall_tune::profile::{
+    self, units::sig, Device, ElementCheck, Envelope, Lowered, ProfileFile, Report,
+};
 use stiffwall_tune::{Outcome, Settings, TuneError};
 
 /// Arguments of `hostctl profile`.
@@ -179,57 +187,24 @@ pub fn load(a: &LoadArgs) -> Result<bool> {
 /// Not the built-in virtual device, a bad file or velocity, the device refused the profile,
 /// the CSV unwritable.
 pub fn simulate(a: &SimulateArgs) -> Result<bool> {
-    use stiffwall_analysis::profile_run::{rest_place, run_start, starts, RestPlace};
+    use stiffwall_analysis::profile_run::{run_start, starts};
     let file = read_file(&a.file)?;
     let spec = a.connect.spec()?.virtual_spec()?.ok_or_else(|| {
         anyhow!("profile simulate runs the built-in virtual device: give --device NAME or --plant FILE.toml")
     })?;
     let p = &spec.plant;
-    let device = Device {
-        rotational: p.rotational,
-        resolution: p.resolution,
-    };
-    let wire = profile::lower(&file, &device)
-        .map_err(|e| anyhow!("{}: {e}", a.file.display()))?
-        .wire();
+    let (wire, device) = lower_for_spec(&file, &a.file, &spec)?;
     let v = a.velocity.unwrap_or(5.0 * p.resolution / p.period_s);
     anyhow::ensure!(
         v.is_finite() && v > 0.0,
         "--velocity {v}: allowed range is > 0"
     );
-    let u = device.units();
     let mut csv = String::from("start,tick,count\n");
     let (mut good, all) = (0, starts(&wire, p.resolution, v, 10));
     for (i, st) in all.iter().enumerate() {
         let (r, natural) = run_start(&spec, &wire, st)?;
-        let n = r.final_count();
-        let place = rest_place(&wire, n);
-        let at = format!(
-            "count {n} ({} {})",
-            profile::units::sig(n as f64 * p.resolution),
-            u.position
-        );
-        let verdict = match (r.faults, r.rests, place) {
-            (f, _, _) if f != 0 => format!("fault {f:#x}"),
-            (_, false, _) => format!(
-                "does not come to rest (last counts span {})",
-                r.final_span(natural)
-            ),
-            (_, true, RestPlace::OffDetent { element }) => format!(
-                "rests at {at}, inside detent train {} at no minimum",
-                element + 1
-            ),
-            (_, true, RestPlace::Detent { element, minimum }) => format!(
-                "rests at {at}: minimum {minimum} of element {}",
-                element + 1
-            ),
-            (_, true, RestPlace::Wall { element }) => {
-                format!("rests at {at}: against the wall, element {}", element + 1)
-            }
-            (_, true, RestPlace::Elsewhere) => format!("rests at {at}"),
-        };
-        good +=
-            usize::from(r.faults == 0 && r.rests && !matches!(place, RestPlace::OffDetent { .. }));
+        let (verdict, holds) = rest_verdict(&wire, &r, natural, &device);
+        good += usize::from(holds);
         println!("{}: {verdict}", st.label);
         for (t, c) in r.counts.iter().enumerate() {
             csv.push_str(&format!("{i},{t},{c}\n"));
@@ -243,6 +218,47 @@ pub fn simulate(a: &SimulateArgs) -> Result<bool> {
         std::fs::write(out, csv).with_context(|| format!("writing {}", out.display()))?;
     }
     Ok(good == all.len())
+}
+
+/// How run `r` of `wire` on `device` ended, in words ("rests at count n (x m): minimum j of
+/// element i", "does not come to rest (last counts span s)", "fault 0x…"; `natural` is the
+/// rest rule's natural period, ticks), and whether it rests where the profile holds the device:
+/// no fault, at rest, and not inside a detent train at no minimum.
+pub(crate) fn rest_verdict(
+    wire: &stiffwall_proto::Profile,
+    r: &stiffwall_analysis::profile_run::Run,
+    natural: f64,
+    device: &Device,
+) -> (String, bool) {
+    use stiffwall_analysis::profile_run::{rest_place, RestPlace};
+    let n = r.final_count();
+    let place = rest_place(wire, n);
+    let at = format!(
+        "count {n} ({} {})",
+        sig(n as f64 * device.resolution),
+        device.units().position
+    );
+    let verdict = match (r.faults, r.rests, place) {
+        (f, _, _) if f != 0 => format!("fault {f:#x}"),
+        (_, false, _) => format!(
+            "does not come to rest (last counts span {})",
+            r.final_span(natural)
+        ),
+        (_, true, RestPlace::OffDetent { element }) => format!(
+            "rests at {at}, inside detent train {} at no minimum",
+            element + 1
+        ),
+        (_, true, RestPlace::Detent { element, minimum }) => format!(
+            "rests at {at}: minimum {minimum} of element {}",
+            element + 1
+        ),
+        (_, true, RestPlace::Wall { element }) => {
+            format!("rests at {at}: against the wall, element {}", element + 1)
+        }
+        (_, true, RestPlace::Elsewhere) => format!("rests at {at}"),
+    };
+    let holds = r.faults == 0 && r.rests && !matches!(place, RestPlace::OffDetent { .. });
+    (verdict, holds)
 }
 
 /// `profile show`: the device's active profile.
@@ -302,8 +318,29 @@ pub fn check(a: &CheckArgs) -> Result<bool> {
     Ok(report.pass)
 }
 
+/// `file` (read from `path`) lowered for the virtual device of `spec` (its axis and
+/// resolution), as `profile simulate` and `simulate SCENE --profile` run it; the device it was
+/// lowered for. A file of the other axis is refused with the library's message.
+///
+/// # Errors
+/// The library's refusal (element, key, range), with the file's name.
+pub(crate) fn lower_for_spec(
+    file: &ProfileFile,
+    path: &Path,
+    spec: &stiffwall_client::VirtualSpec,
+) -> Result<(stiffwall_proto::Profile, Device)> {
+    let device = Device {
+        rotational: spec.plant.rotational,
+        resolution: spec.plant.resolution,
+    };
+    let wire = profile::lower(file, &device)
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?
+        .wire();
+    Ok((wire, device))
+}
+
 /// The profile file at `path`, parsed (its name in the error).
-fn read_file(path: &Path) -> Result<ProfileFile> {
+pub(crate) fn read_file(path: &Path) -> Result<ProfileFile> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     ProfileFile::from_toml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
@@ -388,4 +425,114 @@ fn tune_on(client: &mut stiffwall_client::Client, name: String) -> Result<(Envel
 /// detent's strength may be; the firmware refuses more).
 pub(crate) fn force_limit(info: &stiffwall_proto::DeviceInfo) -> f64 {
     f64::from(info.max_code) * f64::from(info.force_per_code)
+}
+
+/// A profile file loaded at start (`hostctl ui --profile`, `hostctl virtual --profile`), with
+/// its check.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The file, as given.
+    pub file: PathBuf,
+    /// Lowered for the connected device.
+    pub lowered: Lowered,
+    /// The check against `--tune-json`, when given.
+    pub report: Option<Report>,
+}
+
+/// Where an element of a check is, as the profile library's errors name it.
+fn place(e: &ElementCheck) -> String {
+    match e.part {
+        Some(p) => format!("element {} ({}, {p} wall)", e.index, e.kind),
+        None => format!("element {} ({})", e.index, e.kind),
+    }
+}
+
+/// What fails in `report`, one line per failing element.
+#[must_use]
+pub fn failures(report: &Report) -> Vec<String> {
+    report
+        .elements
+        .iter()
+        .filter(|e| !e.pass)
+        .map(|e| format!("{} at {}: {}", place(e), e.at, e.problems.join("; ")))
+        .collect()
+}
+
+/// Reads `file`, lowers it for `info`'s device and checks it against `tune_json` (when given).
+///
+/// # Errors
+/// The file unreadable or refused (the library's message: element, field, range), the tune
+/// result unreadable or of another device, or the check fails and `force` is not set. Nothing
+/// has been loaded onto the device then.
+pub fn prepare(
+    file: &Path,
+    tune_json: Option<&Path>,
+    force: bool,
+    info: &DeviceInfo,
+) -> Result<Loaded> {
+    let text = std::fs::read_to_string(file)
+        .with_context(|| format!("--profile: reading {}", file.display()))?;
+    let named = |e: profile::ProfileError| {
+        anyhow!(
+            "--profile {}: {e}; nothing was loaded onto the device",
+            file.display()
+        )
+    };
+    let parsed = ProfileFile::from_toml(&text).map_err(named)?;
+    let device = Device::of_info(info);
+    let lowered = profile::lower(&parsed, &device).map_err(named)?;
+    let report = match tune_json {
+        None => None,
+        Some(path) => {
+            let envelope = envelope_of_file(path)?.with_force_limit(force_limit(info));
+            same_device(path, &envelope.device, &device)?;
+            let report = profile::check(&lowered, &envelope);
+            if !report.pass {
+                let what = failures(&report).join("\n  ");
+                if force {
+                    eprintln!(
+                        "warning: --profile {} fails the check against {}; loaded anyway \
+                         (--force-profile):\n  {what}",
+                        file.display(),
+                        envelope.source
+                    );
+                } else {
+                    bail!(
+                        "--profile {} fails the check against {}:\n  {what}\nnothing was loaded \
+                         onto the device (--force-profile loads it anyway)",
+                        file.display(),
+                        envelope.source
+                    );
+                }
+            }
+            Some(report)
+        }
+    };
+    Ok(Loaded {
+        file: file.to_path_buf(),
+        lowered,
+        report,
+    })
+}
+
+/// Refuses a tune result (`--tune-json path`, measured on `tuned`) of another device than
+/// `device` (axis, or resolution beyond 1 ppm).
+fn same_device(path: &Path, tuned: &Device, device: &Device) -> Result<()> {
+    let axis = |d: &Device| if d.rotational { "rotary" } else { "linear" };
+    let same = tuned.rotational == device.rotational
+        && (tuned.resolution - device.resolution).abs() <= 1e-6 * device.resolution;
+    if !same {
+        bail!(
+            "--tune-json {} was measured on another device ({}, Δ = {} {}) than the one \
+             connected ({}, Δ = {} {}); nothing was loaded onto the device",
+            path.display(),
+            axis(tuned),
+            sig(tuned.resolution),
+            tuned.units().position,
+            axis(device),
+            sig(device.resolution),
+            device.units().position,
+        );
+    }
+    Ok(())
 }

@@ -3,7 +3,9 @@
 //! `profile` message that draws the device's active profile over the position trace.
 //!
 //! The file format, the lowering and the check are `stiffwall_tune::profile`'s (as `hostctl
-//! profile check`); this module only decides what is loaded and what the page is told.
+//! profile check`); reading, lowering and checking the file is `cmd::profile::prepare`'s
+//! (re-exported here; `hostctl virtual --profile` prepares its profile with it too); this module
+//! only decides what the page is told.
 //!
 //! The `profile` message (server → page, JSON, [`PROFILE_MESSAGE_VERSION`]):
 //! `{"type": "profile", "version": 1, "source": "file" | "device", "file", "name",
@@ -22,126 +24,18 @@
 //! assumes the servo's coarsening shift 0, as the profile library); numbers in the device's
 //! units (N/m, N·s/m, N, m; N·m/rad, N·m·s/rad, N·m, rad).
 
-use anyhow::{anyhow, bail, Context as _, Result};
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
 use stiffwall_proto::{DeviceInfo, Profile, ProfileElement, Side};
-use stiffwall_tune::profile::{
-    self, overlap, units::sig, Device, ElementCheck, Lowered, ProfileFile, Report,
-};
+use stiffwall_tune::profile::{overlap, units::sig, Device};
+
+// Read, lowered and checked as `hostctl virtual --profile` does: `cmd::profile`'s.
+pub use crate::cmd::profile::{failures, prepare, Loaded};
 
 /// The version of the `profile` message.
 pub const PROFILE_MESSAGE_VERSION: u32 = 1;
 
 /// An element whose margin (limit / local K) is below this is marked near its limit.
 pub const NEAR_LIMIT: f64 = 1.25;
-
-/// A profile file loaded at start, with its check.
-#[derive(Debug, Clone)]
-pub struct Loaded {
-    /// The file, as given.
-    pub file: PathBuf,
-    /// Lowered for the connected device.
-    pub lowered: Lowered,
-    /// The check against `--tune-json`, when given.
-    pub report: Option<Report>,
-}
-
-/// Where an element of a check is, as the profile library's errors name it.
-fn place(e: &ElementCheck) -> String {
-    match e.part {
-        Some(p) => format!("element {} ({}, {p} wall)", e.index, e.kind),
-        None => format!("element {} ({})", e.index, e.kind),
-    }
-}
-
-/// What fails in `report`, one line per failing element.
-#[must_use]
-pub fn failures(report: &Report) -> Vec<String> {
-    report
-        .elements
-        .iter()
-        .filter(|e| !e.pass)
-        .map(|e| format!("{} at {}: {}", place(e), e.at, e.problems.join("; ")))
-        .collect()
-}
-
-/// Reads `file`, lowers it for `info`'s device and checks it against `tune_json` (when given).
-///
-/// # Errors
-/// The file unreadable or refused (the library's message: element, field, range), the tune
-/// result unreadable or of another device, or the check fails and `force` is not set. Nothing
-/// has been loaded onto the device then.
-pub fn prepare(
-    file: &Path,
-    tune_json: Option<&Path>,
-    force: bool,
-    info: &DeviceInfo,
-) -> Result<Loaded> {
-    let text = std::fs::read_to_string(file)
-        .with_context(|| format!("--profile: reading {}", file.display()))?;
-    let named = |e: profile::ProfileError| {
-        anyhow!(
-            "--profile {}: {e}; nothing was loaded onto the device",
-            file.display()
-        )
-    };
-    let parsed = ProfileFile::from_toml(&text).map_err(named)?;
-    let device = Device::of_info(info);
-    let lowered = profile::lower(&parsed, &device).map_err(named)?;
-    let report = match tune_json {
-        None => None,
-        Some(path) => {
-            let envelope = crate::cmd::profile::envelope_of_file(path)?
-                .with_force_limit(crate::cmd::profile::force_limit(info));
-            let d = envelope.device;
-            let same = d.rotational == device.rotational
-                && (d.resolution - device.resolution).abs() <= 1e-6 * device.resolution;
-            if !same {
-                bail!(
-                    "--tune-json {} was measured on another device ({}, Δ = {} {}) than the one \
-                     connected ({}, Δ = {} {}); nothing was loaded onto the device",
-                    path.display(),
-                    if d.rotational { "rotary" } else { "linear" },
-                    sig(d.resolution),
-                    d.units().position,
-                    if device.rotational {
-                        "rotary"
-                    } else {
-                        "linear"
-                    },
-                    sig(device.resolution),
-                    device.units().position,
-                );
-            }
-            let report = profile::check(&lowered, &envelope);
-            if !report.pass {
-                let what = failures(&report).join("\n  ");
-                if force {
-                    eprintln!(
-                        "warning: --profile {} fails the check against {}; loaded anyway \
-                         (--force-profile):\n  {what}",
-                        file.display(),
-                        envelope.source
-                    );
-                } else {
-                    bail!(
-                        "--profile {} fails the check against {}:\n  {what}\nnothing was loaded \
-                         onto the device (--force-profile loads it anyway)",
-                        file.display(),
-                        envelope.source
-                    );
-                }
-            }
-            Some(report)
-        }
-    };
-    Ok(Loaded {
-        file: file.to_path_buf(),
-        lowered,
-        report,
-    })
-}
 
 fn number(name: &str, value: f64, unit: &str) -> Value {
     json!({"name": name, "value": value, "unit": unit, "text": format!("{name} = {} {unit}", sig(value))})
@@ -263,6 +157,7 @@ pub fn message(info: &DeviceInfo, active: &Profile, loaded: Option<&Loaded>) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use stiffwall_tune::profile::{self, ProfileFile};
 
     fn info(counts_per_rev: u32) -> DeviceInfo {
         DeviceInfo {
