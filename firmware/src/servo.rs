@@ -230,6 +230,25 @@ impl<'a, N: Numeric> Servo<'a, N> {
     /// profile renders when it ends.
     pub fn set_profile(&mut self, table: ProfileTable<N>) {
         self.profile = table;
+        self.profile_changed();
+    }
+
+    /// Takes the profile queue's next table, as announced by a `ServoCmd::Profile`: its
+    /// elements are copied in place from the queue's slot (only as many as it holds, not the
+    /// whole 16-slot table, and not through the stack), then the slot is released.
+    pub(crate) fn take_profile(&mut self) {
+        let Some(t) = self.port.profiles.peek() else {
+            return;
+        };
+        self.profile.copy_from(t);
+        // The slot's value is not needed: its elements are `Copy`, nothing to drop.
+        let _ = self.port.profiles.dequeue();
+        self.profile_changed();
+    }
+
+    /// What a new profile resets: the delay line restarts empty, the energy monitor afresh,
+    /// and the mode follows the profile unless an experiment runs.
+    fn profile_changed(&mut self) {
         self.prev_pos = self.pos;
         self.ring = [0; RING];
         self.monitor.reset();

@@ -31,6 +31,14 @@ impl<N: Numeric> ProfileTable<N> {
         }
     }
 
+    /// Makes this table `other`'s, copying only `other`'s elements (a table is up to 16
+    /// elements long; the servo takes a profile in one tick).
+    pub fn copy_from(&mut self, other: &Self) {
+        self.elements.clear();
+        // Cannot fail: both hold at most `MAX_PROFILE_ELEMENTS`.
+        let _ = self.elements.extend_from_slice(&other.elements);
+    }
+
     /// No element: the servo renders the config's wall.
     #[must_use]
     pub fn is_empty(&self) -> bool {

@@ -82,11 +82,7 @@ impl<N: Numeric> Servo<'_, N> {
                 self.monitor.reset();
             }
             ServoCmd::Stop => self.end_experiment(false),
-            ServoCmd::Profile => {
-                if let Some(t) = self.port.profiles.dequeue() {
-                    self.set_profile(t);
-                }
-            }
+            ServoCmd::Profile => self.take_profile(),
         }
     }
 

@@ -75,12 +75,13 @@ const PROFILE_1: &str = "profile-detents-1";
 /// (4500), and 12.7 % of a 10 kHz tick (18 000 cycles, the boards' highest rate).
 pub const PROFILE_BUDGET: f64 = 2280.0;
 /// Budget of the tick that takes [`PROFILE_16`] (`ServoCmd::Profile`: the compiled table out of
-/// its queue, then the first render), instructions: 4397 measured + 10 %. Taking a table costs
-/// about 2300 instructions whatever its length (1 train: 2612): the queue's slot is copied
-/// whole. Under half of a 20 kHz tick's 9000 cycles. A config applied in profile mode (the
+/// its queue, then the first render), instructions: 3276 measured + 10 %. Taking a table
+/// copies its elements out of the queue's slot (1 train: 711 in all, 425 over its render tick;
+/// 16: 1192 over it); until the servo copied the elements only, the whole 16-slot table was
+/// copied, 4397 for 16 trains. Under half of a 20 kHz tick's 9000 cycles. A config applied in profile mode (the
 /// gains derived, and the profile's render on the same tick) is a config-applying tick, under
 /// [`WORST_BUDGET`].
-pub const PROFILE_TAKE_BUDGET: f64 = 4840.0;
+pub const PROFILE_TAKE_BUDGET: f64 = 3600.0;
 /// Cycles of the nucleo-f446re's TIM7 handler around `Servo::tick` (exception entry and
 /// return, the acknowledge, the rate check, the encoder read and the output): the board
 /// emulator's wall tick less QEMU's full tick, 49 for the dac image and 62 for the pwm image
@@ -602,8 +603,8 @@ fn profile_text(means: &[Mean], ticks: &[ProfileTick], compiles: &[Mean]) -> Res
          ≤ {WORST_BUDGET} (the worst tick's budget).\n\n\
          Longest single ticks of one run per detent stage, each tick timed alone (the stand-ins\n\
          subtracted): the main loop loads the profile at tick 2 (`profile-take`: that tick takes\n\
-         the table, {take:.0} for 16 trains, {copy:.0} more than its longest render tick, as\n\
-         much for 1 train: the table's copy out of its queue, whatever its length), changes the config at tick 1000 (K × 1.5, B × 0.5; `config-change`:\n\
+         the table, {take:.0} for 16 trains, {copy:.0} more than its longest render tick:\n\
+         the table's elements copied out of its queue's slot), changes the config at tick 1000 (K × 1.5, B × 0.5; `config-change`:\n\
          the gains derived in f64 and the profile rendered on the same tick, {config16:.0}) with the\n\
          profile compiled again for it and taken at tick 1001 (as the device's `SetConfig` does),\n\
          and renders it on the other 2095 ticks (`profile-tick`).\n\n{}\n\
