@@ -22,7 +22,7 @@ use std::os::unix::process::CommandExt as _;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-use ui_support::Server;
+use ui_support::{tune_json, Server};
 
 struct Driver(Child);
 
@@ -594,31 +594,6 @@ fn the_page_in_chromium() {
     });
 }
 
-/// A dry-run tune of the fast virtual maxon-re35 (`hostctl tune --json`), saved in a file.
-fn tune_json() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("stiffwall-ui-browser-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("tune.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_hostctl"))
-        .args([
-            "tune",
-            "--dry-run",
-            "--json",
-            "--fast",
-            "--device",
-            "maxon-re35",
-        ])
-        .output()
-        .expect("run hostctl tune");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    std::fs::write(&path, &out.stdout).unwrap();
-    path
-}
-
 /// The profile overlay of the position panel on `server`'s page, once at least `want_drawn`
 /// elements are drawn: (elements drawn, the legend's kinds, the marks' labels, table rows).
 async fn profile_overlay(
@@ -660,7 +635,7 @@ async fn profile_overlay(
 #[test]
 #[ignore = "needs Debian's chromium and chromium-driver: run `cargo xtask ci` or `cargo xtask ui-screenshots`"]
 fn the_profile_overlay_in_chromium() {
-    let tune = tune_json();
+    let tune = tune_json("browser");
     let profiles = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../profiles");
     let knob = profiles.join("knob-24-detents.toml");
     let strong = profiles.join("too-strong-detent.toml");

@@ -14,35 +14,10 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use stiffwall_tune::profile::{self, overlap, Device, ProfileFile};
-use ui_support::{read_frame, Server};
+use ui_support::{read_frame, tune_json, Server};
 
 fn profiles() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../profiles")
-}
-
-/// A dry-run tune of the fast virtual maxon-re35 (`hostctl tune --json`), saved in a file.
-fn tune_json(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("stiffwall-ui-profile-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("{tag}-tune.json"));
-    let out = Command::new(env!("CARGO_BIN_EXE_hostctl"))
-        .args([
-            "tune",
-            "--dry-run",
-            "--json",
-            "--fast",
-            "--device",
-            "maxon-re35",
-        ])
-        .output()
-        .expect("run hostctl tune");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    std::fs::write(&path, &out.stdout).unwrap();
-    path
 }
 
 /// The JSON messages a newly opened page is sent, until `hello` and `profile` have come.

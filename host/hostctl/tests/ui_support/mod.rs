@@ -6,6 +6,7 @@
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
+use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
@@ -205,4 +206,30 @@ pub fn read_close(s: &mut TcpStream) -> (u16, String) {
             return (code, String::from_utf8_lossy(&p[2..]).into_owned());
         }
     }
+}
+
+/// A dry-run tune of the fast virtual maxon-re35 (`hostctl tune --json`), saved as
+/// `{tag}-tune.json` in a directory of this test process.
+pub fn tune_json(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("stiffwall-ui-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{tag}-tune.json"));
+    let out = Command::new(env!("CARGO_BIN_EXE_hostctl"))
+        .args([
+            "tune",
+            "--dry-run",
+            "--json",
+            "--fast",
+            "--device",
+            "maxon-re35",
+        ])
+        .output()
+        .expect("run hostctl tune");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::write(&path, &out.stdout).unwrap();
+    path
 }
