@@ -129,6 +129,11 @@ pub struct Repeatability {
     /// The spread that margin leaves room for ([`crate::repeat::spread_room`]): a larger
     /// measured spread lowers the margin to 1/(1 + 2·spread).
     pub spread_room: f64,
+    /// The set K is the small-swing screen's (below the first K at which the identified model
+    /// keeps a swing, [`crate::small_swing`]), below margin × the frontier's K: the frontier's
+    /// spread does not move it, the identified model does.
+    #[serde(default)]
+    pub set_by_screen: bool,
 }
 
 fn law_name<S: serde::Serializer>(

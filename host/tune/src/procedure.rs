@@ -585,6 +585,7 @@ fn repeatability(wall: &super::frontier::Wall) -> Option<super::outcome::Repeata
         spread: r.spread(),
         margin: wall.margin,
         spread_room: super::repeat::spread_room(wall.margin),
+        set_by_screen: wall.small_swing.is_some_and(|s| s.k < s.k_asked),
     })
 }
 

@@ -554,7 +554,26 @@ fn render_walls(s: &mut String, o: &Outcome, k_unit: &str, b_unit: &str) {
     let _ = writeln!(s, "  frontier (largest resting K): {}", tried.join("; "));
     if let Some(r) = &o.repeatability {
         let _ = writeln!(s, "{}", repeatability_line(r));
+        if let Some(line) = screen_line(r, o) {
+            let _ = writeln!(s, "{line}");
+        }
     }
+}
+
+/// When the small-swing screen set the wall (below margin × the frontier's K): what moves the
+/// set K from tune to tune, the identified model, and not the frontier's spread.
+fn screen_line(r: &stiffwall_tune::Repeatability, o: &Outcome) -> Option<String> {
+    let sw = o.small_swing.filter(|_| r.set_by_screen)?;
+    let (k_swing, _) = sw.swing?;
+    Some(format!(
+        "  the set K {:.4} is the small-swing screen's ({:.1} % below K = {k_swing:.4}, the first \
+         K of a {:.1} % grid fixed in K at which the identified model keeps a swing), below the \
+         margin's {:.4}: the frontier's spread does not move it, the identified model does",
+        o.k_set,
+        100.0 * (1.0 - o.k_set / k_swing),
+        100.0 * (stiffwall_tune::small_swing::SCAN_STEP - 1.0),
+        sw.k_asked
+    ))
 }
 
 /// The report's repeatability line (issue 42): where this run's tests put the set wall's
