@@ -15,7 +15,7 @@ use super::settings::{
 use super::test_set::{
     impact, min_settle_run, test_set, Test, WallSides, BOTH_SIDES_IMPACT_SHARES,
 };
-use super::verify::{run_test, Judging, TestResult, TestRun};
+use super::verify::{run_test_at, Judging, TestResult, TestRun};
 use stiffwall_client::Client;
 use stiffwall_core::params::PhysicalParams;
 use stiffwall_proto::ServoConfig;
@@ -146,15 +146,18 @@ impl Run<'_> {
                 viscous: self.p.viscous,
             }),
         };
-        crate::travel::recentre(c, base, back, self.room, self.judging().brake_damping)?;
-        let run = run_test(
+        let rest = crate::travel::recentre(c, base, back, self.room, self.judging().brake_damping)?;
+        let run = run_test_at(
             c,
             base,
             k,
             test,
-            self.ticks_for(k, thorough, base.damping > 0.0),
-            min_settle_run(self.p.mass, k, self.period_s()),
+            (
+                self.ticks_for(k, thorough, base.damping > 0.0),
+                min_settle_run(self.p.mass, k, self.period_s()),
+            ),
             &self.judging(),
+            rest,
         )?;
         if let Some(d) = run.delivered {
             // The slowest launch that passed (as the slower impact it was) and the last one

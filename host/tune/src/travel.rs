@@ -214,6 +214,12 @@ pub fn where_now(c: &mut Client, base: &ServoConfig) -> Result<i64> {
 /// # Errors
 /// The device failing or not coming to rest.
 pub fn where_now_braked(c: &mut Client, base: &ServoConfig, brake: f64) -> Result<i64> {
+    rest_braked(c, base, brake).map(|(raw, _)| raw)
+}
+
+/// [`where_now_braked`]'s raw count and the rest count it read, in the counts of `base`'s wall
+/// frame (what `rest_position` returns there).
+fn rest_braked(c: &mut Client, base: &ServoConfig, brake: f64) -> Result<(i64, i32)> {
     let cfg = ServoConfig {
         stiffness: 0.0,
         damping: brake.max(0.0) as f32,
@@ -225,7 +231,8 @@ pub fn where_now_braked(c: &mut Client, base: &ServoConfig, brake: f64) -> Resul
         ..*base
     };
     c.set_config(&cfg)?;
-    Ok(raw_of(&cfg, super::rest::rest_position(c)?))
+    let rest = super::rest::rest_position(c)?;
+    Ok((raw_of(&cfg, rest), rest))
 }
 
 /// Steps of the fine phase's reach: a move farther than this many fine steps glides first.
@@ -650,7 +657,9 @@ fn approach_band(settle: Option<&GentleMove>, static_friction_n: Option<f64>, re
 /// walked back there gently with `how` ([`move_to`]; the search uses a spring of K/16 of the K
 /// under test, far below it and so far more stable) and the wall is off again. Where the device
 /// rests is read with the damper `brake` on (N·s/m, N·m·s/rad; 0: none): a test whose wall
-/// grew leaves it moving.
+/// grew leaves it moving. Returns where the device rests (counts of `base`'s wall frame) when
+/// it was not moved: at rest there, under the same wall-off brake a test's start reads it
+/// with, so the test need not wait for rest again.
 ///
 /// # Errors
 /// The device failing, or the move's.
@@ -660,15 +669,15 @@ pub fn recentre(
     how: GentleMove,
     room: i64,
     brake: f64,
-) -> Result<()> {
+) -> Result<Option<i32>> {
     if room <= 0 || how.k.is_nan() || how.k <= 0.0 {
-        return Ok(());
+        return Ok(None);
     }
     let wall = i64::from(base.wall_position);
     let brake = brake.min(super::approach::firmware_damping_cap(c, base));
-    let at = where_now_braked(c, base, brake)?;
+    let (at, rest) = rest_braked(c, base, brake)?;
     if (at - wall).abs() * 2 <= room {
-        return Ok(());
+        return Ok(Some(rest));
     }
     move_into(c, base, wall, how, room)?;
     c.set_config(&ServoConfig {
@@ -676,5 +685,5 @@ pub fn recentre(
         damping: 0.0,
         ..*base
     })?;
-    Ok(())
+    Ok(None)
 }
