@@ -323,15 +323,16 @@ const REPEATS: usize = 5;
 /// the virtual device's (deterministic in fast mode), run concurrently (one thread per image;
 /// the device ends each test itself, so the host's speed changes no verdict). Every run must
 /// pass its own final check ([`tune`]) and set a wall that rests; the set K is printed with its
-/// deviation from the virtual device's. The issue asks 10 %; this test holds 25 %. Since the
-/// small-swing screen (`stiffwall_tune::small_swing`) a damped maxon-re35 wall is set below
-/// the first K at which the identified model keeps a small swing, not at 0.8 of a frontier
-/// that lands near 4.3 or near the ceiling 5.2 from run to run (set K was 3.42 to 4.15 on the
-/// dac image, the virtual device 3.74, and one final check in 15 latched the buzz fault at
-/// 4.15). Measured in two runs of this test (30 board tunes): dac −0.3 to +6.9 %, pwm −1.2 to
-/// +15.5 %, phantom-1.0 −5.4 to −0.1 %. The screen's answer moves with the identified model
-/// across narrow bands of K that keep a swing (the rigid model has them at 3.4, 3.5 and 3.9):
-/// one pwm tune set 3.87, its model's first swing about 3.95 (the set K is that / 1.02).
+/// deviation from the virtual device's, which must be within [`AGREEMENT`]. A damped
+/// maxon-re35 wall is set below the first K at which the identified model keeps a small swing
+/// (`stiffwall_tune::small_swing`); while that screen scanned K by 2 % from the wall asked
+/// for, its answer stepped over or into a band of swinging K 0.5 % wide depending on where it
+/// started, and the set K was −5.4 to +15.5 % from the virtual device's over 30 board tunes;
+/// on its grid of 0.5 % fixed in K the models of the three images (within 0.6 % of each
+/// other) find the same band: −1.4 to 0.0 % over 30 board tunes (two runs of this test;
+/// maxon-re35 3.3107 on both images but once 3.3056, phantom-1.0 −1.4 to 0.0 %).
+const AGREEMENT: f64 = 0.10;
+
 #[test]
 #[ignore = "needs the images: run `cargo xtask board-emu`"]
 fn tune_is_repeatable_on_the_board() {
@@ -381,9 +382,10 @@ fn tune_is_repeatable_on_the_board() {
         100.0 * worst
     );
     assert!(
-        worst <= 0.25,
-        "a board tune set K {:.1} % from the virtual device's",
-        100.0 * worst
+        worst <= AGREEMENT,
+        "a board tune set K {:.1} % from the virtual device's (allowed {:.0} %)",
+        100.0 * worst,
+        100.0 * AGREEMENT
     );
 }
 
