@@ -17,6 +17,7 @@
 pub mod family;
 pub mod kstar;
 pub mod supervise;
+pub mod swings;
 
 use std::collections::VecDeque;
 use stiffwall_firmware::{BoardInfo, ByteLink, ConfigStore, Device, Encoder, MemStorage, Servo};

@@ -191,18 +191,8 @@ fn describe(t: &Trial) -> String {
 /// damper's dead band leaves a swing of under a count per tick undamped (the screen runs them
 /// on tune's identified rigid model; this runs them on the plant with all its effects).
 pub(super) fn small_state_trials(rig: &kstar::Rig) -> Vec<Trial> {
-    let per_tick = rig.resolution_m / rig.period_s;
-    rig.wall_offsets
-        .iter()
-        .flat_map(|&wall| {
-            stiffwall_tune::small_swing::small_starts().map(move |st| Trial {
-                wall,
-                side: 1,
-                kind: TrialKind::Moving {
-                    position_counts: st.x_counts,
-                    velocity_m_per_s: st.v_counts_per_tick * per_tick,
-                },
-            })
-        })
-        .collect()
+    let starts: Vec<(f64, f64)> = stiffwall_tune::small_swing::small_starts()
+        .map(|st| (st.x_counts, st.v_counts_per_tick))
+        .collect();
+    stiffwall_tests::swings::moving_trials(rig, &starts)
 }

@@ -447,48 +447,15 @@ fn k_star_at_set(damped: &PlantCase, k_star: &KStar, b_set: f64) -> Result<KStar
     }
 }
 
-/// Ratio between the stiffnesses [`with_small_swings`] tries (K*'s confirmation step).
-const SMALL_SWING_STEP: f64 = 1.05;
-
 /// `k`, the damped wall's K*(B) by the criterion's trials, lowered where the plant keeps a
 /// small swing: tune's small-swing states (`stiffwall_tune::small_swing`, at up to one count
 /// per tick within three counts of the origin, which the dead band leaves undamped) run on the
-/// plant at K from K*/1.05³ upwards in steps of ×1.05; the first K at which one does not come
-/// to rest is the failure, and K* the first K below it, by the same steps, that keeps none.
-/// None of the criterion's trials starts there (docs/TUNE.md, "Small swings").
+/// plant ([`stiffwall_tests::swings::lowered_where_swinging`]: from K*/1.05³ upwards by ×1.05,
+/// K* the first K below the first swing that keeps none). None of the criterion's trials
+/// starts there (docs/TUNE.md, "Small swings").
 fn with_small_swings(damped: &PlantCase, k: KStar) -> KStar {
-    use rayon::prelude::*;
     let trials = super::row::small_state_trials(&damped.rig);
-    let swing = |at: f64| {
-        trials
-            .par_iter()
-            .find_first(|t| !kstar::run_trial(&damped.proto, &damped.rig, at, **t).rests())
-            .copied()
-    };
-    let mut evaluations = k.evaluations;
-    let mut at = k.k_star / (SMALL_SWING_STEP * SMALL_SWING_STEP * SMALL_SWING_STEP);
-    loop {
-        let top = at >= k.k_star;
-        let kk = at.min(k.k_star);
-        evaluations += 1;
-        if let Some(failing) = swing(kk) {
-            let mut below = kk / SMALL_SWING_STEP;
-            while below > k.k_star / 10.0 && swing(below).is_some() {
-                evaluations += 1;
-                below /= SMALL_SWING_STEP;
-            }
-            return KStar {
-                k_star: below,
-                k_fail: kk,
-                failing,
-                evaluations,
-            };
-        }
-        if top {
-            return KStar { evaluations, ..k };
-        }
-        at *= SMALL_SWING_STEP;
-    }
+    stiffwall_tests::swings::lowered_where_swinging(&damped.proto, &damped.rig, k, &trials)
 }
 
 /// The K* the supervisor's 1.5 K* is taken of: K*(B set) when found, else K*(0).
