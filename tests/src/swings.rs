@@ -54,7 +54,7 @@ pub fn lowered_where_swinging<P: SampledPlant + Clone + Sync>(
             .copied()
     };
     let mut evaluations = k.evaluations;
-    let mut at = k.k_star / SMALL_SWING_STEP.powi(3);
+    let mut at = k.k_star / (SMALL_SWING_STEP * SMALL_SWING_STEP * SMALL_SWING_STEP);
     loop {
         let top = at >= k.k_star;
         let kk = at.min(k.k_star);
