@@ -136,15 +136,7 @@ pub fn run_test(
     min_run: usize,
     judging: &Judging,
 ) -> Result<TestRun> {
-    let run = Attempt {
-        base,
-        k,
-        ticks,
-        min_run,
-        judging,
-        rest_hint: std::cell::Cell::new(None),
-    };
-    run_attempts(c, &run, test)
+    run_test_at(c, base, k, test, (ticks, min_run), judging, None)
 }
 
 /// [`run_test`] (its `ticks` and `min_run` as a pair) for a device known to rest at `rest`
